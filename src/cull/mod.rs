@@ -1,0 +1,33 @@
+//! Culling strategies. Each decides which fine tiles the final pass draws:
+//! - `None`: every tile (the reference image);
+//! - `ThreePass`: GPU depth prepass of coarse proxies, exact visible-pixel count per tile, fine draw
+//!   of tiles above a pixel threshold (all on the GPU in one submission; see `gpu`);
+//! - `Oracle`: exactly the tiles with at least one visible pixel in the unculled image (a lower
+//!   bound for benchmarks, not a practical method: it renders the reference first).
+
+use crate::error::{input_err, Result};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Culling {
+    None,
+    ThreePass,
+    Oracle,
+}
+
+impl Culling {
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "none" => Ok(Self::None),
+            "three_pass" => Ok(Self::ThreePass),
+            "oracle" => Ok(Self::Oracle),
+            _ => Err(input_err("culling", format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\""))),
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::ThreePass => "three_pass",
+            Self::Oracle => "oracle",
+        }
+    }
+}

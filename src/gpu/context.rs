@@ -1,0 +1,108 @@
+//! The wgpu device: headless adapter selection and the features geocull needs.
+
+use crate::error::{Error, Result};
+use std::sync::{Arc, Mutex};
+
+/// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
+pub const INSTALL_HINT: &str = "install a Vulkan driver; on Debian/Ubuntu without a GPU: \
+    `apt-get install libvulkan1 mesa-vulkan-drivers` (Mesa's lavapipe renders on the CPU)";
+
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    pub timestamps: bool,
+    /// Errors the device reported outside an error scope, taken after each frame.
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
+    Ok(match backend {
+        "auto" => wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12,
+        "vulkan" => wgpu::Backends::VULKAN,
+        "gl" => wgpu::Backends::GL,
+        "metal" => wgpu::Backends::METAL,
+        "dx12" => wgpu::Backends::DX12,
+        _ => {
+            return Err(crate::error::input_err(
+                "backend",
+                format!("unknown backend {backend:?}; expected one of \"auto\", \"vulkan\", \"gl\", \"metal\", \"dx12\""),
+            ))
+        }
+    })
+}
+
+impl GpuContext {
+    pub fn new(backend: &str) -> Result<Self> {
+        let backends = parse_backends(backend)?;
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        let instance = wgpu::Instance::new(desc);
+        // Prefer a real GPU, then any adapter (lavapipe / llvmpipe on CPU-only machines); among
+        // the enumerated ones prefer Vulkan, which has every feature we use.
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        adapters.sort_by_key(|a| {
+            let i = a.get_info();
+            let kind = match i.device_type {
+                wgpu::DeviceType::DiscreteGpu => 0,
+                wgpu::DeviceType::IntegratedGpu => 1,
+                wgpu::DeviceType::VirtualGpu => 2,
+                wgpu::DeviceType::Cpu => 3,
+                wgpu::DeviceType::Other => 4,
+            };
+            let has_features = a.features().contains(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+            (!has_features as u8, kind, (i.backend != wgpu::Backend::Vulkan) as u8)
+        });
+        let adapter = adapters.into_iter().next().ok_or_else(|| Error::Device(format!("no graphics adapter found for backend {backend:?}; {INSTALL_HINT}")))?;
+        let info = adapter.get_info();
+        let available = adapter.features();
+        let needed = wgpu::Features::INDIRECT_FIRST_INSTANCE;
+        if !available.contains(needed) {
+            return Err(Error::Device(format!(
+                "adapter {} ({:?}) lacks INDIRECT_FIRST_INSTANCE, which geocull's tile draws need; use backend=\"vulkan\" ({INSTALL_HINT})",
+                info.name, info.backend
+            )));
+        }
+        let timestamps = available.contains(wgpu::Features::TIMESTAMP_QUERY);
+        let features = needed | if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() };
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("geocull"),
+            required_features: features,
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| Error::Device(format!("could not open device {}: {e}; {INSTALL_HINT}", info.name)))?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock().unwrap().push(e.to_string());
+        }));
+        Ok(Self { device, queue, info, limits, timestamps, errors })
+    }
+
+    /// Returns the first device error reported since the last call, as an Error.
+    pub fn take_error(&self) -> Result<()> {
+        let mut errs = self.errors.lock().unwrap();
+        if errs.is_empty() {
+            return Ok(());
+        }
+        let msg = errs.join("; ");
+        errs.clear();
+        Err(Error::Device(format!("the GPU driver rejected the frame: {msg}")))
+    }
+
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")))
+    }
+
+    pub fn adapter_description(&self) -> String {
+        format!("{} ({:?}, {:?}, driver {} {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info)
+    }
+}

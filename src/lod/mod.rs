@@ -1,0 +1,213 @@
+//! Tiling and levels of detail.
+//!
+//! Every object is cut into tiles. A tile owns a compact local vertex array (f32, relative to the
+//! scene origin) and two triangle lists into it: level 0 (`fine`, the original triangles) and the
+//! coarse proxy (`coarse`, about 1/coarse_factor of them, by quadric-error simplification with the
+//! tile's border locked, see [`simplify`]). The coarse level reuses the fine vertices, so it costs
+//! only its indices.
+//!
+//! Height fields: a (ny, nx) grid, x along columns, y along rows, two triangles per cell (diagonal
+//! from sample (i, j) to (i+1, j+1)); a triangle touching a NaN sample is dropped. Tile boundaries
+//! along x are `round(t * (nx-1) / tx)` for t = 0..=tx (likewise y), and neighbouring tiles share
+//! their border samples so the fine level has no cracks.
+
+pub mod simplify;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// One tile of one object.
+#[derive(Clone, Debug, Default)]
+pub struct TileMesh {
+    pub ix: u32,
+    pub iy: u32,
+    /// Local vertices, relative to the scene origin (world units, not exaggerated).
+    pub positions: Vec<[f32; 3]>,
+    /// Fine (level 0) triangle list into `positions`.
+    pub fine: Vec<u32>,
+    /// Coarse proxy triangle list into `positions`.
+    pub coarse: Vec<u32>,
+    pub bbox_min: [f32; 3],
+    pub bbox_max: [f32; 3],
+}
+
+impl TileMesh {
+    pub fn is_empty(&self) -> bool {
+        self.fine.is_empty()
+    }
+    pub fn fine_triangles(&self) -> usize {
+        self.fine.len() / 3
+    }
+    pub fn coarse_triangles(&self) -> usize {
+        self.coarse.len() / 3
+    }
+
+    fn finish(mut self, coarse_factor: f32) -> Self {
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        if self.positions.is_empty() {
+            lo = [0.0; 3];
+            hi = [0.0; 3];
+        }
+        self.bbox_min = lo;
+        self.bbox_max = hi;
+        self.coarse = simplify::coarse_indices(&self.positions, &self.fine, coarse_factor);
+        self
+    }
+}
+
+/// Tile boundaries: `n_samples` samples cut into `n_tiles` runs sharing their end samples.
+pub fn tile_bounds(n_samples: usize, n_tiles: usize) -> Vec<usize> {
+    (0..=n_tiles)
+        .map(|t| ((t as f64) * ((n_samples - 1) as f64) / (n_tiles as f64)).round() as usize)
+        .collect()
+}
+
+/// A height field grid in world coordinates. `z` is row-major (ny, nx); NaN = hole.
+pub struct GridSpec<'a> {
+    pub z: &'a [f64],
+    pub nx: usize,
+    pub ny: usize,
+    pub x0: f64,
+    pub y0: f64,
+    pub dx: f64,
+    pub dy: f64,
+}
+
+/// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in
+/// row-major order (index `iy * tx + ix`); tiles wholly inside holes are empty.
+pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coarse_factor: f32) -> Vec<TileMesh> {
+    let (tx, ty) = tiles;
+    let bx = tile_bounds(g.nx, tx);
+    let by = tile_bounds(g.ny, ty);
+    (0..tx * ty)
+        .into_par_iter()
+        .map(|t| {
+            let (ix, iy) = (t % tx, t / tx);
+            let (i0, i1, j0, j1) = (bx[ix], bx[ix + 1], by[iy], by[iy + 1]);
+            let w = i1 - i0 + 1;
+            let h = j1 - j0 + 1;
+            let at = |i: usize, j: usize| g.z[j * g.nx + i];
+            // Local sample -> vertex index (u32::MAX = not used by any triangle).
+            let mut map = vec![u32::MAX; w * h];
+            let mut tile = TileMesh { ix: ix as u32, iy: iy as u32, ..Default::default() };
+            let mut vertex = |li: usize, lj: usize, tile: &mut TileMesh| -> u32 {
+                let slot = &mut map[lj * w + li];
+                if *slot == u32::MAX {
+                    *slot = tile.positions.len() as u32;
+                    let (i, j) = (i0 + li, j0 + lj);
+                    tile.positions.push([
+                        (g.x0 + i as f64 * g.dx - origin.x) as f32,
+                        (g.y0 + j as f64 * g.dy - origin.y) as f32,
+                        (at(i, j) - origin.z) as f32,
+                    ]);
+                }
+                *slot
+            };
+            for lj in 0..h - 1 {
+                for li in 0..w - 1 {
+                    let (i, j) = (i0 + li, j0 + lj);
+                    let z00 = at(i, j).is_finite();
+                    let z10 = at(i + 1, j).is_finite();
+                    let z11 = at(i + 1, j + 1).is_finite();
+                    let z01 = at(i, j + 1).is_finite();
+                    if z00 && z10 && z11 {
+                        let a = vertex(li, lj, &mut tile);
+                        let b = vertex(li + 1, lj, &mut tile);
+                        let c = vertex(li + 1, lj + 1, &mut tile);
+                        tile.fine.extend_from_slice(&[a, b, c]);
+                    }
+                    if z00 && z11 && z01 {
+                        let a = vertex(li, lj, &mut tile);
+                        let c = vertex(li + 1, lj + 1, &mut tile);
+                        let d = vertex(li, lj + 1, &mut tile);
+                        tile.fine.extend_from_slice(&[a, c, d]);
+                    }
+                }
+            }
+            tile.finish(coarse_factor)
+        })
+        .collect()
+}
+
+/// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
+/// `vertices` are world coordinates; `faces` index into them (validated by the caller).
+pub fn tile_mesh(vertices: &[[f64; 3]], faces: &[[u32; 3]], origin: DVec3, clusters: usize, coarse_factor: f32) -> Vec<TileMesh> {
+    let (ids, n) = if clusters <= 1 || faces.len() <= 1 {
+        (vec![0u32; faces.len()], 1)
+    } else {
+        simplify::cluster_triangles(vertices, faces, clusters)
+    };
+    // Faces of each cluster, in input order.
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (f, &c) in ids.iter().enumerate() {
+        members[c as usize].push(f as u32);
+    }
+    members
+        .into_par_iter()
+        .enumerate()
+        .map(|(c, fs)| {
+            let mut map = std::collections::HashMap::<u32, u32>::with_capacity(fs.len());
+            let mut tile = TileMesh { ix: c as u32, iy: 0, ..Default::default() };
+            for &f in &fs {
+                for &v in &faces[f as usize] {
+                    let next = tile.positions.len() as u32;
+                    let slot = *map.entry(v).or_insert(next);
+                    if slot == next {
+                        let p = vertices[v as usize];
+                        tile.positions.push([
+                            (p[0] - origin.x) as f32,
+                            (p[1] - origin.y) as f32,
+                            (p[2] - origin.z) as f32,
+                        ]);
+                    }
+                    tile.fine.push(slot);
+                }
+            }
+            tile.finish(coarse_factor)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_share_ends_and_cover() {
+        assert_eq!(tile_bounds(11, 2), vec![0, 5, 10]);
+        assert_eq!(tile_bounds(2, 1), vec![0, 1]);
+        let b = tile_bounds(500, 10);
+        assert_eq!((b[0], b[10]), (0, 499));
+    }
+
+    #[test]
+    fn grid_triangles_and_holes() {
+        let (nx, ny) = (5, 4);
+        let mut z = vec![0.0; nx * ny];
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0);
+        let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
+        assert_eq!(total, 2 * (nx - 1) * (ny - 1));
+        // One NaN sample in the interior removes the 6 triangles touching it.
+        z[1 * nx + 2] = f64::NAN;
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0);
+        assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
+        assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    }
+
+    #[test]
+    fn all_nan_tile_is_empty() {
+        let z = vec![f64::NAN; 9];
+        let g = GridSpec { z: &z, nx: 3, ny: 3, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0);
+        assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
+    }
+}

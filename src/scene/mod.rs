@@ -1,0 +1,359 @@
+//! The scene: objects (height fields, meshes) cut into tiles with LOD levels, stored relative to
+//! one f64 origin so that positions fit f32 on the GPU with full precision.
+//!
+//! Geometry changes (add/remove) bump `geometry_version`, which tells renderers to re-upload;
+//! visibility, colour and translation are per-object state read every frame (no re-upload).
+
+use crate::error::{ensure, input_err, Result};
+use crate::lod::{self, GridSpec, TileMesh};
+use glam::DVec3;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
+
+#[derive(Clone, Debug)]
+pub enum ObjectKind {
+    /// A height field; keeps its grid (f32, relative to the origin's z) for CPU culling.
+    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, z: Vec<f32>, tiles: (usize, usize) },
+    /// A triangle mesh; `kind` is the user's label ("fault", "mesh", ...).
+    Mesh { kind: String },
+}
+
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub id: u32,
+    pub name: String,
+    pub kind: ObjectKind,
+    pub color: [f32; 3],
+    pub visible: bool,
+    /// Translation applied at draw time (world units).
+    pub offset: DVec3,
+    pub tiles: Vec<TileMesh>,
+}
+
+impl Object {
+    pub fn kind_name(&self) -> &str {
+        match &self.kind {
+            ObjectKind::Heightfield { .. } => "heightfield",
+            ObjectKind::Mesh { kind } => kind,
+        }
+    }
+    pub fn fine_triangles(&self) -> usize {
+        self.tiles.iter().map(|t| t.fine_triangles()).sum()
+    }
+    /// Origin-relative bounds of the object's geometry without its offset, or None when empty.
+    pub fn local_bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for t in self.tiles.iter().filter(|t| !t.is_empty()) {
+            lo = lo.min(DVec3::from_array(t.bbox_min.map(f64::from)));
+            hi = hi.max(DVec3::from_array(t.bbox_max.map(f64::from)));
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+}
+
+/// Options shared by `add_heightfield` and `add_mesh`.
+#[derive(Clone, Debug)]
+pub struct AddOptions {
+    pub coarse_factor: f64,
+    pub name: Option<String>,
+    pub color: Option<[f64; 3]>,
+}
+
+pub struct Scene {
+    uid: u64,
+    geometry_version: u64,
+    origin: Option<DVec3>,
+    objects: Vec<Object>,
+    next_id: u32,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Default colours, cycled by object id.
+const PALETTE: [[f32; 3]; 8] = [
+    [0.90, 0.62, 0.30],
+    [0.35, 0.65, 0.85],
+    [0.55, 0.80, 0.45],
+    [0.85, 0.45, 0.55],
+    [0.75, 0.70, 0.40],
+    [0.60, 0.50, 0.85],
+    [0.40, 0.80, 0.75],
+    [0.85, 0.85, 0.85],
+];
+
+fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
+    match c {
+        None => Ok(PALETTE[id as usize % PALETTE.len()]),
+        Some(c) => {
+            for (i, v) in c.iter().enumerate() {
+                ensure(v.is_finite() && (0.0..=1.0).contains(v), "color", || {
+                    format!("component {i} is {v}; colours are (r, g, b) in [0, 1]")
+                })?;
+            }
+            Ok(c.map(|v| v as f32))
+        }
+    }
+}
+
+fn check_coarse_factor(cf: f64) -> Result<f32> {
+    ensure(cf.is_finite() && cf >= 1.0, "coarse_factor", || format!("coarse_factor is {cf}; expected a number >= 1"))?;
+    Ok(cf as f32)
+}
+
+impl Scene {
+    pub fn new() -> Self {
+        Self { uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed), geometry_version: 0, origin: None, objects: Vec::new(), next_id: 0 }
+    }
+
+    /// Identifies this scene and its geometry; renderers cache GPU buffers by it.
+    pub fn geometry_key(&self) -> (u64, u64) {
+        (self.uid, self.geometry_version)
+    }
+
+    /// The f64 origin all positions are stored relative to (set by the first object).
+    pub fn origin(&self) -> DVec3 {
+        self.origin.unwrap_or(DVec3::ZERO)
+    }
+
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    pub fn object(&self, id: u32) -> Result<&Object> {
+        self.objects.iter().find(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
+    }
+
+    fn object_mut(&mut self, id: u32) -> Result<&mut Object> {
+        self.objects.iter_mut().find(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
+    }
+
+    pub fn n_tiles(&self) -> usize {
+        self.objects.iter().map(|o| o.tiles.len()).sum()
+    }
+
+    pub fn n_triangles(&self) -> usize {
+        self.objects.iter().map(|o| o.fine_triangles()).sum()
+    }
+
+    /// Origin-relative bounds of the visible objects (offsets applied, no exaggeration).
+    pub fn visible_bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.objects.iter().filter(|o| o.visible).filter_map(|o| o.local_bounds().map(|(a, b)| (a + o.offset, b + o.offset))).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
+        *self.origin.get_or_insert_with(|| {
+            // Round to a metre so the origin is a tidy number in reports.
+            ((lo + hi) * 0.5).round()
+        })
+    }
+
+    fn push(&mut self, name: Option<String>, kind: ObjectKind, color: [f32; 3], tiles: Vec<TileMesh>) -> u32 {
+        let id = self.next_id;
+        self.next_id += 1;
+        let name = name.unwrap_or_else(|| format!("object{id}"));
+        self.objects.push(Object { id, name, kind, color, visible: true, offset: DVec3::ZERO, tiles });
+        self.geometry_version += 1;
+        id
+    }
+
+    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows. NaN samples
+    /// (and samples equal to `null_value`) are holes; triangles touching a hole are dropped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_heightfield(
+        &mut self,
+        z: &[f64],
+        ny: usize,
+        nx: usize,
+        origin: [f64; 2],
+        spacing: [f64; 2],
+        tiles: (usize, usize),
+        null_value: Option<f64>,
+        opts: AddOptions,
+    ) -> Result<u32> {
+        ensure(nx >= 2 && ny >= 2, "z", || format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples"))?;
+        ensure(z.len() == nx * ny, "z", || format!("z has {} values, expected {ny} x {nx}", z.len()))?;
+        for (i, v) in origin.iter().enumerate() {
+            ensure(v.is_finite(), "origin", || format!("component {i} is {v}; expected a finite number"))?;
+        }
+        for (i, v) in spacing.iter().enumerate() {
+            ensure(v.is_finite() && *v > 0.0, "spacing", || format!("component {i} is {v}; expected a finite number > 0"))?;
+        }
+        let (tx, ty) = tiles;
+        ensure(tx >= 1 && tx < nx, "tiles", || format!("tiles[0] is {tx}; expected 1..={} for {nx} columns (each tile needs one cell)", nx - 1))?;
+        ensure(ty >= 1 && ty < ny, "tiles", || format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1))?;
+        if let Some(nv) = null_value {
+            ensure(!nv.is_infinite(), "null_value", || format!("null_value is {nv}; expected a finite number or NaN"))?;
+        }
+        let cf = check_coarse_factor(opts.coarse_factor)?;
+        let color = check_color(opts.color, self.next_id)?;
+        // Holes: NaN and null_value become NaN; infinities are an error.
+        let mut zz: Vec<f64> = Vec::with_capacity(z.len());
+        let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, &v) in z.iter().enumerate() {
+            let v = if null_value.is_some_and(|nv| v == nv) { f64::NAN } else { v };
+            ensure(!v.is_infinite(), "z", || format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx))?;
+            if v.is_finite() {
+                zmin = zmin.min(v);
+                zmax = zmax.max(v);
+            }
+            zz.push(v);
+        }
+        let (x0, y0) = (origin[0], origin[1]);
+        let (dx, dy) = (spacing[0], spacing[1]);
+        let (x1, y1) = (x0 + dx * (nx - 1) as f64, y0 + dy * (ny - 1) as f64);
+        if zmin > zmax {
+            (zmin, zmax) = (0.0, 0.0);
+        }
+        let o = self.set_origin_from(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
+        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy };
+        let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
+        let zrel: Vec<f32> = zz.iter().map(|v| (v - o.z) as f32).collect();
+        let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, z: zrel, tiles: (tx, ty) };
+        Ok(self.push(opts.name, kind, color, tile_meshes))
+    }
+
+    /// Adds a triangle mesh. `vertices` is (n, 3) world coordinates, `faces` (m, 3) indices.
+    /// `clusters` = None: one tile; Some(k): about k spatially coherent tiles.
+    pub fn add_mesh(&mut self, vertices: &[[f64; 3]], faces: &[[i64; 3]], kind: &str, clusters: Option<usize>, opts: AddOptions) -> Result<u32> {
+        let n = vertices.len();
+        for (i, v) in vertices.iter().enumerate() {
+            for (a, c) in v.iter().enumerate() {
+                ensure(c.is_finite(), "vertices", || format!("vertices[{i}, {a}] is {c}; vertices must be finite"))?;
+            }
+        }
+        let mut f32faces: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
+        for (i, f) in faces.iter().enumerate() {
+            for (a, &k) in f.iter().enumerate() {
+                ensure(k >= 0 && (k as u64) < n as u64, "faces", || format!("faces[{i}, {a}] is {k}; indices must be in 0..{n}"))?;
+            }
+            f32faces.push(f.map(|k| k as u32));
+        }
+        if let Some(k) = clusters {
+            ensure(k >= 1, "tiles", || format!("tiles is {k}; expected an integer >= 1 (or None for one tile)"))?;
+        }
+        let cf = check_coarse_factor(opts.coarse_factor)?;
+        let color = check_color(opts.color, self.next_id)?;
+        // Bounds of the referenced vertices only.
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for f in &f32faces {
+            for &k in f {
+                let p = DVec3::from_array(vertices[k as usize]);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        if lo.x > hi.x {
+            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
+        }
+        let o = self.set_origin_from(lo, hi);
+        let k = clusters.unwrap_or(1).min(f32faces.len().max(1));
+        let tiles = lod::tile_mesh(vertices, &f32faces, o, k, cf);
+        Ok(self.push(opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
+    }
+
+    pub fn remove(&mut self, id: u32) -> Result<()> {
+        let idx = self.objects.iter().position(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))?;
+        self.objects.remove(idx);
+        self.geometry_version += 1;
+        Ok(())
+    }
+
+    pub fn set_visible(&mut self, id: u32, visible: bool) -> Result<()> {
+        self.object_mut(id)?.visible = visible;
+        Ok(())
+    }
+
+    pub fn translate(&mut self, id: u32, d: [f64; 3]) -> Result<()> {
+        for (i, v) in d.iter().enumerate() {
+            ensure(v.is_finite(), "offset", || format!("component {i} is {v}; expected a finite number"))?;
+        }
+        self.object_mut(id)?.offset += DVec3::from_array(d);
+        Ok(())
+    }
+
+    pub fn set_color(&mut self, id: u32, color: [f64; 3]) -> Result<()> {
+        let c = check_color(Some(color), id)?;
+        self.object_mut(id)?.color = c;
+        Ok(())
+    }
+
+    /// The fine triangles of an object in world coordinates (offset applied): (vertices, faces).
+    pub fn geometry(&self, id: u32) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+        let o = self.object(id)?;
+        let origin = self.origin() + o.offset;
+        let mut verts = Vec::new();
+        let mut faces = Vec::new();
+        for t in &o.tiles {
+            let base = verts.len() as u32;
+            verts.extend(t.positions.iter().map(|p| [p[0] as f64 + origin.x, p[1] as f64 + origin.y, p[2] as f64 + origin.z]));
+            faces.extend(t.fine.chunks_exact(3).map(|c| [c[0] + base, c[1] + base, c[2] + base]));
+        }
+        Ok((verts, faces))
+    }
+
+    /// Bytes of geometry held on the host (vertices, both index levels, height grids).
+    pub fn host_bytes(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| {
+                let grid = match &o.kind {
+                    ObjectKind::Heightfield { z, .. } => z.len() * 4,
+                    _ => 0,
+                };
+                grid + o.tiles.iter().map(|t| t.positions.len() * 12 + (t.fine.len() + t.coarse.len()) * 4).sum::<usize>()
+            })
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts() -> AddOptions {
+        AddOptions { coarse_factor: 1.0, name: None, color: None }
+    }
+
+    #[test]
+    fn utm_origin_keeps_precision() {
+        let mut s = Scene::new();
+        let z = vec![-2500.0; 4];
+        s.add_heightfield(&z, 2, 2, [450_000.0, 6_780_000.0], [10.0, 10.0], (1, 1), None, opts()).unwrap();
+        let z2 = vec![-2500.5; 4];
+        s.add_heightfield(&z2, 2, 2, [450_000.0, 6_780_000.0], [10.0, 10.0], (1, 1), None, opts()).unwrap();
+        let (a, _) = s.geometry(0).unwrap();
+        let (b, _) = s.geometry(1).unwrap();
+        assert_eq!(a[0][0], 450_000.0);
+        assert!((a[0][2] - b[0][2] - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn errors_name_arguments() {
+        let mut s = Scene::new();
+        let z = vec![0.0; 4];
+        let e = s.add_heightfield(&z, 2, 2, [0.0, 0.0], [0.0, 1.0], (1, 1), None, opts()).unwrap_err();
+        assert!(e.to_string().starts_with("spacing"), "{e}");
+        let e = s.add_heightfield(&z, 2, 2, [0.0, 0.0], [1.0, 1.0], (2, 1), None, opts()).unwrap_err();
+        assert!(e.to_string().starts_with("tiles"), "{e}");
+        let e = s.add_mesh(&[[0.0; 3]], &[[0, 0, 1]], "mesh", None, opts()).unwrap_err();
+        assert!(e.to_string().starts_with("faces[0, 2]"), "{e}");
+        let e = s.add_mesh(&[[0.0, f64::NAN, 0.0]], &[[0, 0, 0]], "mesh", None, opts()).unwrap_err();
+        assert!(e.to_string().starts_with("vertices[0, 1]"), "{e}");
+    }
+
+    #[test]
+    fn null_value_makes_holes() {
+        let mut s = Scene::new();
+        let mut z = vec![0.0; 9];
+        z[4] = -999.25;
+        s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(-999.25), opts()).unwrap();
+        assert_eq!(s.n_triangles(), 8 - 6);
+    }
+}
