@@ -9,6 +9,7 @@ pub mod camera;
 pub mod cull;
 pub mod error;
 pub mod gpu;
+pub mod iso;
 pub mod lod;
 pub mod scene;
 

@@ -3,7 +3,11 @@
 //! - `ThreePass`: GPU depth prepass of coarse proxies, exact visible-pixel count per tile, fine draw
 //!   of tiles above a pixel threshold (all on the GPU in one submission; see `gpu`);
 //! - `Oracle`: exactly the tiles with at least one visible pixel in the unculled image (a lower
-//!   bound for benchmarks, not a practical method: it renders the reference first).
+//!   bound for benchmarks, not a practical method: it renders the reference first);
+//! - `Horizon`: CPU horizon occlusion culling of height fields over a quadtree of their tiles,
+//!   front to back with one horizon height per image column ([`horizon`]); meshes are not culled.
+
+pub mod horizon;
 
 use crate::error::{input_err, Result};
 
@@ -12,6 +16,7 @@ pub enum Culling {
     None,
     ThreePass,
     Oracle,
+    Horizon,
 }
 
 impl Culling {
@@ -20,7 +25,8 @@ impl Culling {
             "none" => Ok(Self::None),
             "three_pass" => Ok(Self::ThreePass),
             "oracle" => Ok(Self::Oracle),
-            _ => Err(input_err("culling", format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\""))),
+            "horizon" => Ok(Self::Horizon),
+            _ => Err(input_err("culling", format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\", \"horizon\""))),
         }
     }
     pub fn name(self) -> &'static str {
@@ -28,6 +34,7 @@ impl Culling {
             Self::None => "none",
             Self::ThreePass => "three_pass",
             Self::Oracle => "oracle",
+            Self::Horizon => "horizon",
         }
     }
 }

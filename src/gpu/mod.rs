@@ -101,6 +101,9 @@ pub struct RenderStats {
     /// Wall time to copy the image, depth and counts back and convert them.
     pub readback_ms: f64,
     pub gpu_timestamps: bool,
+    /// Horizon culling: quadtree nodes visited and culled (all height fields together).
+    pub nodes_visited: u32,
+    pub nodes_culled: u32,
 }
 
 /// The result of one frame, as plain host arrays.
@@ -119,10 +122,13 @@ pub struct RenderOutput {
     pub stats: RenderStats,
     pub near: f64,
     pub far: f64,
+    /// Horizon culling: the final horizon of the first height field, one value per image column
+    /// (pixel rows from the bottom that are known hidden; -inf where none).
+    pub horizon: Option<Vec<f32>>,
 }
 
 /// GPU copy of a scene's geometry.
-struct SceneGpu {
+pub(crate) struct SceneGpu {
     key: (u64, u64),
     vertices: Option<wgpu::Buffer>,
     indices: Option<wgpu::Buffer>,
@@ -134,7 +140,7 @@ struct SceneGpu {
     bytes: u64,
 }
 
-struct Targets {
+pub(crate) struct Targets {
     width: u32,
     height: u32,
     color: Option<wgpu::TextureView>,
@@ -145,21 +151,27 @@ struct Targets {
 }
 
 pub struct Renderer {
-    ctx: GpuContext,
-    width: u32,
-    height: u32,
-    scene_layout: wgpu::BindGroupLayout,
-    hist_layout: wgpu::BindGroupLayout,
-    args_layout: wgpu::BindGroupLayout,
-    main_pipeline: wgpu::RenderPipeline,
-    prepass_pipeline: wgpu::RenderPipeline,
-    hist_pipeline: wgpu::ComputePipeline,
-    args_pipeline: wgpu::ComputePipeline,
-    main_targets: Targets,
-    prepass_targets: Option<Targets>,
-    cache: Option<SceneGpu>,
-    timestamp_set: Option<wgpu::QuerySet>,
+    pub(crate) ctx: GpuContext,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) scene_layout: wgpu::BindGroupLayout,
+    pub(crate) hist_layout: wgpu::BindGroupLayout,
+    pub(crate) args_layout: wgpu::BindGroupLayout,
+    pub(crate) main_pipeline: wgpu::RenderPipeline,
+    pub(crate) prepass_pipeline: wgpu::RenderPipeline,
+    pub(crate) hist_pipeline: wgpu::ComputePipeline,
+    pub(crate) args_pipeline: wgpu::ComputePipeline,
+    pub(crate) main_targets: Targets,
+    pub(crate) prepass_targets: Option<Targets>,
+    pub(crate) cache: Option<SceneGpu>,
+    pub(crate) timestamp_set: Option<wgpu::QuerySet>,
+    /// Horizon quadtrees per height field, keyed by (scene key, object id, z_scale, offset).
+    pub(crate) horizon_trees: Vec<(HorizonKey, crate::cull::horizon::HorizonTree)>,
+    /// Isosurface pipelines and caches, created on first use.
+    pub(crate) iso: Option<Box<crate::iso::render::IsoGpu>>,
 }
+
+type HorizonKey = ((u64, u64), u32, u64, [u64; 3]);
 
 const N_TIMESTAMPS: u32 = 8;
 
@@ -292,6 +304,8 @@ impl Renderer {
             prepass_targets: None,
             cache: None,
             timestamp_set,
+            horizon_trees: Vec::new(),
+            iso: None,
         })
     }
 
@@ -404,7 +418,57 @@ impl Renderer {
                 out.tile_pixels = reference.tile_pixels;
                 Ok(out)
             }
+            Culling::Horizon => {
+                let t0 = Instant::now();
+                let (mask, visited, culled, horizon) = self.horizon_mask(scene, camera);
+                let cull_ms = t0.elapsed().as_secs_f64() * 1e3;
+                let mut out = self.frame(scene, camera, DrawSet::Mask(mask), false)?;
+                out.stats.cull_ms = cull_ms;
+                out.stats.total_ms += cull_ms;
+                out.stats.nodes_visited = visited;
+                out.stats.nodes_culled = culled;
+                out.horizon = horizon;
+                Ok(out)
+            }
         }
+    }
+
+    /// Horizon culling on the CPU: a tile mask over the whole scene (meshes: all tiles).
+    fn horizon_mask(&mut self, scene: &Scene, camera: &Camera) -> (Vec<bool>, u32, u32, Option<Vec<f32>>) {
+        use crate::cull::horizon::{HeightGrid, HorizonTree};
+        use crate::scene::ObjectKind;
+        let origin = scene.origin();
+        let zs = camera.z_scale;
+        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * DVec3::new(1.0, 1.0, zs), hi * DVec3::new(1.0, 1.0, zs)));
+        let fc = camera.frame(origin, bounds, self.width as f64 / self.height as f64);
+        let key = scene.geometry_key();
+        self.horizon_trees.retain(|(k, _)| k.0 == key);
+        let mut mask = Vec::with_capacity(scene.n_tiles());
+        let (mut visited, mut culled, mut horizon) = (0, 0, None);
+        for o in scene.objects() {
+            let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, z, tiles } = &o.kind else {
+                mask.extend(std::iter::repeat_n(true, o.tiles.len()));
+                continue;
+            };
+            let hk: HorizonKey = (key, o.id, zs.to_bits(), o.offset.to_array().map(f64::to_bits));
+            let idx = match self.horizon_trees.iter().position(|(k, _)| *k == hk) {
+                Some(i) => i,
+                None => {
+                    let zr: Vec<f32> = z.iter().map(|&v| ((v as f64 + o.offset.z) * zs) as f32).collect();
+                    let grid = HeightGrid { z: &zr, nx: *nx, ny: *ny, x0: x0 + o.offset.x, y0: y0 + o.offset.y, dx: *dx, dy: *dy, tiles: *tiles };
+                    self.horizon_trees.push((hk, HorizonTree::build(&grid)));
+                    self.horizon_trees.len() - 1
+                }
+            };
+            let r = self.horizon_trees[idx].1.cull(fc.view_proj, fc.eye, self.width, self.height);
+            visited += r.nodes_visited;
+            culled += r.nodes_culled;
+            mask.extend_from_slice(&r.tile_visible);
+            if horizon.is_none() {
+                horizon = Some(r.horizon);
+            }
+        }
+        (mask, visited, culled, horizon)
     }
 
     /// Renders drawing exactly the tiles in `mask` (CPU-side culling strategies).
@@ -633,11 +697,11 @@ impl Renderer {
         };
         let _ = threshold_px;
         stats.readback_ms = t1.elapsed().as_secs_f64() * 1e3;
-        Ok(RenderOutput { width: w, height: h, image, depth, tile_pixels, tile_drawn, stats, near: fc.near, far: fc.far })
+        Ok(RenderOutput { width: w, height: h, image, depth, tile_pixels, tile_drawn, stats, near: fc.near, far: fc.far, horizon: None })
     }
 }
 
-enum DrawSet {
+pub(crate) enum DrawSet {
     All,
     Mask(Vec<bool>),
     ThreePass { threshold: f64, scale: f64 },

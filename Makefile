@@ -1,0 +1,54 @@
+# geocull: `make demo` renders the demo scene to demo.png; `make test` runs every test.
+# Both do all set-up on a fresh Debian machine (Rust toolchain and Python 3.11 present):
+# the Vulkan software driver (lavapipe) when no Vulkan driver is installed, a .venv with the
+# Python dependencies, and a release build of the extension. Re-running is fast.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
+
+.PHONY: setup vulkan build demo test test-rust test-python bench bench-quick clean
+
+setup: vulkan build
+
+# Mesa's lavapipe renders Vulkan on the CPU; install it only when no Vulkan driver is present.
+vulkan:
+	@if ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 && ldconfig -p | grep -q libvulkan.so.1; then \
+	  echo "vulkan: driver present"; \
+	else \
+	  echo "vulkan: installing libvulkan1 mesa-vulkan-drivers"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null; \
+	fi
+
+$(VENV)/.deps: requirements-dev.txt
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r requirements-dev.txt
+	@touch $@
+
+# Release build of the Rust extension, installed into the venv in editable mode.
+build: $(VENV)/.deps
+	$(VENV)/bin/maturin develop --release -q 2>&1 | grep -v "^📦\|^🔗\|^🐍\|^✏️\|Installed\|Built wheel" || true
+	@$(PY) -c "import geocull._geocull" || (echo "build failed" && exit 1)
+
+demo: setup
+	$(PY) -m geocull demo --out demo.png
+
+test-rust: vulkan
+	cargo test --release
+
+test-python: setup
+	$(PY) -m pytest -q
+
+test: setup test-rust test-python
+
+bench: setup
+	$(PY) -m geocull bench
+
+bench-quick: setup
+	$(PY) -m geocull bench --quick --json out/bench_quick.json
+
+clean:
+	rm -rf $(VENV) target demo.png out

@@ -1,0 +1,15 @@
+"""geocull: fast rendering of geoscience sub-surface scenes by culling what cannot be seen.
+
+>>> import geocull as gc
+>>> scene = gc.Scene()
+>>> hid = scene.add_heightfield(z, origin=(x0, y0), spacing=(dx, dy), tiles=(10, 10), coarse_factor=25)
+>>> cam = gc.Camera.look_at(eye, target)
+>>> res = gc.Renderer(1280, 1024).render(scene, cam, culling="three_pass")
+>>> res.image, res.depth, res.tile_pixels, res.stats
+"""
+
+from ._errors import DeviceError, GeocullError, InputError
+from ._api import Camera, Renderer, RenderResult, Scene
+
+__version__ = "0.1.0"
+__all__ = ["Scene", "Camera", "Renderer", "RenderResult", "GeocullError", "InputError", "DeviceError"]

@@ -1,0 +1,1016 @@
+//! Crack-free isosurface extraction by marching tetrahedra.
+//!
+//! Variant: every cell is split into the 6 tetrahedra of the Kuhn (Freudenthal)
+//! decomposition, all sharing the main diagonal from corner `(0,0,0)` to
+//! `(1,1,1)`: for each permutation `(a,b,c)` of the axes the tetrahedron is
+//! `0, e_a, e_a+e_b, e_a+e_b+e_c`. Each cube face is then cut along the diagonal
+//! from its lowest to its highest corner, the same cut the neighbouring cell
+//! makes, so the triangulation is consistent across every shared face with no
+//! ambiguity to resolve. A tetrahedron contributes one triangle (1 or 3 corners
+//! above) or a quad split into two (2 corners above).
+//!
+//! Surface vertices lie on the 19 edges of the decomposition (12 cube edges,
+//! 6 face diagonals, 1 main diagonal). Every such edge goes from a sample `p` to
+//! `p + d` with `d` in `{0,1}^3`, so `p` is always the endpoint with the lower
+//! linear index. The vertex is computed from the edge alone, always interpolating
+//! from `p` towards `p + d` in `f64`, so two patches that share an edge produce
+//! bit-identical positions and normals.
+//!
+//! Conventions:
+//! * a sample is *above* when `value >= w` (a sample exactly at `w` is above);
+//! * cells touching a NaN sample produce nothing;
+//! * normals are the normalized gradient (central differences, one-sided at the
+//!   border or next to NaN), interpolated along the edge, so they point towards
+//!   *increasing* values; triangles wind counter-clockwise seen from that side
+//!   (the right-hand normal of `(p0,p1,p2)` points towards increasing values);
+//! * a sample exactly at `w` may give zero-area triangles (several edges meet at
+//!   that sample). They are kept: they draw nothing and keep patches consistent.
+//!
+//! The 256-case cell table is generated at first use (`OnceLock`) from the
+//! tetrahedra above; no table is hand-written.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::{Arc, OnceLock, Weak};
+
+use rayon::prelude::*;
+
+use super::octree::NodeInfo;
+use super::Volume;
+
+/// Triangles of one box of cells. Positions are world coordinates.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfacePatch {
+    pub positions: Vec<[f64; 3]>,
+    /// Unit normals pointing towards increasing field values.
+    pub normals: Vec<[f32; 3]>,
+    /// Indices into `positions`/`normals`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl SurfacePatch {
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Concatenates patches (no welding; shared boundary vertices appear once
+    /// per patch with bit-identical positions).
+    pub fn concat<'a, I: IntoIterator<Item = &'a SurfacePatch>>(patches: I) -> SurfacePatch {
+        let mut out = SurfacePatch::default();
+        for p in patches {
+            let base = out.positions.len() as u32;
+            out.positions.extend_from_slice(&p.positions);
+            out.normals.extend_from_slice(&p.normals);
+            out.triangles.extend(
+                p.triangles
+                    .iter()
+                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+            );
+        }
+        out
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Generated tables
+
+struct Tables {
+    /// Edge id -> (lower corner, direction bits); corner bit 0 = x, 1 = y, 2 = z.
+    edges: [(u8, u8); 19],
+    /// Triangles of case `m` are `tris[start[m]..start[m+1]]`, as edge ids.
+    start: [u16; 257],
+    tris: Vec<[u8; 3]>,
+}
+
+fn tables() -> &'static Tables {
+    static T: OnceLock<Tables> = OnceLock::new();
+    T.get_or_init(build_tables)
+}
+
+fn corner_pos(c: u8) -> [f64; 3] {
+    [(c & 1) as f64, ((c >> 1) & 1) as f64, ((c >> 2) & 1) as f64]
+}
+
+fn build_tables() -> Tables {
+    // All comparable corner pairs lo ⊂ hi: exactly the 19 Kuhn edges.
+    let mut edges = [(0u8, 0u8); 19];
+    let mut n = 0;
+    for hi in 0u8..8 {
+        for lo in 0u8..8 {
+            if lo != hi && lo & hi == lo {
+                edges[n] = (lo, hi ^ lo);
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 19);
+    let edge_id = |a: u8, b: u8| -> u8 {
+        let (lo, hi) = if a & b == a { (a, b) } else { (b, a) };
+        assert_eq!(lo & hi, lo, "tetrahedron edge must join comparable corners");
+        edges.iter().position(|&e| e == (lo, hi ^ lo)).unwrap() as u8
+    };
+    let mid = |a: u8, b: u8| -> [f64; 3] {
+        let (pa, pb) = (corner_pos(a), corner_pos(b));
+        [0, 1, 2].map(|i| 0.5 * (pa[i] + pb[i]))
+    };
+
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let tets: Vec<[u8; 4]> = perms
+        .iter()
+        .map(|p| {
+            let a = 1u8 << p[0];
+            let b = a | (1u8 << p[1]);
+            [0, a, b, 7]
+        })
+        .collect();
+
+    let mut start = [0u16; 257];
+    let mut tris = Vec::new();
+    for (m, st) in start.iter_mut().enumerate().take(256) {
+        *st = tris.len() as u16;
+        for t in &tets {
+            let above: Vec<u8> = t.iter().copied().filter(|&c| (m >> c) & 1 == 1).collect();
+            let below: Vec<u8> = t.iter().copied().filter(|&c| (m >> c) & 1 == 0).collect();
+            // polygon as a cycle of (corner, corner) edges
+            let poly: Vec<(u8, u8)> = match above.len() {
+                1 => below.iter().map(|&o| (above[0], o)).collect(),
+                3 => above.iter().map(|&o| (below[0], o)).collect(),
+                2 => vec![
+                    (above[0], below[0]),
+                    (above[0], below[1]),
+                    (above[1], below[1]),
+                    (above[1], below[0]),
+                ],
+                _ => continue,
+            };
+            let ca = centroid(&above.iter().map(|&c| corner_pos(c)).collect::<Vec<_>>());
+            for f in 1..poly.len() - 1 {
+                let mut tri = [poly[0], poly[f], poly[f + 1]];
+                let p = tri.map(|(a, b)| mid(a, b));
+                let nrm = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+                let toward_above = sub(ca, centroid(&p));
+                let s = dot(nrm, toward_above);
+                assert!(s.abs() > 1e-9);
+                if s < 0.0 {
+                    tri.swap(1, 2);
+                }
+                tris.push(tri.map(|(a, b)| edge_id(a, b)));
+            }
+        }
+    }
+    start[256] = tris.len() as u16;
+    Tables { edges, start, tris }
+}
+
+fn centroid(p: &[[f64; 3]]) -> [f64; 3] {
+    let n = p.len() as f64;
+    [0, 1, 2].map(|i| p.iter().map(|q| q[i]).sum::<f64>() / n)
+}
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+// ---------------------------------------------------------------------------
+// Extraction
+
+/// Central-difference gradient at a sample, in world units; one-sided at the
+/// border or next to a NaN neighbour, 0 along an axis with no usable pair.
+fn gradient(vol: &Volume, p: [usize; 3]) -> [f64; 3] {
+    let n = [vol.nx, vol.ny, vol.nz];
+    let v = &vol.values;
+    let c = vol.index(p[0], p[1], p[2]);
+    let vc = v[c] as f64;
+    let stride = [1, vol.nx, vol.nx * vol.ny];
+    let mut g = [0.0; 3];
+    for a in 0..3 {
+        let lo = if p[a] > 0 {
+            Some(v[c - stride[a]] as f64)
+        } else {
+            None
+        }
+        .filter(|x| !x.is_nan());
+        let hi = if p[a] + 1 < n[a] {
+            Some(v[c + stride[a]] as f64)
+        } else {
+            None
+        }
+        .filter(|x| !x.is_nan());
+        let h = vol.spacing[a];
+        g[a] = match (lo, hi) {
+            (Some(l), Some(u)) => (u - l) / (2.0 * h),
+            (None, Some(u)) => (u - vc) / h,
+            (Some(l), None) => (vc - l) / h,
+            (None, None) => 0.0,
+        };
+    }
+    g
+}
+
+/// Vertex on the edge from sample `p` to `q = p + d` (canonical direction:
+/// always interpolated from `p` towards `q`), given both samples' gradients.
+#[inline]
+fn edge_vertex(
+    vol: &Volume,
+    w: f32,
+    p: [usize; 3],
+    q: [usize; 3],
+    ga: [f64; 3],
+    gb: [f64; 3],
+) -> ([f64; 3], [f32; 3]) {
+    let va = vol.values[vol.index(p[0], p[1], p[2])] as f64;
+    let vb = vol.values[vol.index(q[0], q[1], q[2])] as f64;
+    let t = (w as f64 - va) / (vb - va);
+    let pa = vol.sample_position(p[0], p[1], p[2]);
+    let pb = vol.sample_position(q[0], q[1], q[2]);
+    let pos = [0, 1, 2].map(|a| pa[a] + t * (pb[a] - pa[a]));
+
+    let mut g = [0, 1, 2].map(|a| ga[a] + t * (gb[a] - ga[a]));
+    let mut len = dot(g, g).sqrt();
+    if len.is_nan() || len <= 0.0 || len.is_infinite() {
+        // Degenerate gradient: fall back to the edge direction, oriented
+        // towards the higher endpoint value.
+        let s = if vb > va { 1.0 } else { -1.0 };
+        g = sub(pb, pa).map(|x| x * s);
+        len = dot(g, g).sqrt();
+    }
+    (pos, g.map(|x| (x / len) as f32))
+}
+
+const NONE: u32 = u32::MAX;
+
+/// Lazily computed sample gradients of two consecutive sample layers.
+struct GradLayers {
+    sx: usize,
+    g: [Vec<[f64; 3]>; 2],
+    ok: [Vec<bool>; 2],
+}
+
+impl GradLayers {
+    fn new(sx: usize, sy: usize) -> Self {
+        let n = sx * sy;
+        GradLayers {
+            sx,
+            g: [vec![[0.0; 3]; n], vec![[0.0; 3]; n]],
+            ok: [vec![false; n], vec![false; n]],
+        }
+    }
+    /// Gradient of local sample `(lx, ly)` in layer `layer` (0 = k, 1 = k+1);
+    /// `p` is its global index.
+    #[inline]
+    fn get(&mut self, vol: &Volume, lx: usize, ly: usize, layer: usize, p: [usize; 3]) -> [f64; 3] {
+        let i = ly * self.sx + lx;
+        if !self.ok[layer][i] {
+            self.g[layer][i] = gradient(vol, p);
+            self.ok[layer][i] = true;
+        }
+        self.g[layer][i]
+    }
+    /// Moves layer k+1 down to layer k.
+    fn advance(&mut self) {
+        self.g.swap(0, 1);
+        self.ok.swap(0, 1);
+        self.ok[1].fill(false);
+    }
+}
+
+struct SerialOut {
+    patch: SurfacePatch,
+    /// Vertex ids of the in-plane edges of the bottom / top sample layer
+    /// (slot `3*(y*sx + x) + dir-1`), for welding z-chunks.
+    bottom: Vec<u32>,
+    top: Vec<u32>,
+}
+
+/// Single-threaded extraction of cells `lo..hi` (already clamped, non-empty).
+fn extract_serial(
+    vol: &Volume,
+    w: f32,
+    lo: [usize; 3],
+    hi: [usize; 3],
+    keep_planes: bool,
+) -> SerialOut {
+    let tb = tables();
+    let sx = hi[0] - lo[0] + 1;
+    let sy = hi[1] - lo[1] + 1;
+    let plane_len = sx * sy;
+    let mut plane_a = vec![NONE; 3 * plane_len]; // in-plane edges of layer k
+    let mut plane_b = vec![NONE; 3 * plane_len]; // in-plane edges of layer k+1
+    let mut zedges = vec![NONE; 4 * plane_len]; // edges from layer k to k+1
+    let mut grads = GradLayers::new(sx, sy);
+    let mut bottom = Vec::new();
+    let mut patch = SurfacePatch::default();
+
+    let (nx, nxy) = (vol.nx, vol.nx * vol.ny);
+    let offs = [0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1];
+    let v = &vol.values[..];
+
+    for k in lo[2]..hi[2] {
+        if k > lo[2] {
+            plane_b.fill(NONE);
+            zedges.fill(NONE);
+            grads.advance();
+        }
+        for j in lo[1]..hi[1] {
+            let row = vol.index(0, j, k);
+            for i in lo[0]..hi[0] {
+                let base = row + i;
+                let mut mask = 0usize;
+                let mut nan = false;
+                for (n, o) in offs.iter().enumerate() {
+                    let x = v[base + o];
+                    nan |= x.is_nan();
+                    mask |= ((x >= w) as usize) << n;
+                }
+                if nan || mask == 0 || mask == 255 {
+                    continue;
+                }
+                let (li, lj) = (i - lo[0], j - lo[1]);
+                for tri in &tb.tris[tb.start[mask] as usize..tb.start[mask + 1] as usize] {
+                    let mut out = [0u32; 3];
+                    for (s, &e) in tri.iter().enumerate() {
+                        let (lc, d) = tb.edges[e as usize];
+                        let px = li + (lc & 1) as usize;
+                        let py = lj + ((lc >> 1) & 1) as usize;
+                        let pz = (lc >> 2) as usize;
+                        let cell = py * sx + px;
+                        let slot = if pz != 0 {
+                            &mut plane_b[3 * cell + d as usize - 1]
+                        } else if d & 4 != 0 {
+                            &mut zedges[4 * cell + d as usize - 4]
+                        } else {
+                            &mut plane_a[3 * cell + d as usize - 1]
+                        };
+                        if *slot == NONE {
+                            let (qx, qy, qz) = (
+                                px + (d & 1) as usize,
+                                py + ((d >> 1) & 1) as usize,
+                                pz + ((d >> 2) & 1) as usize,
+                            );
+                            let p = [lo[0] + px, lo[1] + py, k + pz];
+                            let q = [lo[0] + qx, lo[1] + qy, k + qz];
+                            let ga = grads.get(vol, px, py, pz, p);
+                            let gb = grads.get(vol, qx, qy, qz, q);
+                            let (pos, nrm) = edge_vertex(vol, w, p, q, ga, gb);
+                            *slot = patch.positions.len() as u32;
+                            patch.positions.push(pos);
+                            patch.normals.push(nrm);
+                        }
+                        out[s] = *slot;
+                    }
+                    patch.triangles.push(out);
+                }
+            }
+        }
+        if keep_planes && k == lo[2] {
+            bottom = plane_a.clone();
+        }
+        std::mem::swap(&mut plane_a, &mut plane_b);
+    }
+    SerialOut {
+        patch,
+        bottom,
+        top: if keep_planes { plane_a } else { Vec::new() },
+    }
+}
+
+/// Clamps a cell box to the volume; `None` when empty.
+fn clamp_box(
+    vol: &Volume,
+    cell_lo: [u32; 3],
+    cell_hi: [u32; 3],
+) -> Option<([usize; 3], [usize; 3])> {
+    let cells = vol.cells();
+    let hi = [0, 1, 2].map(|a| (cell_hi[a] as usize).min(cells[a]));
+    let lo = [0, 1, 2].map(|a| (cell_lo[a] as usize).min(hi[a]));
+    if (0..3).any(|a| lo[a] >= hi[a]) {
+        None
+    } else {
+        Some((lo, hi))
+    }
+}
+
+/// Boxes with at least this many cells are split into z-chunks and extracted
+/// in parallel by [`extract`].
+const PARALLEL_MIN_CELLS: usize = 32 * 32 * 32;
+
+/// Splits `v` into consecutive mutable pieces of the given lengths.
+fn split_lengths<'a, T>(mut v: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(lens.len());
+    for &l in lens {
+        let (a, b) = std::mem::take(&mut v).split_at_mut(l);
+        out.push(a);
+        v = b;
+    }
+    out
+}
+
+/// Extracts the isosurface `w` in the cell box `[cell_lo, cell_hi)` (clamped to
+/// the volume). Positions are world coordinates; vertices are shared between
+/// the triangles of the box. Large boxes are processed in parallel z-chunks
+/// and welded; the result does not depend on the thread count.
+pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> SurfacePatch {
+    let Some((lo, hi)) = clamp_box(vol, cell_lo, cell_hi) else {
+        return SurfacePatch::default();
+    };
+    let layers = hi[2] - lo[2];
+    let cells = (hi[0] - lo[0]) * (hi[1] - lo[1]) * layers;
+    if cells < PARALLEL_MIN_CELLS || layers < 2 {
+        return extract_serial(vol, w, lo, hi, false).patch;
+    }
+    // Fixed chunking (independent of the thread count) for reproducible output.
+    let nchunks = layers.min(64).min(cells / (PARALLEL_MIN_CELLS / 4)).max(2);
+    let bounds: Vec<(usize, usize)> = (0..nchunks)
+        .map(|c| {
+            (
+                lo[2] + layers * c / nchunks,
+                lo[2] + layers * (c + 1) / nchunks,
+            )
+        })
+        .collect();
+    let parts: Vec<SerialOut> = bounds
+        .par_iter()
+        .map(|&(z0, z1)| extract_serial(vol, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true))
+        .collect();
+
+    // Weld: a chunk's bottom-plane vertices are the previous chunk's top-plane
+    // vertices (same edges, bit-identical), and those are never themselves
+    // shared (a chunk has >= 1 layer). Every other vertex is "own"; a chunk's
+    // own vertices get consecutive global ids, in local order.
+    struct Numbering {
+        shared_from: Vec<u32>, // prev-chunk local id, or NONE
+        own_local: Vec<u32>,   // index among own vertices, or NONE
+        own: usize,
+    }
+    let numberings: Vec<Numbering> = (0..parts.len())
+        .into_par_iter()
+        .map(|c| {
+            let n = parts[c].patch.positions.len();
+            let mut shared_from = vec![NONE; n];
+            if c > 0 {
+                let prev_top = &parts[c - 1].top;
+                for (s, &b) in parts[c].bottom.iter().enumerate() {
+                    if b != NONE && prev_top[s] != NONE {
+                        shared_from[b as usize] = prev_top[s];
+                    }
+                }
+            }
+            let mut own_local = vec![NONE; n];
+            let mut own = 0usize;
+            for (l, &sf) in shared_from.iter().enumerate() {
+                if sf == NONE {
+                    own_local[l] = own as u32;
+                    own += 1;
+                }
+            }
+            Numbering {
+                shared_from,
+                own_local,
+                own,
+            }
+        })
+        .collect();
+    let mut base = Vec::with_capacity(parts.len());
+    let mut total = 0usize;
+    for nb in &numberings {
+        base.push(total as u32);
+        total += nb.own;
+    }
+    let own_lens: Vec<usize> = numberings.iter().map(|nb| nb.own).collect();
+    let tri_lens: Vec<usize> = parts.iter().map(|p| p.patch.triangles.len()).collect();
+
+    let mut out = SurfacePatch {
+        positions: vec![[0.0; 3]; total],
+        normals: vec![[0.0; 3]; total],
+        triangles: vec![[0; 3]; tri_lens.iter().sum()],
+    };
+    let pos_parts = split_lengths(&mut out.positions, &own_lens);
+    let nrm_parts = split_lengths(&mut out.normals, &own_lens);
+    let tri_parts = split_lengths(&mut out.triangles, &tri_lens);
+    pos_parts
+        .into_par_iter()
+        .zip(nrm_parts)
+        .zip(tri_parts)
+        .enumerate()
+        .for_each(|(c, ((pos, nrm), tri))| {
+            let nb = &numberings[c];
+            let part = &parts[c].patch;
+            for (l, &o) in nb.own_local.iter().enumerate() {
+                if o != NONE {
+                    pos[o as usize] = part.positions[l];
+                    nrm[o as usize] = part.normals[l];
+                }
+            }
+            let global = |l: u32| -> u32 {
+                let o = nb.own_local[l as usize];
+                if o != NONE {
+                    base[c] + o
+                } else {
+                    let prev = &numberings[c - 1];
+                    base[c - 1] + prev.own_local[nb.shared_from[l as usize] as usize]
+                }
+            };
+            for (dst, src) in tri.iter_mut().zip(&part.triangles) {
+                *dst = src.map(global);
+            }
+        });
+    out
+}
+
+/// Extracts one patch per node (over the node's cell box), in parallel.
+pub fn extract_nodes(vol: &Volume, w: f32, nodes: &[NodeInfo]) -> Vec<SurfacePatch> {
+    nodes
+        .par_iter()
+        .map(|n| extract(vol, w, n.cell_lo, n.cell_hi))
+        .collect()
+}
+
+// ---------------------------------------------------------------------------
+// Cache
+
+/// Cache key: `(isovalue bits, depth, ix, iy, iz)`.
+pub type PatchKey = (u32, u32, u32, u32, u32);
+
+/// Key for isovalue `w` and `node`; `-0.0` and `0.0` share a key.
+pub fn patch_key(w: f32, node: &NodeInfo) -> PatchKey {
+    let w = if w == 0.0 { 0.0f32 } else { w };
+    (w.to_bits(), node.depth, node.ix, node.iy, node.iz)
+}
+
+struct Source {
+    values: Weak<[f32]>,
+    dims: [usize; 3],
+    origin: [f64; 3],
+    spacing: [f64; 3],
+}
+
+impl Source {
+    fn of(vol: &Volume) -> Self {
+        Source {
+            values: Arc::downgrade(&vol.values),
+            dims: [vol.nx, vol.ny, vol.nz],
+            origin: vol.origin,
+            spacing: vol.spacing,
+        }
+    }
+    fn matches(&self, vol: &Volume) -> bool {
+        // The Weak keeps the allocation's address from being reused.
+        std::ptr::eq(
+            self.values.as_ptr() as *const f32,
+            Arc::as_ptr(&vol.values) as *const f32,
+        ) && self.dims == [vol.nx, vol.ny, vol.nz]
+            && self.origin == vol.origin
+            && self.spacing == vol.spacing
+    }
+}
+
+/// Extracted patches keyed by `(isovalue bits, depth, ix, iy, iz)`, so later
+/// frames reuse earlier extractions. The cache remembers which volume it was
+/// filled from (the `values` allocation plus geometry) and clears itself when
+/// asked about a different one. Nodes must come from a [`MinMaxOctree`] of
+/// that volume.
+///
+/// [`MinMaxOctree`]: super::octree::MinMaxOctree
+#[derive(Default)]
+pub struct PatchCache {
+    map: HashMap<PatchKey, Arc<SurfacePatch>>,
+    source: Option<Source>,
+}
+
+impl PatchCache {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn bind(&mut self, vol: &Volume) {
+        if !self.source.as_ref().is_some_and(|s| s.matches(vol)) {
+            self.map.clear();
+            self.source = Some(Source::of(vol));
+        }
+    }
+
+    /// One patch per node, in order: cached ones are shared, missing ones are
+    /// extracted in parallel and inserted.
+    pub fn get_or_extract_many(
+        &mut self,
+        vol: &Volume,
+        w: f32,
+        nodes: &[NodeInfo],
+    ) -> Vec<Arc<SurfacePatch>> {
+        self.bind(vol);
+        let mut seen = HashSet::new();
+        let missing: Vec<&NodeInfo> = nodes
+            .iter()
+            .filter(|n| {
+                let k = patch_key(w, n);
+                !self.map.contains_key(&k) && seen.insert(k)
+            })
+            .collect();
+        let fresh: Vec<(PatchKey, Arc<SurfacePatch>)> = missing
+            .par_iter()
+            .map(|n| {
+                (
+                    patch_key(w, n),
+                    Arc::new(extract(vol, w, n.cell_lo, n.cell_hi)),
+                )
+            })
+            .collect();
+        self.map.extend(fresh);
+        nodes
+            .iter()
+            .map(|n| self.map[&patch_key(w, n)].clone())
+            .collect()
+    }
+
+    /// The cached patch for `(w, node)`, if any.
+    pub fn get(&self, w: f32, node: &NodeInfo) -> Option<Arc<SurfacePatch>> {
+        self.map.get(&patch_key(w, node)).cloned()
+    }
+
+    /// Drops every patch not extracted at isovalue `w`.
+    pub fn retain_isovalue(&mut self, w: f32) {
+        let bits = if w == 0.0 { 0.0f32 } else { w }.to_bits();
+        self.map.retain(|k, _| k.0 == bits);
+    }
+
+    pub fn len(&self) -> usize {
+        self.map.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.map.clear();
+        self.source = None;
+    }
+}
+
+// ---------------------------------------------------------------------------
+
+#[cfg(test)]
+mod tests {
+    use super::super::octree::MinMaxOctree;
+    use super::super::{pesco_synthetic, sphere_field};
+    use super::*;
+    use std::collections::BTreeMap;
+    use std::time::Instant;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    type PosKey = [u64; 3];
+    fn pk(p: [f64; 3]) -> PosKey {
+        p.map(f64::to_bits)
+    }
+
+    /// Welds by bit-identical position; returns (unique positions, triangles
+    /// as welded ids, with degenerate ones dropped).
+    fn weld(patch: &SurfacePatch) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let mut ids: HashMap<PosKey, u32> = HashMap::new();
+        let mut pos = Vec::new();
+        let map: Vec<u32> = patch
+            .positions
+            .iter()
+            .map(|&p| {
+                *ids.entry(pk(p)).or_insert_with(|| {
+                    pos.push(p);
+                    pos.len() as u32 - 1
+                })
+            })
+            .collect();
+        let tris = patch
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| map[i as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect();
+        (pos, tris)
+    }
+
+    /// Sorted triangles as position triples, rotated to a canonical start
+    /// (keeps winding).
+    fn tri_set(patch: &SurfacePatch) -> Vec<[PosKey; 3]> {
+        let mut v: Vec<[PosKey; 3]> = patch
+            .triangles
+            .iter()
+            .map(|t| {
+                let p = t.map(|i| pk(patch.positions[i as usize]));
+                let m = (0..3).min_by_key(|&r| p[r]).unwrap();
+                [p[m], p[(m + 1) % 3], p[(m + 2) % 3]]
+            })
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn vertex_set(patch: &SurfacePatch) -> Vec<PosKey> {
+        let mut v: Vec<PosKey> = patch.positions.iter().map(|&p| pk(p)).collect();
+        v.sort();
+        v.dedup();
+        v
+    }
+
+    fn assert_closed_oriented(patch: &SurfacePatch) {
+        let (_, tris) = weld(patch);
+        assert!(!tris.is_empty());
+        let mut directed: BTreeMap<(u32, u32), u32> = BTreeMap::new();
+        for t in &tris {
+            for e in 0..3 {
+                *directed.entry((t[e], t[(e + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &n) in &directed {
+            assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
+            assert_eq!(
+                directed.get(&(b, a)),
+                Some(&1),
+                "edge {a}-{b} is a border or non-manifold"
+            );
+        }
+    }
+
+    fn area(patch: &SurfacePatch) -> f64 {
+        patch
+            .triangles
+            .iter()
+            .map(|t| {
+                let p = t.map(|i| patch.positions[i as usize]);
+                let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+                0.5 * dot(c, c).sqrt()
+            })
+            .sum()
+    }
+
+    fn full(vol: &Volume, w: f32) -> SurfacePatch {
+        extract(vol, w, [0; 3], [u32::MAX; 3])
+    }
+
+    #[test]
+    fn table_is_sane() {
+        let t = tables();
+        assert_eq!(t.start[0], t.start[1]);
+        assert_eq!(t.start[255], t.start[256]);
+        // complementary cases cut the same edges, with opposite orientation
+        let area_vec = |m: usize| {
+            let mut e: Vec<u8> = Vec::new();
+            let mut n = [0.0; 3];
+            for tri in &t.tris[t.start[m] as usize..t.start[m + 1] as usize] {
+                e.extend_from_slice(tri);
+                let p = tri.map(|id| {
+                    let (lo, d) = t.edges[id as usize];
+                    let (a, b) = (corner_pos(lo), corner_pos(lo | d));
+                    [0, 1, 2].map(|i| 0.5 * (a[i] + b[i]))
+                });
+                let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+                n = [0, 1, 2].map(|i| n[i] + c[i]);
+            }
+            e.sort();
+            e.dedup();
+            (e, n)
+        };
+        for m in 0..256usize {
+            let (ea, na) = area_vec(m);
+            let (eb, nb) = area_vec(255 - m);
+            assert_eq!(ea, eb);
+            assert!((0..3).all(|i| (na[i] + nb[i]).abs() < 1e-12));
+        }
+        // at most 12 triangles per cell (6 tets x 2)
+        assert!((0..256).all(|m| t.start[m + 1] - t.start[m] <= 12));
+    }
+
+    #[test]
+    fn per_node_matches_whole_volume() {
+        let mut rng = Lcg(7);
+        let vols = vec![pesco_synthetic(37), sphere_field(29, 0.63), {
+            // random field with some NaNs, odd dims
+            let dims = (13, 9, 21);
+            let v: Vec<f32> = (0..dims.0 * dims.1 * dims.2)
+                .map(|_| {
+                    if rng.unit() < 0.03 {
+                        f32::NAN
+                    } else {
+                        rng.unit() - 0.5
+                    }
+                })
+                .collect();
+            Volume::new(v.into(), dims, [0.25, 1.0, -3.0], [0.3, 0.7, 0.11]).unwrap()
+        }];
+        for vol in &vols {
+            let w = 0.0;
+            let whole = full(vol, w);
+            assert!(!whole.is_empty());
+            let tree = MinMaxOctree::build(vol);
+            for d in [tree.max_depth(), tree.max_depth().saturating_sub(2), 0] {
+                let nodes = tree.straddling_at_depth(w, d);
+                let patches = extract_nodes(vol, w, &nodes);
+                let joined = SurfacePatch::concat(&patches);
+                assert_eq!(joined.triangle_count(), whole.triangle_count(), "depth {d}");
+                assert_eq!(vertex_set(&joined), vertex_set(&whole), "depth {d}");
+                assert_eq!(tri_set(&joined), tri_set(&whole), "depth {d}");
+                // non-straddling nodes yield nothing
+                for n in tree.nodes_at_depth(d) {
+                    if !n.straddles(w) {
+                        assert!(extract(vol, w, n.cell_lo, n.cell_hi).is_empty());
+                    }
+                }
+            }
+            // serial == parallel chunked
+            let cells = vol.cells();
+            let serial = extract_serial(vol, w, [0; 3], cells, false).patch;
+            assert_eq!(serial.triangle_count(), whole.triangle_count());
+            assert_eq!(tri_set(&serial), tri_set(&whole));
+            assert_eq!(serial.vertex_count(), whole.vertex_count());
+        }
+    }
+
+    #[test]
+    fn sphere_closed_area_normals() {
+        let r = 0.7;
+        let vol = sphere_field(64, r);
+        let p = full(&vol, 0.0);
+        assert_closed_oriented(&p);
+        let a = area(&p);
+        let exact = 4.0 * std::f64::consts::PI * r * r;
+        let err = (a - exact).abs() / exact;
+        println!(
+            "sphere n=64: {} tris, area {a:.5} vs {exact:.5} ({:.3}%)",
+            p.triangle_count(),
+            err * 100.0
+        );
+        assert!(err < 0.02);
+        // vertices on the sphere, normals outward, winding agrees with normals
+        for (q, n) in p.positions.iter().zip(&p.normals) {
+            let len = dot(*q, *q).sqrt();
+            assert!((len - r).abs() < 0.01);
+            let nn = n.map(|x| x as f64);
+            assert!((dot(nn, nn).sqrt() - 1.0).abs() < 1e-5);
+            assert!(dot(nn, *q) / len > 0.95);
+        }
+        for t in &p.triangles {
+            let q = t.map(|i| p.positions[i as usize]);
+            let c = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+            let centre = centroid(&q);
+            assert!(dot(c, centre) >= 0.0);
+        }
+        // patches per octree node, joined, are also closed (crack-free)
+        let tree = MinMaxOctree::build(&vol);
+        for d in [tree.max_depth(), tree.max_depth() - 2, 1] {
+            let nodes = tree.straddling_at_depth(0.0, d);
+            let joined = SurfacePatch::concat(&extract_nodes(&vol, 0.0, &nodes));
+            assert_closed_oriented(&joined);
+        }
+    }
+
+    #[test]
+    fn samples_exactly_at_isovalue() {
+        // isovalue hitting samples exactly: no panic, still closed after welding
+        let vol = sphere_field(21, 0.5);
+        let vals: Vec<f32> = vol
+            .values
+            .iter()
+            .map(|v| (v * 10.0).round() / 10.0)
+            .collect();
+        let q = Volume::new(vals.into(), (21, 21, 21), vol.origin, vol.spacing).unwrap();
+        let p = full(&q, 0.0);
+        assert_closed_oriented(&p);
+    }
+
+    #[test]
+    fn no_surface_cases() {
+        let vol = sphere_field(17, 0.5);
+        // wholly above: every value >= w
+        assert!(full(&vol, -10.0).is_empty());
+        // wholly below
+        assert!(full(&vol, 10.0).is_empty());
+        // constant field equal to w counts as above
+        let c = Volume::new(vec![1.0f32; 27].into(), (3, 3, 3), [0.0; 3], [1.0; 3]).unwrap();
+        assert!(full(&c, 1.0).is_empty());
+        // empty / out-of-range boxes
+        assert!(extract(&vol, 0.0, [5, 5, 5], [5, 9, 9]).is_empty());
+        assert!(extract(&vol, 0.0, [100, 0, 0], [200, 9, 9]).is_empty());
+        assert!(full(&vol, f32::NAN).is_empty());
+    }
+
+    #[test]
+    fn nan_handling() {
+        let mut rng = Lcg(99);
+        let base = pesco_synthetic(24);
+        let vals: Vec<f32> = base
+            .values
+            .iter()
+            .map(|&v| if rng.unit() < 0.1 { f32::NAN } else { v })
+            .collect();
+        let vol = Volume::new(vals.into(), (24, 24, 24), base.origin, base.spacing).unwrap();
+        let p = full(&vol, 0.0);
+        assert!(!p.is_empty());
+        assert!(p.positions.iter().flatten().all(|x| x.is_finite()));
+        assert!(p.normals.iter().flatten().all(|x| x.is_finite()));
+        let tree = MinMaxOctree::build(&vol);
+        let nodes = tree.straddling_at_depth(0.0, tree.max_depth() - 1);
+        let joined = SurfacePatch::concat(&extract_nodes(&vol, 0.0, &nodes));
+        assert_eq!(tri_set(&joined), tri_set(&p));
+        // all-NaN volume
+        let nanv = Volume::new(vec![f32::NAN; 64].into(), (4, 4, 4), [0.0; 3], [1.0; 3]).unwrap();
+        assert!(full(&nanv, 0.0).is_empty());
+        let t = MinMaxOctree::build(&nanv);
+        assert!(t.straddling_at_depth(0.0, 5).is_empty());
+    }
+
+    #[test]
+    fn cache_reuses_patches() {
+        let vol = pesco_synthetic(33);
+        let tree = MinMaxOctree::build(&vol);
+        let nodes = tree.straddling_at_depth(0.0, 3);
+        let mut cache = PatchCache::new();
+        let a = cache.get_or_extract_many(&vol, 0.0, &nodes);
+        assert_eq!(cache.len(), nodes.len());
+        let b = cache.get_or_extract_many(&vol, 0.0, &nodes);
+        assert_eq!(a.len(), b.len());
+        assert!(a.iter().zip(&b).all(|(x, y)| Arc::ptr_eq(x, y)));
+        assert!(Arc::ptr_eq(&cache.get(-0.0, &nodes[0]).unwrap(), &a[0]));
+        // duplicates in one request share one patch
+        let dup = vec![nodes[0], nodes[0]];
+        let c = cache.get_or_extract_many(&vol, 0.0, &dup);
+        assert!(Arc::ptr_eq(&c[0], &c[1]) && Arc::ptr_eq(&c[0], &a[0]));
+        // another isovalue adds entries
+        let _ = cache.get_or_extract_many(&vol, 0.5, &nodes[..1]);
+        assert_eq!(cache.len(), nodes.len() + 1);
+        cache.retain_isovalue(0.0);
+        assert_eq!(cache.len(), nodes.len());
+        // a different volume clears the cache
+        let other = pesco_synthetic(33);
+        let d = cache.get_or_extract_many(&other, 0.0, &nodes[..1]);
+        assert_eq!(cache.len(), 1);
+        assert!(!Arc::ptr_eq(&d[0], &a[0]));
+        assert_eq!(*d[0], *a[0]);
+        cache.clear();
+        assert!(cache.is_empty());
+    }
+
+    #[test]
+    fn timing_pesco() {
+        for n in [128usize, 256] {
+            let t0 = Instant::now();
+            let vol = pesco_synthetic(n);
+            let t_vol = t0.elapsed();
+            let t1 = Instant::now();
+            let tree = MinMaxOctree::build(&vol);
+            let t_tree = t1.elapsed();
+            let t2 = Instant::now();
+            let p = full(&vol, 0.0);
+            let t_full = t2.elapsed();
+            let t3 = Instant::now();
+            let nodes = tree.straddling_at_depth(0.0, tree.max_depth().saturating_sub(4));
+            let patches = extract_nodes(&vol, 0.0, &nodes);
+            let t_nodes = t3.elapsed();
+            let nt: usize = patches.iter().map(|p| p.triangle_count()).sum();
+            assert_eq!(nt, p.triangle_count());
+            println!(
+                "pesco_synthetic({n}) on {} threads: sample {:?}, octree {:?}, full extract {:?} \
+                 -> {} triangles, {} vertices; {} straddling nodes at depth {} extract {:?}",
+                rayon::current_num_threads(),
+                t_vol,
+                t_tree,
+                t_full,
+                p.triangle_count(),
+                p.vertex_count(),
+                nodes.len(),
+                tree.max_depth().saturating_sub(4),
+                t_nodes
+            );
+        }
+    }
+}

@@ -1,0 +1,215 @@
+//! Isosurface core for view-dependent ("implicit occluder") extraction.
+//!
+//! After Pesco, Lindstrom, Pascucci, Silva, "Implicit Occluders": a min/max
+//! octree over the cells of a scalar volume tells which blocks can contain the
+//! isosurface `f = w`; the renderer tests those blocks against a GPU occlusion
+//! map and asks this module to triangulate only the visible ones.
+//!
+//! * [`Volume`]: a regular scalar grid (x fastest, then y, then z).
+//! * [`octree::MinMaxOctree`]: per-node min/max over cells, built with rayon.
+//! * [`mc`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
+//!   cells, plus a patch cache keyed by isovalue and node.
+//!
+//! This file is meant to become `src/iso/mod.rs` of the main crate; the
+//! submodules refer to it only through `super::`.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+pub mod mc;
+pub mod render;
+pub mod octree;
+
+pub use mc::{extract, extract_nodes, PatchCache, SurfacePatch};
+pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
+
+/// A scalar field sampled on a regular grid.
+///
+/// `values` is indexed `values[(k*ny + j)*nx + i]`, where `k` is the z index,
+/// `j` the y index and `i` the x index. Sample `(i,j,k)` sits at world
+/// position `origin + (i,j,k) * spacing`. NaN samples mean "no data".
+#[derive(Clone, Debug)]
+pub struct Volume {
+    pub values: Arc<[f32]>,
+    pub nx: usize,
+    pub ny: usize,
+    pub nz: usize,
+    pub origin: [f64; 3],
+    pub spacing: [f64; 3],
+}
+
+impl Volume {
+    /// Checks that `values.len() == nx*ny*nz`, that every dimension has at
+    /// least 2 samples (one cell), that the cell count per axis fits in `u32`,
+    /// and that origin and spacing are finite with positive spacing.
+    pub fn new(
+        values: Arc<[f32]>,
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+    ) -> Result<Self, String> {
+        let (nx, ny, nz) = dims;
+        if nx < 2 || ny < 2 || nz < 2 {
+            return Err(format!(
+                "volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}"
+            ));
+        }
+        if nx > u32::MAX as usize / 2 || ny > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
+            return Err(format!("volume dimensions {nx}x{ny}x{nz} too large"));
+        }
+        let n = nx
+            .checked_mul(ny)
+            .and_then(|v| v.checked_mul(nz))
+            .ok_or_else(|| format!("volume dimensions {nx}x{ny}x{nz} overflow"))?;
+        if values.len() != n {
+            return Err(format!(
+                "volume of {nx}x{ny}x{nz} needs {n} values, got {}",
+                values.len()
+            ));
+        }
+        if origin.iter().any(|o| !o.is_finite()) {
+            return Err(format!("volume origin {origin:?} is not finite"));
+        }
+        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+            return Err(format!("volume spacing {spacing:?} must be finite and > 0"));
+        }
+        Ok(Volume {
+            values,
+            nx,
+            ny,
+            nz,
+            origin,
+            spacing,
+        })
+    }
+
+    /// Linear index of sample `(i,j,k)`.
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        (k * self.ny + j) * self.nx + i
+    }
+
+    /// Sample value at `(i,j,k)`. Panics when out of range.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize, k: usize) -> f32 {
+        debug_assert!(i < self.nx && j < self.ny && k < self.nz);
+        self.values[self.index(i, j, k)]
+    }
+
+    /// Number of cells per axis: `(nx-1, ny-1, nz-1)`.
+    #[inline]
+    pub fn cells(&self) -> [usize; 3] {
+        [self.nx - 1, self.ny - 1, self.nz - 1]
+    }
+
+    /// World position of sample `(i,j,k)`.
+    #[inline]
+    pub fn sample_position(&self, i: usize, j: usize, k: usize) -> [f64; 3] {
+        [
+            self.origin[0] + i as f64 * self.spacing[0],
+            self.origin[1] + j as f64 * self.spacing[1],
+            self.origin[2] + k as f64 * self.spacing[2],
+        ]
+    }
+
+    /// World-space bounding box `(min, max)` of the samples.
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        (
+            self.origin,
+            self.sample_position(self.nx - 1, self.ny - 1, self.nz - 1),
+        )
+    }
+
+    /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).
+    pub fn from_fn<F>(
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+        f: F,
+    ) -> Result<Self, String>
+    where
+        F: Fn(f64, f64, f64) -> f32 + Sync,
+    {
+        let (nx, ny, nz) = dims;
+        let slice = nx.checked_mul(ny).ok_or("volume dimensions overflow")?;
+        let total = slice.checked_mul(nz).ok_or("volume dimensions overflow")?;
+        let mut v = vec![0.0f32; total];
+        if slice > 0 {
+            v.par_chunks_mut(slice).enumerate().for_each(|(k, s)| {
+                let z = origin[2] + k as f64 * spacing[2];
+                for j in 0..ny {
+                    let y = origin[1] + j as f64 * spacing[1];
+                    for i in 0..nx {
+                        let x = origin[0] + i as f64 * spacing[0];
+                        s[j * nx + i] = f(x, y, z);
+                    }
+                }
+            });
+        }
+        Volume::new(v.into(), dims, origin, spacing)
+    }
+}
+
+/// The paper's synthetic field `f(x,y,z) = sin(x*y*z/8) + cos((x-2)(y-2)(z-2))`
+/// on `[-5,5]^3`, sampled at `n^3` points (`n >= 2`). Extract it at isovalue 0.
+pub fn pesco_synthetic(n: usize) -> Volume {
+    let n = n.max(2);
+    let h = 10.0 / (n - 1) as f64;
+    Volume::from_fn((n, n, n), [-5.0; 3], [h; 3], |x, y, z| {
+        ((x * y * z / 8.0).sin() + ((x - 2.0) * (y - 2.0) * (z - 2.0)).cos()) as f32
+    })
+    .expect("valid synthetic volume")
+}
+
+/// Signed distance to a sphere for tests: `value = |p - c| - radius`, with
+/// `c = (0,0,0)`, sampled at `n^3` points (`n >= 2`) on the cube `[-1,1]^3`.
+/// Use `radius < 1` for a closed surface; extract at isovalue 0.
+pub fn sphere_field(n: usize, radius: f64) -> Volume {
+    let n = n.max(2);
+    let h = 2.0 / (n - 1) as f64;
+    Volume::from_fn((n, n, n), [-1.0; 3], [h; 3], |x, y, z| {
+        ((x * x + y * y + z * z).sqrt() - radius) as f32
+    })
+    .expect("valid sphere volume")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volume_new_validates() {
+        let v: Arc<[f32]> = vec![0.0; 8].into();
+        assert!(Volume::new(v.clone(), (2, 2, 2), [0.0; 3], [1.0; 3]).is_ok());
+        assert!(Volume::new(v.clone(), (2, 2, 3), [0.0; 3], [1.0; 3]).is_err());
+        assert!(Volume::new(v.clone(), (8, 1, 1), [0.0; 3], [1.0; 3]).is_err());
+        assert!(Volume::new(v.clone(), (2, 2, 2), [0.0; 3], [0.0, 1.0, 1.0]).is_err());
+        assert!(Volume::new(v, (2, 2, 2), [f64::NAN, 0.0, 0.0], [1.0; 3]).is_err());
+    }
+
+    #[test]
+    fn volume_indexing_and_bounds() {
+        let vals: Vec<f32> = (0..24).map(|x| x as f32).collect();
+        let v = Volume::new(vals.into(), (2, 3, 4), [1.0, 2.0, 3.0], [0.5, 1.0, 2.0]).unwrap();
+        assert_eq!(v.get(1, 0, 0), 1.0);
+        assert_eq!(v.get(0, 1, 0), 2.0);
+        assert_eq!(v.get(0, 0, 1), 6.0);
+        assert_eq!(v.get(1, 2, 3), 23.0);
+        let (lo, hi) = v.bounds();
+        assert_eq!(lo, [1.0, 2.0, 3.0]);
+        assert_eq!(hi, [1.5, 4.0, 9.0]);
+    }
+
+    #[test]
+    fn synthetic_fields() {
+        let p = pesco_synthetic(11);
+        assert_eq!(p.bounds(), ([-5.0; 3], [5.0; 3]));
+        // at (0,0,0): sin(0) + cos(-8)
+        let f = (0.0f64.sin() + (-8.0f64).cos()) as f32;
+        assert_eq!(p.get(5, 5, 5), f);
+        let s = sphere_field(5, 0.5);
+        assert_eq!(s.get(2, 2, 2), -0.5);
+        assert_eq!(s.get(4, 2, 2), 0.5);
+    }
+}

@@ -1,0 +1,521 @@
+//! Min/max octree over the cells of a [`Volume`].
+//!
+//! Cell `(i,j,k)` spans samples `i..=i+1`, `j..=j+1`, `k..=k+1`. With
+//! `D = ceil(log2(max cells per axis))`, depth 0 is the root covering the
+//! padded cube of `2^D` cells per side and a node at depth `d` covers a block of
+//! `2^(D-d)` cells per side (depth `D` = single cells). Only nodes that
+//! intersect the real volume are stored; their cell ranges are clamped to it.
+//!
+//! NaN samples carry no surface: they are skipped in min/max, and a node whose
+//! samples are all NaN gets `min = +inf, max = -inf` ([`Class::Empty`]).
+
+use rayon::prelude::*;
+
+use super::Volume;
+
+/// Position of an isovalue relative to a node's value range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Class {
+    /// `max < w`: the node lies wholly below the isovalue.
+    Below,
+    /// `min > w`: the node lies wholly above the isovalue.
+    Above,
+    /// `min <= w <= max`: the node may contain surface.
+    Straddles,
+    /// All samples NaN: no surface.
+    Empty,
+}
+
+/// One octree node, with its cell range and world-space box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeInfo {
+    pub depth: u32,
+    pub ix: u32,
+    pub iy: u32,
+    pub iz: u32,
+    /// Minimum of the non-NaN samples of the node's cells (`+inf` if none).
+    pub min: f32,
+    /// Maximum of the non-NaN samples of the node's cells (`-inf` if none).
+    pub max: f32,
+    /// First cell (inclusive) per axis.
+    pub cell_lo: [u32; 3],
+    /// Last cell (exclusive) per axis, clamped to the volume's cells.
+    pub cell_hi: [u32; 3],
+    /// World position of sample `cell_lo`.
+    pub bbox_min: [f64; 3],
+    /// World position of sample `cell_hi` (the far corner of the last cell).
+    pub bbox_max: [f64; 3],
+}
+
+/// The octree hands out plain node copies.
+pub type NodeRef = NodeInfo;
+
+impl NodeInfo {
+    /// Classifies the node against isovalue `w` (see [`Class`]).
+    #[inline]
+    pub fn classify(&self, w: f32) -> Class {
+        classify_range(self.min, self.max, w)
+    }
+
+    /// True when the node may contain the isosurface `w`.
+    #[inline]
+    pub fn straddles(&self, w: f32) -> bool {
+        self.classify(w) == Class::Straddles
+    }
+
+    /// Node key `(depth, ix, iy, iz)`.
+    #[inline]
+    pub fn key(&self) -> (u32, u32, u32, u32) {
+        (self.depth, self.ix, self.iy, self.iz)
+    }
+
+    /// Number of cells covered (after clamping).
+    pub fn cell_count(&self) -> u64 {
+        (0..3)
+            .map(|a| (self.cell_hi[a] - self.cell_lo[a]) as u64)
+            .product()
+    }
+}
+
+/// Classification of a value range `[min, max]` against `w`.
+#[inline]
+pub fn classify_range(min: f32, max: f32, w: f32) -> Class {
+    if min.is_nan() || max.is_nan() || min > max {
+        Class::Empty
+    } else if max < w {
+        Class::Below
+    } else if min > w {
+        Class::Above
+    } else {
+        Class::Straddles
+    }
+}
+
+#[derive(Clone, Debug)]
+struct Level {
+    /// Nodes per axis at this depth (only those intersecting the volume).
+    dims: [u32; 3],
+    min: Vec<f32>,
+    max: Vec<f32>,
+}
+
+impl Level {
+    #[inline]
+    fn idx(&self, x: u32, y: u32, z: u32) -> usize {
+        ((z as usize * self.dims[1] as usize) + y as usize) * self.dims[0] as usize + x as usize
+    }
+}
+
+/// Min/max octree over cells; see the module docs.
+#[derive(Clone, Debug)]
+pub struct MinMaxOctree {
+    depth: u32,
+    cells: [u32; 3],
+    origin: [f64; 3],
+    spacing: [f64; 3],
+    /// `levels[d]` holds depth `d`.
+    levels: Vec<Level>,
+}
+
+#[inline]
+fn nan_min(a: f32, b: f32) -> f32 {
+    // `b` may be NaN; NaN comparisons are false so it is skipped.
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
+#[inline]
+fn nan_max(a: f32, b: f32) -> f32 {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+impl MinMaxOctree {
+    /// Builds the octree in parallel (rayon). Leaves are single cells.
+    pub fn build(vol: &Volume) -> Self {
+        let cells = [
+            (vol.nx - 1) as u32,
+            (vol.ny - 1) as u32,
+            (vol.nz - 1) as u32,
+        ];
+        let m = *cells.iter().max().unwrap();
+        let depth = if m <= 1 {
+            0
+        } else {
+            32 - (m - 1).leading_zeros()
+        };
+
+        // Leaf level: min/max over the 8 corners of each cell.
+        let leaf = {
+            let dims = cells;
+            let (cx, cy, cz) = (dims[0] as usize, dims[1] as usize, dims[2] as usize);
+            let n = cx * cy * cz;
+            let mut min = vec![f32::INFINITY; n];
+            let mut max = vec![f32::NEG_INFINITY; n];
+            let (nx, ny) = (vol.nx, vol.ny);
+            let v = &vol.values[..];
+            min.par_chunks_mut(cx * cy)
+                .zip(max.par_chunks_mut(cx * cy))
+                .enumerate()
+                .for_each(|(k, (mn, mx))| {
+                    // Per row, fold the 4 sample rows (j,k),(j+1,k),(j,k+1),(j+1,k+1)
+                    // into per-sample column min/max, then pair neighbours.
+                    let mut colmin = vec![f32::INFINITY; nx];
+                    let mut colmax = vec![f32::NEG_INFINITY; nx];
+                    for j in 0..cy {
+                        colmin.fill(f32::INFINITY);
+                        colmax.fill(f32::NEG_INFINITY);
+                        for (dj, dk) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            let base = ((k + dk) * ny + j + dj) * nx;
+                            let row = &v[base..base + nx];
+                            for i in 0..nx {
+                                colmin[i] = nan_min(colmin[i], row[i]);
+                                colmax[i] = nan_max(colmax[i], row[i]);
+                            }
+                        }
+                        let o = j * cx;
+                        for i in 0..cx {
+                            mn[o + i] = colmin[i].min(colmin[i + 1]);
+                            mx[o + i] = colmax[i].max(colmax[i + 1]);
+                        }
+                    }
+                });
+            Level { dims, min, max }
+        };
+
+        let mut levels = vec![leaf];
+        for d in (0..depth).rev() {
+            let child = levels.last().unwrap();
+            let s = 1u64 << (depth - d);
+            let dims = [0, 1, 2].map(|a| (cells[a] as u64).div_ceil(s).max(1) as u32);
+            let (px, py, pz) = (dims[0] as usize, dims[1] as usize, dims[2] as usize);
+            let n = px * py * pz;
+            let mut min = vec![f32::INFINITY; n];
+            let mut max = vec![f32::NEG_INFINITY; n];
+            min.par_chunks_mut(px * py)
+                .zip(max.par_chunks_mut(px * py))
+                .enumerate()
+                .for_each(|(z, (mn, mx))| {
+                    let z = z as u32;
+                    for y in 0..py as u32 {
+                        for x in 0..px as u32 {
+                            let mut lo = f32::INFINITY;
+                            let mut hi = f32::NEG_INFINITY;
+                            for cz in 2 * z..(2 * z + 2).min(child.dims[2]) {
+                                for cy in 2 * y..(2 * y + 2).min(child.dims[1]) {
+                                    for cx in 2 * x..(2 * x + 2).min(child.dims[0]) {
+                                        let ci = child.idx(cx, cy, cz);
+                                        lo = lo.min(child.min[ci]);
+                                        hi = hi.max(child.max[ci]);
+                                    }
+                                }
+                            }
+                            let o = y as usize * px + x as usize;
+                            mn[o] = lo;
+                            mx[o] = hi;
+                        }
+                    }
+                });
+            levels.push(Level { dims, min, max });
+        }
+        levels.reverse();
+
+        MinMaxOctree {
+            depth,
+            cells,
+            origin: vol.origin,
+            spacing: vol.spacing,
+            levels,
+        }
+    }
+
+    /// `D`: the depth of the single-cell leaves (root is depth 0).
+    pub fn max_depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Cells per axis of the volume the tree was built from.
+    pub fn cells(&self) -> [u32; 3] {
+        self.cells
+    }
+
+    /// Nodes per axis at `depth` (only those intersecting the volume).
+    pub fn dims_at_depth(&self, depth: u32) -> Option<[u32; 3]> {
+        self.levels.get(depth as usize).map(|l| l.dims)
+    }
+
+    /// The root node (depth 0).
+    pub fn root(&self) -> NodeInfo {
+        self.make(0, 0, 0, 0)
+    }
+
+    fn make(&self, depth: u32, ix: u32, iy: u32, iz: u32) -> NodeInfo {
+        let l = &self.levels[depth as usize];
+        let i = l.idx(ix, iy, iz);
+        let s = 1u64 << (self.depth - depth);
+        let c = [ix, iy, iz];
+        let cell_lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as u32);
+        let cell_hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as u32);
+        let pos = |p: [u32; 3]| [0, 1, 2].map(|a| self.origin[a] + p[a] as f64 * self.spacing[a]);
+        NodeInfo {
+            depth,
+            ix,
+            iy,
+            iz,
+            min: l.min[i],
+            max: l.max[i],
+            cell_lo,
+            cell_hi,
+            bbox_min: pos(cell_lo),
+            bbox_max: pos(cell_hi),
+        }
+    }
+
+    /// The node at `depth` with index `(ix,iy,iz)`, if it intersects the volume.
+    pub fn node(&self, depth: u32, (ix, iy, iz): (u32, u32, u32)) -> Option<NodeInfo> {
+        let l = self.levels.get(depth as usize)?;
+        if ix < l.dims[0] && iy < l.dims[1] && iz < l.dims[2] {
+            Some(self.make(depth, ix, iy, iz))
+        } else {
+            None
+        }
+    }
+
+    /// All nodes at `depth` that intersect the volume (x fastest, then y, z).
+    /// Empty when `depth > max_depth()`.
+    pub fn nodes_at_depth(&self, depth: u32) -> Vec<NodeInfo> {
+        let Some(l) = self.levels.get(depth as usize) else {
+            return Vec::new();
+        };
+        let mut out = Vec::with_capacity(l.min.len());
+        for z in 0..l.dims[2] {
+            for y in 0..l.dims[1] {
+                for x in 0..l.dims[0] {
+                    out.push(self.make(depth, x, y, z));
+                }
+            }
+        }
+        out
+    }
+
+    /// Children of `n` (up to 8, only those intersecting the volume);
+    /// empty for leaves.
+    pub fn children(&self, n: &NodeInfo) -> Vec<NodeInfo> {
+        if n.depth >= self.depth {
+            return Vec::new();
+        }
+        let d = n.depth + 1;
+        let l = &self.levels[d as usize];
+        let mut out = Vec::with_capacity(8);
+        for dz in 0..2 {
+            for dy in 0..2 {
+                for dx in 0..2 {
+                    let (x, y, z) = (2 * n.ix + dx, 2 * n.iy + dy, 2 * n.iz + dz);
+                    if x < l.dims[0] && y < l.dims[1] && z < l.dims[2] {
+                        out.push(self.make(d, x, y, z));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// All nodes at `depth` (clamped to `max_depth()`) that straddle `w`,
+    /// found by descending from the root through straddling nodes only.
+    pub fn straddling_at_depth(&self, w: f32, depth: u32) -> Vec<NodeInfo> {
+        let depth = depth.min(self.depth);
+        let mut frontier = vec![self.root()];
+        frontier.retain(|n| n.straddles(w));
+        for _ in 0..depth {
+            frontier = frontier
+                .par_iter()
+                .flat_map_iter(|n| {
+                    let mut c = self.children(n);
+                    c.retain(|c| c.straddles(w));
+                    c
+                })
+                .collect();
+        }
+        frontier
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn next_u32(&mut self) -> u32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 33) as u32
+        }
+        fn unit(&mut self) -> f32 {
+            self.next_u32() as f32 / (1u64 << 31) as f32
+        }
+    }
+
+    fn random_volume(rng: &mut Lcg, dims: (usize, usize, usize), nan_frac: f32) -> Volume {
+        let n = dims.0 * dims.1 * dims.2;
+        let v: Vec<f32> = (0..n)
+            .map(|_| {
+                if rng.unit() < nan_frac {
+                    f32::NAN
+                } else {
+                    rng.unit() * 200.0 - 100.0
+                }
+            })
+            .collect();
+        Volume::new(Arc::from(v), dims, [0.5, -1.0, 2.0], [1.0, 0.5, 2.0]).unwrap()
+    }
+
+    fn brute(vol: &Volume, lo: [u32; 3], hi: [u32; 3]) -> (f32, f32) {
+        let mut mn = f32::INFINITY;
+        let mut mx = f32::NEG_INFINITY;
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    let v = vol.get(i as usize, j as usize, k as usize);
+                    if !v.is_nan() {
+                        mn = mn.min(v);
+                        mx = mx.max(v);
+                    }
+                }
+            }
+        }
+        (mn, mx)
+    }
+
+    #[test]
+    fn minmax_matches_brute_force() {
+        let mut rng = Lcg(12345);
+        for (t, dims) in [
+            (2, 2, 2),
+            (3, 2, 2),
+            (5, 7, 3),
+            (9, 9, 9),
+            (17, 4, 11),
+            (12, 30, 6),
+            (2, 2, 40),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let nan_frac = [0.0, 0.05, 0.3][t % 3];
+            let vol = random_volume(&mut rng, dims, nan_frac);
+            let tree = MinMaxOctree::build(&vol);
+            let m = (dims.0.max(dims.1).max(dims.2) - 1) as u32;
+            assert!(1u32 << tree.max_depth() >= m);
+            assert!(tree.max_depth() == 0 || 1u32 << (tree.max_depth() - 1) < m);
+            let mut total_leaf_cells = 0;
+            for d in 0..=tree.max_depth() {
+                let nodes = tree.nodes_at_depth(d);
+                let mut cells = 0u64;
+                for n in &nodes {
+                    assert_eq!(n.depth, d);
+                    let (mn, mx) = brute(&vol, n.cell_lo, n.cell_hi);
+                    assert_eq!((n.min, n.max), (mn, mx), "dims {dims:?} node {n:?}");
+                    assert_eq!(tree.node(d, (n.ix, n.iy, n.iz)), Some(*n));
+                    for a in 0..3 {
+                        assert!(n.cell_lo[a] < n.cell_hi[a]);
+                        assert!((n.cell_hi[a] as usize) < [dims.0, dims.1, dims.2][a]);
+                    }
+                    cells += n.cell_count();
+                    // children partition the parent
+                    let ch = tree.children(n);
+                    if d < tree.max_depth() {
+                        assert!(!ch.is_empty() && ch.len() <= 8);
+                        assert_eq!(
+                            ch.iter().map(|c| c.cell_count()).sum::<u64>(),
+                            n.cell_count()
+                        );
+                        let cmin = ch.iter().map(|c| c.min).fold(f32::INFINITY, f32::min);
+                        let cmax = ch.iter().map(|c| c.max).fold(f32::NEG_INFINITY, f32::max);
+                        assert_eq!((cmin, cmax), (n.min, n.max));
+                    } else {
+                        assert!(ch.is_empty());
+                        assert_eq!(n.cell_count(), 1);
+                    }
+                }
+                // every depth covers exactly all cells
+                let all = ((dims.0 - 1) * (dims.1 - 1) * (dims.2 - 1)) as u64;
+                assert_eq!(cells, all);
+                total_leaf_cells = cells;
+            }
+            assert!(total_leaf_cells > 0);
+            let root = tree.root();
+            assert_eq!(root.bbox_min, vol.origin);
+            assert_eq!(root.bbox_max, vol.bounds().1);
+            assert!(tree.node(tree.max_depth() + 1, (0, 0, 0)).is_none());
+            assert!(tree.nodes_at_depth(tree.max_depth() + 1).is_empty());
+        }
+    }
+
+    #[test]
+    fn classify_rules() {
+        let mk = |min: f32, max: f32| NodeInfo {
+            depth: 0,
+            ix: 0,
+            iy: 0,
+            iz: 0,
+            min,
+            max,
+            cell_lo: [0; 3],
+            cell_hi: [1; 3],
+            bbox_min: [0.0; 3],
+            bbox_max: [1.0; 3],
+        };
+        assert_eq!(mk(0.0, 1.0).classify(2.0), Class::Below);
+        assert_eq!(mk(0.0, 1.0).classify(-0.5), Class::Above);
+        assert_eq!(mk(0.0, 1.0).classify(0.5), Class::Straddles);
+        assert_eq!(mk(0.0, 1.0).classify(0.0), Class::Straddles);
+        assert_eq!(mk(0.0, 1.0).classify(1.0), Class::Straddles);
+        assert_eq!(
+            mk(f32::INFINITY, f32::NEG_INFINITY).classify(0.0),
+            Class::Empty
+        );
+        assert_eq!(mk(2.0, 2.0).classify(2.0), Class::Straddles);
+    }
+
+    #[test]
+    fn all_nan_nodes_are_empty() {
+        let mut v = vec![f32::NAN; 5 * 5 * 5];
+        v[0] = 1.0; // only cell (0,0,0) has data
+        let vol = Volume::new(v.into(), (5, 5, 5), [0.0; 3], [1.0; 3]).unwrap();
+        let t = MinMaxOctree::build(&vol);
+        assert_eq!(t.root().min, 1.0);
+        assert_eq!(t.root().classify(1.0), Class::Straddles);
+        let leaf = t.node(t.max_depth(), (3, 3, 3)).unwrap();
+        assert_eq!(leaf.classify(0.0), Class::Empty);
+        assert_eq!(t.straddling_at_depth(1.0, 99).len(), 1);
+    }
+
+    #[test]
+    fn straddling_descent_matches_filter() {
+        let vol = super::super::pesco_synthetic(40);
+        let t = MinMaxOctree::build(&vol);
+        for d in 0..=t.max_depth() {
+            let a = t.straddling_at_depth(0.0, d);
+            let b: Vec<_> = t
+                .nodes_at_depth(d)
+                .into_iter()
+                .filter(|n| n.straddles(0.0))
+                .collect();
+            let mut ka: Vec<_> = a.iter().map(|n| n.key()).collect();
+            let mut kb: Vec<_> = b.iter().map(|n| n.key()).collect();
+            ka.sort();
+            kb.sort();
+            assert_eq!(ka, kb);
+        }
+    }
+}
