@@ -373,16 +373,30 @@ impl Renderer {
         let mut vertices: Vec<[f32; 3]> = Vec::with_capacity(nv as usize);
         let mut indices: Vec<u32> = Vec::with_capacity(ni as usize);
         let (mut fine, mut coarse, mut tile_object) = (Vec::new(), Vec::new(), Vec::new());
+        let mut remap: Vec<u32> = Vec::new();
         for (oi, o) in scene.objects().iter().enumerate() {
             for t in &o.tiles {
                 let tile = fine.len() as u32;
                 let base_vertex = vertices.len() as i32;
                 vertices.extend_from_slice(&t.positions);
-                let mk = |first: usize, n: usize| DrawArgs { index_count: n as u32, instance_count: 1, first_index: first as u32, base_vertex, first_instance: tile };
-                fine.push(mk(indices.len(), t.fine.len()));
+                fine.push(DrawArgs { index_count: t.fine.len() as u32, instance_count: 1, first_index: indices.len() as u32, base_vertex, first_instance: tile });
                 indices.extend_from_slice(&t.fine);
-                coarse.push(mk(indices.len(), t.coarse.len()));
-                indices.extend_from_slice(&t.coarse);
+                // The coarse proxy gets its own compact copy of the vertices it uses: software
+                // rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
+                // indexing into the fine vertices would make the prepass cost as much as a fine draw.
+                remap.clear();
+                remap.resize(t.positions.len(), u32::MAX);
+                let coarse_base = vertices.len();
+                let first_index = indices.len() as u32;
+                for &k in &t.coarse {
+                    let slot = &mut remap[k as usize];
+                    if *slot == u32::MAX {
+                        *slot = (vertices.len() - coarse_base) as u32;
+                        vertices.push(t.positions[k as usize]);
+                    }
+                    indices.push(*slot);
+                }
+                coarse.push(DrawArgs { index_count: t.coarse.len() as u32, instance_count: 1, first_index, base_vertex: coarse_base as i32, first_instance: tile });
                 tile_object.push(oi as u32);
             }
         }
@@ -617,17 +631,6 @@ impl Renderer {
                 pass.multi_draw_indexed_indirect(&final_args, 0, n_tiles as u32);
             }
         }
-        if count_final {
-            let hist_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("histogram_final"),
-                layout: &self.hist_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&mt.id) }, wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() }],
-            });
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("count_final"), timestamp_writes: ts_compute(6) });
-            pass.set_pipeline(&self.hist_pipeline);
-            pass.set_bind_group(0, &hist_bg, &[]);
-            pass.dispatch_workgroups(self.width.div_ceil(16), self.height.div_ceil(16), 1);
-        }
         let ts_buf = ts.map(|q| {
             let b = d.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: 8 * N_TIMESTAMPS as u64, usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
             enc.resolve_query_set(q, 0..N_TIMESTAMPS, &b, 0);
@@ -642,6 +645,18 @@ impl Renderer {
         let t1 = Instant::now();
         let (w, h) = (self.width, self.height);
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        // Visible pixels per tile in the final image: counted after the frame time was taken.
+        if count_final {
+            let hist_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("histogram_final"),
+                layout: &self.hist_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&mt.id) }, wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() }],
+            });
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("count_final"), timestamp_writes: None });
+            pass.set_pipeline(&self.hist_pipeline);
+            pass.set_bind_group(0, &hist_bg, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(16), self.height.div_ceil(16), 1);
+        }
         let color_rb = ReadbackTexture::new(d, &mut enc, mt.color_tex.as_ref().unwrap(), w, h, 4, wgpu::TextureAspect::All);
         let depth_rb = ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
         let read_buf = |enc: &mut wgpu::CommandEncoder, src: &wgpu::Buffer, size: u64| {
@@ -684,9 +699,6 @@ impl Renderer {
                 stats.count_ms = span(2);
             }
             stats.draw_ms = span(4);
-            if count_final {
-                stats.count_ms += span(6);
-            }
         }
         let tile_pixels = if three_pass {
             // Full-image pixel units.

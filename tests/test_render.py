@@ -1,0 +1,144 @@
+"""Walking-skeleton acceptance (issue 2): scenes whose image and depth are known by construction."""
+
+import numpy as np
+import pytest
+
+import geocull as gc
+
+BG = np.array([0, 0, 0, 255], dtype=np.uint8)
+
+
+@pytest.fixture(scope="module")
+def r64():
+    return gc.Renderer(64, 64)
+
+
+def flat(z=0.0, n=11, size=100.0, tiles=(2, 2), **kw):
+    s = gc.Scene()
+    d = size / (n - 1)
+    s.add_heightfield(np.full((n, n), z), origin=(-size / 2, -size / 2), spacing=(d, d), tiles=tiles, **kw)
+    return s
+
+
+def top_down(h=100.0, fov=90.0):
+    return gc.Camera.look_at((0, 0, h), (0, 0, 0), up=(0, 1, 0), fov_y=fov)
+
+
+def test_flat_plane_from_above_covers_expected_pixels_with_exact_depth(r64):
+    # 100 m plane, 100 m below a 90° camera: it fills exactly the middle 32 x 32 pixels.
+    res = r64.render(flat(), top_down())
+    cov = res.coverage
+    expected = np.zeros((64, 64), bool)
+    expected[16:48, 16:48] = True
+    assert np.array_equal(cov, expected)
+    np.testing.assert_allclose(res.depth[cov], 100.0, rtol=1e-3)
+    assert np.all(np.isinf(res.depth[~cov]))
+    assert np.all(res.image[~cov] == BG)
+    assert np.all(res.image[cov][:, :3].max(axis=1) > 0)
+
+
+def test_orthographic_depth_is_distance_along_the_view_axis(r64):
+    s = flat(z=-7.0)
+    cam = gc.Camera.look_at((0, 0, 50), (0, 0, -7), up=(0, 1, 0), projection="orthographic", ortho_height=200.0)
+    res = r64.render(s, cam)
+    cov = res.coverage
+    assert cov.sum() == 32 * 32
+    np.testing.assert_allclose(res.depth[cov], 57.0, rtol=1e-3)
+
+
+def test_nan_hole_shows_as_empty_pixels(r64):
+    # A 3 x 3 block of NaN samples in a 21 x 21 grid removes every cell touching it: a 40 m square
+    # hole centred on the plane (cells touching samples 9..11 span x in [-20, 20]).
+    n = 21
+    z = np.zeros((n, n))
+    z[9:12, 9:12] = np.nan
+    s = gc.Scene()
+    s.add_heightfield(z, origin=(-50, -50), spacing=(5, 5), tiles=(4, 4))
+    res = r64.render(s, top_down())
+    cov = res.coverage
+    # Plane spans pixels 16..47; the hole spans x, y in [-20, 20] m = pixels 16+12.8 .. 16+19.2.
+    assert not cov[30:34, 30:34].any()
+    assert cov[16:26, 16:48].all() and cov[38:48, 16:48].all()
+    # The 4 x 4 cells touching the block lose their triangles, except the two corner-cell triangles
+    # (diagonal from sample (i, j) to (i+1, j+1)) that do not touch a NaN sample: 32 - 2 dropped.
+    assert s.n_triangles == 2 * 20 * 20 - 30
+
+
+def test_mesh_in_front_occludes_the_plane(r64):
+    s = flat()
+    # A red square 50 m above the plane (half way to the camera), 20 m wide.
+    v = np.array([[-10, -10, 50], [10, -10, 50], [10, 10, 50], [-10, 10, 50]], float)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    s.add_mesh(v, f, kind="fault", color=(1, 0, 0))
+    res = r64.render(s, top_down())
+    # 20 m at 50 m distance with a 90° fov over 64 px: 12.8 px around the centre.
+    centre = res.depth[28:36, 28:36]
+    np.testing.assert_allclose(centre, 50.0, rtol=1e-3)
+    px = res.image[32, 32]
+    assert px[0] > 0 and px[1] == 0 and px[2] == 0
+    # Around it the plane is still visible at 100 m.
+    np.testing.assert_allclose(res.depth[18, 18], 100.0, rtol=1e-3)
+
+
+def test_result_shapes_and_dtypes():
+    r = gc.Renderer(40, 30)
+    res = r.render(flat(), top_down())
+    assert res.image.shape == (30, 40, 4) and res.image.dtype == np.uint8
+    assert res.depth.shape == (30, 40) and res.depth.dtype == np.float32
+    assert res.tile_pixels.shape == (4,) and res.tile_pixels.dtype == np.uint32
+    assert res.tile_drawn.shape == (4,) and res.tile_drawn.dtype == bool
+    for k in ("triangles_drawn", "triangles_fine_total", "tiles_drawn", "total_ms", "draw_ms"):
+        assert k in res.stats
+    png = res._repr_png_()
+    assert png.startswith(b"\x89PNG") and len(png) > 100
+
+
+def test_dynamic_scene_visibility_translation_and_removal(r64):
+    s = flat()
+    v = np.array([[-10, -10, 50], [10, -10, 50], [10, 10, 50], [-10, 10, 50]], float)
+    mid = s.add_mesh(v, np.array([[0, 1, 2], [0, 2, 3]]))
+    base = r64.render(s, top_down())
+    s.set_visible(mid, False)
+    hidden = r64.render(s, top_down())
+    np.testing.assert_allclose(hidden.depth[32, 32], 100.0, rtol=1e-3)
+    s.set_visible(mid, True)
+    s.translate(mid, (0, 0, -25))  # now 75 m from the camera
+    moved = r64.render(s, top_down())
+    np.testing.assert_allclose(moved.depth[32, 32], 75.0, rtol=1e-3)
+    s.remove(mid)
+    gone = r64.render(s, top_down())
+    assert np.array_equal(gone.image, hidden.image)
+    assert base.stats["triangles_fine_total"] == gone.stats["triangles_fine_total"] + 2
+
+
+def test_input_errors_name_the_argument():
+    s = gc.Scene()
+    cases = [
+        (lambda: s.add_heightfield(np.zeros(5)), "z"),
+        (lambda: s.add_heightfield(np.zeros((3, 3)), spacing=(1, -1)), "spacing"),
+        (lambda: s.add_heightfield(np.zeros((3, 3)), tiles=(3, 1)), "tiles"),
+        (lambda: s.add_heightfield(np.zeros((3, 3)), coarse_factor=0.5), "coarse_factor"),
+        (lambda: s.add_heightfield(np.zeros((3, 3)), color=(1, 2, 0)), "color"),
+        (lambda: s.add_heightfield(np.array([["a", "b"], ["c", "d"]])), "z"),
+        (lambda: s.add_mesh(np.zeros((3, 2)), np.zeros((1, 3), int)), "vertices"),
+        (lambda: s.add_mesh(np.zeros((3, 3)), np.array([[0, 1, 3]])), "faces"),
+        (lambda: s.add_mesh(np.zeros((3, 3)), np.array([[0, 1, -1]])), "faces"),
+        (lambda: s.add_mesh(np.array([[0, 0, np.inf], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]])), "vertices"),
+        (lambda: gc.Camera.look_at((1, 2, 3), (1, 2, 3)), "target"),
+        (lambda: gc.Camera.look_at((0, 0, 1), (0, 0, 0), fov_y=180), "fov_y"),
+        (lambda: gc.Renderer(0, 10), "width"),
+        (lambda: gc.Renderer(10, 10**6), "height"),
+    ]
+    for fn, arg in cases:
+        with pytest.raises(gc.InputError) as e:
+            fn()
+        assert str(e.value).startswith(arg), (arg, str(e.value))
+        assert isinstance(e.value, ValueError)
+
+
+def test_render_argument_errors(r64):
+    s, c = flat(), top_down()
+    for kw, arg in [({"culling": "fast"}, "culling"), ({"pixel_threshold": -1}, "pixel_threshold"),
+                    ({"prepass_scale": 0}, "prepass_scale"), ({"prepass_scale": 1.5}, "prepass_scale")]:
+        with pytest.raises(gc.InputError, match=f"^{arg}"):
+            r64.render(s, c, **kw)
