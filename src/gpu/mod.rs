@@ -137,6 +137,8 @@ pub(crate) struct SceneGpu {
     tile_object_cpu: Vec<u32>,
     fine: Vec<DrawArgs>,
     coarse: Vec<DrawArgs>,
+    /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
+    bbox: Vec<(DVec3, DVec3)>,
     bytes: u64,
 }
 
@@ -372,7 +374,7 @@ impl Renderer {
         }
         let mut vertices: Vec<[f32; 3]> = Vec::with_capacity(nv as usize);
         let mut indices: Vec<u32> = Vec::with_capacity(ni as usize);
-        let (mut fine, mut coarse, mut tile_object) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut remap: Vec<u32> = Vec::new();
         for (oi, o) in scene.objects().iter().enumerate() {
             for t in &o.tiles {
@@ -398,6 +400,7 @@ impl Renderer {
                 }
                 coarse.push(DrawArgs { index_count: t.coarse.len() as u32, instance_count: 1, first_index, base_vertex: coarse_base as i32, first_instance: tile });
                 tile_object.push(oi as u32);
+                bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
             }
         }
         let buf = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
@@ -409,7 +412,7 @@ impl Renderer {
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tile_object"), contents: bytemuck::cast_slice(&to), usage: wgpu::BufferUsages::STORAGE });
         let bytes = (vertices.len() * 12 + indices.len() * 4 + to.len() * 4) as u64;
-        self.cache = Some(SceneGpu { key, vertices: vb, indices: ib, tile_object: tob, tile_object_cpu: tile_object, fine, coarse, bytes });
+        self.cache = Some(SceneGpu { key, vertices: vb, indices: ib, tile_object: tob, tile_object_cpu: tile_object, fine, coarse, bbox, bytes });
         self.ctx.take_error()
     }
 
@@ -552,7 +555,20 @@ impl Renderer {
                     self.prepass_targets = Some(Self::make_targets(d, pw, ph, false));
                 }
                 let pt = self.prepass_targets.as_ref().unwrap();
-                let coarse = pick(&cache.coarse, &|_| true);
+                let mut coarse = pick(&cache.coarse, &|_| true);
+                // Front to back, so that hidden fragments fail the depth test early.
+                let zscale = DVec3::new(1.0, 1.0, z);
+                let dist: Vec<f64> = cache
+                    .bbox
+                    .iter()
+                    .zip(&cache.tile_object_cpu)
+                    .map(|((lo, hi), &oi)| {
+                        let off = objects[oi as usize].offset;
+                        let (lo, hi) = ((*lo + off) * zscale, (*hi + off) * zscale);
+                        (fc.eye.clamp(lo, hi) - fc.eye).length_squared()
+                    })
+                    .collect();
+                coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
                 prepass_tris = coarse.iter().filter(|a| a.instance_count > 0).map(|a| a.index_count as u64 / 3).sum();
                 let coarse_buf = args_init("coarse_args", &coarse);
                 // Pass 1: depth + tile id of the coarse proxies.

@@ -3,7 +3,7 @@
 
 struct Globals {
     view_proj: mat4x4<f32>,
-    // Direction towards the light, render space (xyz), w unused.
+    // Direction towards the head light (over the viewer's shoulder), render space, w unused.
     light_dir: vec4<f32>,
     z_scale: f32,
     _pad0: f32,
@@ -54,8 +54,10 @@ fn fs_main(v: VOut) -> FOut {
         n = normalize(n0);
     }
     let c = objects[tile_object[v.tile]].color.rgb;
-    // Two-sided Lambert with an ambient term.
-    let shade = 0.3 + 0.7 * abs(dot(n, g.light_dir.xyz));
+    // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
+    // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
+    let sun = vec3<f32>(-0.45, 0.45, 0.77);
+    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
     var out: FOut;
     out.color = vec4<f32>(c * shade, 1.0);
     out.id = v.tile + 1u;
