@@ -356,12 +356,16 @@ impl Renderer {
         }
         self.cache = None; // free the old buffers first
         let d = &self.ctx.device;
+        // Sizes first (the coarse proxies get compact copies of the vertices they use), so that
+        // the geometry is written straight into mapped GPU buffers without host temporaries.
         let (mut nv, mut ni) = (0u64, 0u64);
-        for o in scene.objects() {
-            for t in &o.tiles {
-                nv += t.positions.len() as u64;
-                ni += (t.fine.len() + t.coarse.len()) as u64;
-            }
+        let mut seen: Vec<bool> = Vec::new();
+        for t in scene.objects().iter().flat_map(|o| &o.tiles) {
+            seen.clear();
+            seen.resize(t.positions.len(), false);
+            let unique = t.coarse.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count();
+            nv += (t.positions.len() + unique) as u64;
+            ni += (t.fine.len() + t.coarse.len()) as u64;
         }
         let max = self.ctx.limits.max_buffer_size;
         if nv * 12 > max || ni * 4 > max {
@@ -372,46 +376,74 @@ impl Renderer {
                 max >> 20
             )));
         }
-        let mut vertices: Vec<[f32; 3]> = Vec::with_capacity(nv as usize);
-        let mut indices: Vec<u32> = Vec::with_capacity(ni as usize);
+        let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            (size > 0).then(|| d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true }))
+        };
+        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX);
+        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let mut remap: Vec<u32> = Vec::new();
-        for (oi, o) in scene.objects().iter().enumerate() {
-            for t in &o.tiles {
-                let tile = fine.len() as u32;
-                let base_vertex = vertices.len() as i32;
-                vertices.extend_from_slice(&t.positions);
-                fine.push(DrawArgs { index_count: t.fine.len() as u32, instance_count: 1, first_index: indices.len() as u32, base_vertex, first_instance: tile });
-                indices.extend_from_slice(&t.fine);
-                // The coarse proxy gets its own compact copy of the vertices it uses: software
-                // rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
-                // indexing into the fine vertices would make the prepass cost as much as a fine draw.
-                remap.clear();
-                remap.resize(t.positions.len(), u32::MAX);
-                let coarse_base = vertices.len();
-                let first_index = indices.len() as u32;
-                for &k in &t.coarse {
-                    let slot = &mut remap[k as usize];
-                    if *slot == u32::MAX {
-                        *slot = (vertices.len() - coarse_base) as u32;
-                        vertices.push(t.positions[k as usize]);
+        if let (Some(vb), Some(ib)) = (&vb, &ib) {
+            let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
+            let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
+            // Mapped memory is write-only: append whole runs, counting in vertices and indices.
+            let (mut v, mut i) = (0usize, 0usize);
+            let mut put_v = |v: &mut usize, data: &[[f32; 3]]| {
+                vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
+                *v += data.len();
+            };
+            let mut put_i = |i: &mut usize, data: &[u32]| {
+                imap.slice(*i * 4..(*i + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(data));
+                *i += data.len();
+            };
+            let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) = (Vec::new(), Vec::new(), Vec::new());
+            for (oi, o) in scene.objects().iter().enumerate() {
+                for t in &o.tiles {
+                    let tile = fine.len() as u32;
+                    fine.push(DrawArgs { index_count: t.fine.len() as u32, instance_count: 1, first_index: i as u32, base_vertex: v as i32, first_instance: tile });
+                    put_v(&mut v, &t.positions);
+                    put_i(&mut i, &t.fine);
+                    // The coarse proxy gets its own compact copy of the vertices it uses: software
+                    // rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
+                    // indexing into the fine vertices would make the prepass cost as much as a fine draw.
+                    remap.clear();
+                    remap.resize(t.positions.len(), u32::MAX);
+                    cverts.clear();
+                    cidx.clear();
+                    for &k in &t.coarse {
+                        let slot = &mut remap[k as usize];
+                        if *slot == u32::MAX {
+                            *slot = cverts.len() as u32;
+                            cverts.push(t.positions[k as usize]);
+                        }
+                        cidx.push(*slot);
                     }
-                    indices.push(*slot);
+                    coarse.push(DrawArgs { index_count: cidx.len() as u32, instance_count: 1, first_index: i as u32, base_vertex: v as i32, first_instance: tile });
+                    put_v(&mut v, &cverts);
+                    put_i(&mut i, &cidx);
+                    tile_object.push(oi as u32);
+                    bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
                 }
-                coarse.push(DrawArgs { index_count: t.coarse.len() as u32, instance_count: 1, first_index, base_vertex: coarse_base as i32, first_instance: tile });
-                tile_object.push(oi as u32);
-                bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
+            }
+            debug_assert_eq!((v as u64, i as u64), (nv, ni));
+        } else {
+            // No triangles anywhere: keep the tile table (all tiles empty).
+            for (oi, o) in scene.objects().iter().enumerate() {
+                for t in &o.tiles {
+                    let tile = fine.len() as u32;
+                    fine.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    tile_object.push(oi as u32);
+                    bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
+                }
             }
         }
-        let buf = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            (!contents.is_empty()).then(|| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage }))
-        };
-        let vb = buf("vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
-        let ib = buf("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
+        for b in vb.iter().chain(ib.iter()) {
+            b.unmap();
+        }
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tile_object"), contents: bytemuck::cast_slice(&to), usage: wgpu::BufferUsages::STORAGE });
-        let bytes = (vertices.len() * 12 + indices.len() * 4 + to.len() * 4) as u64;
+        let bytes = nv * 12 + ni * 4 + to.len() as u64 * 4;
         self.cache = Some(SceneGpu { key, vertices: vb, indices: ib, tile_object: tob, tile_object_cpu: tile_object, fine, coarse, bbox, bytes });
         self.ctx.take_error()
     }
@@ -463,7 +495,7 @@ impl Renderer {
         let mut mask = Vec::with_capacity(scene.n_tiles());
         let (mut visited, mut culled, mut horizon) = (0, 0, None);
         for o in scene.objects() {
-            let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, z, tiles } = &o.kind else {
+            let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, tiles } = &o.kind else {
                 mask.extend(std::iter::repeat_n(true, o.tiles.len()));
                 continue;
             };
@@ -471,6 +503,7 @@ impl Renderer {
             let idx = match self.horizon_trees.iter().position(|(k, _)| *k == hk) {
                 Some(i) => i,
                 None => {
+                    let z = o.height_grid().unwrap_or_default();
                     let zr: Vec<f32> = z.iter().map(|&v| ((v as f64 + o.offset.z) * zs) as f32).collect();
                     let grid = HeightGrid { z: &zr, nx: *nx, ny: *ny, x0: x0 + o.offset.x, y0: y0 + o.offset.y, dx: *dx, dy: *dy, tiles: *tiles };
                     self.horizon_trees.push((hk, HorizonTree::build(&grid)));

@@ -4,7 +4,8 @@
 //! Geometry changes (add/remove) bump `geometry_version`, which tells renderers to re-upload;
 //! visibility, colour and translation are per-object state read every frame (no re-upload).
 
-use crate::error::{ensure, input_err, Result};
+use crate::camera::MAX_COORD;
+use crate::error::{ensure, input_err, num, Result};
 use crate::lod::{self, GridSpec, TileMesh};
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -13,8 +14,9 @@ static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
 #[derive(Clone, Debug)]
 pub enum ObjectKind {
-    /// A height field; keeps its grid (f32, relative to the origin's z) for CPU culling.
-    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, z: Vec<f32>, tiles: (usize, usize) },
+    /// A height field: its grid layout (x0, y0 relative to the scene origin). The heights live only
+    /// in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler needs it.
+    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, tiles: (usize, usize) },
     /// A triangle mesh; `kind` is the user's label ("fault", "mesh", ...).
     Mesh { kind: String },
 }
@@ -41,6 +43,24 @@ impl Object {
     pub fn fine_triangles(&self) -> usize {
         self.tiles.iter().map(|t| t.fine_triangles()).sum()
     }
+    /// The heights of a height field as a row-major (ny, nx) grid relative to the origin's z
+    /// (NaN where no triangle uses the sample), rebuilt from the tiles' vertices: every vertex is
+    /// a grid sample, and its origin-relative x, y give back its integer column and row.
+    pub fn height_grid(&self) -> Option<Vec<f32>> {
+        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, .. } = self.kind else { return None };
+        let mut z = vec![f32::NAN; nx * ny];
+        for t in &self.tiles {
+            for p in &t.positions {
+                let i = ((p[0] as f64 - x0) / dx).round();
+                let j = ((p[1] as f64 - y0) / dy).round();
+                if (0.0..nx as f64).contains(&i) && (0.0..ny as f64).contains(&j) {
+                    z[j as usize * nx + i as usize] = p[2];
+                }
+            }
+        }
+        Some(z)
+    }
+
     /// Origin-relative bounds of the object's geometry without its offset, or None when empty.
     pub fn local_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -184,6 +204,12 @@ impl Scene {
         for (i, v) in spacing.iter().enumerate() {
             ensure(v.is_finite() && *v > 0.0, "spacing", || format!("component {i} is {v}; expected a finite number > 0"))?;
         }
+        for (i, (o, (d, n))) in origin.iter().zip(spacing.iter().zip([nx, ny])).enumerate() {
+            let end = o + d * (n - 1) as f64;
+            ensure(o.abs() <= MAX_COORD && end.abs() <= MAX_COORD, if o.abs() > MAX_COORD { "origin" } else { "spacing" }, || {
+                format!("component {i}: the grid spans {} .. {}; coordinates must be within +-{MAX_COORD:e}", num(*o), num(end))
+            })?;
+        }
         let (tx, ty) = tiles;
         ensure(tx >= 1 && tx < nx, "tiles", || format!("tiles[0] is {tx}; expected 1..={} for {nx} columns (each tile needs one cell)", nx - 1))?;
         ensure(ty >= 1 && ty < ny, "tiles", || format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1))?;
@@ -198,6 +224,7 @@ impl Scene {
         for (k, &v) in z.iter().enumerate() {
             let v = if null_value.is_some_and(|nv| v == nv) { f64::NAN } else { v };
             ensure(!v.is_infinite(), "z", || format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx))?;
+            ensure(!(v.abs() > MAX_COORD), "z", || format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v)))?;
             if v.is_finite() {
                 zmin = zmin.min(v);
                 zmax = zmax.max(v);
@@ -213,8 +240,7 @@ impl Scene {
         let o = self.set_origin_from(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
         let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy };
         let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
-        let zrel: Vec<f32> = zz.iter().map(|v| (v - o.z) as f32).collect();
-        let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, z: zrel, tiles: (tx, ty) };
+        let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, tiles: (tx, ty) };
         Ok(self.push(opts.name, kind, color, tile_meshes))
     }
 
@@ -225,6 +251,7 @@ impl Scene {
         for (i, v) in vertices.iter().enumerate() {
             for (a, c) in v.iter().enumerate() {
                 ensure(c.is_finite(), "vertices", || format!("vertices[{i}, {a}] is {c}; vertices must be finite"))?;
+                ensure(c.abs() <= MAX_COORD, "vertices", || format!("vertices[{i}, {a}] is {}; coordinates must be within +-{MAX_COORD:e}", num(*c)))?;
             }
         }
         let mut f32faces: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
@@ -274,7 +301,12 @@ impl Scene {
         for (i, v) in d.iter().enumerate() {
             ensure(v.is_finite(), "offset", || format!("component {i} is {v}; expected a finite number"))?;
         }
-        self.object_mut(id)?.offset += DVec3::from_array(d);
+        let o = self.object_mut(id)?;
+        let new = o.offset + DVec3::from_array(d);
+        for (i, v) in new.to_array().iter().enumerate() {
+            ensure(v.abs() <= MAX_COORD, "offset", || format!("component {i}: the total offset would be {}; coordinates must be within +-{MAX_COORD:e}", num(*v)))?;
+        }
+        o.offset = new;
         Ok(())
     }
 
@@ -303,11 +335,7 @@ impl Scene {
         self.objects
             .iter()
             .map(|o| {
-                let grid = match &o.kind {
-                    ObjectKind::Heightfield { z, .. } => z.len() * 4,
-                    _ => 0,
-                };
-                grid + o.tiles.iter().map(|t| t.positions.len() * 12 + (t.fine.len() + t.coarse.len()) * 4).sum::<usize>()
+                o.tiles.iter().map(|t| t.positions.len() * 12 + (t.fine.len() + t.coarse.len()) * 4).sum::<usize>()
             })
             .sum()
     }
