@@ -6,7 +6,7 @@
 //! and target, so a camera keeps looking at the same geological point whatever the exaggeration
 //! (the same convention as VTK's `SetScale` with the camera placed in scaled coordinates).
 
-use crate::error::{ensure, input_err, Result};
+use crate::error::{ensure, input_err, num, Result};
 use glam::dcamera::rh::{proj::directx, view::look_at_mat4};
 use glam::{DMat4, DVec3};
 
@@ -62,11 +62,24 @@ pub struct FrameCamera {
     pub near: f64,
     pub far: f64,
     pub projection: Projection,
+    /// Perspective only: true when a finite far plane clips (the caller gave `far`).
+    pub finite_far: bool,
     /// Eye in render space.
     pub eye: DVec3,
     /// Unit view direction in render space.
     pub forward: DVec3,
 }
+
+/// Smallest near distance accepted (and the floor of the automatic one), world units.
+pub const MIN_NEAR: f64 = 1e-6;
+/// Smallest vertical field of view accepted, degrees.
+pub const MIN_FOV_Y: f64 = 1e-6;
+/// Range of vertical exaggeration accepted.
+pub const MIN_Z_SCALE: f64 = 1e-6;
+pub const MAX_Z_SCALE: f64 = 1e6;
+/// Largest coordinate magnitude accepted anywhere (scene and camera), world units: far beyond any
+/// geographic coordinate, and small enough that origin-relative f32 positions stay finite.
+pub const MAX_COORD: f64 = 1e12;
 
 fn finite3(v: [f64; 3], arg: &str) -> Result<DVec3> {
     for (i, x) in v.iter().enumerate() {
@@ -92,15 +105,32 @@ impl Camera {
         let target = finite3(target, "target")?;
         let up = finite3(up, "up")?;
         ensure(eye != target, "target", || "target equals eye; the view direction is undefined".into())?;
-        ensure(up.length() > 0.0, "up", || "up is the zero vector".into())?;
+        ensure(up.try_normalize().is_some(), "up", || format!("up is {up}; expected a non-zero vector"))?;
         ensure(fov_y.is_finite() && fov_y > 0.0 && fov_y < 180.0, "fov_y", || {
             format!("fov_y is {fov_y}; expected degrees in the open interval (0, 180)")
         })?;
+        // Below this the f32 projection overflows (focal length > 1e38): an empty image, not a view.
+        ensure(fov_y >= MIN_FOV_Y, "fov_y", || format!("fov_y is {}; expected at least {} degrees", num(fov_y), num(MIN_FOV_Y)))?;
         ensure(z_scale.is_finite() && z_scale > 0.0, "z_scale", || {
             format!("z_scale is {z_scale}; expected a finite number > 0")
         })?;
+        ensure((MIN_Z_SCALE..=MAX_Z_SCALE).contains(&z_scale), "z_scale", || {
+            format!("z_scale is {}; expected a vertical exaggeration in [{}, {}]", num(z_scale), num(MIN_Z_SCALE), num(MAX_Z_SCALE))
+        })?;
+        for (p, arg) in [(eye, "eye"), (target, "target")] {
+            for (i, x) in p.to_array().iter().enumerate() {
+                ensure(x.abs() <= MAX_COORD, arg, || format!("component {i} is {}; coordinates must be within +-{MAX_COORD:e}", num(*x)))?;
+            }
+        }
+        // The view direction in render space (exaggerated) must be normalisable in f64.
+        let dir = (target - eye) * DVec3::new(1.0, 1.0, z_scale);
+        ensure(dir.try_normalize().is_some(), "target", || {
+            format!("target - eye is {dir} (exaggerated); too short to define a view direction")
+        })?;
         if let Some(n) = near {
             ensure(n.is_finite() && n > 0.0, "near", || format!("near is {n}; expected a finite number > 0"))?;
+            // Reverse-Z depth is near / distance in f32: a smaller near underflows to "nothing drawn".
+            ensure(n >= MIN_NEAR, "near", || format!("near is {}; expected at least {}", num(n), num(MIN_NEAR)))?;
         }
         if let Some(f) = far {
             ensure(f.is_finite() && f > 0.0, "far", || format!("far is {f}; expected a finite number > 0"))?;
@@ -164,27 +194,45 @@ impl Camera {
         };
         let span = (dmax - dmin).abs().max(1e-6);
         let far = self.far.unwrap_or_else(|| (dmax + 0.01 * span).max(1e-3));
-        let (near, proj) = match self.projection {
+        let (near, far, proj) = match self.projection {
             Projection::Perspective => {
                 // Reverse-Z with a float depth buffer keeps relative precision at any distance, so a
-                // small near costs nothing; never let it reach zero.
-                let near = self.near.unwrap_or_else(|| (dmin - 0.01 * span).max(far * 1e-6).max(1e-6));
-                let p = directx::perspective_infinite_reverse(self.fov_y.to_radians(), aspect, near);
-                (near, p)
+                // small near costs nothing; never let it reach zero. The floor is absolute: one tied
+                // to `far` (near >= far * 1e-6) clipped nearby geometry whenever the camera was inside
+                // a large scene or the caller gave a large `far`.
+                let mut near = self.near.unwrap_or_else(|| (dmin - 0.01 * span).max(MIN_NEAR));
+                if self.near.is_none() && self.far.is_some() {
+                    near = near.min(far * 0.5).max(MIN_NEAR);
+                }
+                // Without a given far the far plane is at infinity (nothing is clipped behind) and
+                // `far` is only reported; a given far clips with a finite reverse-Z projection.
+                let fov = self.fov_y.to_radians();
+                let p = match self.far {
+                    None => directx::perspective_infinite_reverse(fov, aspect, near),
+                    // Arguments swapped: near maps to depth 1, far to 0.
+                    Some(f) => directx::perspective(fov, aspect, f, near),
+                };
+                let far = if self.far.is_none() { far.max(near * 1.01) } else { far };
+                (near, far, p)
             }
             Projection::Orthographic => {
-                let near = self.near.unwrap_or_else(|| (dmin - 0.01 * span).max(0.0));
-                let far = far.max(near + 1e-3);
+                let mut near = self.near.unwrap_or_else(|| (dmin - 0.01 * span).max(0.0));
+                if self.near.is_none() && self.far.is_some() {
+                    near = near.min(far * 0.5);
+                }
+                // The same far for the projection and for linear_depth (they used to differ here).
+                let far = far.max(near * (1.0 + 1e-6) + 1e-3);
                 let h = self.ortho_height.unwrap_or_else(|| {
                     2.0 * (target - eye).length() * (self.fov_y.to_radians() * 0.5).tan()
                 });
                 let w = h * aspect;
                 // Reverse-Z: near maps to depth 1, far to 0.
                 let p = directx::orthographic(-w / 2.0, w / 2.0, -h / 2.0, h / 2.0, far, near);
-                (near, p)
+                (near, far, p)
             }
         };
-        FrameCamera { view_proj: proj * view, view, near, far, projection: self.projection, eye, forward }
+        let finite_far = self.far.is_some();
+        FrameCamera { view_proj: proj * view, view, near, far, finite_far, projection: self.projection, eye, forward }
     }
 }
 
@@ -197,8 +245,11 @@ impl FrameCamera {
             return f32::INFINITY;
         }
         match self.projection {
+            Projection::Perspective if self.finite_far => (self.near * self.far / (d as f64 * (self.far - self.near) + self.near)) as f32,
             Projection::Perspective => (self.near / d as f64) as f32,
-            Projection::Orthographic => (self.far - d as f64 * (self.far - self.near)) as f32,
+            // near + (1 - d)(far - near), not far - d (far - near): the latter cancels to 0 when
+            // far >> near.
+            Projection::Orthographic => (self.near + (1.0 - d as f64) * (self.far - self.near)) as f32,
         }
     }
 }
@@ -231,6 +282,24 @@ mod tests {
                 let back = f.linear_depth(d) as f64;
                 assert!((back - dist).abs() / dist < 1e-5, "{p:?} {back} vs {dist}");
             }
+        }
+    }
+
+    #[test]
+    fn given_far_clips_and_round_trips() {
+        let c = Camera::look_at([0.0, 0.0, 100.0], [0.0; 3], [0.0, 0.0, 1.0], 45.0, Some(50.0), Some(150.0), Projection::Perspective, None, 1.0)
+            .unwrap();
+        let f = c.frame(DVec3::ZERO, None, 1.0);
+        assert!(f.finite_far && f.near == 50.0 && f.far == 150.0);
+        let depth_at = |dist: f64| {
+            let clip = f.view_proj * glam::DVec4::new(0.0, 0.0, 100.0 - dist, 1.0);
+            clip.z / clip.w
+        };
+        assert!((depth_at(50.0) - 1.0).abs() < 1e-9 && depth_at(150.0).abs() < 1e-9);
+        assert!(depth_at(151.0) < 0.0, "beyond far is clipped");
+        for dist in [60.0, 100.0, 149.0] {
+            let back = f.linear_depth(depth_at(dist) as f32) as f64;
+            assert!((back - dist).abs() / dist < 1e-5, "{back} vs {dist}");
         }
     }
 

@@ -14,6 +14,16 @@ pub enum Error {
 
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// A number for a message: plain where that is short, scientific (`1e300`) where it is not.
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Shorthand for an [`Error::Input`] naming `arg`.
 pub fn input_err(arg: impl Into<String>, msg: impl Into<String>) -> Error {
     Error::Input { arg: arg.into(), msg: msg.into() }

@@ -116,7 +116,7 @@ pub struct RenderOutput {
     /// Distance along the view axis (render-space units), +inf where empty.
     pub depth: Vec<f32>,
     /// Visible pixels per tile: pass-2 counts scaled to full-image pixels for three_pass; counts
-    /// in the unculled image for oracle; in the final image for none.
+    /// in the unculled image for oracle; in the final image for none and horizon.
     pub tile_pixels: Vec<u32>,
     pub tile_drawn: Vec<bool>,
     pub stats: RenderStats,
@@ -193,6 +193,21 @@ fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayout
         ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
         count: None,
     }
+}
+
+/// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
+/// at most `max` bytes, with u32 indices and offsets: a clear error rather than a wrong image.
+pub(crate) fn check_buffer_sizes(nv: u64, ni: u64, max: u64) -> Result<()> {
+    if nv * 12 > max || ni * 4 > max || nv > u32::MAX as u64 || ni > u32::MAX as u64 {
+        return Err(Error::Device(format!(
+            "scene too large for one GPU buffer on this device: {} MiB of vertices ({nv}), {} MiB of indices ({ni}), \
+             limit {} MiB per buffer and 2^32 elements; split it into several scenes or reduce its resolution",
+            nv * 12 >> 20,
+            ni * 4 >> 20,
+            max >> 20
+        )));
+    }
+    Ok(())
 }
 
 /// Checks an image size against the device limit.
@@ -367,15 +382,7 @@ impl Renderer {
             nv += (t.positions.len() + unique) as u64;
             ni += (t.fine.len() + t.coarse.len()) as u64;
         }
-        let max = self.ctx.limits.max_buffer_size;
-        if nv * 12 > max || ni * 4 > max {
-            return Err(Error::Device(format!(
-                "scene too large for one GPU buffer on this device: {} MB of vertices, {} MB of indices, limit {} MB",
-                nv * 12 >> 20,
-                ni * 4 >> 20,
-                max >> 20
-            )));
-        }
+        check_buffer_sizes(nv, ni, self.ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             (size > 0).then(|| d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true }))
         };
@@ -471,7 +478,7 @@ impl Renderer {
                 let t0 = Instant::now();
                 let (mask, visited, culled, horizon) = self.horizon_mask(scene, camera);
                 let cull_ms = t0.elapsed().as_secs_f64() * 1e3;
-                let mut out = self.frame(scene, camera, DrawSet::Mask(mask), false)?;
+                let mut out = self.frame(scene, camera, DrawSet::Mask(mask), true)?;
                 out.stats.cull_ms = cull_ms;
                 out.stats.total_ms += cull_ms;
                 out.stats.nodes_visited = visited;

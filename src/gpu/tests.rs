@@ -58,3 +58,11 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     assert_eq!(tp.image, none.image);
     assert!(tp.stats.triangles_drawn < none.stats.triangles_drawn);
 }
+
+#[test]
+fn scenes_larger_than_a_buffer_get_a_clear_error() {
+    assert!(check_buffer_sizes(100, 300, 1 << 20).is_ok());
+    let e = check_buffer_sizes(100_000, 300, 1 << 20).unwrap_err();
+    assert!(matches!(e, Error::Device(ref m) if m.contains("too large")), "{e}");
+    assert!(check_buffer_sizes(10, (u32::MAX as u64) + 1, u64::MAX).is_err());
+}
