@@ -10,6 +10,7 @@
 
 from ._errors import DeviceError, GeocullError, InputError
 from ._api import Camera, Renderer, RenderResult, Scene
+from .iso import Volume
 
 __version__ = "0.1.0"
-__all__ = ["Scene", "Camera", "Renderer", "RenderResult", "GeocullError", "InputError", "DeviceError"]
+__all__ = ["Scene", "Camera", "Renderer", "RenderResult", "Volume", "GeocullError", "InputError", "DeviceError"]

@@ -1,0 +1,95 @@
+// Implicit occluders (Pesco et al.): occlusion map from octree boxes, exact per-node visible-pixel
+// counts against it, and the lit isosurface. Depth is reverse-Z everywhere (1 = near, 0 = far):
+// "nearer" means a larger depth value.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // Direction towards the light (render space), w unused.
+    light_dir: vec4<f32>,
+    color: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> g: Globals;
+
+// The 12 triangles of a box, wound counter-clockwise seen from outside. Corner c has
+// x = bit 0, y = bit 1, z = bit 2 (0 = lo, 1 = hi).
+var<private> CUBE: array<u32, 36> = array<u32, 36>(
+    0u, 4u, 6u, 0u, 6u, 2u,  // -x
+    1u, 3u, 7u, 1u, 7u, 5u,  // +x
+    0u, 1u, 5u, 0u, 5u, 4u,  // -y
+    2u, 6u, 7u, 2u, 7u, 3u,  // +y
+    0u, 2u, 3u, 0u, 3u, 1u,  // -z
+    4u, 5u, 7u, 4u, 7u, 6u,  // +z
+);
+
+struct BoxOut {
+    // Invariant: the map passes and the test pass rasterise identical depths for identical boxes.
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) @interpolate(flat) id: u32,
+}
+
+// One instance per box: lo.xyz + id (bit pattern in w), hi.xyz.
+@vertex
+fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
+    let c = CUBE[vi];
+    let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
+    let p = select(lo.xyz, hi.xyz, sel);
+    var out: BoxOut;
+    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.id = bitcast<u32>(lo.w);
+    return out;
+}
+
+// Pass 3 of the map: keep only fragments strictly farther than the reference depth (the nearest
+// point of the boxes of the other class on this pixel's ray); the depth test (Greater) then keeps
+// the nearest of them.
+@group(1) @binding(0) var ref_depth: texture_depth_2d;
+
+@fragment
+fn fs_beyond(v: BoxOut) {
+    let r = textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0);
+    if (v.clip.z >= r) {
+        discard;
+    }
+}
+
+// Node test: count the pixels where the node box's front face is nearer than (or as near as) the
+// occlusion map. The comparison is done here, by hand, so no early-depth-test feature is needed
+// and hidden fragments are never counted.
+@group(1) @binding(0) var map_depth: texture_depth_2d;
+@group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
+
+@fragment
+fn fs_test(v: BoxOut) -> @location(0) u32 {
+    let m = textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0);
+    if (v.clip.z >= m) {
+        atomicAdd(&counts[v.id], 1u);
+        return v.id + 1u;
+    }
+    return 0u;
+}
+
+// The isosurface: positions relative to the volume centre (render space), smooth normals.
+struct SurfOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+}
+
+@vertex
+fn vs_surf(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>) -> SurfOut {
+    var out: SurfOut;
+    out.clip = g.view_proj * vec4<f32>(pos, 1.0);
+    out.normal = normal;
+    return out;
+}
+
+@fragment
+fn fs_surf(v: SurfOut) -> @location(0) vec4<f32> {
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    if (dot(v.normal, v.normal) > 0.0) {
+        n = normalize(v.normal);
+    }
+    // Two-sided Lambert with an ambient term.
+    let shade = 0.3 + 0.7 * abs(dot(n, g.light_dir.xyz));
+    return vec4<f32>(g.color.rgb * shade, 1.0);
+}

@@ -1,0 +1,197 @@
+"""Isosurfaces with implicit occluders: known answers on small volumes (<= 48^3, <= 128x128)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import geocull as gc
+from geocull import data
+
+W = H = 96
+
+
+@pytest.fixture(scope="module")
+def renderer():
+    return gc.Renderer(W, H)
+
+
+def grid(n, lo=-1.0, hi=1.0):
+    h = (hi - lo) / (n - 1)
+    c = lo + h * np.arange(n)
+    return c[:, None, None], c[None, :, None], c[None, None, :], h
+
+
+def sphere_volume(n=40, r=0.6):
+    z, y, x = grid(n)[:3]
+    h = 2.0 / (n - 1)
+    vals = (np.sqrt(x * x + y * y + z * z) - r).astype(np.float32)
+    return gc.Volume(vals, origin=(-1, -1, -1), spacing=(h, h, h))
+
+
+def cam_around(az_deg, el_deg=20.0, dist=4.0, center=(0.0, 0.0, 0.0)):
+    a, e = np.radians(az_deg), np.radians(el_deg)
+    eye = np.array(center) + dist * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    return gc.Camera.look_at(eye, center, up=(0, 0, 1), fov_y=40.0), eye
+
+
+# ---- Volume
+
+
+def test_volume_accepts_float32_float64_memmap_and_checks(tmp_path):
+    v32 = np.random.default_rng(0).random((5, 6, 7), dtype=np.float32)
+    v = gc.Volume(v32, origin=(1, 2, 3), spacing=(0.5, 1, 2))
+    assert v.shape == (5, 6, 7)
+    assert v.bounds == ((1, 2, 3), (1 + 6 * 0.5, 2 + 5, 3 + 4 * 2))
+    assert v.max_depth() == 3  # 6 cells along x -> 8 = 2^3
+    gc.Volume(v32.astype(np.float64))
+    mm = np.lib.format.open_memmap(tmp_path / "v.npy", mode="w+", dtype=np.float32, shape=(5, 6, 7))
+    mm[:] = v32
+    vm = gc.Volume(mm)
+    n = vm.nodes(0)
+    assert n["min"][0] == pytest.approx(v32.min()) and n["max"][0] == pytest.approx(v32.max())
+    gc.Volume(v32[:, :, ::2])  # non-contiguous: copied
+    with pytest.raises(gc.InputError, match="values"):
+        gc.Volume(np.zeros((4, 4)))
+    with pytest.raises(gc.InputError, match="values"):
+        gc.Volume(np.zeros((1, 4, 4)))
+    with pytest.raises(gc.InputError, match="spacing"):
+        gc.Volume(v32, spacing=(0, 1, 1))
+
+
+def test_bad_arguments(renderer):
+    v = sphere_volume(9)
+    cam, _ = cam_around(30)
+    with pytest.raises(gc.InputError, match="culling"):
+        renderer.render_isosurface(v, 0.0, cam, culling="bogus")
+    with pytest.raises(gc.InputError, match="cull_depth"):
+        renderer.render_isosurface(v, 0.0, cam, cull_depth=v.max_depth() + 1)
+    with pytest.raises(gc.InputError, match="isovalue"):
+        renderer.render_isosurface(v, float("nan"), cam)
+
+
+# ---- Known answers
+
+
+def test_volume_wholly_above_has_no_surface(renderer):
+    v = gc.Volume(np.ones((20, 20, 20), np.float32))
+    cam = gc.Camera.look_at((30, 25, 20), (10, 10, 10))
+    for culling in ("implicit", "none"):
+        res = renderer.render_isosurface(v, 0.0, cam, culling=culling)
+        s = res.stats
+        assert s["surface_triangles"] == 0 and s["nodes_visible"] == 0 and s["nodes_straddling"] == 0
+        assert (res.image == np.array([0, 0, 0, 255], np.uint8)).all()
+        assert np.isinf(res.depth).all()
+    # Wholly below as well: everything is an occluder of one class, nothing is proven.
+    res = renderer.render_isosurface(v, 2.0, cam, return_map=True)
+    assert res.stats["surface_triangles"] == 0 and np.isinf(res.occlusion_map).all()
+
+
+def test_sphere_back_half_culled_and_image_equal(renderer):
+    v = sphere_volume(40, 0.6)
+    md = v.max_depth()
+    for az in (0.0, 130.0, 250.0):
+        cam, eye = cam_around(az)
+        ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+        # Fine occluders (single cells) and nodes of 2 cells: the back half is hidden except near
+        # the silhouette, where rays only graze the region below w.
+        res = renderer.render_isosurface(v, 0.0, cam, culling="implicit", occluder_depth=md,
+                                         cull_depth=md - 1, return_map=True)
+        s = res.stats
+        # The image is identical: the method is conservative.
+        assert np.array_equal(res.image, ref.image)
+        assert np.array_equal(res.depth, ref.depth)
+        assert s["surface_triangles"] < 0.75 * ref.stats["surface_triangles"]
+        assert s["nodes_visible"] < 0.75 * s["nodes_straddling"]
+        assert s["nodes_tested"] >= s["nodes_tested_cull_depth"] > 0
+        # Nodes on the far side of the sphere are culled.
+        cd = s["cull_depth"]
+        cells = 2 ** (md - cd)
+        h = v.spacing[0]
+        centers = -1.0 + (res.nodes[:, 1:4] + 0.5) * cells * h
+        vdir = eye / np.linalg.norm(eye)
+        side = centers @ vdir
+        back = side < -0.4
+        assert back.sum() > 10
+        assert not res.tile_drawn[back].any()
+        # Every front node with surface pixels in the reference is drawn.
+        front = side > 0.3
+        assert res.tile_drawn[front].all()
+        # The map never claims a depth nearer than the true surface.
+        m = res.occlusion_map
+        proven = np.isfinite(m)
+        assert proven.sum() > 0.3 * np.isfinite(ref.depth).sum()
+        assert (ref.depth[proven] <= m[proven] * (1 + 1e-5)).all()
+        assert np.isfinite(ref.depth[proven]).all()
+
+
+def test_occlusion_map_of_nested_boxes(renderer):
+    # f = max(|x|, |y|, |z|) on [-1, 1]^3, w = 0.5: the surface is the box |.|_inf = 0.5; the region
+    # below w is the inner box, above w the shell between it and the volume's box.
+    n = 33
+    z, y, x, h = grid(n)
+    vals = np.maximum(np.maximum(np.abs(x), np.abs(y)), np.abs(z)).astype(np.float32)
+    v = gc.Volume(vals, origin=(-1, -1, -1), spacing=(h, h, h))
+    assert v.max_depth() == 5
+    od = 4  # nodes of 2 cells (0.125 units)
+    nodes = v.nodes(od)
+    below = nodes["max"] < 0.5
+    lo, hi = nodes["bbox_min"][below].min(0), nodes["bbox_max"][below].max(0)
+    a = 0.375  # union of the Below nodes at depth 4 (samples at +-0.5 have f = 0.5, not < 0.5)
+    assert np.allclose(lo, -a) and np.allclose(hi, a)
+    cam = gc.Camera.look_at((0, 0, 5), (0, 0, 0), up=(0, 1, 0), projection="orthographic", ortho_height=2.4)
+    res = renderer.render_isosurface(vals_volume := v, 0.5, cam, occluder_depth=od, cull_depth=3, return_map=True)
+    m = res.occlusion_map
+    px = -1.2 + (np.arange(W) + 0.5) * (2.4 / W)  # pixel centres (square image: same in y)
+    inside = (np.abs(px)[None, :] < a) & (np.abs(px)[:, None] < a)
+    # Proven exactly over the inner (Below) box, at its top face: entering the outer shell (above)
+    # at z = 1 and then the inner box (below) means the surface z = 0.5 was crossed before z = a.
+    assert np.array_equal(np.isfinite(m), inside)
+    assert np.allclose(m[inside], 5 - a, atol=1e-3)
+    # The true surface is in front of the map everywhere it is proven.
+    assert (res.depth[inside] <= m[inside] + 1e-4).all()
+    assert np.allclose(res.depth[inside], 4.5, atol=1e-3)
+    ref = renderer.render_isosurface(vals_volume, 0.5, cam, culling="none", cull_depth=3)
+    assert np.array_equal(res.image, ref.image)
+    assert res.stats["nodes_visible"] < res.stats["nodes_straddling"]
+
+
+def test_second_frame_reuses_patches(renderer):
+    gc.iso.clear_cache(renderer)
+    v = sphere_volume(24, 0.5)
+    cam, _ = cam_around(45)
+    a = renderer.render_isosurface(v, 0.0, cam)
+    assert a.stats["patches_extracted"] == a.stats["nodes_visible"] > 0
+    b = renderer.render_isosurface(v, 0.0, cam)
+    assert b.stats["patches_extracted"] == 0 and b.stats["patches_cached"] == b.stats["nodes_visible"]
+    assert np.array_equal(a.image, b.image)
+    c = renderer.render_isosurface(v, 0.0, cam, cache=False)
+    assert c.stats["patches_cached"] == 0 and np.array_equal(a.image, c.image)
+
+
+def test_pesco_synthetic_conservative_over_views_and_depths(renderer):
+    vals, origin, spacing = data.pesco_synthetic(40)
+    v = gc.Volume(vals, origin=origin, spacing=spacing)
+    md = v.max_depth()
+    for az in (20.0, 200.0):
+        cam, _ = cam_around(az, 25.0, dist=30.0)
+        ref = renderer.render_isosurface(v, 0.0, cam, culling="none", cull_depth=md - 2)
+        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md, md - 1)):
+            res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
+            assert np.array_equal(res.image, ref.image), (az, od, cd)
+            assert res.stats["surface_triangles"] <= ref.stats["surface_triangles"]
+        # Fine occluders cull a good part of this (heavily aliased) surface.
+        assert res.stats["surface_triangles"] < 0.9 * ref.stats["surface_triangles"]
+
+
+def test_renderresult_fields(renderer):
+    v = sphere_volume(16, 0.5)
+    cam, _ = cam_around(10)
+    res = renderer.render_isosurface(v, 0.0, cam)
+    assert res.image.shape == (H, W, 4) and res.image.dtype == np.uint8
+    assert res.depth.shape == (H, W) and res.depth.dtype == np.float32
+    n = res.stats["nodes_straddling"]
+    assert res.tile_pixels.shape == (n,) and res.tile_drawn.shape == (n,) and res.nodes.shape == (n, 4)
+    for k in ("surface_triangles", "nodes_tested", "nodes_visible", "occluder_ms", "cull_ms", "surface_ms", "total_ms"):
+        assert k in res.stats
+    assert "RenderResult" in repr(res)
