@@ -1,0 +1,395 @@
+"""``python -m geocull bench``: geocull's culling methods against each other and against PyVista.
+
+For every view of a Gullfaks-like scene (default: 11 horizons of 418×418 samples + 16 faults,
+≈ 3.9 M triangles, 1280×1024, all :func:`geocull.data.standard_views`) it renders, side by side in
+one process and one run (a warm-up round, then ``--repeats`` rounds in rotated order):
+
+- geocull ``none`` (every fine tile: the reference image), ``three_pass`` (pixel threshold 10,
+  coarse factor 25, prepass scale 1.0 and 0.5), ``oracle`` (exactly the tiles visible in the
+  unculled image: the lower bound), ``horizon`` (CPU horizon culling);
+- PyVista/VTK off-screen with MSAA off and with MSAA on (PyVista's default), same camera and clip
+  range.
+
+Frame time = minimum over the rounds of geocull's ``stats["total_ms"]`` (call → GPU done, no
+read-back) or VTK's ``Render()`` + ``WaitForCompletion()`` wall time. Errors against geocull
+``none``: differing pixel fraction and missing tiles (tiles visible in the unculled image but not
+drawn) for geocull methods; for PyVista (shading differs) coverage agreement and relative depth
+error. Also printed: scene build time, triangles, host + GPU bytes per fine triangle, peak RSS,
+adapter. ``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
+
+``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
+``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import resource
+import statistics
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+__all__ = ["main", "run", "format_table"]
+
+THRESHOLD = 10
+COARSE_FACTOR = 25
+TILES = (10, 10)
+QUICK_VIEWS = ("oblique_az045", "low_az200", "top_down")
+
+
+def _say(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _rss_mb() -> float:
+    """Peak resident set size of this process so far, MiB (Linux reports KiB)."""
+    r = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return r / 1024.0 if sys.platform != "darwin" else r / 2**20
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m geocull bench",
+        description="Benchmark geocull's culling (none / three_pass / oracle / horizon) against PyVista, side by side.",
+    )
+    p.add_argument("--quick", action="store_true", help="small scene (120x120 samples, 6 faults), 320x256, 3 views")
+    p.add_argument("--tiny", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("--json", metavar="PATH", help="write rows and summary as JSON")
+    p.add_argument("--width", type=int, help="image width (default 1280; quick 320)")
+    p.add_argument("--height", type=int, help="image height (default 1024; quick 256)")
+    p.add_argument("--views", help="number of standard views to use (first N), or comma-separated view names")
+    p.add_argument("--repeats", type=int, help="timed rounds after the warm-up (default 3; quick 2)")
+    p.add_argument("--size", type=int, help="samples per horizon side (default 418; quick 120)")
+    p.add_argument("--no-pyvista", action="store_true", help="skip the PyVista rows")
+    p.add_argument("--no-horizon", action="store_true", help="skip CPU horizon culling")
+    return p
+
+
+def _config(a: argparse.Namespace) -> dict[str, Any]:
+    tiny = a.tiny or os.environ.get("GEOCULL_BENCH_TINY", "") not in ("", "0")
+    if tiny:
+        mode = "tiny"
+        cfg = dict(size=48, n_faults=2, fault_triangles=(50, 200), width=64, height=48, views="1", repeats=1)
+    elif a.quick:
+        mode = "quick"
+        cfg = dict(size=120, n_faults=6, fault_triangles=(2000, 20000), width=320, height=256,
+                   views=",".join(QUICK_VIEWS), repeats=2)
+    else:
+        mode = "full"
+        cfg = dict(size=418, n_faults=16, fault_triangles=(2000, 20000), width=1280, height=1024, views=None, repeats=3)
+    cfg["mode"] = mode
+    for k in ("size", "width", "height", "views", "repeats"):
+        v = getattr(a, k)
+        if v is not None:
+            cfg[k] = v
+    cfg["pyvista"] = not a.no_pyvista
+    cfg["horizon"] = not a.no_horizon
+    return cfg
+
+
+def _select_views(views, spec_arg) -> list:
+    from .data import standard_views
+
+    all_views = standard_views(*spec_arg)
+    if views is None:
+        return all_views
+    views = str(views).strip()
+    if views.isdigit():
+        n = int(views)
+        if n < 1:
+            raise SystemExit("--views: need at least 1")
+        return all_views[:n]
+    names = [v.strip() for v in views.split(",") if v.strip()]
+    byname = dict(all_views)
+    bad = [n for n in names if n not in byname]
+    if bad:
+        raise SystemExit(f"--views: unknown view(s) {bad}; known: {', '.join(byname)}")
+    return [(n, byname[n]) for n in names]
+
+
+def run(cfg: dict[str, Any]) -> dict[str, Any]:
+    """Run the benchmark described by ``cfg`` (see :func:`_config`); returns summary and rows."""
+    import geocull as gc
+    from . import report
+    from .compare import coverage_agreement, depth_error, image_error
+    from .data import gullfaks_like
+
+    t_start = time.perf_counter()
+    w, h = int(cfg["width"]), int(cfg["height"])
+    _say(f"bench[{cfg['mode']}]: generating scene {cfg['size']}x{cfg['size']} samples, {cfg['n_faults']} faults")
+    t0 = time.perf_counter()
+    spec = gullfaks_like(nx=cfg["size"], ny=cfg["size"], n_faults=cfg["n_faults"], fault_triangles=cfg["fault_triangles"])
+    gen_s = time.perf_counter() - t0
+    _say(f"bench: building tiles + LOD (tiles {TILES[0]}x{TILES[1]}, coarse factor {COARSE_FACTOR})")
+    t0 = time.perf_counter()
+    scene = spec.build(tiles=TILES, coarse_factor=COARSE_FACTOR)
+    build_s = time.perf_counter() - t0
+    renderer = gc.Renderer(w, h)
+    views = _select_views(cfg["views"], (spec, 45.0, 1.0, w / h))
+
+    methods: list[tuple[str, dict[str, Any]]] = [
+        ("none", dict(culling="none")),
+        ("three_pass(s=1)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=1.0)),
+        ("three_pass(s=0.5)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5)),
+        ("oracle", dict(culling="oracle")),
+    ]
+    if cfg["horizon"]:
+        methods.append(("horizon", dict(culling="horizon")))
+
+    gpv = None
+    pv_versions: dict[str, str] = {}
+
+    def import_pyvista():
+        # imported after geocull's first view so that peak_rss_geocull_mb excludes VTK
+        nonlocal gpv
+        try:
+            from . import pyvista as gpv_mod
+            import pyvista
+            import vtk
+
+            pv_versions.update(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
+            gpv = gpv_mod
+        except Exception as e:  # pragma: no cover - environment dependent
+            _say(f"bench: PyVista unavailable ({e}); skipping its rows")
+
+    rows: list[dict[str, Any]] = []
+    rss_geocull = None
+    gpu_bytes = None
+    pv_setup_s: list[float] = []
+    for vi, (vname, kw) in enumerate(views):
+        cam = gc.Camera.look_at(**kw)
+        _say(f"bench: view {vi + 1}/{len(views)} {vname}: warm-up")
+        first = {name: renderer.render(scene, cam, **rk) for name, rk in methods}
+        if gpu_bytes is None:
+            gpu_bytes = int(renderer.gpu_bytes)
+        ref = first["none"]
+        visible = np.asarray(first["oracle"].tile_pixels)
+        if rss_geocull is None:
+            rss_geocull = _rss_mb()
+            if cfg["pyvista"]:
+                import_pyvista()
+
+        def gjob(rk):
+            return lambda: renderer.render(scene, cam, **rk).stats["total_ms"]
+
+        jobs = [(name, gjob(rk)) for name, rk in methods]
+        setups = {}
+        if gpv is not None:
+            for name, msaa in (("pyvista", False), ("pyvista_msaa", True)):
+                _say(f"bench: view {vname}: PyVista setup ({'MSAA on' if msaa else 'MSAA off'})")
+                t0 = time.perf_counter()
+                st = gpv._Setup(scene, cam, w, h, msaa, True, ref.near, ref.far, (0.0, 0.0, 0.0), 1e-4)
+                st.render()  # warm-up: context, shaders, geometry upload
+                pv_setup_s.append(time.perf_counter() - t0)
+                setups[name] = st
+                jobs.append((name, st.render))
+        try:
+            _say(f"bench: view {vname}: {cfg['repeats']} timed round(s) of {len(jobs)} methods")
+            times = report.timed_rounds(jobs, cfg["repeats"])
+            pv_out = {name: st.read() for name, st in setups.items()}
+        finally:
+            for st in setups.values():
+                st.close()
+
+        t_none = min(times["none"])
+        t_oracle = min(times["oracle"])
+        t_pv = min(times["pyvista"]) if "pyvista" in times else None
+        t_pvm = min(times["pyvista_msaa"]) if "pyvista_msaa" in times else None
+        for name, _ in jobs:
+            t = min(times[name])
+            row: dict[str, Any] = dict(
+                view=vname,
+                method=name,
+                total_ms=t,
+                median_ms=statistics.median(times[name]),
+                ratio_to_none=t / t_none,
+                ratio_to_oracle=t / t_oracle,
+                ratio_to_pyvista=t / t_pv if t_pv else None,
+                ratio_to_pyvista_msaa=t / t_pvm if t_pvm else None,
+                times_ms=times[name],
+            )
+            if name in first:
+                res = first[name]
+                s = res.stats
+                err = image_error(res.image, ref.image, tile_drawn=res.tile_drawn, reference_tile_pixels=visible)
+                rk = dict(methods)[name]
+                row.update(
+                    renderer="geocull",
+                    culling=rk["culling"],
+                    pixel_threshold=rk.get("pixel_threshold"),
+                    prepass_scale=rk.get("prepass_scale"),
+                    triangles_drawn=int(s["triangles_drawn"]),
+                    triangles_prepass=int(s.get("triangles_prepass", 0)),
+                    tiles_drawn=int(s["tiles_drawn"]),
+                    tiles_total=int(s["tiles_total"]),
+                    differing_pixel_fraction=err["differing_pixel_fraction"],
+                    psnr=err["psnr"],
+                    missing_tiles=err["missing_tiles"],
+                    coverage_agreement=coverage_agreement(res.depth, ref.depth),
+                    depth_median_rel=None,
+                    depth_p99_rel=None,
+                    prepass_ms=float(s.get("prepass_ms", 0.0)),
+                    count_ms=float(s.get("count_ms", 0.0)),
+                    draw_ms=float(s.get("draw_ms", 0.0)),
+                    cull_ms=float(s.get("cull_ms", 0.0)),
+                )
+            else:
+                img, depth = pv_out[name]
+                de = depth_error(depth, ref.depth)
+                row.update(
+                    renderer="pyvista",
+                    culling=None,
+                    msaa=name == "pyvista_msaa",
+                    pixel_threshold=None,
+                    prepass_scale=None,
+                    triangles_drawn=int(scene.n_triangles),
+                    tiles_drawn=None,
+                    tiles_total=None,
+                    differing_pixel_fraction=None,
+                    psnr=None,
+                    missing_tiles=None,
+                    coverage_agreement=coverage_agreement(depth, ref.depth),
+                    depth_median_rel=de["median_rel"],
+                    depth_p99_rel=de["p99_rel"],
+                    depth_fraction_over_1e3=de["fraction_over_tol"],
+                )
+            rows.append(row)
+        del first, ref
+        _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
+
+    # geometric means over views, per method
+    per_method: dict[str, dict[str, Any]] = {}
+    for name in dict.fromkeys(r["method"] for r in rows):
+        rs = [r for r in rows if r["method"] == name]
+        dpf = [r["differing_pixel_fraction"] for r in rs if r["differing_pixel_fraction"] is not None]
+        per_method[name] = dict(
+            ratio_to_none=_gmean(r["ratio_to_none"] for r in rs),
+            ratio_to_oracle=_gmean(r["ratio_to_oracle"] for r in rs),
+            ratio_to_pyvista=_gmean(r["ratio_to_pyvista"] for r in rs),
+            ratio_to_pyvista_msaa=_gmean(r["ratio_to_pyvista_msaa"] for r in rs),
+            mean_differing_pixel_fraction=(sum(dpf) / len(dpf)) if dpf else None,
+            max_differing_pixel_fraction=max(dpf) if dpf else None,
+            missing_tiles=sum(r["missing_tiles"] for r in rs) if rs[0]["missing_tiles"] is not None else None,
+            mean_triangles_drawn=sum(r["triangles_drawn"] for r in rs) / len(rs),
+        )
+    n_tri = int(scene.n_triangles)
+    host = int(scene.host_bytes)
+    summary = dict(
+        mode=cfg["mode"],
+        width=w,
+        height=h,
+        repeats=int(cfg["repeats"]),
+        views=[v for v, _ in views],
+        samples=int(cfg["size"]),
+        n_horizons=len(spec.horizons),
+        n_faults=len(spec.faults),
+        tiles=f"{TILES[0]}x{TILES[1]}",
+        coarse_factor=COARSE_FACTOR,
+        pixel_threshold=THRESHOLD,
+        scene_generate_s=gen_s,
+        scene_build_s=build_s,
+        n_triangles=n_tri,
+        n_tiles=int(scene.n_tiles),
+        host_bytes=host,
+        gpu_bytes=gpu_bytes,
+        bytes_per_triangle=(host + (gpu_bytes or 0)) / n_tri if n_tri else None,
+        peak_rss_geocull_mb=rss_geocull,
+        peak_rss_mb=_rss_mb(),
+        pyvista_setup_s_mean=(sum(pv_setup_s) / len(pv_setup_s)) if pv_setup_s else None,
+        adapter=renderer.adapter_info,
+        cpu_count=os.cpu_count(),
+        python=platform.python_version(),
+        geocull=gc.__version__,
+        **pv_versions,
+        wall_s=time.perf_counter() - t_start,
+        per_method=per_method,
+    )
+    return dict(summary=summary, rows=rows)
+
+
+def _gmean(xs) -> float | None:
+    xs = [float(x) for x in xs if x is not None and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+
+
+def _f(v, fmt: str, none: str = "–") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return none
+    return format(v, fmt)
+
+
+def format_table(result: dict[str, Any]) -> str:
+    """The benchmark as plain text: one table (all views), per-method means, and the summary."""
+    s = result["summary"]
+    rows = result["rows"]
+    lines = []
+    lines.append(
+        f"geocull bench ({s['mode']}): {s['n_horizons']} horizons {s['samples']}x{s['samples']} + {s['n_faults']} faults, "
+        f"{s['width']}x{s['height']}, {len(s['views'])} view(s), best of {s['repeats']} round(s) after a warm-up; "
+        f"three_pass: threshold {s['pixel_threshold']}, coarse factor {s['coarse_factor']}, tiles {s['tiles']}"
+    )
+    lines.append("")
+    hdr = (f"{'view':<14} {'method':<18} {'ms':>9} {'x none':>7} {'x oracle':>8} {'x pv':>6} {'x pv_msaa':>9} "
+           f"{'triangles':>11} {'tiles':>11} {'diff px %':>9} {'missing':>7} {'cov agree':>9} {'depth err':>9}")
+    lines.append(hdr)
+    lines.append("-" * len(hdr))
+    last_view = None
+    for r in rows:
+        if last_view is not None and r["view"] != last_view:
+            lines.append("")
+        last_view = r["view"]
+        tiles = f"{r['tiles_drawn']}/{r['tiles_total']}" if r.get("tiles_drawn") is not None else "all"
+        dpf = r.get("differing_pixel_fraction")
+        lines.append(
+            f"{r['view']:<14} {r['method']:<18} {r['total_ms']:>9.1f} {r['ratio_to_none']:>7.3f} "
+            f"{r['ratio_to_oracle']:>8.3f} {_f(r.get('ratio_to_pyvista'), '.3f'):>6} "
+            f"{_f(r.get('ratio_to_pyvista_msaa'), '.3f'):>9} {r['triangles_drawn']:>11,} {tiles:>11} "
+            f"{_f(None if dpf is None else 100 * dpf, '.4f'):>9} {_f(r.get('missing_tiles'), 'd'):>7} "
+            f"{_f(r.get('coverage_agreement'), '.4f'):>9} {_f(r.get('depth_median_rel'), '.1e'):>9}"
+        )
+    lines.append("")
+    lines.append("geometric mean over views (ratios), mean/max differing pixels, total missing tiles:")
+    for name, m in s["per_method"].items():
+        dp = m["mean_differing_pixel_fraction"]
+        mx = m["max_differing_pixel_fraction"]
+        lines.append(
+            f"  {name:<18} x none {_f(m['ratio_to_none'], '.3f')}  x oracle {_f(m['ratio_to_oracle'], '.3f')}  "
+            f"x pyvista {_f(m['ratio_to_pyvista'], '.3f')}  x pyvista_msaa {_f(m['ratio_to_pyvista_msaa'], '.3f')}  "
+            f"diff px {_f(None if dp is None else 100 * dp, '.4f')} % (max {_f(None if mx is None else 100 * mx, '.4f')} %)  "
+            f"missing tiles {_f(m['missing_tiles'], 'd')}"
+        )
+    lines.append("")
+    bpt = s["bytes_per_triangle"]
+    lines.append(f"scene: {s['n_triangles']:,} triangles in {s['n_tiles']:,} tiles; generated in {s['scene_generate_s']:.2f} s, "
+                 f"tiles + LOD built in {s['scene_build_s']:.2f} s (target < 2 s on 2 cores for the full scene)")
+    lines.append(f"memory: host {s['host_bytes'] / 2**20:.1f} MiB + GPU {(s['gpu_bytes'] or 0) / 2**20:.1f} MiB = "
+                 f"{_f(bpt, '.1f')} bytes per fine triangle (target <= 40); peak RSS {s['peak_rss_geocull_mb']:.0f} MiB "
+                 f"after geocull's first view, {s['peak_rss_mb']:.0f} MiB at the end (PyVista included)")
+    pv = f"; PyVista {s['pyvista']}, VTK {s['vtk']}" if "pyvista" in s else ""
+    lines.append(f"adapter: {s['adapter']}{pv}; {s['cpu_count']} CPU(s); wall {s['wall_s']:.0f} s")
+    lines.append("columns: ms = best frame time (geocull stats total_ms: call -> GPU done; PyVista: Render + "
+                 "WaitForCompletion); x = ratio of frame times, same view, same run; diff px = differing pixels vs "
+                 "geocull none; missing = tiles visible unculled but not drawn; cov agree = coverage agreement vs none; "
+                 "depth err = median relative depth difference vs none (PyVista)")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
+    cfg = _config(a)
+    result = run(cfg)
+    print(format_table(result), flush=True)
+    if a.json:
+        from .report import write_json
+
+        d = os.path.dirname(os.path.abspath(a.json))
+        os.makedirs(d, exist_ok=True)
+        write_json(result, a.json)
+        _say(f"bench: wrote {a.json}")
+    return 0

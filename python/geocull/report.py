@@ -1,0 +1,450 @@
+"""Speed against error: parameter sweeps, tables and plots.
+
+``sweep``        render a scene with ``none``, ``oracle`` and ``three_pass`` (over pixel thresholds,
+                 prepass scales, and, from a :class:`~geocull.data.SceneSpec`, tile counts and coarse
+                 factors) from a set of cameras, timed side by side; returns a table (list of dicts)
+``summarize``    one row per configuration over all views (geometric-mean ratios, mean/max errors)
+``plot``         speed (ratio to none) against error (differing pixel fraction), one labelled marker
+                 per configuration (matplotlib, Agg backend)
+``to_markdown``  a table as GitHub markdown;  ``to_frame``  as a pandas DataFrame (if installed)
+``timed_rounds`` the side-by-side timing loop (warm-up, then interleaved rounds in rotated order)
+
+Timing: every method of one view is rendered once as a warm-up (this also uploads a new scene and
+gives the images used for the errors: renders are deterministic), then ``repeats`` rounds render
+each method once, in an order rotated every round so no method always runs first or last. A frame
+time is the renderer's ``stats["total_ms"]`` (wall time from the call until the GPU is done,
+excluding read-back); a point's time is the minimum over the rounds (the median is kept too).
+Ratios divide by ``none``'s (and ``oracle``'s) time of the same view, scene and run.
+
+Errors are against the unculled (``none``) image of the same view: ``differing_pixel_fraction``
+(any channel differs), ``psnr``, and ``missing_tiles`` = tiles visible in the unculled image
+(``oracle``'s ``tile_pixels > 0``) that the method did not draw.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import statistics
+import sys
+import time
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+
+__all__ = ["sweep", "summarize", "plot", "to_markdown", "to_frame", "timed_rounds", "write_json", "jsonable"]
+
+DEFAULT_THRESHOLDS = (0, 10, 50)
+DEFAULT_COARSE_FACTORS = (25, 100, 400)
+DEFAULT_TILES = ((10, 10),)
+DEFAULT_PREPASS_SCALES = (1.0, 0.5, 0.25)
+
+# Columns of a sweep row, in display order.
+COLUMNS = (
+    "tiles", "coarse_factor", "view", "method", "pixel_threshold", "prepass_scale",
+    "total_ms", "median_ms", "ratio_to_none", "ratio_to_oracle",
+    "differing_pixel_fraction", "psnr", "missing_tiles",
+    "triangles_drawn", "triangles_prepass", "triangles_fine_total", "tiles_drawn", "tiles_total",
+    "triangle_diff_vs_oracle", "prepass_ms", "count_ms", "draw_ms", "build_s",
+)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _progress_fn(progress) -> Callable[[str], None]:
+    if progress is None or progress is False:
+        return lambda msg: None
+    if progress is True:
+        return lambda msg: print(msg, file=sys.stderr, flush=True)
+    return progress
+
+
+def _tiles_tuple(t) -> tuple[int, int]:
+    if isinstance(t, (int, np.integer)):
+        return (int(t), int(t))
+    a, b = t
+    return (int(a), int(b))
+
+
+def _cameras(cameras, spec, width: int, height: int) -> list[tuple[str, Any]]:
+    """Normalise cameras: None (standard views of ``spec``), a dict name -> camera, or a list of
+    cameras / look_at kwargs dicts / (name, camera-or-kwargs) pairs."""
+    import geocull as gc
+
+    if cameras is None:
+        if spec is None:
+            raise ValueError("cameras: required when sweeping a Scene (no SceneSpec to frame views from)")
+        from .data import standard_views
+
+        cameras = standard_views(spec, aspect=width / height)
+    if isinstance(cameras, dict):
+        cameras = list(cameras.items())
+    out = []
+    for i, c in enumerate(cameras):
+        name = f"view{i}"
+        if isinstance(c, tuple) and len(c) == 2 and isinstance(c[0], str):
+            name, c = c
+        if isinstance(c, dict):
+            c = gc.Camera.look_at(**c)
+        if not isinstance(c, gc.Camera):
+            raise ValueError(f"cameras[{i}]: expected a geocull.Camera, look_at kwargs or (name, camera), got {c!r}")
+        out.append((str(name), c))
+    if not out:
+        raise ValueError("cameras: empty")
+    return out
+
+
+def timed_rounds(
+    jobs: Sequence[tuple[Any, Callable[[], float]]], repeats: int, warmup: int = 0
+) -> dict[Any, list[float]]:
+    """Run every ``(key, fn)`` of ``jobs`` once per round, ``repeats`` rounds, rotating the order by
+    one each round (``fn`` returns milliseconds). ``warmup`` extra rounds first, not recorded.
+    Returns key -> list of times."""
+    times: dict[Any, list[float]] = {k: [] for k, _ in jobs}
+    n = len(jobs)
+    for r in range(warmup + max(1, int(repeats))):
+        for i in range(n):
+            k, fn = jobs[(i + r) % n]
+            t = fn()
+            if r >= warmup:
+                times[k].append(float(t))
+    return times
+
+
+def _rel(a: float, b: float) -> float | None:
+    return None if not b else (a - b) / b
+
+
+# --------------------------------------------------------------------------- sweep
+
+
+def _sweep_scene(
+    scene, cams, renderer, thresholds, prepass_scales, repeats, methods, base: dict[str, Any], say
+) -> list[dict[str, Any]]:
+    from .compare import image_error
+
+    # configurations: key -> render kwargs
+    configs: list[tuple[tuple, dict[str, Any]]] = [(("none",), dict(culling="none"))]
+    configs.append((("oracle",), dict(culling="oracle")))
+    if "horizon" in methods:
+        configs.append((("horizon",), dict(culling="horizon")))
+    if "three_pass" in methods:
+        for thr, ps in itertools.product(thresholds, prepass_scales):
+            configs.append(
+                (("three_pass", float(thr), float(ps)), dict(culling="three_pass", pixel_threshold=thr, prepass_scale=ps))
+            )
+
+    rows: list[dict[str, Any]] = []
+    for vname, cam in cams:
+        say(f"  view {vname}: warm-up ({len(configs)} configurations)")
+        first: dict[tuple, Any] = {}
+        for key, kw in configs:  # warm-up; keeps one result per config for errors and counts
+            first[key] = renderer.render(scene, cam, **kw)
+        ref = first[("none",)]
+        oracle = first[("oracle",)]
+        visible = np.asarray(oracle.tile_pixels)
+
+        def job(kw):
+            return lambda: renderer.render(scene, cam, **kw).stats["total_ms"]
+
+        say(f"  view {vname}: {repeats} timed round(s)")
+        times = timed_rounds([(key, job(kw)) for key, kw in configs], repeats)
+        t_none = min(times[("none",)])
+        t_oracle = min(times[("oracle",)])
+        tri_oracle = oracle.stats["triangles_drawn"]
+        for key, kw in configs:
+            res = first[key]
+            s = res.stats
+            t = min(times[key])
+            err = image_error(res.image, ref.image, tile_drawn=res.tile_drawn, reference_tile_pixels=visible)
+            rows.append(
+                dict(
+                    base,
+                    view=vname,
+                    method=key[0],
+                    pixel_threshold=key[1] if len(key) > 1 else None,
+                    prepass_scale=key[2] if len(key) > 2 else None,
+                    total_ms=t,
+                    median_ms=statistics.median(times[key]),
+                    ratio_to_none=t / t_none if t_none > 0 else None,
+                    ratio_to_oracle=t / t_oracle if t_oracle > 0 else None,
+                    differing_pixel_fraction=err["differing_pixel_fraction"],
+                    psnr=err["psnr"],
+                    missing_tiles=err["missing_tiles"],
+                    triangles_drawn=int(s["triangles_drawn"]),
+                    triangles_prepass=int(s.get("triangles_prepass", 0)),
+                    triangles_fine_total=int(s["triangles_fine_total"]),
+                    tiles_drawn=int(s["tiles_drawn"]),
+                    tiles_total=int(s["tiles_total"]),
+                    triangle_diff_vs_oracle=_rel(s["triangles_drawn"], tri_oracle),
+                    prepass_ms=float(s.get("prepass_ms", 0.0)),
+                    count_ms=float(s.get("count_ms", 0.0)),
+                    draw_ms=float(s.get("draw_ms", 0.0)),
+                    times_ms=list(times[key]),
+                )
+            )
+    return rows
+
+
+def sweep(
+    scene_or_spec,
+    cameras=None,
+    thresholds: Sequence[float] = DEFAULT_THRESHOLDS,
+    coarse_factors: Sequence[float] | None = None,
+    tiles: Sequence[int | tuple[int, int]] | None = None,
+    prepass_scales: Sequence[float] = DEFAULT_PREPASS_SCALES,
+    width: int = 640,
+    height: int = 512,
+    repeats: int = 3,
+    methods: Sequence[str] = ("none", "oracle", "three_pass"),
+    fault_tiles: int | None = None,
+    fault_coarse_factor: float = 10,
+    renderer=None,
+    progress: bool | Callable[[str], None] = False,
+    as_frame: bool = False,
+):
+    """Sweep the culling parameters of a scene and measure speed against error, side by side.
+
+    scene_or_spec: a :class:`geocull.data.SceneSpec` (rebuilt for every tile count × coarse factor)
+        or a built :class:`geocull.Scene` (then ``tiles`` and ``coarse_factors`` must be None: a
+        built scene cannot change them).
+    cameras: None (the spec's :func:`~geocull.data.standard_views`), a list of ``geocull.Camera``,
+        ``Camera.look_at`` kwargs dicts or ``(name, camera)`` pairs, or a dict name -> camera.
+    thresholds × prepass_scales: the ``three_pass`` points of each scene (full product).
+    coarse_factors (default for a spec: 25, 100, 400) × tiles (int n = n × n tiles per horizon, or
+        (tx, ty); default for a spec: 10 × 10): one scene build each (faults: ``fault_tiles``,
+        ``fault_coarse_factor``).
+    methods: ``none`` and ``oracle`` always run (they are the references); add ``"horizon"`` for
+        CPU horizon culling; leave out ``"three_pass"`` to time only the references.
+    repeats: timed rounds after the warm-up round (times are the minimum; ``median_ms`` too).
+    renderer: a ``geocull.Renderer`` to reuse (its size wins over width/height).
+
+    Returns a list of dicts, one per (scene build, view, method point), with the keys of
+    :data:`COLUMNS` (``tiles`` is ``"10x10"``, None for a built scene; ``pixel_threshold`` and
+    ``prepass_scale`` are None except for ``three_pass``; ``triangle_diff_vs_oracle`` is
+    (drawn − oracle's drawn) / oracle's drawn) plus ``times_ms`` (every timed round). With
+    ``as_frame=True`` a pandas DataFrame instead.
+    """
+    import geocull as gc
+    from .data import SceneSpec
+
+    say = _progress_fn(progress)
+    repeats = max(1, int(repeats))
+    methods = tuple(methods)
+    is_spec = isinstance(scene_or_spec, SceneSpec)
+    if is_spec:
+        spec = scene_or_spec
+        cfs = list(coarse_factors) if coarse_factors is not None else list(DEFAULT_COARSE_FACTORS)
+        tls = [_tiles_tuple(t) for t in tiles] if tiles is not None else list(DEFAULT_TILES)
+        if not cfs or not tls:
+            raise ValueError("coarse_factors, tiles: need at least one value each")
+    else:
+        spec = None
+        if coarse_factors is not None or tiles is not None:
+            raise ValueError(
+                "coarse_factors, tiles: sweeping them rebuilds the scene; pass a geocull.data.SceneSpec, not a Scene"
+            )
+        if not isinstance(scene_or_spec, gc.Scene):
+            raise ValueError(f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}")
+    if not list(thresholds) or not list(prepass_scales):
+        raise ValueError("thresholds, prepass_scales: need at least one value each")
+
+    if renderer is None:
+        renderer = gc.Renderer(int(width), int(height))
+    cams = _cameras(cameras, spec, renderer.width, renderer.height)
+
+    rows: list[dict[str, Any]] = []
+    if not is_spec:
+        say(f"sweep: built scene, {len(cams)} view(s)")
+        rows += _sweep_scene(
+            scene_or_spec, cams, renderer, thresholds, prepass_scales, repeats, methods,
+            dict(tiles=None, coarse_factor=None, build_s=None), say,
+        )
+    else:
+        for tl, cf in itertools.product(tls, cfs):
+            say(f"sweep: building scene tiles={tl[0]}x{tl[1]} coarse_factor={cf}")
+            t0 = time.perf_counter()
+            scene = spec.build(tiles=tl, coarse_factor=cf, fault_tiles=fault_tiles, fault_coarse_factor=fault_coarse_factor)
+            build_s = time.perf_counter() - t0
+            base = dict(tiles=f"{tl[0]}x{tl[1]}", coarse_factor=cf, build_s=build_s)
+            rows += _sweep_scene(scene, cams, renderer, thresholds, prepass_scales, repeats, methods, base, say)
+            del scene
+    return to_frame(rows) if as_frame else rows
+
+
+# --------------------------------------------------------------------------- tables
+
+
+def _config_key(r: dict[str, Any]) -> tuple:
+    return (r.get("tiles"), r.get("coarse_factor"), r["method"], r.get("pixel_threshold"), r.get("prepass_scale"))
+
+
+def _gmean(xs: Iterable[float]) -> float | None:
+    xs = [float(x) for x in xs if x is not None and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+
+
+def _mean(xs):
+    xs = [float(x) for x in xs if x is not None]
+    return sum(xs) / len(xs) if xs else None
+
+
+def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per configuration (tiles, coarse factor, method, threshold, prepass scale) over all
+    views: geometric means of ``ratio_to_none``/``ratio_to_oracle``, mean and max of
+    ``differing_pixel_fraction``, total ``missing_tiles``, mean ``triangles_drawn``,
+    ``triangles_prepass`` and ``triangle_diff_vs_oracle``, mean ``total_ms``, and ``views`` (how many)."""
+    groups: dict[tuple, list[dict[str, Any]]] = {}
+    for r in table:
+        groups.setdefault(_config_key(r), []).append(r)
+    out = []
+    for key, rs in groups.items():
+        dpf = [r["differing_pixel_fraction"] for r in rs if r.get("differing_pixel_fraction") is not None]
+        miss = [r["missing_tiles"] for r in rs if r.get("missing_tiles") is not None]
+        out.append(
+            dict(
+                tiles=key[0],
+                coarse_factor=key[1],
+                method=key[2],
+                pixel_threshold=key[3],
+                prepass_scale=key[4],
+                views=len(rs),
+                total_ms=_mean(r["total_ms"] for r in rs),
+                ratio_to_none=_gmean(r.get("ratio_to_none") for r in rs),
+                ratio_to_oracle=_gmean(r.get("ratio_to_oracle") for r in rs),
+                differing_pixel_fraction=_mean(dpf),
+                max_differing_pixel_fraction=max(dpf) if dpf else None,
+                missing_tiles=sum(miss) if miss else None,
+                triangles_drawn=_mean(r["triangles_drawn"] for r in rs),
+                triangles_prepass=_mean(r.get("triangles_prepass") for r in rs),
+                triangle_diff_vs_oracle=_mean(r.get("triangle_diff_vs_oracle") for r in rs),
+                tiles_drawn=_mean(r["tiles_drawn"] for r in rs),
+                build_s=rs[0].get("build_s"),
+            )
+        )
+    return out
+
+
+def point_label(r: dict[str, Any]) -> str:
+    """A short label of a row's configuration, e.g. ``three_pass t10 s0.5 c25 10x10``."""
+    parts = [str(r["method"])]
+    if r.get("pixel_threshold") is not None:
+        parts.append(f"t{r['pixel_threshold']:g}")
+    if r.get("prepass_scale") is not None:
+        parts.append(f"s{r['prepass_scale']:g}")
+    if r.get("coarse_factor") is not None:
+        parts.append(f"c{r['coarse_factor']:g}")
+    if r.get("tiles") is not None:
+        parts.append(str(r["tiles"]))
+    return " ".join(parts)
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, (int, np.integer)):
+        return f"{int(v):,}"
+    if isinstance(v, float):
+        if math.isinf(v):
+            return "inf"
+        if math.isnan(v):
+            return "nan"
+        if v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e6):
+            return f"{v:.2e}"
+        return f"{v:.4g}" if abs(v) < 1 else f"{v:.3f}" if abs(v) < 100 else f"{v:.1f}"
+    return str(v)
+
+
+def to_markdown(table: Sequence[dict[str, Any]], columns: Sequence[str] | None = None) -> str:
+    """The table as GitHub markdown; ``columns`` default to those of :data:`COLUMNS` present."""
+    if not table:
+        return "(empty table)\n"
+    if columns is None:
+        present = set().union(*(r.keys() for r in table))
+        columns = [c for c in COLUMNS if c in present] + sorted(
+            c for c in present if c not in COLUMNS and c != "times_ms"
+        )
+    lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
+    for r in table:
+        lines.append("| " + " | ".join(_fmt(r.get(c)) for c in columns) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def to_frame(table: Sequence[dict[str, Any]]):
+    """The table as a pandas DataFrame (ImportError with a hint if pandas is missing)."""
+    try:
+        import pandas as pd
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("to_frame/as_frame need pandas (pip install pandas); the list of dicts works without") from e
+    return pd.DataFrame(list(table))
+
+
+def jsonable(x: Any) -> Any:
+    """``x`` with numpy scalars/arrays made plain and non-finite floats made None (strict JSON)."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return jsonable(x.tolist())
+    if isinstance(x, np.generic):
+        return jsonable(x.item())
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def write_json(obj: Any, path: str) -> None:
+    with open(path, "w") as f:
+        json.dump(jsonable(obj), f, indent=1, allow_nan=False)
+        f.write("\n")
+
+
+# --------------------------------------------------------------------------- plot
+
+
+def plot(table: Sequence[dict[str, Any]], path: str, title: str | None = None, aggregate: bool = True) -> str:
+    """Plot speed (ratio of frame time to ``none``; lower is faster) against error (differing pixel
+    fraction vs the unculled image) to ``path`` (PNG, SVG, ... by extension), one labelled marker per
+    point. With ``aggregate`` (default) a point is a configuration over all views (see
+    :func:`summarize`), else every row is a point (labelled with its view). Returns ``path``."""
+    import matplotlib
+
+    if matplotlib.get_backend().lower() != "agg":
+        matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    rows = summarize(table) if aggregate else list(table)
+    rows = [r for r in rows if r.get("ratio_to_none") is not None and r.get("differing_pixel_fraction") is not None]
+    colors = {"none": "black", "oracle": "tab:green", "three_pass": "tab:blue", "horizon": "tab:orange"}
+    markers = {"none": "s", "oracle": "*", "three_pass": "o", "horizon": "^"}
+    fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
+    xs = [r["differing_pixel_fraction"] for r in rows]
+    for r in rows:
+        m = r["method"]
+        ax.scatter(r["differing_pixel_fraction"], r["ratio_to_none"], c=colors.get(m, "tab:gray"),
+                   marker=markers.get(m, "D"), s=60 if m != "oracle" else 140, zorder=3,
+                   edgecolors="white", linewidths=0.5)
+        label = point_label(r) if aggregate else f"{point_label(r)} [{r['view']}]"
+        ax.annotate(label, (r["differing_pixel_fraction"], r["ratio_to_none"]), textcoords="offset points",
+                    xytext=(5, 4), fontsize=7, zorder=4)
+    pos = [x for x in xs if x > 0]
+    ax.set_xscale("symlog", linthresh=max(min(pos) / 2, 1e-6) if pos else 1e-5)
+    ax.set_xlim(left=0)
+    ax.axhline(1.0, color="gray", lw=0.8, ls="--")
+    ax.set_xlabel("error: differing pixel fraction vs unculled image (symlog)")
+    ax.set_ylabel("frame time / unculled frame time (lower = faster)")
+    ax.set_title(title or "geocull: speed against error")
+    ax.grid(True, alpha=0.3)
+    handles = [plt.Line2D([], [], ls="", marker=markers[m], color=colors[m], label=m)
+               for m in colors if any(r["method"] == m for r in rows)]
+    if handles:
+        ax.legend(handles=handles, loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
