@@ -15,7 +15,7 @@ setup: vulkan build
 
 # Mesa's lavapipe renders Vulkan on the CPU; install it only when no Vulkan driver is present.
 vulkan:
-	@if ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1 && ldconfig -p | grep -q libvulkan.so.1; then \
+	@if ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json 2>/dev/null | grep -q . && ldconfig -p | grep -q libvulkan.so.1; then \
 	  echo "vulkan: driver present"; \
 	else \
 	  echo "vulkan: installing libvulkan1 mesa-vulkan-drivers"; \
