@@ -42,7 +42,8 @@ impl TileMesh {
         self.coarse.len() / 3
     }
 
-    fn finish(mut self, coarse_factor: f32) -> Self {
+    /// Bounding box, and the coarse proxy by quadric simplification unless `coarse` is given.
+    fn finish(mut self, coarse_factor: f32, coarse: Option<Vec<u32>>) -> Self {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.positions {
@@ -57,7 +58,7 @@ impl TileMesh {
         }
         self.bbox_min = lo;
         self.bbox_max = hi;
-        self.coarse = simplify::coarse_indices(&self.positions, &self.fine, coarse_factor);
+        self.coarse = coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         self
     }
 }
@@ -131,7 +132,26 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
                     }
                 }
             }
-            tile.finish(coarse_factor)
+            // Hole-free tiles: the proxy is the sample lattice at stride k = round(sqrt(coarse_factor)),
+            // always keeping the tile's last row and column. Neighbours then keep the same border
+            // samples, so proxies meet without cracks at any factor. (Quadric simplification with a
+            // locked border cannot go below the border's own edges: about 1/20 for 40 x 40 cells.)
+            let k = (coarse_factor as f64).sqrt().round() as usize;
+            let holes = tile.fine_triangles() != 2 * (w - 1) * (h - 1);
+            let lattice = (k > 1 && !holes).then(|| {
+                let steps = |n: usize| -> Vec<usize> { (0..n - 1).step_by(k).chain(std::iter::once(n - 1)).collect() };
+                let (xs, ys) = (steps(w), steps(h));
+                let mut idx = Vec::with_capacity(6 * xs.len() * ys.len());
+                for jj in ys.windows(2) {
+                    for ii in xs.windows(2) {
+                        let m = |li: usize, lj: usize| map[lj * w + li];
+                        let (a, b, c, d) = (m(ii[0], jj[0]), m(ii[1], jj[0]), m(ii[1], jj[1]), m(ii[0], jj[1]));
+                        idx.extend_from_slice(&[a, b, c, a, c, d]);
+                    }
+                }
+                idx
+            });
+            tile.finish(coarse_factor, lattice)
         })
         .collect()
 }
@@ -170,7 +190,7 @@ pub fn tile_mesh(vertices: &[[f64; 3]], faces: &[[u32; 3]], origin: DVec3, clust
                     tile.fine.push(slot);
                 }
             }
-            tile.finish(coarse_factor)
+            tile.finish(coarse_factor, None)
         })
         .collect()
 }
@@ -201,6 +221,30 @@ mod tests {
         let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0);
         assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
         assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    }
+
+    #[test]
+    fn lattice_proxy_reaches_the_factor_and_neighbours_share_border_samples() {
+        let (nx, ny) = (81, 81);
+        let z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + ((k / nx) as f64 * 0.2).cos()).collect();
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
+            let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf);
+            let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
+            let coarse: usize = tiles.iter().map(|t| t.coarse_triangles()).sum();
+            let ratio = fine as f64 / coarse as f64;
+            assert!(ratio > want * 0.5 && ratio < want * 1.5, "factor {cf}: {fine}/{coarse}");
+            // Tiles (0,0) and (1,0) share the column x = 40: both proxies keep the same samples there.
+            let on_seam = |t: &TileMesh| {
+                let mut ys: Vec<i64> = t.coarse.iter().map(|&k| t.positions[k as usize]).filter(|p| p[0] == 40.0).map(|p| p[1] as i64).collect();
+                ys.sort();
+                ys.dedup();
+                ys
+            };
+            assert_eq!(on_seam(&tiles[0]), on_seam(&tiles[1]));
+            assert_eq!(on_seam(&tiles[0]).first(), Some(&0));
+            assert_eq!(on_seam(&tiles[0]).last(), Some(&40));
+        }
     }
 
     #[test]
