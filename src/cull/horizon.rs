@@ -36,8 +36,19 @@
 //!   from above). Winding `>= 1` therefore proves that the ray through `p` hits an up-facing
 //!   (front-facing even if the renderer culls back faces with "up = front") drawn triangle of
 //!   this tile inside the clip volume. Per column the winding is evaluated exactly at the
-//!   pixel-centre x (half-open crossing rule), so partially covered columns are handled exactly,
-//!   with a safety margin of `PIX_EPS` pixels against round-off.
+//!   pixel-centre x (half-open crossing rule), so partially covered columns are handled exactly.
+//! * Margins for the GPU: a rasterizer snaps vertices to its sub-pixel grid (1/256 px on
+//!   lavapipe, >= 1/16 px on any Vulkan device) and computes clip coordinates from f32 positions
+//!   with an f32 matrix. A pixel centre is credited only if it is at least `eps` pixels from every
+//!   edge of the occluder's boundary (`RASTER_EPS` plus a per-vertex bound of the f32 round-off,
+//!   which grows near the eye and with the size of the coordinates; see `View::err_px`; along an
+//!   edge it is interpolated between the endpoints' margins, see `add_band`), and occludee boxes
+//!   are grown by the largest margin of their corners. Seen through the real renderer, crediting a pixel
+//!   0.001 px inside a tile's border edge culled the neighbour tile that the GPU actually gave the
+//!   pixel to. Tile seams get no margin: the occluder of a drawn tile is the union of its covered
+//!   set with those of its already drawn 8 neighbours (shared sides cancel), and the GPU's shared
+//!   vertices make the seam watertight, so a pixel near a seam goes to one of two drawn tiles.
+//!   "In the depth range" also keeps an f32 margin, so the GPU never clips a credited cell.
 //! * Front-to-back order: children are visited as (eye quadrant, the two adjacent quadrants,
 //!   opposite quadrant), decided by which side of the node's two vertical split planes the
 //!   centre of projection lies on. For two nodes A visited before B there is always a split
@@ -64,6 +75,17 @@
 //! node is culled iff every row centre the hull can reach in every column it spans is `< K[c]`.
 //! Both kinds of culls are counted in `nodes_culled`.
 //!
+//! # Depth conventions
+//!
+//! Standard depth and reverse-Z (the renderer: infinite-far reverse-Z perspective, reverse-Z
+//! orthographic, `Greater` test) both work: the clip tests only use `0 <= z <= w` (the wgpu /
+//! Vulkan / D3D range, either orientation) and `w > 0`. Front-to-back order comes from the
+//! centre of projection (perspective) or the projection direction (orthographic). For
+//! orthographic views the direction's sign cannot be read from the matrix (depth grows forward
+//! with standard depth, backward with reverse-Z), so `eye` decides: its depth is <= 0 with
+//! standard depth and >= 1 with reverse-Z. (Before this rule, reverse-Z orthographic views were
+//! traversed back to front and culled visible tiles.)
+//!
 //! # Validity rule (when `culling_applied == false`)
 //!
 //! The argument above needs no "eye above terrain", no "no roll" and no particular pitch: it
@@ -83,16 +105,26 @@
 //!   bottom-up horizon cannot rise (the nadir projects into the screen), so the traversal
 //!   would cost time for nothing. This is a usefulness rule, not a correctness one.
 //!
-//! `eye` is not used: the centre of projection is derived from `view_proj` itself, so the
-//! ordering can never disagree with what is rendered (orthographic views included).
+//! The centre of projection is derived from `view_proj` itself, so the ordering can never
+//! disagree with what is rendered; `eye` (render space, consistent with `view_proj`) is only used
+//! for the sign of an orthographic view direction (see "Depth conventions").
 //! Not covered: LOD rendering (coarser meshes than the finest samples) - the covered set is
 //! computed for the full-resolution surface; MSAA (sub-pixel samples other than the centre).
 
 use glam::{DMat4, DVec3, DVec4};
 
 const NONE: u32 = u32::MAX;
-/// Safety margin in pixels against floating-point round-off.
+/// Safety margin in pixels against floating-point round-off (of this module's f64 arithmetic).
 const PIX_EPS: f64 = 1e-4;
+/// Rasterizer margin in pixels: a GPU snaps vertex positions to its sub-pixel grid before testing
+/// pixel centres (lavapipe/llvmpipe and desktop GPUs: 8 bits = 1/256 px; Vulkan's minimum is
+/// 4 bits = 1/16 px, i.e. a vertex moves by at most 1/32 px per axis). Coverage is credited only at
+/// pixel centres at least this far (plus the f32 bound below) from every occluder boundary edge,
+/// and occludee boxes are grown by it.
+const RASTER_EPS: f64 = 1.0 / 16.0;
+/// Bound on the relative f32 round-off of the GPU's clip coordinates (positions rounded to f32,
+/// f32 matrix, a 4-term dot product): a few units of 2^-24 of the sum of absolute terms, with margin.
+const F32_REL: f64 = 8.0 / 16_777_216.0;
 /// Culling is disabled when |forward.z| exceeds this (view within 30° of vertical).
 const STEEP_SIN: f64 = 0.866_025_403_784_438_6;
 
@@ -245,6 +277,21 @@ impl Chain {
     }
 }
 
+impl Chain {
+    /// max (upper) / min (lower) of the chain over [a, b] (a <= b, inside the chain's x range):
+    /// the ends and every chain vertex in between.
+    fn extreme_on(&self, a: f64, b: f64, upper: bool) -> f64 {
+        let pick = |u: f64, v: f64| if upper { u.max(v) } else { u.min(v) };
+        let mut best = pick(self.eval(a, upper), self.eval(b, upper));
+        for k in 0..self.n {
+            if a <= self.p[k].0 && self.p[k].0 <= b {
+                best = pick(best, self.p[k].1);
+            }
+        }
+        best
+    }
+}
+
 fn cross2(o: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
     (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
 }
@@ -278,6 +325,8 @@ struct NodeProj {
     front: bool,
     /// all corners inside the depth range (0 <= z <= w)
     depth_ok: bool,
+    /// margin in pixels (rasterizer snapping + f32 round-off) for the box's contents
+    eps: f64,
     xmin: f64,
     xmax: f64,
     lo: Chain,
@@ -286,6 +335,8 @@ struct NodeProj {
 
 struct View {
     m: DMat4,
+    /// |rows| of `m` (x, y, z, w), for the f32 error bound of clip coordinates
+    ra: [DVec4; 4],
     /// homogeneous centre of projection (w = 1 perspective, w = 0 orthographic: -view dir)
     eh: DVec4,
     w_margin: f64,
@@ -296,7 +347,7 @@ struct View {
 }
 
 impl View {
-    fn new(m: DMat4, w: usize, h: usize, scale: f64) -> Option<View> {
+    fn new(m: DMat4, eye: DVec3, w: usize, h: usize, scale: f64) -> Option<View> {
         let r0 = m.row(0);
         let r1 = m.row(1);
         let r2 = m.row(2);
@@ -328,9 +379,19 @@ impl View {
         let s2 = r2.truncate().dot(f);
         let tiny = 1e-12 * fl;
         if s3.abs() > tiny * r3.truncate().length().max(1e-300) {
+            // perspective: w (the distance along the view axis) grows forward
             f *= s3.signum();
         } else if s2.abs() > tiny * r2.truncate().length().max(1e-300) {
-            f *= s2.signum();
+            // orthographic: depth is linear along f, but whether it grows forward (standard depth,
+            // near -> 0, far -> 1) or backward (reverse-Z, near -> 1, far -> 0) cannot be read
+            // from the matrix. The eye decides: it lies at or before the near plane, so its depth
+            // is <= 0 for standard depth and >= 1 for reverse-Z.
+            let ce = m * eye.extend(1.0);
+            if !ce.is_finite() || ce.w <= 0.0 {
+                return None;
+            }
+            let reverse = ce.z / ce.w >= 0.5;
+            f *= if reverse { -s2.signum() } else { s2.signum() };
         } else {
             return None;
         }
@@ -349,6 +410,7 @@ impl View {
         let w_margin = (1e-9 * (r3.truncate().length() * scale + r3.w.abs())).max(1e-300);
         Some(View {
             m,
+            ra: [r0.abs(), r1.abs(), r2.abs(), r3.abs()],
             eh,
             w_margin,
             wf: w as f64,
@@ -371,9 +433,31 @@ impl View {
         )
     }
 
+    /// Bound on the f32 round-off of clip coordinate `row` of render-space point `p` on the GPU.
     #[inline]
-    fn in_depth(&self, c: DVec4) -> bool {
-        c.w > self.w_margin && c.z >= 0.0 && c.z <= c.w
+    fn f32_err(&self, row: usize, p: DVec3) -> f64 {
+        F32_REL * (self.ra[row].truncate().dot(p.abs()) + self.ra[row].w)
+    }
+
+    /// Pixels by which the GPU's projection of `p` (clip `c`, w > 0) may differ from ours:
+    /// sub-pixel snapping plus the f32 bound. Infinite when w is not safely positive.
+    #[inline]
+    fn err_px(&self, p: DVec3, c: DVec4) -> f64 {
+        let ew = self.f32_err(3, p);
+        if !(c.w > ew + self.w_margin) {
+            return f64::INFINITY;
+        }
+        let ex = (self.f32_err(0, p) + (c.x / c.w).abs() * ew) / (c.w - ew);
+        let ey = (self.f32_err(1, p) + (c.y / c.w).abs() * ew) / (c.w - ew);
+        RASTER_EPS + PIX_EPS + (0.5 * self.wf * ex).max(0.5 * self.hf * ey)
+    }
+
+    /// Inside the depth range `0 <= z <= w` (wgpu/Vulkan/D3D; holds for standard and reverse-Z)
+    /// with a margin for the GPU's f32 round-off, so the GPU does not clip it.
+    #[inline]
+    fn in_depth(&self, p: DVec3, c: DVec4) -> bool {
+        let (ez, ew) = (self.f32_err(2, p), self.f32_err(3, p));
+        c.w > self.w_margin + ew && c.z >= ez && c.z <= c.w - ez - ew
     }
 
     /// Number of rows whose centre is < y (clamped to 0..=h).
@@ -392,9 +476,9 @@ impl View {
     }
 
     /// Columns whose centre lies in [xmin - eps, xmax + eps], clipped to the screen.
-    fn col_range(&self, xmin: f64, xmax: f64) -> Option<(usize, usize)> {
-        let c0 = (xmin - PIX_EPS - 0.5).ceil().max(0.0);
-        let c1 = (xmax + PIX_EPS - 0.5).floor().min(self.wf - 1.0);
+    fn col_range(&self, xmin: f64, xmax: f64, eps: f64) -> Option<(usize, usize)> {
+        let c0 = (xmin - eps - 0.5).ceil().max(0.0);
+        let c1 = (xmax + eps - 0.5).floor().min(self.wf - 1.0);
         if c0 > c1 || c0.is_nan() || c1.is_nan() {
             None
         } else {
@@ -540,10 +624,9 @@ impl HorizonTree {
 
     /// view_proj: column-major 4x4 (glam::DMat4) mapping render space to clip space
     /// (OpenGL/wgpu style: clip.w > 0 in front; NDC x,y in [-1,1], y up). Both perspective and
-    /// orthographic work. `eye` is not needed (the centre of projection is taken from
-    /// `view_proj`); it is kept for API stability.
+    /// orthographic work, with standard or reverse-Z depth. `eye` (render space) is only used
+    /// to orient orthographic views (see the module doc).
     pub fn cull(&self, view_proj: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
-        let _ = eye;
         let (w, h) = (width as usize, height as usize);
         let fallback = || HorizonResult {
             tile_visible: if self.valid {
@@ -559,7 +642,7 @@ impl HorizonTree {
         if !self.valid || w == 0 || h == 0 || !view_proj.is_finite() {
             return fallback();
         }
-        let Some(view) = View::new(view_proj, w, h, self.scale) else {
+        let Some(view) = View::new(view_proj, eye, w, h, self.scale) else {
             return fallback();
         };
         let mut res = HorizonResult {
@@ -574,7 +657,10 @@ impl HorizonTree {
         }
         let mut k = vec![0u32; w];
         let mut stack: Vec<(u32, NodeProj)> = Vec::with_capacity(64);
-        let mut scratch = Scratch::default();
+        let mut scratch = Scratch {
+            tile_edges: vec![(0, 0); self.tx * self.ty],
+            ..Scratch::default()
+        };
 
         res.nodes_visited += 1;
         match self.project_node(&view, self.root) {
@@ -660,13 +746,24 @@ impl HorizonTree {
             return Some(NodeProj {
                 front: false,
                 depth_ok: false,
+                eps: f64::INFINITY,
                 xmin: f64::NEG_INFINITY,
                 xmax: f64::INFINITY,
                 lo: Chain::EMPTY,
                 up: Chain::EMPTY,
             });
         }
-        let depth_ok = clip.iter().all(|&c| view.in_depth(c));
+        let mut depth_ok = true;
+        let mut eps: f64 = 0.0;
+        for (kk, &c) in clip.iter().enumerate() {
+            let p = DVec3::new(
+                if kk & 1 != 0 { n.max.x } else { n.min.x },
+                if kk & 2 != 0 { n.max.y } else { n.min.y },
+                if kk & 4 != 0 { n.max.z } else { n.min.z },
+            );
+            depth_ok &= view.in_depth(p, c);
+            eps = eps.max(view.err_px(p, c));
+        }
         let mut pts = [(0.0, 0.0); 8];
         let (mut xmin, mut xmax, mut ymin, mut ymax) = (
             f64::INFINITY,
@@ -685,20 +782,33 @@ impl HorizonTree {
             return Some(NodeProj {
                 front: false,
                 depth_ok: false,
+                eps: f64::INFINITY,
                 xmin: f64::NEG_INFINITY,
                 xmax: f64::INFINITY,
                 lo: Chain::EMPTY,
                 up: Chain::EMPTY,
             });
         }
-        view.col_range(xmin, xmax)?;
-        if ymax + PIX_EPS < 0.5 || ymin - PIX_EPS > view.hf - 0.5 {
+        if !eps.is_finite() {
+            return Some(NodeProj {
+                front: false,
+                depth_ok: false,
+                eps,
+                xmin: f64::NEG_INFINITY,
+                xmax: f64::INFINITY,
+                lo: Chain::EMPTY,
+                up: Chain::EMPTY,
+            });
+        }
+        view.col_range(xmin, xmax, eps)?;
+        if ymax + eps < 0.5 || ymin - eps > view.hf - 0.5 {
             return None;
         }
         let (lo, up) = hull_chains(&mut pts);
         Some(NodeProj {
             front,
             depth_ok,
+            eps,
             xmin,
             xmax,
             lo,
@@ -710,7 +820,7 @@ impl HorizonTree {
         if !p.front {
             return false;
         }
-        let Some((c0, c1)) = view.col_range(p.xmin, p.xmax) else {
+        let Some((c0, c1)) = view.col_range(p.xmin, p.xmax, p.eps) else {
             return true;
         };
         for (c, &kc) in k.iter().enumerate().take(c1 + 1).skip(c0) {
@@ -718,11 +828,14 @@ impl HorizonTree {
                 continue;
             }
             let xc = (c as f64 + 0.5).clamp(p.xmin, p.xmax);
-            let top = p.up.eval(xc, true) + PIX_EPS;
+            // the hull's top within eps of the column centre (its slope is unbounded near
+            // the ends of the hull, so evaluate at both ends of the eps-window), grown by eps
+            let (a, b) = ((xc - p.eps).max(p.xmin), (xc + p.eps).min(p.xmax));
+            let top = p.up.extreme_on(a, b, true) + p.eps;
             if top < 0.5 || kc as f64 + 0.5 > top {
                 continue;
             }
-            let bot = p.lo.eval(xc, false) - PIX_EPS;
+            let bot = p.lo.extreme_on(a, b, false) - p.eps;
             if bot > view.hf - 0.5 {
                 continue;
             }
@@ -739,10 +852,12 @@ impl HorizonTree {
             if !p.front {
                 return 0;
             }
-            if xc < p.xmin - PIX_EPS || xc > p.xmax + PIX_EPS {
+            if xc < p.xmin - p.eps || xc > p.xmax + p.eps {
                 continue;
             }
-            m = m.min(p.lo.eval(xc.clamp(p.xmin, p.xmax), false));
+            let (a, b) = ((xc - p.eps).max(p.xmin), (xc + p.eps).min(p.xmax));
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            m = m.min(p.lo.extreme_on(a, b, false) - p.eps);
         }
         view.rows_below(m - PIX_EPS)
     }
@@ -757,13 +872,15 @@ impl HorizonTree {
         s: &mut Scratch,
     ) {
         s.cross.clear();
+        s.unc.clear();
+        s.ue.clear();
+        // The occluder is the union of this tile's covered set with those of its already drawn
+        // neighbours (each with the edge set it was credited with, static or per-frame): their
+        // shared sides cancel, so the margin is only taken around the union's boundary. Tile seams must not get a margin: the GPU gives a
+        // pixel centre near a seam to one side or the other, and both sides are drawn.
         if proj.depth_ok {
-            for &[a, b] in &self.edges[self.edge_off[t] as usize..self.edge_off[t + 1] as usize] {
-                let (a, b) = (a as usize, b as usize);
-                let pa = view.screen(view.clip(self.pos(a % self.nx, a / self.nx)));
-                let pb = view.screen(view.clip(self.pos(b % self.nx, b / self.nx)));
-                add_edge(pa, pb, view.w, &mut s.cross);
-            }
+            let r = self.edge_off[t] as usize..self.edge_off[t + 1] as usize;
+            s.ue.extend_from_slice(&self.edges[r]);
         } else {
             // per-frame mask: cells with 4 finite corners inside the depth range
             let (ix, iy) = (t % self.tx, t / self.tx);
@@ -771,33 +888,68 @@ impl HorizonTree {
             let (j0, j1) = (self.by[iy], self.by[iy + 1]);
             let lw = i1 - i0 + 1;
             s.valid.clear();
-            s.pts.clear();
             for j in j0..=j1 {
                 for i in i0..=i1 {
                     let p = self.pos(i, j);
-                    let c = view.clip(p);
-                    let ok = p.z.is_finite() && view.in_depth(c);
-                    s.valid.push(ok);
-                    s.pts.push(if ok { view.screen(c) } else { (0.0, 0.0) });
+                    s.valid.push(p.z.is_finite() && view.in_depth(p, view.clip(p)));
                 }
             }
             let valid = &s.valid;
             let v = |i: usize, j: usize| valid[(j - j0) * lw + (i - i0)];
             let good =
                 |i: usize, j: usize| v(i, j) && v(i + 1, j) && v(i, j + 1) && v(i + 1, j + 1);
-            let pts = &s.pts;
-            let cross = &mut s.cross;
+            let (nx, ue) = (self.nx, &mut s.ue);
             boundary_edges((i0, i1), (j0, j1), good, self.flip, |a, b| {
-                let pa = pts[(a.1 - j0) * lw + (a.0 - i0)];
-                let pb = pts[(b.1 - j0) * lw + (b.0 - i0)];
-                add_edge(pa, pb, view.w, cross);
+                ue.push([(a.1 * nx + a.0) as u32, (b.1 * nx + b.0) as u32]);
             });
+        }
+        let own = s.ue.len();
+        s.tile_edges[t] = (s.pool.len() as u32, (s.pool.len() + own) as u32);
+        s.pool.extend_from_slice(&s.ue);
+        let (ix, iy) = ((t % self.tx) as isize, (t / self.tx) as isize);
+        for (ddx, ddy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+            let (jx, jy) = (ix + ddx, iy + ddy);
+            if jx < 0 || jy < 0 || jx >= self.tx as isize || jy >= self.ty as isize {
+                continue;
+            }
+            let u = jy as usize * self.tx + jx as usize;
+            let (a, b) = s.tile_edges[u];
+            if a < b {
+                s.ue.extend_from_slice(&s.pool[a as usize..b as usize]);
+            }
+        }
+        if s.ue.len() > own {
+            // cancel opposite pairs (a shared side appears once in each tile, reversed)
+            s.ue.sort_unstable_by_key(|e| (e[0].min(e[1]), e[0].max(e[1])));
+            let mut out = 0;
+            let mut i = 0;
+            while i < s.ue.len() {
+                if i + 1 < s.ue.len() && s.ue[i][0] == s.ue[i + 1][1] && s.ue[i][1] == s.ue[i + 1][0] {
+                    i += 2;
+                    continue;
+                }
+                s.ue[out] = s.ue[i];
+                out += 1;
+                i += 1;
+            }
+            s.ue.truncate(out);
+        }
+        for &[a, b] in &s.ue {
+            let (a, b) = (a as usize, b as usize);
+            let (qa, qb) = (self.pos(a % self.nx, a / self.nx), self.pos(b % self.nx, b / self.nx));
+            let (ca, cb) = (view.clip(qa), view.clip(qb));
+            let (pa, pb) = (view.screen(ca), view.screen(cb));
+            add_edge(pa, pb, view.w, &mut s.cross);
+            add_band(pa, pb, view.err_px(qa, ca), view.err_px(qb, cb), view, &mut s.unc);
         }
         if s.cross.is_empty() {
             return;
         }
         s.cross
             .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+        s.unc
+            .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let mut ui = 0;
         let mut idx = 0;
         let n = s.cross.len();
         while idx < n {
@@ -818,9 +970,35 @@ impl HorizonTree {
                 prev = e.1;
             }
             idx = end;
+            // remove the rows within the margin of any boundary edge: what remains is covered
+            // for every position of the edges the GPU may rasterize
+            while ui < s.unc.len() && (s.unc[ui].0 as usize) < c {
+                ui += 1;
+            }
+            let mut ue = ui;
+            while ue < s.unc.len() && s.unc[ue].0 as usize == c {
+                ue += 1;
+            }
+            s.pieces.clear();
+            for &(lo, hi) in s.iv.iter().rev() {
+                let mut cur = lo;
+                for &(_, ulo, uhi) in &s.unc[ui..ue] {
+                    if uhi <= cur || ulo >= hi {
+                        continue;
+                    }
+                    if ulo > cur {
+                        s.pieces.push((cur, ulo));
+                    }
+                    cur = cur.max(uhi);
+                }
+                if cur < hi {
+                    s.pieces.push((cur, hi));
+                }
+            }
+            ui = ue;
             let mut kk = k[c];
             let mut dead_done = false;
-            'outer: for &(lo, hi) in s.iv.iter().rev() {
+            'outer: for &(lo, hi) in s.pieces.iter() {
                 loop {
                     if kk as usize >= view.h {
                         break 'outer;
@@ -846,8 +1024,62 @@ struct Scratch {
     /// (column, y, sign)
     cross: Vec<(u32, f64, i8)>,
     iv: Vec<(f64, f64)>,
+    /// (column, lo, hi): rows within the margin of a boundary edge
+    unc: Vec<(u32, f64, f64)>,
+    /// robustly covered intervals of one column, bottom up
+    pieces: Vec<(f64, f64)>,
     valid: Vec<bool>,
-    pts: Vec<(f64, f64)>,
+    /// boundary edges (global sample indices) of the current occluder union
+    ue: Vec<[u32; 2]>,
+    /// per tile: range in `pool` of the boundary edges it was credited with (empty = not drawn)
+    tile_edges: Vec<(u32, u32)>,
+    pool: Vec<[u32; 2]>,
+}
+
+/// For each pixel column whose centre may be within the margin of the projected edge a-b: the
+/// interval of y on the centre line within the margin of the edge. The margin varies linearly
+/// along the edge from `ea` (at a) to `eb` (at b): a point of the segment moves by at most the
+/// convex combination of its endpoints' moves, which matters for edges with one end near the eye
+/// (huge margin) and the other far away. Per column, with E the largest margin over the part of
+/// the edge inside the window [xc - E, xc + E] (E = e(xc) / (1 - |de/dx|)), the interval is the
+/// y range of that part grown by E (a superset of the true band).
+#[inline]
+fn add_band(a: (f64, f64), b: (f64, f64), ea: f64, eb: f64, view: &View, out: &mut Vec<(u32, f64, f64)>) {
+    if !(a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite()) {
+        return;
+    }
+    if !(ea.is_finite() && eb.is_finite()) {
+        return; // cannot happen for in-range points; the caller only credits finite ones
+    }
+    let ((l, el), (r, er)) = if a.0 <= b.0 { ((a, ea), (b, eb)) } else { ((b, eb), (a, ea)) };
+    let emax = el.max(er);
+    let Some((c0, c1)) = view.col_range(l.0, r.0, emax) else {
+        return;
+    };
+    let dx = r.0 - l.0;
+    let slope = if dx > 0.0 { (er - el).abs() / dx } else { f64::INFINITY };
+    let at = |x: f64| {
+        if dx > 0.0 {
+            let t = ((x - l.0) / dx).clamp(0.0, 1.0);
+            (l.1 + t * (r.1 - l.1), el + t * (er - el))
+        } else {
+            (l.1, el)
+        }
+    };
+    for c in c0..=c1 {
+        let xc = c as f64 + 0.5;
+        let e = if slope < 0.5 {
+            (at(xc).1 / (1.0 - slope)).min(emax)
+        } else {
+            emax
+        };
+        let (x0, x1) = ((xc - e).max(l.0), (xc + e).min(r.0));
+        if x0 > x1 {
+            continue;
+        }
+        let (y0, y1) = if dx > 0.0 { (at(x0).0, at(x1).0) } else { (l.1, r.1) };
+        out.push((c as u32, y0.min(y1) - e, y0.max(y1) + e));
+    }
 }
 
 /// Crossings of the projected edge a->b with the pixel-centre lines x = c + 0.5
@@ -982,7 +1214,8 @@ mod tests {
     }
 
     /// Software rasterizer: pixel-centre sampling (inclusive edges, generous), z-buffer.
-    fn reference(t: &Terrain, vp: DMat4, w: usize, h: usize, gl: bool) -> RefOut {
+    /// `reverse`: reverse-Z depth (larger z_ndc = nearer, as the renderer's `Greater` test).
+    fn reference(t: &Terrain, vp: DMat4, w: usize, h: usize, gl: bool, reverse: bool) -> RefOut {
         let (tx, ty) = t.tiles;
         let bx = partition(t.nx, tx);
         let by = partition(t.ny, ty);
@@ -1019,7 +1252,7 @@ mod tests {
                                     DVec3::new(
                                         (c.x / c.w + 1.0) * 0.5 * w as f64,
                                         (c.y / c.w + 1.0) * 0.5 * h as f64,
-                                        c.z / c.w,
+                                        if reverse { -c.z / c.w } else { c.z / c.w },
                                     )
                                 })
                                 .collect();
@@ -1111,9 +1344,21 @@ mod tests {
     }
 
     fn check_gl(t: &Terrain, vp: DMat4, eye: DVec3, w: usize, h: usize, gl: bool) -> Check {
+        check_depth(t, vp, eye, w, h, gl, false)
+    }
+
+    fn check_depth(
+        t: &Terrain,
+        vp: DMat4,
+        eye: DVec3,
+        w: usize,
+        h: usize,
+        gl: bool,
+        reverse: bool,
+    ) -> Check {
         let tree = HorizonTree::build(&t.grid());
         let res = tree.cull(vp, eye, w as u32, h as u32);
-        let rf = reference(t, vp, w, h, gl);
+        let rf = reference(t, vp, w, h, gl, reverse);
         let n = t.tiles.0 * t.tiles.1;
         let mut violations = vec![];
         let (mut nonempty, mut culled, mut invisible) = (0, 0, 0);
@@ -1465,6 +1710,64 @@ mod tests {
         println!(
             "roll/ortho/any-eye: applied in {applied}/{ncases} views, culled {culled}/{nonempty}"
         );
+    }
+
+    /// The renderer's projections: reverse-Z, infinite-far perspective and reverse-Z
+    /// orthographic (near -> depth 1), low eyes near the terrain, `Greater` depth test.
+    #[test]
+    fn property_reverse_z() {
+        let mut rng = Lcg(2024);
+        let (w, h) = (128, 96);
+        let (mut culled, mut nonempty, mut applied, mut ortho_culled) = (0, 0, 0, 0);
+        let ncases: usize = std::env::var("HORIZON_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(160);
+        for case in 0..ncases {
+            let t = random_terrain(&mut rng);
+            let (ex, ey) = t.extent();
+            let ext = ex.max(ey);
+            let eye = DVec3::new(
+                t.x0 + rng.range(-0.3, 1.3) * ex,
+                t.y0 + rng.range(-0.3, 1.3) * ey,
+                t.zmax() + rng.range(0.005, 0.2) * ext,
+            );
+            let f = dir(rng.range(0.0, 360.0), rng.range(-30.0, 8.0));
+            let view = look_at_mat4(eye, eye + f, DVec3::Z);
+            let ortho = case % 3 == 0;
+            let proj = if ortho {
+                let s = rng.range(0.05, 0.5) * ext;
+                let (l, r) = (-s * w as f64 / h as f64, s * w as f64 / h as f64);
+                let near = if case % 2 == 0 { 0.0 } else { rng.range(0.0, 0.3) * ext };
+                dx_proj::orthographic(l, r, -s, s, 4.0 * ext, near)
+            } else {
+                let fov = rng.range(20.0f64, 90.0).to_radians();
+                let near = rng.range(0.0005, 0.05) * ext;
+                dx_proj::perspective_infinite_reverse(fov, w as f64 / h as f64, near)
+            };
+            let vp = proj * view;
+            let c = check_depth(&t, vp, eye, w, h, false, true);
+            if c.res.culling_applied {
+                applied += 1;
+            }
+            if !c.violations.is_empty() {
+                print_tiles(&t, &c);
+            }
+            assert!(
+                c.violations.is_empty(),
+                "case {case} (ortho {ortho}): visible tiles culled {:?}",
+                c.violations
+            );
+            culled += c.culled;
+            nonempty += c.nonempty;
+            if ortho {
+                ortho_culled += c.culled;
+            }
+        }
+        println!(
+            "reverse-Z: applied in {applied}/{ncases} views, culled {culled}/{nonempty} (orthographic {ortho_culled})"
+        );
+        assert!(culled > 0 && ortho_culled > 0);
     }
 
     #[test]
