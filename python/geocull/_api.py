@@ -338,6 +338,13 @@ class Renderer:
         ``pixel_threshold`` pixels), "oracle" (exactly the tiles visible in the unculled image; a
         benchmark lower bound), "horizon" (CPU horizon culling of height fields).
         pixel_threshold: >= 0, in full-image pixels.  prepass_scale: (0, 1], prepass resolution.
+
+        Accuracy: "none", "oracle" and "horizon" give the unculled image. "three_pass" is exact
+        with pixel_threshold=0 and coarse_factor=1; with coarser proxies it is approximate, as in
+        the method's paper: a proxy that bulges above its fine tile can hide a tile that is
+        visible. Measured: at most 0.03 % of pixels on the stacked Gullfaks-like scene, but up
+        to 9 % for low, near-horizontal views over rough terrain at coarse_factor=25 (0.3 % at 4);
+        use culling="horizon" (exact) for such views.
         """
         if not isinstance(scene, Scene):
             raise InputError(f"scene: expected a geocull.Scene, got {type(scene).__name__}")
