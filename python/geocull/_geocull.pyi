@@ -96,3 +96,33 @@ class Renderer:
     def render(
         self, scene: Scene, camera: Camera, culling: str, pixel_threshold: float, prepass_scale: float
     ) -> dict[str, Any]: ...
+
+class Volume:
+    def __init__(
+        self,
+        values: npt.NDArray[np.float32] | npt.NDArray[np.float64],  # (nz, ny, nx), C-contiguous
+        origin: tuple[float, float, float],
+        spacing: tuple[float, float, float],
+    ) -> None: ...
+    @property
+    def shape(self) -> tuple[int, int, int]: ...
+    @property
+    def origin(self) -> tuple[float, float, float]: ...
+    @property
+    def spacing(self) -> tuple[float, float, float]: ...
+    def max_depth(self) -> int: ...
+    def nodes(self, depth: int) -> dict[str, np.ndarray]: ...
+
+def render_isosurface(
+    renderer: Renderer,
+    volume: Volume,
+    isovalue: float,
+    camera: Camera,
+    culling: str,
+    occluder_depth: int | None,
+    cull_depth: int | None,
+    color: tuple[float, float, float],
+    cache: bool,
+    return_map: bool,
+) -> dict[str, Any]: ...
+def clear_isosurface_cache(renderer: Renderer) -> None: ...
