@@ -59,6 +59,13 @@ def _int(x: Any, name: str, lo: int = 0, hi: int = 2**31 - 1) -> int:
     return v
 
 
+def _expect(x: Any, cls: type, name: str) -> Any:
+    """``x`` if it is a ``cls``, else InputError naming the argument."""
+    if not isinstance(x, cls):
+        raise InputError(f"{name}: expected a geocull.{cls.__name__}, got {type(x).__name__}")
+    return x
+
+
 def _color(c: Any) -> tuple[float, float, float] | None:
     return None if c is None else _vec(c, "color", 3)  # range checked in Rust
 
@@ -346,10 +353,8 @@ class Renderer:
         to 9 % for low, near-horizontal views over rough terrain at coarse_factor=25 (0.3 % at 4);
         use culling="horizon" (exact) for such views.
         """
-        if not isinstance(scene, Scene):
-            raise InputError(f"scene: expected a geocull.Scene, got {type(scene).__name__}")
-        if not isinstance(camera, Camera):
-            raise InputError(f"camera: expected a geocull.Camera, got {type(camera).__name__}")
+        _expect(scene, Scene, "scene")
+        _expect(camera, Camera, "camera")
         if not isinstance(culling, str):
             raise InputError(f"culling: {culling!r} is not a string")
         d = self._r.render(scene._s, camera._c, culling, _number(pixel_threshold, "pixel_threshold"),

@@ -28,7 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import _geocull
-from ._api import Camera, RenderResult, _int, _number, _vec
+from ._api import Camera, RenderResult, _expect, _int, _number, _vec
 from ._errors import InputError
 
 __all__ = ["Volume", "render_isosurface", "clear_cache"]
@@ -134,12 +134,9 @@ def render_isosurface(
     """
     from ._api import Renderer
 
-    if not isinstance(renderer, Renderer):
-        raise InputError(f"renderer: expected a geocull.Renderer, got {type(renderer).__name__}")
-    if not isinstance(volume, Volume):
-        raise InputError(f"volume: expected a geocull.Volume, got {type(volume).__name__}")
-    if not isinstance(camera, Camera):
-        raise InputError(f"camera: expected a geocull.Camera, got {type(camera).__name__}")
+    _expect(renderer, Renderer, "renderer")
+    _expect(volume, Volume, "volume")
+    _expect(camera, Camera, "camera")
     if not isinstance(culling, str) or culling not in CULLING:
         raise InputError(f"culling: {culling!r} is not one of {CULLING}")
     w = _number(isovalue, "isovalue")

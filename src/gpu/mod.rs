@@ -776,7 +776,7 @@ pub(crate) enum DrawSet {
 }
 
 /// Light from over the viewer's shoulder (up and to the right), so surfaces facing the camera are lit.
-fn light_dir(fc: &FrameCamera) -> DVec3 {
+pub(crate) fn light_dir(fc: &FrameCamera) -> DVec3 {
     let inv = fc.view.inverse();
     let right = inv.transform_vector3(DVec3::X);
     let up = inv.transform_vector3(DVec3::Y);
@@ -784,15 +784,15 @@ fn light_dir(fc: &FrameCamera) -> DVec3 {
 }
 
 /// A texture copied into a mappable buffer with 256-byte aligned rows.
-struct ReadbackTexture {
-    buffer: wgpu::Buffer,
+pub(crate) struct ReadbackTexture {
+    pub(crate) buffer: wgpu::Buffer,
     row_bytes: u32,
     padded: u32,
     height: u32,
 }
 
 impl ReadbackTexture {
-    fn new(d: &wgpu::Device, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture, w: u32, h: u32, bpp: u32, aspect: wgpu::TextureAspect) -> Self {
+    pub(crate) fn new(d: &wgpu::Device, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture, w: u32, h: u32, bpp: u32, aspect: wgpu::TextureAspect) -> Self {
         let row_bytes = w * bpp;
         let padded = row_bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buffer = d.create_buffer(&wgpu::BufferDescriptor { label: Some("readback_texture"), size: padded as u64 * h as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
@@ -804,7 +804,7 @@ impl ReadbackTexture {
         Self { buffer, row_bytes, padded, height: h }
     }
 
-    fn read_rows(&self) -> Result<Vec<u8>> {
+    pub(crate) fn read_rows(&self) -> Result<Vec<u8>> {
         let data = self.buffer.slice(..).get_mapped_range().map_err(map_err)?;
         let mut out = Vec::with_capacity((self.row_bytes * self.height) as usize);
         for r in 0..self.height as usize {
@@ -815,7 +815,7 @@ impl ReadbackTexture {
     }
 }
 
-fn map_err(e: impl std::fmt::Display) -> Error {
+pub(crate) fn map_err(e: impl std::fmt::Display) -> Error {
     Error::Device(format!("reading back from the GPU failed: {e}"))
 }
 

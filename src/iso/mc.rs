@@ -30,7 +30,7 @@
 //! tetrahedra above; no table is hand-written.
 
 use std::collections::{HashMap, HashSet};
-use std::sync::{Arc, OnceLock, Weak};
+use std::sync::{Arc, OnceLock};
 
 use rayon::prelude::*;
 
@@ -560,33 +560,6 @@ pub fn patch_key(w: f32, node: &NodeInfo) -> PatchKey {
     (w.to_bits(), node.depth, node.ix, node.iy, node.iz)
 }
 
-struct Source {
-    values: Weak<[f32]>,
-    dims: [usize; 3],
-    origin: [f64; 3],
-    spacing: [f64; 3],
-}
-
-impl Source {
-    fn of(vol: &Volume) -> Self {
-        Source {
-            values: Arc::downgrade(&vol.values),
-            dims: [vol.nx, vol.ny, vol.nz],
-            origin: vol.origin,
-            spacing: vol.spacing,
-        }
-    }
-    fn matches(&self, vol: &Volume) -> bool {
-        // The Weak keeps the allocation's address from being reused.
-        std::ptr::eq(
-            self.values.as_ptr() as *const f32,
-            Arc::as_ptr(&vol.values) as *const f32,
-        ) && self.dims == [vol.nx, vol.ny, vol.nz]
-            && self.origin == vol.origin
-            && self.spacing == vol.spacing
-    }
-}
-
 /// Extracted patches keyed by `(isovalue bits, depth, ix, iy, iz)`, so later
 /// frames reuse earlier extractions. The cache remembers which volume it was
 /// filled from (the `values` allocation plus geometry) and clears itself when
@@ -597,7 +570,7 @@ impl Source {
 #[derive(Default)]
 pub struct PatchCache {
     map: HashMap<PatchKey, Arc<SurfacePatch>>,
-    source: Option<Source>,
+    source: Option<super::VolumeId>,
 }
 
 impl PatchCache {
@@ -608,7 +581,7 @@ impl PatchCache {
     fn bind(&mut self, vol: &Volume) {
         if !self.source.as_ref().is_some_and(|s| s.matches(vol)) {
             self.map.clear();
-            self.source = Some(Source::of(vol));
+            self.source = Some(super::VolumeId::of(vol));
         }
     }
 

@@ -24,6 +24,27 @@ pub mod octree;
 pub use mc::{extract, extract_nodes, PatchCache, SurfacePatch};
 pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
 
+/// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
+/// address from being reused) and its geometry.
+pub(crate) struct VolumeId {
+    values: std::sync::Weak<[f32]>,
+    dims: [usize; 3],
+    origin: [f64; 3],
+    spacing: [f64; 3],
+}
+
+impl VolumeId {
+    pub(crate) fn of(v: &Volume) -> Self {
+        Self { values: Arc::downgrade(&v.values), dims: [v.nx, v.ny, v.nz], origin: v.origin, spacing: v.spacing }
+    }
+    pub(crate) fn matches(&self, v: &Volume) -> bool {
+        std::ptr::eq(self.values.as_ptr() as *const f32, Arc::as_ptr(&v.values) as *const f32)
+            && self.dims == [v.nx, v.ny, v.nz]
+            && self.origin == v.origin
+            && self.spacing == v.spacing
+    }
+}
+
 /// A scalar field sampled on a regular grid.
 ///
 /// `values` is indexed `values[(k*ny + j)*nx + i]`, where `k` is the z index,

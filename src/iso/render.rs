@@ -46,7 +46,7 @@
 //! `tree.max_depth()`. A volume of 256³ samples has 255 cells per axis and max depth 8, matching
 //! the paper's numbering for its 256³ volume; for a 128³ volume subtract 1 to compare node sizes.
 
-use std::sync::{Arc, Weak};
+use std::sync::Arc;
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
@@ -59,7 +59,7 @@ use super::octree::{Class, MinMaxOctree, NodeInfo};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
 use crate::error::{ensure, input_err, Error, Result};
-use crate::gpu::Renderer;
+use crate::gpu::{light_dir, map_err, ReadbackTexture, Renderer};
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -213,26 +213,6 @@ struct Occluders {
     n_above: u32,
 }
 
-/// Identity of the volume the caches were filled from (the Weak keeps the address from reuse).
-struct Source {
-    values: Weak<[f32]>,
-    dims: [usize; 3],
-    origin: [f64; 3],
-    spacing: [f64; 3],
-}
-
-impl Source {
-    fn of(v: &Volume) -> Self {
-        Self { values: Arc::downgrade(&v.values), dims: [v.nx, v.ny, v.nz], origin: v.origin, spacing: v.spacing }
-    }
-    fn matches(&self, v: &Volume) -> bool {
-        std::ptr::eq(self.values.as_ptr() as *const f32, Arc::as_ptr(&v.values) as *const f32)
-            && self.dims == [v.nx, v.ny, v.nz]
-            && self.origin == v.origin
-            && self.spacing == v.spacing
-    }
-}
-
 /// Straddling nodes of one (isovalue bits, depth).
 type StraddlingEntry = ((u32, u32), Arc<Vec<NodeInfo>>);
 
@@ -246,7 +226,7 @@ pub struct IsoGpu {
     test_pipeline: wgpu::RenderPipeline,
     surf_pipeline: wgpu::RenderPipeline,
     targets: Option<Targets>,
-    source: Option<Source>,
+    source: Option<super::VolumeId>,
     occluders: Option<Occluders>,
     /// Straddling nodes per (isovalue bits, depth).
     straddling: Vec<StraddlingEntry>,
@@ -420,7 +400,7 @@ impl IsoGpu {
             self.occluders = None;
             self.straddling.clear();
             self.patches.clear();
-            self.source = Some(Source::of(vol));
+            self.source = Some(super::VolumeId::of(vol));
         }
     }
 
@@ -505,49 +485,6 @@ impl Space {
         let (lo, hi) = (lo.min(hi), lo.max(hi));
         BoxInstance { lo: lo.as_vec3().to_array(), id, hi: hi.as_vec3().to_array(), _pad: 0 }
     }
-}
-
-fn map_err(e: impl std::fmt::Display) -> Error {
-    Error::Device(format!("reading back from the GPU failed: {e}"))
-}
-
-/// A texture copied into a mappable buffer with 256-byte aligned rows.
-struct Readback {
-    buffer: wgpu::Buffer,
-    row_bytes: u32,
-    padded: u32,
-    height: u32,
-}
-
-impl Readback {
-    fn new(d: &wgpu::Device, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture, w: u32, h: u32, aspect: wgpu::TextureAspect) -> Self {
-        let row_bytes = w * 4;
-        let padded = row_bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = d.create_buffer(&wgpu::BufferDescriptor { label: Some("iso_readback"), size: padded as u64 * h as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo { texture: tex, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
-            wgpu::TexelCopyBufferInfo { buffer: &buffer, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) } },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        );
-        Self { buffer, row_bytes, padded, height: h }
-    }
-    fn read(&self) -> Result<Vec<u8>> {
-        let data = self.buffer.slice(..).get_mapped_range().map_err(map_err)?;
-        let mut out = Vec::with_capacity((self.row_bytes * self.height) as usize);
-        for r in 0..self.height as usize {
-            let s = r * self.padded as usize;
-            out.extend_from_slice(&data[s..s + self.row_bytes as usize]);
-        }
-        Ok(out)
-    }
-}
-
-/// Light from over the viewer's shoulder (as the scene renderer does).
-fn light_dir(fc: &FrameCamera) -> DVec3 {
-    let inv = fc.view.inverse();
-    let right = inv.transform_vector3(DVec3::X);
-    let up = inv.transform_vector3(DVec3::Y);
-    (-fc.forward + 0.6 * up + 0.3 * right).normalize()
 }
 
 /// True when some part of the box is not in front of the near plane (so the test pass could miss
@@ -727,20 +664,20 @@ impl Renderer {
         // ---- Read-back (not part of the frame time).
         let t_rb = Instant::now();
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
-        let color_rb = Readback::new(d, &mut enc, &tg.color_tex, width, height, wgpu::TextureAspect::All);
-        let depth_rb = Readback::new(d, &mut enc, &tg.depth_tex, width, height, wgpu::TextureAspect::DepthOnly);
-        let map_rb = (opts.return_map && implicit).then(|| Readback::new(d, &mut enc, &tg.map_tex, width, height, wgpu::TextureAspect::DepthOnly));
+        let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
+        let depth_rb = ReadbackTexture::new(d, &mut enc, &tg.depth_tex, width, height, 4, wgpu::TextureAspect::DepthOnly);
+        let map_rb = (opts.return_map && implicit).then(|| ReadbackTexture::new(d, &mut enc, &tg.map_tex, width, height, 4, wgpu::TextureAspect::DepthOnly));
         ctx.queue.submit([enc.finish()]);
         for r in [&color_rb, &depth_rb].into_iter().chain(map_rb.as_ref()) {
             r.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
         }
         ctx.wait()?;
         ctx.take_error()?;
-        let image = color_rb.read()?;
+        let image = color_rb.read_rows()?;
         let lin = |raw: Vec<u8>| -> Vec<f32> { bytemuck::cast_slice::<u8, f32>(&raw).par_iter().map(|&v| fc.linear_depth(v)).collect() };
-        let depth = lin(depth_rb.read()?);
+        let depth = lin(depth_rb.read_rows()?);
         if let Some(m) = &map_rb {
-            map_out = Some(lin(m.read()?));
+            map_out = Some(lin(m.read_rows()?));
         } else if opts.return_map {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }
