@@ -9,7 +9,7 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan build demo test test-rust test-python bench bench-quick clean
+.PHONY: setup vulkan build demo test test-rust test-python bench bench-quick examples-quick clean
 
 setup: vulkan build
 
@@ -49,6 +49,12 @@ bench: setup
 
 bench-quick: setup
 	$(PY) -m geocull bench --quick --json out/bench_quick.json
+
+# Every example in its quick mode (CI runs them so they cannot rot); outputs under out/examples.
+examples-quick: setup
+	$(PY) examples/seeds_study.py --quick --out out/examples/seeds
+	$(PY) examples/iso_table.py --quick --out out/examples/iso_table
+	$(PY) examples/horizon_dem.py --width 320 --height 240 --spots 1 --repeat 1 --out out/examples/horizon
 
 clean:
 	rm -rf $(VENV) target demo.png out
