@@ -528,12 +528,6 @@ impl Renderer {
         (mask, visited, culled, horizon)
     }
 
-    /// Renders drawing exactly the tiles in `mask` (CPU-side culling strategies).
-    pub fn render_mask(&mut self, scene: &Scene, camera: &Camera, mask: Vec<bool>, count_final: bool) -> Result<RenderOutput> {
-        ensure(mask.len() == scene.n_tiles(), "mask", || format!("mask has {} entries, the scene has {} tiles", mask.len(), scene.n_tiles()))?;
-        self.frame(scene, camera, DrawSet::Mask(mask), count_final)
-    }
-
     fn frame(&mut self, scene: &Scene, camera: &Camera, set: DrawSet, count_final: bool) -> Result<RenderOutput> {
         let t0 = Instant::now();
         self.upload(scene)?;
@@ -582,13 +576,11 @@ impl Renderer {
         let ts_compute = |i: u32| ts.map(|q| wgpu::ComputePassTimestampWrites { query_set: q, beginning_of_pass_write_index: Some(i), end_of_pass_write_index: Some(i + 1) });
         let mut prepass_tris = 0u64;
         let mut prescale = 1.0f64;
-        let mut threshold_px = 0.0f64;
         let final_args: wgpu::Buffer;
         let three_pass = matches!(set, DrawSet::ThreePass { .. });
         match &set {
             DrawSet::ThreePass { threshold, scale } => {
                 prescale = *scale;
-                threshold_px = *threshold;
                 let pw = ((self.width as f64 * scale).round() as u32).max(1);
                 let ph = ((self.height as f64 * scale).round() as u32).max(1);
                 if self.prepass_targets.as_ref().is_none_or(|t| (t.width, t.height) != (pw, ph)) {
@@ -763,7 +755,6 @@ impl Renderer {
         } else {
             counts
         };
-        let _ = threshold_px;
         stats.readback_ms = t1.elapsed().as_secs_f64() * 1e3;
         Ok(RenderOutput { width: w, height: h, image, depth, tile_pixels, tile_drawn, stats, near: fc.near, far: fc.far, horizon: None })
     }
