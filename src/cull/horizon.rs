@@ -191,13 +191,6 @@ pub struct HorizonTree {
     scale: f64,
 }
 
-/// Tile boundaries b[t] = round(t*(n-1)/tiles), t = 0..=tiles (exact integer rounding, half up).
-pub(crate) fn partition(n: usize, tiles: usize) -> Vec<usize> {
-    (0..=tiles)
-        .map(|t| (2 * t * (n - 1) + tiles) / (2 * tiles))
-        .collect()
-}
-
 /// Emits the oriented boundary edges of the union of good cells in the cell range
 /// [i0,i1) x [j0,j1). Edges are CCW in index space (reversed when `flip`).
 fn boundary_edges(
@@ -526,8 +519,8 @@ impl HorizonTree {
             return tree;
         }
         tree.z = grid.z[..nx * ny].to_vec();
-        tree.bx = partition(nx, tx);
-        tree.by = partition(ny, ty);
+        tree.bx = crate::lod::tile_bounds(nx, tx);
+        tree.by = crate::lod::tile_bounds(ny, ty);
         let mut tile_bb = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY); ntiles];
         for iy in 0..ty {
             for ix in 0..tx {
@@ -1217,8 +1210,8 @@ mod tests {
     /// `reverse`: reverse-Z depth (larger z_ndc = nearer, as the renderer's `Greater` test).
     fn reference(t: &Terrain, vp: DMat4, w: usize, h: usize, gl: bool, reverse: bool) -> RefOut {
         let (tx, ty) = t.tiles;
-        let bx = partition(t.nx, tx);
-        let by = partition(t.ny, ty);
+        let bx = crate::lod::tile_bounds(t.nx, tx);
+        let by = crate::lod::tile_bounds(t.ny, ty);
         let pos = |i: usize, j: usize| {
             DVec3::new(
                 t.x0 + i as f64 * t.dx,
@@ -1571,8 +1564,8 @@ mod tests {
         };
         if rng.f() < 0.15 && !noholes {
             // an all-NaN tile
-            let bx = partition(nx, tiles.0);
-            let by = partition(ny, tiles.1);
+            let bx = crate::lod::tile_bounds(nx, tiles.0);
+            let by = crate::lod::tile_bounds(ny, tiles.1);
             let (ix, iy) = (rng.irange(0, tiles.0 - 1), rng.irange(0, tiles.1 - 1));
             for j in by[iy]..=by[iy + 1] {
                 for i in bx[ix]..=bx[ix + 1] {

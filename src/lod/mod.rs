@@ -63,11 +63,11 @@ impl TileMesh {
     }
 }
 
-/// Tile boundaries: `n_samples` samples cut into `n_tiles` runs sharing their end samples.
+/// Tile boundaries: `n_samples` samples cut into `n_tiles` runs sharing their end samples,
+/// b[t] = round(t (n_samples - 1) / n_tiles) for t = 0..=n_tiles, in exact integer arithmetic
+/// (halves round up). The renderer's tiles and the horizon culler's quadtree both use it.
 pub fn tile_bounds(n_samples: usize, n_tiles: usize) -> Vec<usize> {
-    (0..=n_tiles)
-        .map(|t| ((t as f64) * ((n_samples - 1) as f64) / (n_tiles as f64)).round() as usize)
-        .collect()
+    (0..=n_tiles).map(|t| (2 * t * (n_samples - 1) + n_tiles) / (2 * n_tiles)).collect()
 }
 
 /// A height field grid in world coordinates. `z` is row-major (ny, nx); NaN = hole.
