@@ -142,3 +142,15 @@ def test_render_argument_errors(r64):
                     ({"prepass_scale": 0}, "prepass_scale"), ({"prepass_scale": 1.5}, "prepass_scale")]:
         with pytest.raises(gc.InputError, match=f"^{arg}"):
             r64.render(s, c, **kw)
+
+
+def test_submodules_are_reachable_as_attributes():
+    import sys
+
+    assert callable(gc.compare.image_error) and callable(gc.data.gullfaks_like)
+    assert callable(gc.report.sweep)
+    with pytest.raises(AttributeError):
+        gc.no_such_thing
+    # PyVista (VTK) is not imported until gc.pyvista is used.
+    if "pyvista" not in sys.modules:
+        assert "vtk" not in sys.modules

@@ -14,3 +14,15 @@ from .iso import Volume
 
 __version__ = "0.1.0"
 __all__ = ["Scene", "Camera", "Renderer", "RenderResult", "Volume", "GeocullError", "InputError", "DeviceError"]
+
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso")
+
+
+def __getattr__(name: str):
+    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``: imported on first use (PyVista
+    and VTK are only loaded when ``gc.pyvista`` is touched)."""
+    if name in _SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'geocull' has no attribute {name!r}")
