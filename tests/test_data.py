@@ -179,3 +179,15 @@ def test_build_needs_extension(small):
     assert len(ids) == len(small.horizons) + len(small.faults)
     assert scene.object_info(ids[-1])["kind"] == "fault"
     assert scene.n_triangles == small.n_triangles
+
+
+def test_generator_and_sweep_arguments_raise_input_error():
+    from geocull._errors import InputError
+    from geocull import data, report
+
+    with pytest.raises(InputError, match="^nx, ny"):
+        data.gullfaks_like(nx=1)
+    with pytest.raises(InputError, match="^n:"):
+        data.pesco_synthetic(1)
+    with pytest.raises(InputError, match="^scene_or_spec"):
+        report.sweep(object())

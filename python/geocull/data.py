@@ -25,6 +25,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ._errors import InputError
+
 __all__ = [
     "SceneSpec",
     "gullfaks_like",
@@ -212,12 +214,12 @@ def gullfaks_like(
     the exact number). Building it takes about 0.5 s on 2 cores.
     """
     if nx < 2 or ny < 2:
-        raise ValueError(f"nx, ny: need at least 2 samples each, got nx={nx}, ny={ny}")
+        raise InputError(f"nx, ny: need at least 2 samples each, got nx={nx}, ny={ny}")
     if n_horizons < 0 or n_faults < 0:
-        raise ValueError("n_horizons, n_faults: must be >= 0")
+        raise InputError("n_horizons, n_faults: must be >= 0")
     lo, hi = int(fault_triangles[0]), int(fault_triangles[1])
     if lo < 2 or hi < lo:
-        raise ValueError(f"fault_triangles: expected (lo, hi) with 2 <= lo <= hi, got {fault_triangles}")
+        raise InputError(f"fault_triangles: expected (lo, hi) with 2 <= lo <= hi, got {fault_triangles}")
 
     rng = np.random.default_rng(seed)
     x0, y0 = float(origin[0]), float(origin[1])
@@ -355,7 +357,7 @@ def heightfield_mesh(
     """
     z = np.asarray(z, dtype=np.float64)
     if z.ndim != 2 or z.shape[0] < 2 or z.shape[1] < 2:
-        raise ValueError(f"z: expected a (ny, nx) array with ny, nx >= 2, got shape {z.shape}")
+        raise InputError(f"z: expected a (ny, nx) array with ny, nx >= 2, got shape {z.shape}")
     ny, nx = z.shape
     xs = origin[0] + spacing[0] * np.arange(nx)
     ys = origin[1] + spacing[1] * np.arange(ny)
@@ -380,7 +382,7 @@ class MeshScene:
         v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64).reshape(-1, 3))
         f = np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
         if f.size and (f.min() < 0 or f.max() >= len(v)):
-            raise ValueError("faces: index out of range")
+            raise InputError("faces: index out of range")
         oid = self._next
         self._next += 1
         info = dict(name=name if name is not None else f"object_{oid}", kind=kind,
@@ -428,7 +430,7 @@ def _bounds_of(spec_or_bounds) -> np.ndarray:
     b = getattr(spec_or_bounds, "bounds", spec_or_bounds)
     b = np.asarray(b, dtype=np.float64).ravel()
     if b.shape != (6,) or not np.all(np.isfinite(b)):
-        raise ValueError(
+        raise InputError(
             "spec_or_bounds: expected a SceneSpec or finite bounds (xmin, xmax, ymin, ymax, zmin, zmax), "
             f"got {spec_or_bounds!r}"
         )
@@ -504,7 +506,7 @@ def pesco_synthetic(n: int = 64) -> tuple[np.ndarray, tuple[float, float, float]
     ``values[k, j, i] = f(x_i, y_j, z_k)`` (float32), ``x_i = origin[0] + i*spacing[0]`` etc.
     """
     if n < 2:
-        raise ValueError(f"n: need at least 2 samples per axis, got {n}")
+        raise InputError(f"n: need at least 2 samples per axis, got {n}")
     h = 10.0 / (n - 1)
     c = -5.0 + h * np.arange(n)
     z = c[:, None, None]

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from ._errors import GeocullError
+
 # VTK reads this when it creates a render window: EGL renders off-screen (llvmpipe without a GPU).
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
@@ -353,7 +355,7 @@ class _Setup:
         # A clipping range that VTK changed behind our back would make the depth conversion wrong.
         got = self.plotter.camera.clipping_range
         if not np.allclose(got, (self.near, self.far), rtol=1e-9, atol=0):
-            raise RuntimeError(f"VTK changed the clipping range to {got}")
+            raise GeocullError(f"VTK changed the clipping range to {got}")
         rgb = vtkUnsignedCharArray()
         rw.GetPixelData(0, 0, w - 1, h - 1, 0, rgb, 0)
         img = vtk_to_numpy(rgb).reshape(h, w, 3)[::-1].copy()

@@ -33,6 +33,8 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
+from ._errors import InputError
+
 __all__ = ["sweep", "summarize", "plot", "to_markdown", "to_frame", "timed_rounds", "write_json", "jsonable"]
 
 DEFAULT_THRESHOLDS = (0, 10, 50)
@@ -75,7 +77,7 @@ def _cameras(cameras, spec, width: int, height: int) -> list[tuple[str, Any]]:
 
     if cameras is None:
         if spec is None:
-            raise ValueError("cameras: required when sweeping a Scene (no SceneSpec to frame views from)")
+            raise InputError("cameras: required when sweeping a Scene (no SceneSpec to frame views from)")
         from .data import standard_views
 
         cameras = standard_views(spec, aspect=width / height)
@@ -89,10 +91,10 @@ def _cameras(cameras, spec, width: int, height: int) -> list[tuple[str, Any]]:
         if isinstance(c, dict):
             c = gc.Camera.look_at(**c)
         if not isinstance(c, gc.Camera):
-            raise ValueError(f"cameras[{i}]: expected a geocull.Camera, look_at kwargs or (name, camera), got {c!r}")
+            raise InputError(f"cameras[{i}]: expected a geocull.Camera, look_at kwargs or (name, camera), got {c!r}")
         out.append((str(name), c))
     if not out:
-        raise ValueError("cameras: empty")
+        raise InputError("cameras: empty")
     return out
 
 
@@ -239,17 +241,17 @@ def sweep(
         cfs = list(coarse_factors) if coarse_factors is not None else list(DEFAULT_COARSE_FACTORS)
         tls = [_tiles_tuple(t) for t in tiles] if tiles is not None else list(DEFAULT_TILES)
         if not cfs or not tls:
-            raise ValueError("coarse_factors, tiles: need at least one value each")
+            raise InputError("coarse_factors, tiles: need at least one value each")
     else:
         spec = None
         if coarse_factors is not None or tiles is not None:
-            raise ValueError(
+            raise InputError(
                 "coarse_factors, tiles: sweeping them rebuilds the scene; pass a geocull.data.SceneSpec, not a Scene"
             )
         if not isinstance(scene_or_spec, gc.Scene):
-            raise ValueError(f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}")
+            raise InputError(f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}")
     if not list(thresholds) or not list(prepass_scales):
-        raise ValueError("thresholds, prepass_scales: need at least one value each")
+        raise InputError("thresholds, prepass_scales: need at least one value each")
 
     if renderer is None:
         renderer = gc.Renderer(int(width), int(height))
