@@ -16,6 +16,29 @@ pub mod scene;
 #[cfg(feature = "python")]
 mod python;
 
+/// Deterministic random numbers for unit tests (no rand dependency): a 64-bit LCG.
+#[cfg(test)]
+pub(crate) struct TestRng(pub u64);
+
+#[cfg(test)]
+impl TestRng {
+    pub(crate) fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0
+    }
+    /// Uniform in [0, 1) with 53 bits.
+    pub(crate) fn f(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub(crate) fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.f()
+    }
+    /// Uniform integer in a..=b.
+    pub(crate) fn irange(&mut self, a: usize, b: usize) -> usize {
+        a + ((self.next_u64() >> 33) as usize) % (b - a + 1)
+    }
+}
+
 pub use camera::{Camera, Projection};
 pub use cull::Culling;
 pub use error::{Error, Result};

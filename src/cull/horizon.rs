@@ -1104,26 +1104,7 @@ mod tests {
     use glam::dcamera::rh::view::look_at_mat4;
     use std::f64::consts::PI;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            self.0
-        }
-        fn f(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, a: f64, b: f64) -> f64 {
-            a + (b - a) * self.f()
-        }
-        /// inclusive
-        fn irange(&mut self, a: usize, b: usize) -> usize {
-            a + ((self.next_u64() >> 33) as usize) % (b - a + 1)
-        }
-    }
+    use crate::TestRng as Lcg;
 
     struct Terrain {
         z: Vec<f32>,

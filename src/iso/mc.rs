@@ -653,15 +653,11 @@ mod tests {
     use std::collections::BTreeMap;
     use std::time::Instant;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
+    use crate::TestRng as Lcg;
+
+    /// Uniform f32 in [0, 1) from the top 24 bits.
+    fn unit(rng: &mut Lcg) -> f32 {
+        (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 
     type PosKey = [u64; 3];
@@ -792,10 +788,10 @@ mod tests {
             let dims = (13, 9, 21);
             let v: Vec<f32> = (0..dims.0 * dims.1 * dims.2)
                 .map(|_| {
-                    if rng.unit() < 0.03 {
+                    if unit(&mut rng) < 0.03 {
                         f32::NAN
                     } else {
-                        rng.unit() - 0.5
+                        unit(&mut rng) - 0.5
                     }
                 })
                 .collect();
@@ -904,7 +900,7 @@ mod tests {
         let vals: Vec<f32> = base
             .values
             .iter()
-            .map(|&v| if rng.unit() < 0.1 { f32::NAN } else { v })
+            .map(|&v| if unit(&mut rng) < 0.1 { f32::NAN } else { v })
             .collect();
         let vol = Volume::new(vals.into(), (24, 24, 24), base.origin, base.spacing).unwrap();
         let p = full(&vol, 0.0);

@@ -351,28 +351,21 @@ mod tests {
     use super::*;
     use std::sync::Arc;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn next_u32(&mut self) -> u32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 33) as u32
-        }
-        fn unit(&mut self) -> f32 {
-            self.next_u32() as f32 / (1u64 << 31) as f32
-        }
+    use crate::TestRng as Lcg;
+
+    /// Uniform f32 in [0, 1) from bits 33..64.
+    fn unit(rng: &mut Lcg) -> f32 {
+        (rng.next_u64() >> 33) as f32 / (1u64 << 31) as f32
     }
 
     fn random_volume(rng: &mut Lcg, dims: (usize, usize, usize), nan_frac: f32) -> Volume {
         let n = dims.0 * dims.1 * dims.2;
         let v: Vec<f32> = (0..n)
             .map(|_| {
-                if rng.unit() < nan_frac {
+                if unit(rng) < nan_frac {
                     f32::NAN
                 } else {
-                    rng.unit() * 200.0 - 100.0
+                    unit(rng) * 200.0 - 100.0
                 }
             })
             .collect();
