@@ -489,14 +489,19 @@ impl Renderer {
         }
     }
 
+    /// The frame's camera: near/far from the visible objects' bounds in render space.
+    fn frame_camera(&self, scene: &Scene, camera: &Camera) -> FrameCamera {
+        let zs = DVec3::new(1.0, 1.0, camera.z_scale);
+        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * zs, hi * zs));
+        camera.frame(scene.origin(), bounds, self.width as f64 / self.height as f64)
+    }
+
     /// Horizon culling on the CPU: a tile mask over the whole scene (meshes: all tiles).
     fn horizon_mask(&mut self, scene: &Scene, camera: &Camera) -> (Vec<bool>, u32, u32, Option<Vec<f32>>) {
         use crate::cull::horizon::{HeightGrid, HorizonTree};
         use crate::scene::ObjectKind;
-        let origin = scene.origin();
         let zs = camera.z_scale;
-        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * DVec3::new(1.0, 1.0, zs), hi * DVec3::new(1.0, 1.0, zs)));
-        let fc = camera.frame(origin, bounds, self.width as f64 / self.height as f64);
+        let fc = self.frame_camera(scene, camera);
         let key = scene.geometry_key();
         self.horizon_trees.retain(|(k, _)| k.0 == key);
         let mut mask = Vec::with_capacity(scene.n_tiles());
@@ -531,10 +536,8 @@ impl Renderer {
     fn frame(&mut self, scene: &Scene, camera: &Camera, set: DrawSet, count_final: bool) -> Result<RenderOutput> {
         let t0 = Instant::now();
         self.upload(scene)?;
-        let origin = scene.origin();
         let z = camera.z_scale;
-        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * DVec3::new(1.0, 1.0, z), hi * DVec3::new(1.0, 1.0, z)));
-        let fc = camera.frame(origin, bounds, self.width as f64 / self.height as f64);
+        let fc = self.frame_camera(scene, camera);
         let cache = self.cache.as_ref().unwrap();
         let n_tiles = cache.fine.len();
         let objects = scene.objects();
