@@ -110,16 +110,25 @@ impl Camera {
             format!("fov_y is {fov_y}; expected degrees in the open interval (0, 180)")
         })?;
         // Below this the f32 projection overflows (focal length > 1e38): an empty image, not a view.
-        ensure(fov_y >= MIN_FOV_Y, "fov_y", || format!("fov_y is {}; expected at least {} degrees", num(fov_y), num(MIN_FOV_Y)))?;
+        ensure(fov_y >= MIN_FOV_Y, "fov_y", || {
+            format!("fov_y is {}; expected at least {} degrees", num(fov_y), num(MIN_FOV_Y))
+        })?;
         ensure(z_scale.is_finite() && z_scale > 0.0, "z_scale", || {
             format!("z_scale is {z_scale}; expected a finite number > 0")
         })?;
         ensure((MIN_Z_SCALE..=MAX_Z_SCALE).contains(&z_scale), "z_scale", || {
-            format!("z_scale is {}; expected a vertical exaggeration in [{}, {}]", num(z_scale), num(MIN_Z_SCALE), num(MAX_Z_SCALE))
+            format!(
+                "z_scale is {}; expected a vertical exaggeration in [{}, {}]",
+                num(z_scale),
+                num(MIN_Z_SCALE),
+                num(MAX_Z_SCALE)
+            )
         })?;
         for (p, arg) in [(eye, "eye"), (target, "target")] {
             for (i, x) in p.to_array().iter().enumerate() {
-                ensure(x.abs() <= MAX_COORD, arg, || format!("component {i} is {}; coordinates must be within +-{MAX_COORD:e}", num(*x)))?;
+                ensure(x.abs() <= MAX_COORD, arg, || {
+                    format!("component {i} is {}; coordinates must be within +-{MAX_COORD:e}", num(*x))
+                })?;
             }
         }
         // The view direction in render space (exaggerated) must be normalisable in f64.
@@ -160,10 +169,7 @@ impl Camera {
             return up;
         }
         let candidates = [DVec3::Y, DVec3::X, DVec3::Z];
-        *candidates
-            .iter()
-            .min_by(|a, b| a.dot(forward).abs().total_cmp(&b.dot(forward).abs()))
-            .unwrap()
+        *candidates.iter().min_by(|a, b| a.dot(forward).abs().total_cmp(&b.dot(forward).abs())).unwrap()
     }
 
     /// Near/far and matrices for a frame whose visible content (render space) lies in `bounds`.
@@ -222,9 +228,9 @@ impl Camera {
                 }
                 // The same far for the projection and for linear_depth (they used to differ here).
                 let far = far.max(near * (1.0 + 1e-6) + 1e-3);
-                let h = self.ortho_height.unwrap_or_else(|| {
-                    2.0 * (target - eye).length() * (self.fov_y.to_radians() * 0.5).tan()
-                });
+                let h = self
+                    .ortho_height
+                    .unwrap_or_else(|| 2.0 * (target - eye).length() * (self.fov_y.to_radians() * 0.5).tan());
                 let w = h * aspect;
                 // Reverse-Z: near maps to depth 1, far to 0.
                 let p = directx::orthographic(-w / 2.0, w / 2.0, -h / 2.0, h / 2.0, far, near);
@@ -245,7 +251,9 @@ impl FrameCamera {
             return f32::INFINITY;
         }
         match self.projection {
-            Projection::Perspective if self.finite_far => (self.near * self.far / (d as f64 * (self.far - self.near) + self.near)) as f32,
+            Projection::Perspective if self.finite_far => {
+                (self.near * self.far / (d as f64 * (self.far - self.near) + self.near)) as f32
+            }
             Projection::Perspective => (self.near / d as f64) as f32,
             // near + (1 - d)(far - near), not far - d (far - near): the latter cancels to 0 when
             // far >> near.
@@ -287,8 +295,18 @@ mod tests {
 
     #[test]
     fn given_far_clips_and_round_trips() {
-        let c = Camera::look_at([0.0, 0.0, 100.0], [0.0; 3], [0.0, 0.0, 1.0], 45.0, Some(50.0), Some(150.0), Projection::Perspective, None, 1.0)
-            .unwrap();
+        let c = Camera::look_at(
+            [0.0, 0.0, 100.0],
+            [0.0; 3],
+            [0.0, 0.0, 1.0],
+            45.0,
+            Some(50.0),
+            Some(150.0),
+            Projection::Perspective,
+            None,
+            1.0,
+        )
+        .unwrap();
         let f = c.frame(DVec3::ZERO, None, 1.0);
         assert!(f.finite_far && f.near == 50.0 && f.far == 150.0);
         let depth_at = |dist: f64| {
@@ -305,11 +323,22 @@ mod tests {
 
     #[test]
     fn bad_arguments_name_themselves() {
-        let e = Camera::look_at([0.0; 3], [0.0; 3], [0.0, 0.0, 1.0], 45.0, None, None, Projection::Perspective, None, 1.0)
-            .unwrap_err();
+        let e =
+            Camera::look_at([0.0; 3], [0.0; 3], [0.0, 0.0, 1.0], 45.0, None, None, Projection::Perspective, None, 1.0)
+                .unwrap_err();
         assert!(e.to_string().starts_with("target"));
-        let e = Camera::look_at([0.0; 3], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], 180.0, None, None, Projection::Perspective, None, 1.0)
-            .unwrap_err();
+        let e = Camera::look_at(
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            180.0,
+            None,
+            None,
+            Projection::Perspective,
+            None,
+            1.0,
+        )
+        .unwrap_err();
         assert!(e.to_string().starts_with("fov_y"));
     }
 }

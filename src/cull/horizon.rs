@@ -206,7 +206,11 @@ fn boundary_edges(
                 continue;
             }
             let mut e = |a: (usize, usize), b: (usize, usize)| {
-                if flip { emit(b, a) } else { emit(a, b) }
+                if flip {
+                    emit(b, a)
+                } else {
+                    emit(a, b)
+                }
             };
             if j == j0 || !good(i, j - 1) {
                 e((i, j), (i + 1, j));
@@ -232,19 +236,12 @@ struct Chain {
 }
 
 impl Chain {
-    const EMPTY: Chain = Chain {
-        p: [(0.0, 0.0); 8],
-        n: 0,
-    };
+    const EMPTY: Chain = Chain { p: [(0.0, 0.0); 8], n: 0 };
 
     /// max (upper) / min (lower) of the chain at x; x must lie in the chain's x range.
     fn eval(&self, x: f64, upper: bool) -> f64 {
         let pick = |a: f64, b: f64| if upper { a.max(b) } else { a.min(b) };
-        let mut best = if upper {
-            f64::NEG_INFINITY
-        } else {
-            f64::INFINITY
-        };
+        let mut best = if upper { f64::NEG_INFINITY } else { f64::INFINITY };
         if self.n == 1 {
             best = pick(best, self.p[0].1);
         }
@@ -401,16 +398,7 @@ impl View {
             return None;
         }
         let w_margin = (1e-9 * (r3.truncate().length() * scale + r3.w.abs())).max(1e-300);
-        Some(View {
-            m,
-            ra: [r0.abs(), r1.abs(), r2.abs(), r3.abs()],
-            eh,
-            w_margin,
-            wf: w as f64,
-            hf: h as f64,
-            w,
-            h,
-        })
+        Some(View { m, ra: [r0.abs(), r1.abs(), r2.abs(), r3.abs()], eh, w_margin, wf: w as f64, hf: h as f64, w, h })
     }
 
     #[inline]
@@ -420,10 +408,7 @@ impl View {
 
     #[inline]
     fn screen(&self, c: DVec4) -> (f64, f64) {
-        (
-            (c.x / c.w + 1.0) * 0.5 * self.wf,
-            (c.y / c.w + 1.0) * 0.5 * self.hf,
-        )
+        ((c.x / c.w + 1.0) * 0.5 * self.wf, (c.y / c.w + 1.0) * 0.5 * self.hf)
     }
 
     /// Bound on the f32 round-off of clip coordinate `row` of render-space point `p` on the GPU.
@@ -489,9 +474,7 @@ impl HorizonTree {
             && tx >= 1
             && ty >= 1
             && nx.checked_mul(ny).is_some_and(|n| grid.z.len() >= n)
-            && [grid.x0, grid.y0, grid.dx, grid.dy]
-                .iter()
-                .all(|v| v.is_finite())
+            && [grid.x0, grid.y0, grid.dx, grid.dy].iter().all(|v| v.is_finite())
             && grid.dx != 0.0
             && grid.dy != 0.0;
         let ntiles = tx.saturating_mul(ty);
@@ -541,9 +524,7 @@ impl HorizonTree {
                 tree.tile_nonempty[t] = mn.x <= mx.x;
                 let zz = &tree.z;
                 let fin = |i: usize, j: usize| zz[j * nx + i].is_finite();
-                let good = |i: usize, j: usize| {
-                    fin(i, j) && fin(i + 1, j) && fin(i, j + 1) && fin(i + 1, j + 1)
-                };
+                let good = |i: usize, j: usize| fin(i, j) && fin(i + 1, j) && fin(i, j + 1) && fin(i + 1, j + 1);
                 let edges = &mut tree.edges;
                 boundary_edges((i0, i1), (j0, j1), good, tree.flip, |a, b| {
                     edges.push([(a.1 * nx + a.0) as u32, (b.1 * nx + b.0) as u32]);
@@ -562,11 +543,7 @@ impl HorizonTree {
 
     #[inline]
     fn pos(&self, i: usize, j: usize) -> DVec3 {
-        DVec3::new(
-            self.x0 + i as f64 * self.dx,
-            self.y0 + j as f64 * self.dy,
-            self.z[j * self.nx + i] as f64,
-        )
+        DVec3::new(self.x0 + i as f64 * self.dx, self.y0 + j as f64 * self.dy, self.z[j * self.nx + i] as f64)
     }
 
     fn build_node(&mut self, bb: &[(DVec3, DVec3)], ix: usize, iy: usize, s: usize) -> u32 {
@@ -604,14 +581,7 @@ impl HorizonTree {
         }
         let split_x = self.x0 + self.bx[(ix + h).min(self.tx)] as f64 * self.dx;
         let split_y = self.y0 + self.by[(iy + h).min(self.ty)] as f64 * self.dy;
-        self.nodes.push(Node {
-            min: mn,
-            max: mx,
-            children,
-            split_x,
-            split_y,
-            tile: NONE,
-        });
+        self.nodes.push(Node { min: mn, max: mx, children, split_x, split_y, tile: NONE });
         (self.nodes.len() - 1) as u32
     }
 
@@ -650,10 +620,7 @@ impl HorizonTree {
         }
         let mut k = vec![0u32; w];
         let mut stack: Vec<(u32, NodeProj)> = Vec::with_capacity(64);
-        let mut scratch = Scratch {
-            tile_edges: vec![(0, 0); self.tx * self.ty],
-            ..Scratch::default()
-        };
+        let mut scratch = Scratch { tile_edges: vec![(0, 0); self.tx * self.ty], ..Scratch::default() };
 
         res.nodes_visited += 1;
         match self.project_node(&view, self.root) {
@@ -668,26 +635,14 @@ impl HorizonTree {
             let node = self.nodes[ni as usize];
             if node.tile != NONE {
                 res.tile_visible[node.tile as usize] = true;
-                self.add_occluder(
-                    &view,
-                    node.tile as usize,
-                    &proj,
-                    &mut k,
-                    &stack,
-                    &mut scratch,
-                );
+                self.add_occluder(&view, node.tile as usize, &proj, &mut k, &stack, &mut scratch);
                 continue;
             }
             let sx = view.eh.x - node.split_x * view.eh.w;
             let sy = view.eh.y - node.split_y * view.eh.w;
             let qx = usize::from(!(if self.dx > 0.0 { sx < 0.0 } else { sx > 0.0 }));
             let qy = usize::from(!(if self.dy > 0.0 { sy < 0.0 } else { sy > 0.0 }));
-            let order = [
-                qx + 2 * qy,
-                (1 - qx) + 2 * qy,
-                qx + 2 * (1 - qy),
-                (1 - qx) + 2 * (1 - qy),
-            ];
+            let order = [qx + 2 * qy, (1 - qx) + 2 * qy, qx + 2 * (1 - qy), (1 - qx) + 2 * (1 - qy)];
             // push far to near so the nearest child is popped first
             for &q in order.iter().rev() {
                 let c = node.children[q];
@@ -702,11 +657,7 @@ impl HorizonTree {
             }
         }
         for (o, &kk) in res.horizon.iter_mut().zip(&k) {
-            *o = if kk == 0 {
-                f32::NEG_INFINITY
-            } else {
-                kk as f32
-            };
+            *o = if kk == 0 { f32::NEG_INFINITY } else { kk as f32 };
         }
         res
     }
@@ -758,12 +709,8 @@ impl HorizonTree {
             eps = eps.max(view.err_px(p, c));
         }
         let mut pts = [(0.0, 0.0); 8];
-        let (mut xmin, mut xmax, mut ymin, mut ymax) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
+        let (mut xmin, mut xmax, mut ymin, mut ymax) =
+            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
         for (p, &c) in pts.iter_mut().zip(&clip) {
             *p = view.screen(c);
             xmin = xmin.min(p.0);
@@ -798,15 +745,7 @@ impl HorizonTree {
             return None;
         }
         let (lo, up) = hull_chains(&mut pts);
-        Some(NodeProj {
-            front,
-            depth_ok,
-            eps,
-            xmin,
-            xmax,
-            lo,
-            up,
-        })
+        Some(NodeProj { front, depth_ok, eps, xmin, xmax, lo, up })
     }
 
     fn horizon_culled(&self, view: &View, p: &NodeProj, k: &[u32]) -> bool {
@@ -889,8 +828,7 @@ impl HorizonTree {
             }
             let valid = &s.valid;
             let v = |i: usize, j: usize| valid[(j - j0) * lw + (i - i0)];
-            let good =
-                |i: usize, j: usize| v(i, j) && v(i + 1, j) && v(i, j + 1) && v(i + 1, j + 1);
+            let good = |i: usize, j: usize| v(i, j) && v(i + 1, j) && v(i, j + 1) && v(i + 1, j + 1);
             let (nx, ue) = (self.nx, &mut s.ue);
             boundary_edges((i0, i1), (j0, j1), good, self.flip, |a, b| {
                 ue.push([(a.1 * nx + a.0) as u32, (b.1 * nx + b.0) as u32]);
@@ -938,10 +876,8 @@ impl HorizonTree {
         if s.cross.is_empty() {
             return;
         }
-        s.cross
-            .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
-        s.unc
-            .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        s.cross.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+        s.unc.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let mut ui = 0;
         let mut idx = 0;
         let n = s.cross.len();
@@ -1061,11 +997,7 @@ fn add_band(a: (f64, f64), b: (f64, f64), ea: f64, eb: f64, view: &View, out: &m
     };
     for c in c0..=c1 {
         let xc = c as f64 + 0.5;
-        let e = if slope < 0.5 {
-            (at(xc).1 / (1.0 - slope)).min(emax)
-        } else {
-            emax
-        };
+        let e = if slope < 0.5 { (at(xc).1 / (1.0 - slope)).min(emax) } else { emax };
         let (x0, x1) = ((xc - e).max(l.0), (xc + e).min(r.0));
         if x0 > x1 {
             continue;
@@ -1130,22 +1062,13 @@ mod tests {
             }
         }
         fn zmax(&self) -> f64 {
-            self.z
-                .iter()
-                .filter(|v| v.is_finite())
-                .fold(f64::NEG_INFINITY, |a, &b| a.max(b as f64))
+            self.z.iter().filter(|v| v.is_finite()).fold(f64::NEG_INFINITY, |a, &b| a.max(b as f64))
         }
         fn zmin(&self) -> f64 {
-            self.z
-                .iter()
-                .filter(|v| v.is_finite())
-                .fold(f64::INFINITY, |a, &b| a.min(b as f64))
+            self.z.iter().filter(|v| v.is_finite()).fold(f64::INFINITY, |a, &b| a.min(b as f64))
         }
         fn extent(&self) -> (f64, f64) {
-            (
-                (self.nx - 1) as f64 * self.dx.abs(),
-                (self.ny - 1) as f64 * self.dy.abs(),
-            )
+            ((self.nx - 1) as f64 * self.dx.abs(), (self.ny - 1) as f64 * self.dy.abs())
         }
     }
 
@@ -1161,7 +1084,11 @@ mod tests {
         for plane in 0..2 {
             let d = |v: &DVec4| {
                 if plane == 0 {
-                    if gl { v.z + v.w } else { v.z }
+                    if gl {
+                        v.z + v.w
+                    } else {
+                        v.z
+                    }
                 } else {
                     v.w - v.z
                 }
@@ -1193,13 +1120,8 @@ mod tests {
         let (tx, ty) = t.tiles;
         let bx = crate::lod::tile_bounds(t.nx, tx);
         let by = crate::lod::tile_bounds(t.ny, ty);
-        let pos = |i: usize, j: usize| {
-            DVec3::new(
-                t.x0 + i as f64 * t.dx,
-                t.y0 + j as f64 * t.dy,
-                t.z[j * t.nx + i] as f64,
-            )
-        };
+        let pos =
+            |i: usize, j: usize| DVec3::new(t.x0 + i as f64 * t.dx, t.y0 + j as f64 * t.dy, t.z[j * t.nx + i] as f64);
         // collect screen-space triangles with tile id
         let mut tris: Vec<(usize, [DVec3; 3])> = Vec::new();
         for iy in 0..ty {
@@ -1255,9 +1177,7 @@ mod tests {
             if px0 > px1 || py0 > py1 {
                 return;
             }
-            let edge = |p: DVec3, q: DVec3, x: f64, y: f64| {
-                (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x)
-            };
+            let edge = |p: DVec3, q: DVec3, x: f64, y: f64| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
             for py in py0 as usize..=py1 as usize {
                 for px in px0 as usize..=px1 as usize {
                     let (x, y) = (px as f64 + 0.5, py as f64 + 0.5);
@@ -1294,12 +1214,7 @@ mod tests {
 
     fn camera(eye: DVec3, fwd: DVec3, up: DVec3, ext: f64, w: usize, h: usize) -> DMat4 {
         let view = look_at_mat4(eye, eye + fwd, up);
-        let proj = dx_proj::perspective(
-            60f64.to_radians(),
-            w as f64 / h as f64,
-            0.002 * ext,
-            20.0 * ext,
-        );
+        let proj = dx_proj::perspective(60f64.to_radians(), w as f64 / h as f64, 0.002 * ext, 20.0 * ext);
         proj * view
     }
 
@@ -1321,15 +1236,7 @@ mod tests {
         check_depth(t, vp, eye, w, h, gl, false)
     }
 
-    fn check_depth(
-        t: &Terrain,
-        vp: DMat4,
-        eye: DVec3,
-        w: usize,
-        h: usize,
-        gl: bool,
-        reverse: bool,
-    ) -> Check {
+    fn check_depth(t: &Terrain, vp: DMat4, eye: DVec3, w: usize, h: usize, gl: bool, reverse: bool) -> Check {
         let tree = HorizonTree::build(&t.grid());
         let res = tree.cull(vp, eye, w as u32, h as u32);
         let rf = reference(t, vp, w, h, gl, reverse);
@@ -1350,14 +1257,7 @@ mod tests {
                 }
             }
         }
-        Check {
-            res,
-            rf,
-            violations,
-            nonempty,
-            culled,
-            invisible,
-        }
+        Check { res, rf, violations, nonempty, culled, invisible }
     }
 
     fn check(t: &Terrain, vp: DMat4, eye: DVec3, w: usize, h: usize) -> Check {
@@ -1394,16 +1294,7 @@ mod tests {
                     + 0.3) as f32;
             }
         }
-        let t = Terrain {
-            z,
-            nx,
-            ny,
-            x0: 0.0,
-            y0: 0.0,
-            dx: 1.0,
-            dy: 1.0,
-            tiles: (8, 8),
-        };
+        let t = Terrain { z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, tiles: (8, 8) };
         let (w, h) = (160, 120);
         let eye = DVec3::new(32.0, -20.0, 6.0);
         let vp = camera(eye, dir(90.0, -5.0), DVec3::Z, 64.0, w, h);
@@ -1414,11 +1305,7 @@ mod tests {
         );
         print_tiles(&t, &c);
         assert!(c.res.culling_applied);
-        assert!(
-            c.violations.is_empty(),
-            "visible tiles culled: {:?}",
-            c.violations
-        );
+        assert!(c.violations.is_empty(), "visible tiles culled: {:?}", c.violations);
         // the valley behind the ridge (rows iy >= 4) must be culled, centre columns included
         for iy in 4..8 {
             for ix in 0..8 {
@@ -1436,46 +1323,23 @@ mod tests {
     #[test]
     fn flat_field_only_frustum_culls() {
         let (nx, ny) = (65, 65);
-        let t = Terrain {
-            z: vec![0.0; nx * ny],
-            nx,
-            ny,
-            x0: -10.0,
-            y0: 5.0,
-            dx: 1.0,
-            dy: 1.0,
-            tiles: (8, 8),
-        };
+        let t = Terrain { z: vec![0.0; nx * ny], nx, ny, x0: -10.0, y0: 5.0, dx: 1.0, dy: 1.0, tiles: (8, 8) };
         let (w, h) = (160, 120);
-        for (k, (ex, ey, az, pitch)) in [
-            (22.0, 37.0, 30.0, 0.0),
-            (22.0, 37.0, 200.0, -10.0),
-            (-30.0, 0.0, 45.0, -5.0),
-            (10.0, 30.0, 90.0, -25.0),
-        ]
-        .into_iter()
-        .enumerate()
+        for (k, (ex, ey, az, pitch)) in
+            [(22.0, 37.0, 30.0, 0.0), (22.0, 37.0, 200.0, -10.0), (-30.0, 0.0, 45.0, -5.0), (10.0, 30.0, 90.0, -25.0)]
+                .into_iter()
+                .enumerate()
         {
             let eye = DVec3::new(ex, ey, 5.0);
             let vp = camera(eye, dir(az, pitch), DVec3::Z, 64.0, w, h);
             let c = check(&t, vp, eye, w, h);
-            println!(
-                "flat {k}: culled {}/{}, reference-invisible {}",
-                c.culled, c.nonempty, c.invisible
-            );
+            println!("flat {k}: culled {}/{}, reference-invisible {}", c.culled, c.nonempty, c.invisible);
             print_tiles(&t, &c);
             assert!(c.res.culling_applied);
-            assert!(
-                c.violations.is_empty(),
-                "visible tiles culled: {:?}",
-                c.violations
-            );
+            assert!(c.violations.is_empty(), "visible tiles culled: {:?}", c.violations);
             for i in 0..64 {
                 if !c.res.tile_visible[i] {
-                    assert!(
-                        !c.rf.has_frag[i],
-                        "tile {i} culled although inside the frustum"
-                    );
+                    assert!(!c.rf.has_frag[i], "tile {i} culled although inside the frustum");
                 }
             }
         }
@@ -1506,10 +1370,8 @@ mod tests {
         for j in 0..ny {
             for i in 0..nx {
                 let (x, y) = (i as f64 * dx, j as f64 * dy);
-                let v: f64 = waves
-                    .iter()
-                    .map(|&(a, k, th, ph)| a * (k * (x * th.cos() + y * th.sin()) + ph).sin())
-                    .sum();
+                let v: f64 =
+                    waves.iter().map(|&(a, k, th, ph)| a * (k * (x * th.cos() + y * th.sin()) + ph).sin()).sum();
                 z[j * nx + i] = (base + v) as f32;
             }
         }
@@ -1533,16 +1395,7 @@ mod tests {
                 *v = f32::NAN;
             }
         }
-        let mut t = Terrain {
-            z,
-            nx,
-            ny,
-            x0,
-            y0,
-            dx,
-            dy,
-            tiles,
-        };
+        let mut t = Terrain { z, nx, ny, x0, y0, dx, dy, tiles };
         if rng.f() < 0.15 && !noholes {
             // an all-NaN tile
             let bx = crate::lod::tile_bounds(nx, tiles.0);
@@ -1564,10 +1417,7 @@ mod tests {
         let (mut sum_frac, mut sum_eff, mut n_eff) = (0.0, 0.0, 0);
         let (mut tot_culled, mut tot_nonempty, mut tot_invisible) = (0, 0, 0);
         let mut failures = vec![];
-        let ncases: usize = std::env::var("HORIZON_CASES")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(200);
+        let ncases: usize = std::env::var("HORIZON_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
         let mut occl = 0usize;
         for case in 0..ncases {
             let t = random_terrain(&mut rng);
@@ -1601,9 +1451,7 @@ mod tests {
             tot_culled += c.culled;
             tot_nonempty += c.nonempty;
             tot_invisible += c.invisible;
-            occl += (0..c.res.tile_visible.len())
-                .filter(|&i| !c.res.tile_visible[i] && c.rf.has_frag[i])
-                .count();
+            occl += (0..c.res.tile_visible.len()).filter(|&i| !c.res.tile_visible[i] && c.rf.has_frag[i]).count();
         }
         let nc = ncases as f64;
         println!(
@@ -1629,10 +1477,7 @@ mod tests {
         let mut rng = Lcg(42);
         let (w, h) = (128, 96);
         let (mut culled, mut nonempty, mut applied) = (0, 0, 0);
-        let ncases: usize = std::env::var("HORIZON_CASES")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(120);
+        let ncases: usize = std::env::var("HORIZON_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(120);
         for case in 0..ncases {
             let t = random_terrain(&mut rng);
             let (ex, ey) = t.extent();
@@ -1673,17 +1518,11 @@ mod tests {
             if !c.violations.is_empty() {
                 print_tiles(&t, &c);
             }
-            assert!(
-                c.violations.is_empty(),
-                "case {case}: visible tiles culled {:?}",
-                c.violations
-            );
+            assert!(c.violations.is_empty(), "case {case}: visible tiles culled {:?}", c.violations);
             culled += c.culled;
             nonempty += c.nonempty;
         }
-        println!(
-            "roll/ortho/any-eye: applied in {applied}/{ncases} views, culled {culled}/{nonempty}"
-        );
+        println!("roll/ortho/any-eye: applied in {applied}/{ncases} views, culled {culled}/{nonempty}");
     }
 
     /// The renderer's projections: reverse-Z, infinite-far perspective and reverse-Z
@@ -1693,10 +1532,7 @@ mod tests {
         let mut rng = Lcg(2024);
         let (w, h) = (128, 96);
         let (mut culled, mut nonempty, mut applied, mut ortho_culled) = (0, 0, 0, 0);
-        let ncases: usize = std::env::var("HORIZON_CASES")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(160);
+        let ncases: usize = std::env::var("HORIZON_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(160);
         for case in 0..ncases {
             let t = random_terrain(&mut rng);
             let (ex, ey) = t.extent();
@@ -1727,11 +1563,7 @@ mod tests {
             if !c.violations.is_empty() {
                 print_tiles(&t, &c);
             }
-            assert!(
-                c.violations.is_empty(),
-                "case {case} (ortho {ortho}): visible tiles culled {:?}",
-                c.violations
-            );
+            assert!(c.violations.is_empty(), "case {case} (ortho {ortho}): visible tiles culled {:?}", c.violations);
             culled += c.culled;
             nonempty += c.nonempty;
             if ortho {
@@ -1765,30 +1597,15 @@ mod tests {
             let eye = DVec3::new(centre.x, centre.y, t.zmin() - 0.05 * ext);
             let vp = camera(eye, dir(az, pitch), DVec3::Z, ext, w, h);
             let c = check(&t, vp, eye, w, h);
-            println!(
-                "below ({az},{pitch}): applied {} culled {}/{}",
-                c.res.culling_applied, c.culled, c.nonempty
-            );
-            assert!(
-                c.violations.is_empty(),
-                "visible tiles culled: {:?}",
-                c.violations
-            );
+            println!("below ({az},{pitch}): applied {} culled {}/{}", c.res.culling_applied, c.culled, c.nonempty);
+            assert!(c.violations.is_empty(), "visible tiles culled: {:?}", c.violations);
         }
         // degenerate inputs: no panic
         let _ = tree.cull(DMat4::ZERO, eye, w as u32, h as u32);
         let _ = tree.cull(vp, eye, 0, 0);
         let _ = tree.cull(DMat4::from_cols_array(&[f64::NAN; 16]), eye, 10, 10);
-        let empty = HorizonTree::build(&HeightGrid {
-            z: &[],
-            nx: 0,
-            ny: 0,
-            x0: 0.0,
-            y0: 0.0,
-            dx: 1.0,
-            dy: 1.0,
-            tiles: (2, 2),
-        });
+        let empty =
+            HorizonTree::build(&HeightGrid { z: &[], nx: 0, ny: 0, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, tiles: (2, 2) });
         let r = empty.cull(vp, eye, 8, 8);
         assert!(!r.culling_applied && r.tile_visible.len() == 4);
     }

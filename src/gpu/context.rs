@@ -27,7 +27,9 @@ fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
         _ => {
             return Err(crate::error::input_err(
                 "backend",
-                format!("unknown backend {backend:?}; expected one of \"auto\", \"vulkan\", \"gl\", \"metal\", \"dx12\""),
+                format!(
+                    "unknown backend {backend:?}; expected one of \"auto\", \"vulkan\", \"gl\", \"metal\", \"dx12\""
+                ),
             ))
         }
     })
@@ -54,7 +56,9 @@ impl GpuContext {
             let has_features = a.features().contains(wgpu::Features::INDIRECT_FIRST_INSTANCE);
             (!has_features as u8, kind, (i.backend != wgpu::Backend::Vulkan) as u8)
         });
-        let adapter = adapters.into_iter().next().ok_or_else(|| Error::Device(format!("no graphics adapter found for backend {backend:?}; {INSTALL_HINT}")))?;
+        let adapter = adapters.into_iter().next().ok_or_else(|| {
+            Error::Device(format!("no graphics adapter found for backend {backend:?}; {INSTALL_HINT}"))
+        })?;
         let info = adapter.get_info();
         let available = adapter.features();
         let needed = wgpu::Features::INDIRECT_FIRST_INSTANCE;
@@ -103,6 +107,9 @@ impl GpuContext {
     }
 
     pub fn adapter_description(&self) -> String {
-        format!("{} ({:?}, {:?}, driver {} {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info)
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info
+        )
     }
 }

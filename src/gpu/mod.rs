@@ -181,7 +181,11 @@ fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: vis,
-        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only }, has_dynamic_offset: false, min_binding_size: None },
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
         count: None,
     }
 }
@@ -190,7 +194,11 @@ fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayout
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: vis,
-        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
         count: None,
     }
 }
@@ -240,7 +248,11 @@ impl Renderer {
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: cs,
-                    ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Uint, view_dimension: wgpu::TextureViewDimension::D2, multisampled: false },
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
                     count: None,
                 },
                 storage_entry(1, false, cs),
@@ -248,15 +260,34 @@ impl Renderer {
         });
         let args_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("args"),
-            entries: &[uniform_entry(0, cs), storage_entry(1, true, cs), storage_entry(2, true, cs), storage_entry(3, false, cs)],
+            entries: &[
+                uniform_entry(0, cs),
+                storage_entry(1, true, cs),
+                storage_entry(2, true, cs),
+                storage_entry(3, false, cs),
+            ],
         });
-        let scene_shader = d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("scene.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("shaders/scene.wgsl").into()) });
-        let cull_shader = d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("cull.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("shaders/cull.wgsl").into()) });
-        let scene_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("scene"), bind_group_layouts: &[Some(&scene_layout)], immediate_size: 0 });
+        let scene_shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/scene.wgsl").into()),
+        });
+        let cull_shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("cull.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/cull.wgsl").into()),
+        });
+        let scene_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&scene_layout)],
+            immediate_size: 0,
+        });
         let vertex_layout = wgpu::VertexBufferLayout {
             array_stride: 12,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }],
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x3,
+                offset: 0,
+                shader_location: 0,
+            }],
         };
         let depth_state = wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
@@ -270,11 +301,25 @@ impl Renderer {
             d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&scene_pl),
-                vertex: wgpu::VertexState { module: &scene_shader, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[Some(vertex_layout.clone())] },
-                primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleList, cull_mode: None, ..Default::default() },
+                vertex: wgpu::VertexState {
+                    module: &scene_shader,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(vertex_layout.clone())],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
                 depth_stencil: Some(depth_state.clone()),
                 multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState { module: &scene_shader, entry_point: Some(fs), compilation_options: Default::default(), targets }),
+                fragment: Some(wgpu::FragmentState {
+                    module: &scene_shader,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
                 multiview_mask: None,
                 cache: None,
             })
@@ -282,11 +327,22 @@ impl Renderer {
         let main_pipeline = make_pipeline(
             "main",
             "fs_main",
-            &[Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL }), Some(ID_FORMAT.into())],
+            &[
+                Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL }),
+                Some(ID_FORMAT.into()),
+            ],
         );
         let prepass_pipeline = make_pipeline("prepass", "fs_id", &[Some(ID_FORMAT.into())]);
-        let hist_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("histogram"), bind_group_layouts: &[Some(&hist_layout)], immediate_size: 0 });
-        let args_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("args"), bind_group_layouts: &[Some(&args_layout)], immediate_size: 0 });
+        let hist_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("histogram"),
+            bind_group_layouts: &[Some(&hist_layout)],
+            immediate_size: 0,
+        });
+        let args_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("args"),
+            bind_group_layouts: &[Some(&args_layout)],
+            immediate_size: 0,
+        });
         let hist_pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("histogram"),
             layout: Some(&hist_pl),
@@ -303,7 +359,13 @@ impl Renderer {
             compilation_options: Default::default(),
             cache: None,
         });
-        let timestamp_set = ctx.timestamps.then(|| d.create_query_set(&wgpu::QuerySetDescriptor { label: Some("timestamps"), ty: wgpu::QueryType::Timestamp, count: N_TIMESTAMPS }));
+        let timestamp_set = ctx.timestamps.then(|| {
+            d.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: N_TIMESTAMPS,
+            })
+        });
         let main_targets = Self::make_targets(d, width, height, true);
         ctx.take_error()?;
         Ok(Self {
@@ -346,7 +408,16 @@ impl Renderer {
     fn make_targets(d: &wgpu::Device, width: u32, height: u32, with_color: bool) -> Targets {
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let tex = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-            d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] })
+            d.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
         };
         let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let color_tex = with_color.then(|| tex("color", COLOR_FORMAT, ra | wgpu::TextureUsages::COPY_SRC));
@@ -384,7 +455,9 @@ impl Renderer {
         }
         check_buffer_sizes(nv, ni, self.ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
-            (size > 0).then(|| d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true }))
+            (size > 0).then(|| {
+                d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true })
+            })
         };
         let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX);
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX);
@@ -402,11 +475,18 @@ impl Renderer {
                 imap.slice(*i * 4..(*i + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(data));
                 *i += data.len();
             };
-            let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) =
+                (Vec::new(), Vec::new(), Vec::new());
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
                     let tile = fine.len() as u32;
-                    fine.push(DrawArgs { index_count: t.fine.len() as u32, instance_count: 1, first_index: i as u32, base_vertex: v as i32, first_instance: tile });
+                    fine.push(DrawArgs {
+                        index_count: t.fine.len() as u32,
+                        instance_count: 1,
+                        first_index: i as u32,
+                        base_vertex: v as i32,
+                        first_instance: tile,
+                    });
                     put_v(&mut v, &t.positions);
                     put_i(&mut i, &t.fine);
                     // The coarse proxy gets its own compact copy of the vertices it uses: software
@@ -424,11 +504,20 @@ impl Renderer {
                         }
                         cidx.push(*slot);
                     }
-                    coarse.push(DrawArgs { index_count: cidx.len() as u32, instance_count: 1, first_index: i as u32, base_vertex: v as i32, first_instance: tile });
+                    coarse.push(DrawArgs {
+                        index_count: cidx.len() as u32,
+                        instance_count: 1,
+                        first_index: i as u32,
+                        base_vertex: v as i32,
+                        first_instance: tile,
+                    });
                     put_v(&mut v, &cverts);
                     put_i(&mut i, &cidx);
                     tile_object.push(oi as u32);
-                    bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
+                    bbox.push((
+                        DVec3::from_array(t.bbox_min.map(f64::from)),
+                        DVec3::from_array(t.bbox_max.map(f64::from)),
+                    ));
                 }
             }
             debug_assert_eq!((v as u64, i as u64), (nv, ni));
@@ -440,7 +529,10 @@ impl Renderer {
                     fine.push(DrawArgs { first_instance: tile, ..Default::default() });
                     coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
                     tile_object.push(oi as u32);
-                    bbox.push((DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from))));
+                    bbox.push((
+                        DVec3::from_array(t.bbox_min.map(f64::from)),
+                        DVec3::from_array(t.bbox_max.map(f64::from)),
+                    ));
                 }
             }
         }
@@ -449,9 +541,23 @@ impl Renderer {
         }
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
-        let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tile_object"), contents: bytemuck::cast_slice(&to), usage: wgpu::BufferUsages::STORAGE });
+        let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tile_object"),
+            contents: bytemuck::cast_slice(&to),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let bytes = nv * 12 + ni * 4 + to.len() as u64 * 4;
-        self.cache = Some(SceneGpu { key, vertices: vb, indices: ib, tile_object: tob, tile_object_cpu: tile_object, fine, coarse, bbox, bytes });
+        self.cache = Some(SceneGpu {
+            key,
+            vertices: vb,
+            indices: ib,
+            tile_object: tob,
+            tile_object_cpu: tile_object,
+            fine,
+            coarse,
+            bbox,
+            bytes,
+        });
         self.ctx.take_error()
     }
 
@@ -460,12 +566,19 @@ impl Renderer {
         ensure(opts.pixel_threshold.is_finite() && opts.pixel_threshold >= 0.0, "pixel_threshold", || {
             format!("pixel_threshold is {}; expected a number >= 0", opts.pixel_threshold)
         })?;
-        ensure(opts.prepass_scale.is_finite() && opts.prepass_scale > 0.0 && opts.prepass_scale <= 1.0, "prepass_scale", || {
-            format!("prepass_scale is {}; expected a number in (0, 1]", opts.prepass_scale)
-        })?;
+        ensure(
+            opts.prepass_scale.is_finite() && opts.prepass_scale > 0.0 && opts.prepass_scale <= 1.0,
+            "prepass_scale",
+            || format!("prepass_scale is {}; expected a number in (0, 1]", opts.prepass_scale),
+        )?;
         match opts.culling {
             Culling::None => self.frame(scene, camera, DrawSet::All, true),
-            Culling::ThreePass => self.frame(scene, camera, DrawSet::ThreePass { threshold: opts.pixel_threshold, scale: opts.prepass_scale }, false),
+            Culling::ThreePass => self.frame(
+                scene,
+                camera,
+                DrawSet::ThreePass { threshold: opts.pixel_threshold, scale: opts.prepass_scale },
+                false,
+            ),
             Culling::Oracle => {
                 // The reference frame (not timed) tells which tiles are visible at all.
                 let reference = self.frame(scene, camera, DrawSet::All, true)?;
@@ -517,7 +630,16 @@ impl Renderer {
                 None => {
                     let z = o.height_grid().unwrap_or_default();
                     let zr: Vec<f32> = z.iter().map(|&v| ((v as f64 + o.offset.z) * zs) as f32).collect();
-                    let grid = HeightGrid { z: &zr, nx: *nx, ny: *ny, x0: x0 + o.offset.x, y0: y0 + o.offset.y, dx: *dx, dy: *dy, tiles: *tiles };
+                    let grid = HeightGrid {
+                        z: &zr,
+                        nx: *nx,
+                        ny: *ny,
+                        x0: x0 + o.offset.x,
+                        y0: y0 + o.offset.y,
+                        dx: *dx,
+                        dy: *dy,
+                        tiles: *tiles,
+                    };
                     self.horizon_trees.push((hk, HorizonTree::build(&grid)));
                     self.horizon_trees.len() - 1
                 }
@@ -545,17 +667,39 @@ impl Renderer {
         let gpu_objects: Vec<GpuObject> = if objects.is_empty() {
             vec![GpuObject::zeroed()]
         } else {
-            objects.iter().map(|o| GpuObject { offset: [o.offset.x as f32, o.offset.y as f32, o.offset.z as f32, 0.0], color: [o.color[0], o.color[1], o.color[2], 1.0] }).collect()
+            objects
+                .iter()
+                .map(|o| GpuObject {
+                    offset: [o.offset.x as f32, o.offset.y as f32, o.offset.z as f32, 0.0],
+                    color: [o.color[0], o.color[1], o.color[2], 1.0],
+                })
+                .collect()
         };
         let visible: Vec<bool> = cache.tile_object_cpu.iter().map(|&oi| objects[oi as usize].visible).collect();
         let pick = |args: &[DrawArgs], keep: &dyn Fn(usize) -> bool| -> Vec<DrawArgs> {
-            args.iter().enumerate().map(|(i, a)| if visible[i] && keep(i) { *a } else { DrawArgs { instance_count: 0, ..*a } }).collect()
+            args.iter()
+                .enumerate()
+                .map(|(i, a)| if visible[i] && keep(i) { *a } else { DrawArgs { instance_count: 0, ..*a } })
+                .collect()
         };
         let d = &self.ctx.device;
         let light = light_dir(&fc);
-        let globals = Globals { view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(), light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0], z_scale: z as f32, _pad: [0.0; 3] };
-        let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("globals"), contents: bytemuck::bytes_of(&globals), usage: wgpu::BufferUsages::UNIFORM });
-        let objects_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("objects"), contents: bytemuck::cast_slice(&gpu_objects), usage: wgpu::BufferUsages::STORAGE });
+        let globals = Globals {
+            view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+            light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0],
+            z_scale: z as f32,
+            _pad: [0.0; 3],
+        };
+        let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("globals"),
+            contents: bytemuck::bytes_of(&globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let objects_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("objects"),
+            contents: bytemuck::cast_slice(&gpu_objects),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let scene_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
             layout: &self.scene_layout,
@@ -566,17 +710,41 @@ impl Renderer {
             ],
         });
         let n_buf = n_tiles.max(1);
-        let args_usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let args_usage = wgpu::BufferUsages::INDIRECT
+            | wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC;
         let args_init = |label: &str, a: &[DrawArgs]| {
             let a = if a.is_empty() { vec![DrawArgs::default()] } else { a.to_vec() };
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytemuck::cast_slice(&a), usage: args_usage })
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(&a),
+                usage: args_usage,
+            })
         };
-        let counts_buf = d.create_buffer(&wgpu::BufferDescriptor { label: Some("counts"), size: 4 * n_buf as u64, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        let counts_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counts"),
+            size: 4 * n_buf as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         enc.clear_buffer(&counts_buf, 0, None);
         let ts = self.timestamp_set.as_ref();
-        let ts_render = |i: u32| ts.map(|q| wgpu::RenderPassTimestampWrites { query_set: q, beginning_of_pass_write_index: Some(i), end_of_pass_write_index: Some(i + 1) });
-        let ts_compute = |i: u32| ts.map(|q| wgpu::ComputePassTimestampWrites { query_set: q, beginning_of_pass_write_index: Some(i), end_of_pass_write_index: Some(i + 1) });
+        let ts_render = |i: u32| {
+            ts.map(|q| wgpu::RenderPassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
+        };
+        let ts_compute = |i: u32| {
+            ts.map(|q| wgpu::ComputePassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
+        };
         let mut prepass_tris = 0u64;
         let mut prescale = 1.0f64;
         let final_args: wgpu::Buffer;
@@ -610,8 +778,23 @@ impl Renderer {
                 {
                     let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some("prepass"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &pt.id, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store } })],
-                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &pt.depth, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &pt.id,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })],
+                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                            view: &pt.depth,
+                            depth_ops: Some(wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(0.0),
+                                store: wgpu::StoreOp::Discard,
+                            }),
+                            stencil_ops: None,
+                        }),
                         timestamp_writes: ts_render(0),
                         occlusion_query_set: None,
                         multiview_mask: None,
@@ -628,12 +811,25 @@ impl Renderer {
                 let hist_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("histogram"),
                     layout: &self.hist_layout,
-                    entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&pt.id) }, wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() }],
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&pt.id) },
+                        wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() },
+                    ],
                 });
                 let fine_buf = args_init("fine_args", &pick(&cache.fine, &|_| true));
-                final_args = d.create_buffer(&wgpu::BufferDescriptor { label: Some("draw_args"), size: (n_buf * std::mem::size_of::<DrawArgs>()) as u64, usage: args_usage, mapped_at_creation: false });
-                let params = CullParams { n_tiles: n_tiles as u32, threshold: (threshold * scale * scale) as f32, _pad: [0; 2] };
-                let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("cull_params"), contents: bytemuck::bytes_of(&params), usage: wgpu::BufferUsages::UNIFORM });
+                final_args = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("draw_args"),
+                    size: (n_buf * std::mem::size_of::<DrawArgs>()) as u64,
+                    usage: args_usage,
+                    mapped_at_creation: false,
+                });
+                let params =
+                    CullParams { n_tiles: n_tiles as u32, threshold: (threshold * scale * scale) as f32, _pad: [0; 2] };
+                let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("cull_params"),
+                    contents: bytemuck::bytes_of(&params),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
                 let args_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("args"),
                     layout: &self.args_layout,
@@ -644,7 +840,10 @@ impl Renderer {
                         wgpu::BindGroupEntry { binding: 3, resource: final_args.as_entire_binding() },
                     ],
                 });
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("count"), timestamp_writes: ts_compute(2) });
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("count"),
+                    timestamp_writes: ts_compute(2),
+                });
                 pass.set_pipeline(&self.hist_pipeline);
                 pass.set_bind_group(0, &hist_bg, &[]);
                 pass.dispatch_workgroups(pw.div_ceil(16), ph.div_ceil(16), 1);
@@ -665,11 +864,26 @@ impl Renderer {
                         view: mt.color.as_ref().unwrap(),
                         depth_slice: None,
                         resolve_target: None,
-                        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }), store: wgpu::StoreOp::Store },
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }),
+                            store: wgpu::StoreOp::Store,
+                        },
                     }),
-                    Some(wgpu::RenderPassColorAttachment { view: &mt.id, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store } }),
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &mt.id,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
                 ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &mt.depth, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }), stencil_ops: None }),
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &mt.depth,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
                 timestamp_writes: ts_render(4),
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -683,7 +897,12 @@ impl Renderer {
             }
         }
         let ts_buf = ts.map(|q| {
-            let b = d.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: 8 * N_TIMESTAMPS as u64, usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
+            let b = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 8 * N_TIMESTAMPS as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
             enc.resolve_query_set(q, 0..N_TIMESTAMPS, &b, 0);
             b
         });
@@ -701,17 +920,29 @@ impl Renderer {
             let hist_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("histogram_final"),
                 layout: &self.hist_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&mt.id) }, wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() }],
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&mt.id) },
+                    wgpu::BindGroupEntry { binding: 1, resource: counts_buf.as_entire_binding() },
+                ],
             });
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("count_final"), timestamp_writes: None });
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("count_final"),
+                timestamp_writes: None,
+            });
             pass.set_pipeline(&self.hist_pipeline);
             pass.set_bind_group(0, &hist_bg, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(16), self.height.div_ceil(16), 1);
         }
-        let color_rb = ReadbackTexture::new(d, &mut enc, mt.color_tex.as_ref().unwrap(), w, h, 4, wgpu::TextureAspect::All);
+        let color_rb =
+            ReadbackTexture::new(d, &mut enc, mt.color_tex.as_ref().unwrap(), w, h, 4, wgpu::TextureAspect::All);
         let depth_rb = ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
         let read_buf = |enc: &mut wgpu::CommandEncoder, src: &wgpu::Buffer, size: u64| {
-            let b = d.create_buffer(&wgpu::BufferDescriptor { label: Some("readback"), size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+            let b = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             enc.copy_buffer_to_buffer(src, 0, &b, 0, size);
             b
         };
@@ -727,13 +958,20 @@ impl Renderer {
         let image = color_rb.read_rows()?;
         let depth_raw: Vec<f32> = bytemuck::cast_slice(&depth_rb.read_rows()?).to_vec();
         let depth: Vec<f32> = depth_raw.par_iter().map(|&v| fc.linear_depth(v)).collect();
-        let mut counts: Vec<u32> = bytemuck::cast_slice(&counts_rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+        let mut counts: Vec<u32> =
+            bytemuck::cast_slice(&counts_rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
         counts.truncate(n_tiles);
-        let drawn_args: Vec<DrawArgs> = bytemuck::cast_slice(&args_rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
-        let tile_drawn: Vec<bool> = drawn_args[..n_tiles].iter().map(|a| a.instance_count > 0 && a.index_count > 0).collect();
+        let drawn_args: Vec<DrawArgs> =
+            bytemuck::cast_slice(&args_rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+        let tile_drawn: Vec<bool> =
+            drawn_args[..n_tiles].iter().map(|a| a.instance_count > 0 && a.index_count > 0).collect();
         let mut stats = RenderStats {
             triangles_fine_total: cache.fine.iter().map(|a| a.index_count as u64 / 3).sum(),
-            triangles_drawn: drawn_args[..n_tiles].iter().filter(|a| a.instance_count > 0).map(|a| a.index_count as u64 / 3).sum(),
+            triangles_drawn: drawn_args[..n_tiles]
+                .iter()
+                .filter(|a| a.instance_count > 0)
+                .map(|a| a.index_count as u64 / 3)
+                .sum(),
             triangles_prepass: prepass_tris,
             tiles_total: n_tiles as u32,
             tiles_drawn: tile_drawn.iter().filter(|&&b| b).count() as u32,
@@ -759,7 +997,18 @@ impl Renderer {
             counts
         };
         stats.readback_ms = t1.elapsed().as_secs_f64() * 1e3;
-        Ok(RenderOutput { width: w, height: h, image, depth, tile_pixels, tile_drawn, stats, near: fc.near, far: fc.far, horizon: None })
+        Ok(RenderOutput {
+            width: w,
+            height: h,
+            image,
+            depth,
+            tile_pixels,
+            tile_drawn,
+            stats,
+            near: fc.near,
+            far: fc.far,
+            horizon: None,
+        })
     }
 }
 
@@ -786,13 +1035,29 @@ pub(crate) struct ReadbackTexture {
 }
 
 impl ReadbackTexture {
-    pub(crate) fn new(d: &wgpu::Device, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture, w: u32, h: u32, bpp: u32, aspect: wgpu::TextureAspect) -> Self {
+    pub(crate) fn new(
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        tex: &wgpu::Texture,
+        w: u32,
+        h: u32,
+        bpp: u32,
+        aspect: wgpu::TextureAspect,
+    ) -> Self {
         let row_bytes = w * bpp;
         let padded = row_bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = d.create_buffer(&wgpu::BufferDescriptor { label: Some("readback_texture"), size: padded as u64 * h as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        let buffer = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback_texture"),
+            size: padded as u64 * h as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         enc.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo { texture: tex, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
-            wgpu::TexelCopyBufferInfo { buffer: &buffer, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) } },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            },
             wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
         );
         Self { buffer, row_bytes, padded, height: h }

@@ -15,7 +15,18 @@ fn plane(s: &mut Scene, z: f64, n: usize, size: f64, tiles: usize, cf: f64) -> u
 }
 
 fn top_down(h: f64) -> Camera {
-    Camera::look_at([0.0, 0.0, h], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 90.0, None, None, Projection::Perspective, None, 1.0).unwrap()
+    Camera::look_at(
+        [0.0, 0.0, h],
+        [0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        90.0,
+        None,
+        None,
+        Projection::Perspective,
+        None,
+        1.0,
+    )
+    .unwrap()
 }
 
 #[test]
@@ -43,9 +54,22 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     plane(&mut s, 0.0, 21, 100.0, 4, 1.0);
     let lower = plane(&mut s, -10.0, 21, 60.0, 3, 1.0);
     let mut r = Renderer::new(80, 60, "auto").unwrap();
-    let cam = Camera::look_at([30.0, -120.0, 90.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0, None, None, Projection::Perspective, None, 1.0).unwrap();
+    let cam = Camera::look_at(
+        [30.0, -120.0, 90.0],
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0],
+        40.0,
+        None,
+        None,
+        Projection::Perspective,
+        None,
+        1.0,
+    )
+    .unwrap();
     let none = r.render(&s, &cam, &RenderOptions::default()).unwrap();
-    let tp = r.render(&s, &cam, &RenderOptions { culling: Culling::ThreePass, pixel_threshold: 0.0, prepass_scale: 1.0 }).unwrap();
+    let tp = r
+        .render(&s, &cam, &RenderOptions { culling: Culling::ThreePass, pixel_threshold: 0.0, prepass_scale: 1.0 })
+        .unwrap();
     let covered = none.depth.iter().filter(|d| d.is_finite()).count() as u32;
     assert!(covered > 0);
     assert_eq!(tp.tile_pixels.iter().sum::<u32>(), covered);

@@ -68,11 +68,7 @@ impl SurfacePatch {
             let base = out.positions.len() as u32;
             out.positions.extend_from_slice(&p.positions);
             out.normals.extend_from_slice(&p.normals);
-            out.triangles.extend(
-                p.triangles
-                    .iter()
-                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
-            );
+            out.triangles.extend(p.triangles.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
         }
         out
     }
@@ -121,14 +117,7 @@ fn build_tables() -> Tables {
         [0, 1, 2].map(|i| 0.5 * (pa[i] + pb[i]))
     };
 
-    let perms = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
+    let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
     let tets: Vec<[u8; 4]> = perms
         .iter()
         .map(|p| {
@@ -149,12 +138,7 @@ fn build_tables() -> Tables {
             let poly: Vec<(u8, u8)> = match above.len() {
                 1 => below.iter().map(|&o| (above[0], o)).collect(),
                 3 => above.iter().map(|&o| (below[0], o)).collect(),
-                2 => vec![
-                    (above[0], below[0]),
-                    (above[0], below[1]),
-                    (above[1], below[1]),
-                    (above[1], below[0]),
-                ],
+                2 => vec![(above[0], below[0]), (above[0], below[1]), (above[1], below[1]), (above[1], below[0])],
                 _ => continue,
             };
             let ca = centroid(&above.iter().map(|&c| corner_pos(c)).collect::<Vec<_>>());
@@ -187,11 +171,7 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 // ---------------------------------------------------------------------------
@@ -207,18 +187,8 @@ fn gradient(vol: &Volume, p: [usize; 3]) -> [f64; 3] {
     let stride = [1, vol.nx, vol.nx * vol.ny];
     let mut g = [0.0; 3];
     for a in 0..3 {
-        let lo = if p[a] > 0 {
-            Some(v[c - stride[a]] as f64)
-        } else {
-            None
-        }
-        .filter(|x| !x.is_nan());
-        let hi = if p[a] + 1 < n[a] {
-            Some(v[c + stride[a]] as f64)
-        } else {
-            None
-        }
-        .filter(|x| !x.is_nan());
+        let lo = if p[a] > 0 { Some(v[c - stride[a]] as f64) } else { None }.filter(|x| !x.is_nan());
+        let hi = if p[a] + 1 < n[a] { Some(v[c + stride[a]] as f64) } else { None }.filter(|x| !x.is_nan());
         let h = vol.spacing[a];
         g[a] = match (lo, hi) {
             (Some(l), Some(u)) => (u - l) / (2.0 * h),
@@ -233,14 +203,7 @@ fn gradient(vol: &Volume, p: [usize; 3]) -> [f64; 3] {
 /// Vertex on the edge from sample `p` to `q = p + d` (canonical direction:
 /// always interpolated from `p` towards `q`), given both samples' gradients.
 #[inline]
-fn edge_vertex(
-    vol: &Volume,
-    w: f32,
-    p: [usize; 3],
-    q: [usize; 3],
-    ga: [f64; 3],
-    gb: [f64; 3],
-) -> ([f64; 3], [f32; 3]) {
+fn edge_vertex(vol: &Volume, w: f32, p: [usize; 3], q: [usize; 3], ga: [f64; 3], gb: [f64; 3]) -> ([f64; 3], [f32; 3]) {
     let va = vol.values[vol.index(p[0], p[1], p[2])] as f64;
     let vb = vol.values[vol.index(q[0], q[1], q[2])] as f64;
     let t = (w as f64 - va) / (vb - va);
@@ -272,11 +235,7 @@ struct GradLayers {
 impl GradLayers {
     fn new(sx: usize, sy: usize) -> Self {
         let n = sx * sy;
-        GradLayers {
-            sx,
-            g: [vec![[0.0; 3]; n], vec![[0.0; 3]; n]],
-            ok: [vec![false; n], vec![false; n]],
-        }
+        GradLayers { sx, g: [vec![[0.0; 3]; n], vec![[0.0; 3]; n]], ok: [vec![false; n], vec![false; n]] }
     }
     /// Gradient of local sample `(lx, ly)` in layer `layer` (0 = k, 1 = k+1);
     /// `p` is its global index.
@@ -306,13 +265,7 @@ struct SerialOut {
 }
 
 /// Single-threaded extraction of cells `lo..hi` (already clamped, non-empty).
-fn extract_serial(
-    vol: &Volume,
-    w: f32,
-    lo: [usize; 3],
-    hi: [usize; 3],
-    keep_planes: bool,
-) -> SerialOut {
+fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_planes: bool) -> SerialOut {
     let tb = tables();
     let sx = hi[0] - lo[0] + 1;
     let sy = hi[1] - lo[1] + 1;
@@ -365,11 +318,8 @@ fn extract_serial(
                             &mut plane_a[3 * cell + d as usize - 1]
                         };
                         if *slot == NONE {
-                            let (qx, qy, qz) = (
-                                px + (d & 1) as usize,
-                                py + ((d >> 1) & 1) as usize,
-                                pz + ((d >> 2) & 1) as usize,
-                            );
+                            let (qx, qy, qz) =
+                                (px + (d & 1) as usize, py + ((d >> 1) & 1) as usize, pz + ((d >> 2) & 1) as usize);
                             let p = [lo[0] + px, lo[1] + py, k + pz];
                             let q = [lo[0] + qx, lo[1] + qy, k + qz];
                             let ga = grads.get(vol, px, py, pz, p);
@@ -390,19 +340,11 @@ fn extract_serial(
         }
         std::mem::swap(&mut plane_a, &mut plane_b);
     }
-    SerialOut {
-        patch,
-        bottom,
-        top: if keep_planes { plane_a } else { Vec::new() },
-    }
+    SerialOut { patch, bottom, top: if keep_planes { plane_a } else { Vec::new() } }
 }
 
 /// Clamps a cell box to the volume; `None` when empty.
-fn clamp_box(
-    vol: &Volume,
-    cell_lo: [u32; 3],
-    cell_hi: [u32; 3],
-) -> Option<([usize; 3], [usize; 3])> {
+fn clamp_box(vol: &Volume, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Option<([usize; 3], [usize; 3])> {
     let cells = vol.cells();
     let hi = [0, 1, 2].map(|a| (cell_hi[a] as usize).min(cells[a]));
     let lo = [0, 1, 2].map(|a| (cell_lo[a] as usize).min(hi[a]));
@@ -443,14 +385,8 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     }
     // Fixed chunking (independent of the thread count) for reproducible output.
     let nchunks = layers.min(64).min(cells / (PARALLEL_MIN_CELLS / 4)).max(2);
-    let bounds: Vec<(usize, usize)> = (0..nchunks)
-        .map(|c| {
-            (
-                lo[2] + layers * c / nchunks,
-                lo[2] + layers * (c + 1) / nchunks,
-            )
-        })
-        .collect();
+    let bounds: Vec<(usize, usize)> =
+        (0..nchunks).map(|c| (lo[2] + layers * c / nchunks, lo[2] + layers * (c + 1) / nchunks)).collect();
     let parts: Vec<SerialOut> = bounds
         .par_iter()
         .map(|&(z0, z1)| extract_serial(vol, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true))
@@ -486,11 +422,7 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
                     own += 1;
                 }
             }
-            Numbering {
-                shared_from,
-                own_local,
-                own,
-            }
+            Numbering { shared_from, own_local, own }
         })
         .collect();
     let mut base = Vec::with_capacity(parts.len());
@@ -510,42 +442,34 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     let pos_parts = split_lengths(&mut out.positions, &own_lens);
     let nrm_parts = split_lengths(&mut out.normals, &own_lens);
     let tri_parts = split_lengths(&mut out.triangles, &tri_lens);
-    pos_parts
-        .into_par_iter()
-        .zip(nrm_parts)
-        .zip(tri_parts)
-        .enumerate()
-        .for_each(|(c, ((pos, nrm), tri))| {
-            let nb = &numberings[c];
-            let part = &parts[c].patch;
-            for (l, &o) in nb.own_local.iter().enumerate() {
-                if o != NONE {
-                    pos[o as usize] = part.positions[l];
-                    nrm[o as usize] = part.normals[l];
-                }
+    pos_parts.into_par_iter().zip(nrm_parts).zip(tri_parts).enumerate().for_each(|(c, ((pos, nrm), tri))| {
+        let nb = &numberings[c];
+        let part = &parts[c].patch;
+        for (l, &o) in nb.own_local.iter().enumerate() {
+            if o != NONE {
+                pos[o as usize] = part.positions[l];
+                nrm[o as usize] = part.normals[l];
             }
-            let global = |l: u32| -> u32 {
-                let o = nb.own_local[l as usize];
-                if o != NONE {
-                    base[c] + o
-                } else {
-                    let prev = &numberings[c - 1];
-                    base[c - 1] + prev.own_local[nb.shared_from[l as usize] as usize]
-                }
-            };
-            for (dst, src) in tri.iter_mut().zip(&part.triangles) {
-                *dst = src.map(global);
+        }
+        let global = |l: u32| -> u32 {
+            let o = nb.own_local[l as usize];
+            if o != NONE {
+                base[c] + o
+            } else {
+                let prev = &numberings[c - 1];
+                base[c - 1] + prev.own_local[nb.shared_from[l as usize] as usize]
             }
-        });
+        };
+        for (dst, src) in tri.iter_mut().zip(&part.triangles) {
+            *dst = src.map(global);
+        }
+    });
     out
 }
 
 /// Extracts one patch per node (over the node's cell box), in parallel.
 pub fn extract_nodes(vol: &Volume, w: f32, nodes: &[NodeInfo]) -> Vec<SurfacePatch> {
-    nodes
-        .par_iter()
-        .map(|n| extract(vol, w, n.cell_lo, n.cell_hi))
-        .collect()
+    nodes.par_iter().map(|n| extract(vol, w, n.cell_lo, n.cell_hi)).collect()
 }
 
 // ---------------------------------------------------------------------------
@@ -587,12 +511,7 @@ impl PatchCache {
 
     /// One patch per node, in order: cached ones are shared, missing ones are
     /// extracted in parallel and inserted.
-    pub fn get_or_extract_many(
-        &mut self,
-        vol: &Volume,
-        w: f32,
-        nodes: &[NodeInfo],
-    ) -> Vec<Arc<SurfacePatch>> {
+    pub fn get_or_extract_many(&mut self, vol: &Volume, w: f32, nodes: &[NodeInfo]) -> Vec<Arc<SurfacePatch>> {
         self.bind(vol);
         let mut seen = HashSet::new();
         let missing: Vec<&NodeInfo> = nodes
@@ -602,20 +521,10 @@ impl PatchCache {
                 !self.map.contains_key(&k) && seen.insert(k)
             })
             .collect();
-        let fresh: Vec<(PatchKey, Arc<SurfacePatch>)> = missing
-            .par_iter()
-            .map(|n| {
-                (
-                    patch_key(w, n),
-                    Arc::new(extract(vol, w, n.cell_lo, n.cell_hi)),
-                )
-            })
-            .collect();
+        let fresh: Vec<(PatchKey, Arc<SurfacePatch>)> =
+            missing.par_iter().map(|n| (patch_key(w, n), Arc::new(extract(vol, w, n.cell_lo, n.cell_hi)))).collect();
         self.map.extend(fresh);
-        nodes
-            .iter()
-            .map(|n| self.map[&patch_key(w, n)].clone())
-            .collect()
+        nodes.iter().map(|n| self.map[&patch_key(w, n)].clone()).collect()
     }
 
     /// The cached patch for `(w, node)`, if any.
@@ -723,11 +632,7 @@ mod tests {
         }
         for (&(a, b), &n) in &directed {
             assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
-            assert_eq!(
-                directed.get(&(b, a)),
-                Some(&1),
-                "edge {a}-{b} is a border or non-manifold"
-            );
+            assert_eq!(directed.get(&(b, a)), Some(&1), "edge {a}-{b} is a border or non-manifold");
         }
     }
 
@@ -787,13 +692,7 @@ mod tests {
             // random field with some NaNs, odd dims
             let dims = (13, 9, 21);
             let v: Vec<f32> = (0..dims.0 * dims.1 * dims.2)
-                .map(|_| {
-                    if unit(&mut rng) < 0.03 {
-                        f32::NAN
-                    } else {
-                        unit(&mut rng) - 0.5
-                    }
-                })
+                .map(|_| if unit(&mut rng) < 0.03 { f32::NAN } else { unit(&mut rng) - 0.5 })
                 .collect();
             Volume::new(v.into(), dims, [0.25, 1.0, -3.0], [0.3, 0.7, 0.11]).unwrap()
         }];
@@ -834,11 +733,7 @@ mod tests {
         let a = area(&p);
         let exact = 4.0 * std::f64::consts::PI * r * r;
         let err = (a - exact).abs() / exact;
-        println!(
-            "sphere n=64: {} tris, area {a:.5} vs {exact:.5} ({:.3}%)",
-            p.triangle_count(),
-            err * 100.0
-        );
+        println!("sphere n=64: {} tris, area {a:.5} vs {exact:.5} ({:.3}%)", p.triangle_count(), err * 100.0);
         assert!(err < 0.02);
         // vertices on the sphere, normals outward, winding agrees with normals
         for (q, n) in p.positions.iter().zip(&p.normals) {
@@ -867,11 +762,7 @@ mod tests {
     fn samples_exactly_at_isovalue() {
         // isovalue hitting samples exactly: no panic, still closed after welding
         let vol = sphere_field(21, 0.5);
-        let vals: Vec<f32> = vol
-            .values
-            .iter()
-            .map(|v| (v * 10.0).round() / 10.0)
-            .collect();
+        let vals: Vec<f32> = vol.values.iter().map(|v| (v * 10.0).round() / 10.0).collect();
         let q = Volume::new(vals.into(), (21, 21, 21), vol.origin, vol.spacing).unwrap();
         let p = full(&q, 0.0);
         assert_closed_oriented(&p);
@@ -897,11 +788,7 @@ mod tests {
     fn nan_handling() {
         let mut rng = Lcg(99);
         let base = pesco_synthetic(24);
-        let vals: Vec<f32> = base
-            .values
-            .iter()
-            .map(|&v| if unit(&mut rng) < 0.1 { f32::NAN } else { v })
-            .collect();
+        let vals: Vec<f32> = base.values.iter().map(|&v| if unit(&mut rng) < 0.1 { f32::NAN } else { v }).collect();
         let vol = Volume::new(vals.into(), (24, 24, 24), base.origin, base.spacing).unwrap();
         let p = full(&vol, 0.0);
         assert!(!p.is_empty());

@@ -18,8 +18,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 pub mod mc;
-pub mod render;
 pub mod octree;
+pub mod render;
 
 pub use mc::{extract, extract_nodes, PatchCache, SurfacePatch};
 pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
@@ -72,9 +72,7 @@ impl Volume {
     ) -> Result<Self, String> {
         let (nx, ny, nz) = dims;
         if nx < 2 || ny < 2 || nz < 2 {
-            return Err(format!(
-                "volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}"
-            ));
+            return Err(format!("volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}"));
         }
         if nx > u32::MAX as usize / 2 || ny > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
             return Err(format!("volume dimensions {nx}x{ny}x{nz} too large"));
@@ -84,10 +82,7 @@ impl Volume {
             .and_then(|v| v.checked_mul(nz))
             .ok_or_else(|| format!("volume dimensions {nx}x{ny}x{nz} overflow"))?;
         if values.len() != n {
-            return Err(format!(
-                "volume of {nx}x{ny}x{nz} needs {n} values, got {}",
-                values.len()
-            ));
+            return Err(format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len()));
         }
         if origin.iter().any(|o| !o.is_finite()) {
             return Err(format!("volume origin {origin:?} is not finite"));
@@ -95,14 +90,7 @@ impl Volume {
         if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
             return Err(format!("volume spacing {spacing:?} must be finite and > 0"));
         }
-        Ok(Volume {
-            values,
-            nx,
-            ny,
-            nz,
-            origin,
-            spacing,
-        })
+        Ok(Volume { values, nx, ny, nz, origin, spacing })
     }
 
     /// Linear index of sample `(i,j,k)`.
@@ -136,19 +124,11 @@ impl Volume {
 
     /// World-space bounding box `(min, max)` of the samples.
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        (
-            self.origin,
-            self.sample_position(self.nx - 1, self.ny - 1, self.nz - 1),
-        )
+        (self.origin, self.sample_position(self.nx - 1, self.ny - 1, self.nz - 1))
     }
 
     /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).
-    pub fn from_fn<F>(
-        dims: (usize, usize, usize),
-        origin: [f64; 3],
-        spacing: [f64; 3],
-        f: F,
-    ) -> Result<Self, String>
+    pub fn from_fn<F>(dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3], f: F) -> Result<Self, String>
     where
         F: Fn(f64, f64, f64) -> f32 + Sync,
     {
@@ -189,10 +169,8 @@ pub fn pesco_synthetic(n: usize) -> Volume {
 pub fn sphere_field(n: usize, radius: f64) -> Volume {
     let n = n.max(2);
     let h = 2.0 / (n - 1) as f64;
-    Volume::from_fn((n, n, n), [-1.0; 3], [h; 3], |x, y, z| {
-        ((x * x + y * y + z * z).sqrt() - radius) as f32
-    })
-    .expect("valid sphere volume")
+    Volume::from_fn((n, n, n), [-1.0; 3], [h; 3], |x, y, z| ((x * x + y * y + z * z).sqrt() - radius) as f32)
+        .expect("valid sphere volume")
 }
 
 #[cfg(test)]

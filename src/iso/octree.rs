@@ -71,9 +71,7 @@ impl NodeInfo {
 
     /// Number of cells covered (after clamping).
     pub fn cell_count(&self) -> u64 {
-        (0..3)
-            .map(|a| (self.cell_hi[a] - self.cell_lo[a]) as u64)
-            .product()
+        (0..3).map(|a| (self.cell_hi[a] - self.cell_lo[a]) as u64).product()
     }
 }
 
@@ -139,17 +137,9 @@ fn nan_max(a: f32, b: f32) -> f32 {
 impl MinMaxOctree {
     /// Builds the octree in parallel (rayon). Leaves are single cells.
     pub fn build(vol: &Volume) -> Self {
-        let cells = [
-            (vol.nx - 1) as u32,
-            (vol.ny - 1) as u32,
-            (vol.nz - 1) as u32,
-        ];
+        let cells = [(vol.nx - 1) as u32, (vol.ny - 1) as u32, (vol.nz - 1) as u32];
         let m = *cells.iter().max().unwrap();
-        let depth = if m <= 1 {
-            0
-        } else {
-            32 - (m - 1).leading_zeros()
-        };
+        let depth = if m <= 1 { 0 } else { 32 - (m - 1).leading_zeros() };
 
         // Leaf level: min/max over the 8 corners of each cell.
         let leaf = {
@@ -160,32 +150,29 @@ impl MinMaxOctree {
             let mut max = vec![f32::NEG_INFINITY; n];
             let (nx, ny) = (vol.nx, vol.ny);
             let v = &vol.values[..];
-            min.par_chunks_mut(cx * cy)
-                .zip(max.par_chunks_mut(cx * cy))
-                .enumerate()
-                .for_each(|(k, (mn, mx))| {
-                    // Per row, fold the 4 sample rows (j,k),(j+1,k),(j,k+1),(j+1,k+1)
-                    // into per-sample column min/max, then pair neighbours.
-                    let mut colmin = vec![f32::INFINITY; nx];
-                    let mut colmax = vec![f32::NEG_INFINITY; nx];
-                    for j in 0..cy {
-                        colmin.fill(f32::INFINITY);
-                        colmax.fill(f32::NEG_INFINITY);
-                        for (dj, dk) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                            let base = ((k + dk) * ny + j + dj) * nx;
-                            let row = &v[base..base + nx];
-                            for i in 0..nx {
-                                colmin[i] = nan_min(colmin[i], row[i]);
-                                colmax[i] = nan_max(colmax[i], row[i]);
-                            }
-                        }
-                        let o = j * cx;
-                        for i in 0..cx {
-                            mn[o + i] = colmin[i].min(colmin[i + 1]);
-                            mx[o + i] = colmax[i].max(colmax[i + 1]);
+            min.par_chunks_mut(cx * cy).zip(max.par_chunks_mut(cx * cy)).enumerate().for_each(|(k, (mn, mx))| {
+                // Per row, fold the 4 sample rows (j,k),(j+1,k),(j,k+1),(j+1,k+1)
+                // into per-sample column min/max, then pair neighbours.
+                let mut colmin = vec![f32::INFINITY; nx];
+                let mut colmax = vec![f32::NEG_INFINITY; nx];
+                for j in 0..cy {
+                    colmin.fill(f32::INFINITY);
+                    colmax.fill(f32::NEG_INFINITY);
+                    for (dj, dk) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let base = ((k + dk) * ny + j + dj) * nx;
+                        let row = &v[base..base + nx];
+                        for i in 0..nx {
+                            colmin[i] = nan_min(colmin[i], row[i]);
+                            colmax[i] = nan_max(colmax[i], row[i]);
                         }
                     }
-                });
+                    let o = j * cx;
+                    for i in 0..cx {
+                        mn[o + i] = colmin[i].min(colmin[i + 1]);
+                        mx[o + i] = colmax[i].max(colmax[i + 1]);
+                    }
+                }
+            });
             Level { dims, min, max }
         };
 
@@ -198,41 +185,32 @@ impl MinMaxOctree {
             let n = px * py * pz;
             let mut min = vec![f32::INFINITY; n];
             let mut max = vec![f32::NEG_INFINITY; n];
-            min.par_chunks_mut(px * py)
-                .zip(max.par_chunks_mut(px * py))
-                .enumerate()
-                .for_each(|(z, (mn, mx))| {
-                    let z = z as u32;
-                    for y in 0..py as u32 {
-                        for x in 0..px as u32 {
-                            let mut lo = f32::INFINITY;
-                            let mut hi = f32::NEG_INFINITY;
-                            for cz in 2 * z..(2 * z + 2).min(child.dims[2]) {
-                                for cy in 2 * y..(2 * y + 2).min(child.dims[1]) {
-                                    for cx in 2 * x..(2 * x + 2).min(child.dims[0]) {
-                                        let ci = child.idx(cx, cy, cz);
-                                        lo = lo.min(child.min[ci]);
-                                        hi = hi.max(child.max[ci]);
-                                    }
+            min.par_chunks_mut(px * py).zip(max.par_chunks_mut(px * py)).enumerate().for_each(|(z, (mn, mx))| {
+                let z = z as u32;
+                for y in 0..py as u32 {
+                    for x in 0..px as u32 {
+                        let mut lo = f32::INFINITY;
+                        let mut hi = f32::NEG_INFINITY;
+                        for cz in 2 * z..(2 * z + 2).min(child.dims[2]) {
+                            for cy in 2 * y..(2 * y + 2).min(child.dims[1]) {
+                                for cx in 2 * x..(2 * x + 2).min(child.dims[0]) {
+                                    let ci = child.idx(cx, cy, cz);
+                                    lo = lo.min(child.min[ci]);
+                                    hi = hi.max(child.max[ci]);
                                 }
                             }
-                            let o = y as usize * px + x as usize;
-                            mn[o] = lo;
-                            mx[o] = hi;
                         }
+                        let o = y as usize * px + x as usize;
+                        mn[o] = lo;
+                        mx[o] = hi;
                     }
-                });
+                }
+            });
             levels.push(Level { dims, min, max });
         }
         levels.reverse();
 
-        MinMaxOctree {
-            depth,
-            cells,
-            origin: vol.origin,
-            spacing: vol.spacing,
-            levels,
-        }
+        MinMaxOctree { depth, cells, origin: vol.origin, spacing: vol.spacing, levels }
     }
 
     /// `D`: the depth of the single-cell leaves (root is depth 0).
@@ -360,15 +338,8 @@ mod tests {
 
     fn random_volume(rng: &mut Lcg, dims: (usize, usize, usize), nan_frac: f32) -> Volume {
         let n = dims.0 * dims.1 * dims.2;
-        let v: Vec<f32> = (0..n)
-            .map(|_| {
-                if unit(rng) < nan_frac {
-                    f32::NAN
-                } else {
-                    unit(rng) * 200.0 - 100.0
-                }
-            })
-            .collect();
+        let v: Vec<f32> =
+            (0..n).map(|_| if unit(rng) < nan_frac { f32::NAN } else { unit(rng) * 200.0 - 100.0 }).collect();
         Volume::new(Arc::from(v), dims, [0.5, -1.0, 2.0], [1.0, 0.5, 2.0]).unwrap()
     }
 
@@ -392,17 +363,8 @@ mod tests {
     #[test]
     fn minmax_matches_brute_force() {
         let mut rng = Lcg(12345);
-        for (t, dims) in [
-            (2, 2, 2),
-            (3, 2, 2),
-            (5, 7, 3),
-            (9, 9, 9),
-            (17, 4, 11),
-            (12, 30, 6),
-            (2, 2, 40),
-        ]
-        .into_iter()
-        .enumerate()
+        for (t, dims) in
+            [(2, 2, 2), (3, 2, 2), (5, 7, 3), (9, 9, 9), (17, 4, 11), (12, 30, 6), (2, 2, 40)].into_iter().enumerate()
         {
             let nan_frac = [0.0, 0.05, 0.3][t % 3];
             let vol = random_volume(&mut rng, dims, nan_frac);
@@ -428,10 +390,7 @@ mod tests {
                     let ch = tree.children(n);
                     if d < tree.max_depth() {
                         assert!(!ch.is_empty() && ch.len() <= 8);
-                        assert_eq!(
-                            ch.iter().map(|c| c.cell_count()).sum::<u64>(),
-                            n.cell_count()
-                        );
+                        assert_eq!(ch.iter().map(|c| c.cell_count()).sum::<u64>(), n.cell_count());
                         let cmin = ch.iter().map(|c| c.min).fold(f32::INFINITY, f32::min);
                         let cmax = ch.iter().map(|c| c.max).fold(f32::NEG_INFINITY, f32::max);
                         assert_eq!((cmin, cmax), (n.min, n.max));
@@ -473,10 +432,7 @@ mod tests {
         assert_eq!(mk(0.0, 1.0).classify(0.5), Class::Straddles);
         assert_eq!(mk(0.0, 1.0).classify(0.0), Class::Straddles);
         assert_eq!(mk(0.0, 1.0).classify(1.0), Class::Straddles);
-        assert_eq!(
-            mk(f32::INFINITY, f32::NEG_INFINITY).classify(0.0),
-            Class::Empty
-        );
+        assert_eq!(mk(f32::INFINITY, f32::NEG_INFINITY).classify(0.0), Class::Empty);
         assert_eq!(mk(2.0, 2.0).classify(2.0), Class::Straddles);
     }
 
@@ -499,11 +455,7 @@ mod tests {
         let t = MinMaxOctree::build(&vol);
         for d in 0..=t.max_depth() {
             let a = t.straddling_at_depth(0.0, d);
-            let b: Vec<_> = t
-                .nodes_at_depth(d)
-                .into_iter()
-                .filter(|n| n.straddles(0.0))
-                .collect();
+            let b: Vec<_> = t.nodes_at_depth(d).into_iter().filter(|n| n.straddles(0.0)).collect();
             let mut ka: Vec<_> = a.iter().map(|n| n.key()).collect();
             let mut kb: Vec<_> = b.iter().map(|n| n.key()).collect();
             ka.sort();

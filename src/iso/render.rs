@@ -108,7 +108,14 @@ pub struct IsoOptions {
 
 impl Default for IsoOptions {
     fn default() -> Self {
-        Self { culling: IsoCulling::Implicit, occluder_depth: None, cull_depth: None, color: [0.85, 0.72, 0.45], use_cache: true, return_map: false }
+        Self {
+            culling: IsoCulling::Implicit,
+            occluder_depth: None,
+            cull_depth: None,
+            color: [0.85, 0.72, 0.45],
+            use_cache: true,
+            return_map: false,
+        }
     }
 }
 
@@ -248,7 +255,11 @@ impl IsoGpu {
         let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: fs,
-            ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Depth, view_dimension: wgpu::TextureViewDimension::D2, multisampled: false },
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
             count: None,
         };
         let globals_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -256,11 +267,18 @@ impl IsoGpu {
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
                 visibility: vf,
-                ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
                 count: None,
             }],
         });
-        let ref_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("iso_ref"), entries: &[depth_tex_entry(0)] });
+        let ref_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_ref"),
+            entries: &[depth_tex_entry(0)],
+        });
         let test_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso_test"),
             entries: &[
@@ -268,13 +286,26 @@ impl IsoGpu {
                 wgpu::BindGroupLayoutEntry {
                     binding: 1,
                     visibility: fs,
-                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: false }, has_dynamic_offset: false, min_binding_size: None },
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
                     count: None,
                 },
             ],
         });
-        let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("iso.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()) });
-        let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some(label), bind_group_layouts: layouts, immediate_size: 0 });
+        let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("iso.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()),
+        });
+        let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            })
+        };
         let pl_globals = pl("iso_globals", &[Some(&globals_layout)]);
         let pl_ref = pl("iso_ref", &[Some(&globals_layout), Some(&ref_layout)]);
         let pl_test = pl("iso_test", &[Some(&globals_layout), Some(&test_layout)]);
@@ -285,8 +316,18 @@ impl IsoGpu {
             stencil: wgpu::StencilState::default(),
             bias: wgpu::DepthBiasState::default(),
         });
-        let box_vs = wgpu::VertexState { module: &shader, entry_point: Some("vs_box"), compilation_options: Default::default(), buffers: &[Some(box_layout())] };
-        let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleList, cull_mode: cull, front_face: wgpu::FrontFace::Ccw, ..Default::default() };
+        let box_vs = wgpu::VertexState {
+            module: &shader,
+            entry_point: Some("vs_box"),
+            compilation_options: Default::default(),
+            buffers: &[Some(box_layout())],
+        };
+        let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: cull,
+            front_face: wgpu::FrontFace::Ccw,
+            ..Default::default()
+        };
         let near_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("iso_near"),
             layout: Some(&pl_globals),
@@ -305,7 +346,12 @@ impl IsoGpu {
             primitive: prim(None),
             depth_stencil: depth_write.clone(),
             multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState { module: &shader, entry_point: Some("fs_beyond"), compilation_options: Default::default(), targets: &[] }),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_beyond"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
             multiview_mask: None,
             cache: None,
         });
@@ -316,7 +362,12 @@ impl IsoGpu {
             primitive: prim(Some(wgpu::Face::Back)),
             depth_stencil: None,
             multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState { module: &shader, entry_point: Some("fs_test"), compilation_options: Default::default(), targets: &[Some(ID_FORMAT.into())] }),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_test"),
+                compilation_options: Default::default(),
+                targets: &[Some(ID_FORMAT.into())],
+            }),
             multiview_mask: None,
             cache: None,
         });
@@ -331,7 +382,11 @@ impl IsoGpu {
                 module: &shader,
                 entry_point: Some("vs_surf"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout { array_stride: 24, step_mode: wgpu::VertexStepMode::Vertex, attributes: &SURF_ATTRS })],
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 24,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &SURF_ATTRS,
+                })],
             },
             primitive: prim(None),
             depth_stencil: depth_write,
@@ -340,7 +395,11 @@ impl IsoGpu {
                 module: &shader,
                 entry_point: Some("fs_surf"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
             }),
             multiview_mask: None,
             cache: None,
@@ -365,7 +424,16 @@ impl IsoGpu {
         if self.targets.as_ref().is_none_or(|t| (t.width, t.height) != (width, height)) {
             let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
             let tex = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-                d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] })
+                d.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
             };
             let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
             let tb = wgpu::TextureUsages::TEXTURE_BINDING;
@@ -519,15 +587,30 @@ impl Renderer {
 
     /// Renders the isosurface `vol = w` seen by `camera`; `tree` must be the octree of `vol`.
     /// See the module docs for what `culling = Implicit` does.
-    pub fn render_isosurface(&mut self, vol: &Volume, tree: &MinMaxOctree, w: f32, camera: &Camera, opts: &IsoOptions) -> Result<IsoOutput> {
+    pub fn render_isosurface(
+        &mut self,
+        vol: &Volume,
+        tree: &MinMaxOctree,
+        w: f32,
+        camera: &Camera,
+        opts: &IsoOptions,
+    ) -> Result<IsoOutput> {
         ensure(w.is_finite(), "isovalue", || format!("isovalue is {w}; expected a finite number"))?;
-        ensure(opts.color.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)), "color", || format!("color is {:?}; expected (r, g, b) in [0, 1]", opts.color))?;
-        ensure(tree.cells() == [vol.nx as u32 - 1, vol.ny as u32 - 1, vol.nz as u32 - 1], "volume", || "the octree was built from another volume".into())?;
+        ensure(opts.color.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)), "color", || {
+            format!("color is {:?}; expected (r, g, b) in [0, 1]", opts.color)
+        })?;
+        ensure(tree.cells() == [vol.nx as u32 - 1, vol.ny as u32 - 1, vol.nz as u32 - 1], "volume", || {
+            "the octree was built from another volume".into()
+        })?;
         let maxd = tree.max_depth();
         let occ_depth = opts.occluder_depth.unwrap_or(maxd.saturating_sub(1));
         let cull_depth = opts.cull_depth.unwrap_or(maxd.saturating_sub(2));
-        ensure(occ_depth <= maxd, "occluder_depth", || format!("occluder_depth is {occ_depth}; this volume's octree has depths 0..={maxd}"))?;
-        ensure(cull_depth <= maxd, "cull_depth", || format!("cull_depth is {cull_depth}; this volume's octree has depths 0..={maxd}"))?;
+        ensure(occ_depth <= maxd, "occluder_depth", || {
+            format!("occluder_depth is {occ_depth}; this volume's octree has depths 0..={maxd}")
+        })?;
+        ensure(cull_depth <= maxd, "cull_depth", || {
+            format!("cull_depth is {cull_depth}; this volume's octree has depths 0..={maxd}")
+        })?;
 
         let t0 = Instant::now();
         let (width, height) = (self.width, self.height);
@@ -556,23 +639,56 @@ impl Renderer {
         let implicit = opts.culling == IsoCulling::Implicit;
         let t_occ = Instant::now();
         if implicit {
-            let okey = (norm_bits(w), occ_depth, [space.origin.x.to_bits(), space.origin.y.to_bits(), space.origin.z.to_bits(), camera.z_scale.to_bits()]);
+            let okey = (
+                norm_bits(w),
+                occ_depth,
+                [
+                    space.origin.x.to_bits(),
+                    space.origin.y.to_bits(),
+                    space.origin.z.to_bits(),
+                    camera.z_scale.to_bits(),
+                ],
+            );
             if iso.occluders.as_ref().is_none_or(|o| o.key != okey) {
                 iso.occluders = None;
                 let (below, above) = occluder_nodes(tree, w, occ_depth);
                 let make = |nodes: &[NodeInfo], label: &str| {
                     (!nodes.is_empty()).then(|| {
                         let inst: Vec<BoxInstance> = nodes.par_iter().map(|n| space.instance(n, 0, -eps)).collect();
-                        d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytemuck::cast_slice(&inst), usage: wgpu::BufferUsages::VERTEX })
+                        d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some(label),
+                            contents: bytemuck::cast_slice(&inst),
+                            usage: wgpu::BufferUsages::VERTEX,
+                        })
                     })
                 };
-                iso.occluders = Some(Occluders { key: okey, below: make(&below, "iso_below"), above: make(&above, "iso_above"), n_below: below.len() as u32, n_above: above.len() as u32 });
+                iso.occluders = Some(Occluders {
+                    key: okey,
+                    below: make(&below, "iso_below"),
+                    above: make(&above, "iso_above"),
+                    n_below: below.len() as u32,
+                    n_above: above.len() as u32,
+                });
             }
         }
         let iso: &IsoGpu = &*iso;
-        let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("iso_globals"), contents: bytemuck::bytes_of(&globals), usage: wgpu::BufferUsages::UNIFORM });
-        let globals_bg = d.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("iso_globals"), layout: &iso.globals_layout, entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals_buf.as_entire_binding() }] });
-        let mut stats = IsoStats { occluder_depth: occ_depth, cull_depth, max_depth: maxd, nodes_straddling: candidates.len() as u32, ..Default::default() };
+        let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_globals"),
+            contents: bytemuck::bytes_of(&globals),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let globals_bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("iso_globals"),
+            layout: &iso.globals_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals_buf.as_entire_binding() }],
+        });
+        let mut stats = IsoStats {
+            occluder_depth: occ_depth,
+            cull_depth,
+            max_depth: maxd,
+            nodes_straddling: candidates.len() as u32,
+            ..Default::default()
+        };
         let mut node_pixels = vec![0u32; candidates.len()];
         let mut map_out = None;
 
@@ -587,17 +703,26 @@ impl Renderer {
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let start = cull_depth.saturating_sub(2);
-            let mut level: Vec<NodeInfo> = if start == cull_depth { candidates.to_vec() } else { tree.straddling_at_depth(w, start) };
+            let mut level: Vec<NodeInfo> =
+                if start == cull_depth { candidates.to_vec() } else { tree.straddling_at_depth(w, start) };
             let mut d_level = start;
             let vis_final: Vec<NodeInfo> = loop {
-                let boxes: Vec<BoxInstance> = level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
+                let boxes: Vec<BoxInstance> =
+                    level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
                 let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, b)).collect();
                 let counts = test_nodes(ctx, iso, &globals_bg, &boxes)?;
                 stats.nodes_tested += level.len() as u32;
-                let vis: Vec<NodeInfo> = level.iter().zip(&counts).zip(&forced).filter(|((_, &c), &f)| c > 0 || f).map(|((n, _), _)| *n).collect();
+                let vis: Vec<NodeInfo> = level
+                    .iter()
+                    .zip(&counts)
+                    .zip(&forced)
+                    .filter(|((_, &c), &f)| c > 0 || f)
+                    .map(|((n, _), _)| *n)
+                    .collect();
                 if d_level == cull_depth {
                     stats.nodes_tested_cull_depth = level.len() as u32;
-                    let index: std::collections::HashMap<(u32, u32, u32), usize> = candidates.iter().enumerate().map(|(i, n)| ((n.ix, n.iy, n.iz), i)).collect();
+                    let index: std::collections::HashMap<(u32, u32, u32), usize> =
+                        candidates.iter().enumerate().map(|(i, n)| ((n.ix, n.iy, n.iz), i)).collect();
                     for (n, &c) in level.iter().zip(&counts) {
                         if let Some(&i) = index.get(&(n.ix, n.iy, n.iz)) {
                             node_pixels[i] = c;
@@ -665,8 +790,10 @@ impl Renderer {
         let t_rb = Instant::now();
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
         let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
-        let depth_rb = ReadbackTexture::new(d, &mut enc, &tg.depth_tex, width, height, 4, wgpu::TextureAspect::DepthOnly);
-        let map_rb = (opts.return_map && implicit).then(|| ReadbackTexture::new(d, &mut enc, &tg.map_tex, width, height, 4, wgpu::TextureAspect::DepthOnly));
+        let depth_rb =
+            ReadbackTexture::new(d, &mut enc, &tg.depth_tex, width, height, 4, wgpu::TextureAspect::DepthOnly);
+        let map_rb = (opts.return_map && implicit)
+            .then(|| ReadbackTexture::new(d, &mut enc, &tg.map_tex, width, height, 4, wgpu::TextureAspect::DepthOnly));
         ctx.queue.submit([enc.finish()]);
         for r in [&color_rb, &depth_rb].into_iter().chain(map_rb.as_ref()) {
             r.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
@@ -674,7 +801,9 @@ impl Renderer {
         ctx.wait()?;
         ctx.take_error()?;
         let image = color_rb.read_rows()?;
-        let lin = |raw: Vec<u8>| -> Vec<f32> { bytemuck::cast_slice::<u8, f32>(&raw).par_iter().map(|&v| fc.linear_depth(v)).collect() };
+        let lin = |raw: Vec<u8>| -> Vec<f32> {
+            bytemuck::cast_slice::<u8, f32>(&raw).par_iter().map(|&v| fc.linear_depth(v)).collect()
+        };
         let depth = lin(depth_rb.read_rows()?);
         if let Some(m) = &map_rb {
             map_out = Some(lin(m.read_rows()?));
@@ -699,15 +828,27 @@ impl Renderer {
 }
 
 fn depth_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
-    Some(wgpu::RenderPassDepthStencilAttachment { view, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }), stencil_ops: None })
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
+    })
 }
 
-fn pass<'e>(enc: &'e mut wgpu::CommandEncoder, label: &str, color: Option<&wgpu::TextureView>, depth: Option<&wgpu::TextureView>) -> wgpu::RenderPass<'e> {
+fn pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: Option<&wgpu::TextureView>,
+    depth: Option<&wgpu::TextureView>,
+) -> wgpu::RenderPass<'e> {
     let colors = [color.map(|v| wgpu::RenderPassColorAttachment {
         view: v,
         depth_slice: None,
         resolve_target: None,
-        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }), store: wgpu::StoreOp::Store },
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }),
+            store: wgpu::StoreOp::Store,
+        },
     })];
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
@@ -733,7 +874,13 @@ fn draw_map(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindG
             p.draw(0..36, 0..n);
         }
     }
-    let ref_bg = |v: &wgpu::TextureView| d.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("iso_ref"), layout: &iso.ref_layout, entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(v) }] });
+    let ref_bg = |v: &wgpu::TextureView| {
+        d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("iso_ref"),
+            layout: &iso.ref_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(v) }],
+        })
+    };
     let (bg_below, bg_above) = (ref_bg(&tg.below), ref_bg(&tg.above));
     {
         let mut p = pass(&mut enc, "iso_map", None, Some(&tg.map));
@@ -755,20 +902,42 @@ fn draw_map(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindG
 }
 
 /// Visible-pixel count of every box against the map (one submission and read-back).
-fn test_nodes(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindGroup, boxes: &[BoxInstance]) -> Result<Vec<u32>> {
+fn test_nodes(
+    ctx: &crate::gpu::GpuContext,
+    iso: &IsoGpu,
+    globals_bg: &wgpu::BindGroup,
+    boxes: &[BoxInstance],
+) -> Result<Vec<u32>> {
     if boxes.is_empty() {
         return Ok(Vec::new());
     }
     let d = &ctx.device;
     let tg = iso.targets.as_ref().unwrap();
     let size = 4 * boxes.len() as u64;
-    let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("iso_test_boxes"), contents: bytemuck::cast_slice(boxes), usage: wgpu::BufferUsages::VERTEX });
-    let counts = d.create_buffer(&wgpu::BufferDescriptor { label: Some("iso_counts"), size, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-    let rb = d.create_buffer(&wgpu::BufferDescriptor { label: Some("iso_counts_rb"), size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+    let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("iso_test_boxes"),
+        contents: bytemuck::cast_slice(boxes),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let counts = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_counts"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let rb = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_counts_rb"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("iso_test"),
         layout: &iso.test_layout,
-        entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&tg.map) }, wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() }],
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&tg.map) },
+            wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+        ],
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_test") });
     enc.clear_buffer(&counts, 0, None);
@@ -790,13 +959,23 @@ fn test_nodes(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::Bin
 }
 
 /// Uploads the patches (render space, f32) and draws them lit; waits for the GPU.
-fn draw_surface(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindGroup, tg: &Targets, patches: &[Arc<SurfacePatch>], space: &Space) -> Result<(u64, u64)> {
+fn draw_surface(
+    ctx: &crate::gpu::GpuContext,
+    iso: &IsoGpu,
+    globals_bg: &wgpu::BindGroup,
+    tg: &Targets,
+    patches: &[Arc<SurfacePatch>],
+    space: &Space,
+) -> Result<(u64, u64)> {
     let d = &ctx.device;
     let nv: usize = patches.iter().map(|p| p.positions.len()).sum();
     let nt: usize = patches.iter().map(|p| p.triangles.len()).sum();
     let max = ctx.limits.max_buffer_size;
     if (nv as u64) * 24 > max || (nt as u64) * 12 > max {
-        return Err(Error::Device(format!("isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)", max >> 20)));
+        return Err(Error::Device(format!(
+            "isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)",
+            max >> 20
+        )));
     }
     // Vertex offset of each patch in the shared buffer, then fill in parallel.
     let mut voff = Vec::with_capacity(patches.len());
@@ -839,8 +1018,16 @@ fn draw_surface(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::B
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
     let (vb, ib) = if nt > 0 {
         (
-            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("iso_vertices"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX })),
-            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("iso_indices"), contents: bytemuck::cast_slice(&idx), usage: wgpu::BufferUsages::INDEX })),
+            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_vertices"),
+                contents: bytemuck::cast_slice(&verts),
+                usage: wgpu::BufferUsages::VERTEX,
+            })),
+            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_indices"),
+                contents: bytemuck::cast_slice(&idx),
+                usage: wgpu::BufferUsages::INDEX,
+            })),
         )
     } else {
         (None, None)
@@ -888,10 +1075,31 @@ mod tests {
         let Some(mut r) = renderer() else { return };
         let vol = super::super::sphere_field(24, 0.6);
         let tree = MinMaxOctree::build(&vol);
-        let cam = Camera::look_at([3.0, 1.0, 1.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0, None, None, Projection::Perspective, None, 1.0).unwrap();
-        let none = r.render_isosurface(&vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() }).unwrap();
+        let cam = Camera::look_at(
+            [3.0, 1.0, 1.0],
+            [0.0; 3],
+            [0.0, 0.0, 1.0],
+            40.0,
+            None,
+            None,
+            Projection::Perspective,
+            None,
+            1.0,
+        )
+        .unwrap();
+        let none = r
+            .render_isosurface(&vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() })
+            .unwrap();
         let md = tree.max_depth();
-        let imp = r.render_isosurface(&vol, &tree, 0.0, &cam, &IsoOptions { occluder_depth: Some(md), cull_depth: Some(md - 1), ..Default::default() }).unwrap();
+        let imp = r
+            .render_isosurface(
+                &vol,
+                &tree,
+                0.0,
+                &cam,
+                &IsoOptions { occluder_depth: Some(md), cull_depth: Some(md - 1), ..Default::default() },
+            )
+            .unwrap();
         assert_eq!(none.image, imp.image);
         assert!(imp.stats.surface_triangles < none.stats.surface_triangles);
         assert!(imp.stats.nodes_visible < imp.stats.nodes_straddling);

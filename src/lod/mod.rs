@@ -158,7 +158,13 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
 
 /// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
 /// `vertices` are world coordinates; `faces` index into them (validated by the caller).
-pub fn tile_mesh(vertices: &[[f64; 3]], faces: &[[u32; 3]], origin: DVec3, clusters: usize, coarse_factor: f32) -> Vec<TileMesh> {
+pub fn tile_mesh(
+    vertices: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    origin: DVec3,
+    clusters: usize,
+    coarse_factor: f32,
+) -> Vec<TileMesh> {
     let (ids, n) = if clusters <= 1 || faces.len() <= 1 {
         (vec![0u32; faces.len()], 1)
     } else {
@@ -236,7 +242,13 @@ mod tests {
             assert!(ratio > want * 0.5 && ratio < want * 1.5, "factor {cf}: {fine}/{coarse}");
             // Tiles (0,0) and (1,0) share the column x = 40: both proxies keep the same samples there.
             let on_seam = |t: &TileMesh| {
-                let mut ys: Vec<i64> = t.coarse.iter().map(|&k| t.positions[k as usize]).filter(|p| p[0] == 40.0).map(|p| p[1] as i64).collect();
+                let mut ys: Vec<i64> = t
+                    .coarse
+                    .iter()
+                    .map(|&k| t.positions[k as usize])
+                    .filter(|p| p[0] == 40.0)
+                    .map(|p| p[1] as i64)
+                    .collect();
                 ys.sort();
                 ys.dedup();
                 ys

@@ -82,12 +82,8 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
     }
 
     // Non-degenerate input triangles (used for simplification and as fallback).
-    let clean: Vec<u32> = tris
-        .chunks_exact(3)
-        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-        .flatten()
-        .copied()
-        .collect();
+    let clean: Vec<u32> =
+        tris.chunks_exact(3).filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).flatten().copied().collect();
     let fallback = |clean: Vec<u32>| if clean.is_empty() { indices.to_vec() } else { clean };
     let n_tris = clean.len() / 3;
     if n_tris <= 1 {
@@ -127,15 +123,7 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
 
     let mut best: Vec<u32> = Vec::new();
     for &err in ERROR_STEPS.iter() {
-        let out = meshopt::simplify_with_locks(
-            &local_idx,
-            &adapter,
-            &locks,
-            target_index_count,
-            err,
-            options,
-            None,
-        );
+        let out = meshopt::simplify_with_locks(&local_idx, &adapter, &locks, target_index_count, err, options, None);
         let out = drop_degenerate(out);
         if !out.is_empty() && (best.is_empty() || out.len() < best.len()) {
             best = out;
@@ -152,17 +140,10 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
 }
 
 fn drop_degenerate(idx: Vec<u32>) -> Vec<u32> {
-    if idx
-        .chunks_exact(3)
-        .all(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-    {
+    if idx.chunks_exact(3).all(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) {
         return idx;
     }
-    idx.chunks_exact(3)
-        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-        .flatten()
-        .copied()
-        .collect()
+    idx.chunks_exact(3).filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).flatten().copied().collect()
 }
 
 /// Lock flags (one per local vertex) for every vertex touching an edge that is not used by
@@ -172,11 +153,8 @@ fn border_locks(pos: &[[f32; 3]], idx: &[u32]) -> (Vec<bool>, usize) {
     let n = pos.len();
     // Canonical id per position: sort (bit pattern, index); -0.0 folded onto 0.0.
     let bits = |x: f32| if x == 0.0 { 0u32 } else { x.to_bits() };
-    let mut keyed: Vec<([u32; 3], u32)> = pos
-        .iter()
-        .enumerate()
-        .map(|(i, p)| ([bits(p[0]), bits(p[1]), bits(p[2])], i as u32))
-        .collect();
+    let mut keyed: Vec<([u32; 3], u32)> =
+        pos.iter().enumerate().map(|(i, p)| ([bits(p[0]), bits(p[1]), bits(p[2])], i as u32)).collect();
     keyed.sort_unstable();
     let mut canon = vec![0u32; n];
     let mut cur = 0u32;
@@ -193,7 +171,11 @@ fn border_locks(pos: &[[f32; 3]], idx: &[u32]) -> (Vec<bool>, usize) {
     let edge = |t: &[u32], k: usize| {
         let a = canon[t[k] as usize];
         let b = canon[t[(k + 1) % 3] as usize];
-        if a < b { (a, b) } else { (b, a) }
+        if a < b {
+            (a, b)
+        } else {
+            (b, a)
+        }
     };
     for t in idx.chunks_exact(3) {
         for k in 0..3 {
@@ -332,9 +314,7 @@ fn split(items: &mut [Item], k: usize, base: u32) {
             axis = a;
         }
     }
-    items.select_nth_unstable_by(nl, |x, y| {
-        x.c[axis].total_cmp(&y.c[axis]).then(x.tri.cmp(&y.tri))
-    });
+    items.select_nth_unstable_by(nl, |x, y| x.c[axis].total_cmp(&y.c[axis]).then(x.tri.cmp(&y.tri)));
     let (left, right) = items.split_at_mut(nl);
     let base_r = base + kl as u32;
     if n >= PAR_THRESHOLD {
@@ -450,7 +430,11 @@ mod tests {
         let base = smooth(3.0, 7.0);
         let (pos, idx) = grid(n, |x, y| {
             let (dx, dy) = (x - 20.0, y - 25.0);
-            if dx * dx + dy * dy < 36.0 { f32::NAN } else { base(x, y) }
+            if dx * dx + dy * dy < 36.0 {
+                f32::NAN
+            } else {
+                base(x, y)
+            }
         });
         let out = coarse_indices(&pos, &idx, 25.0);
         check_border_kept(&pos, &idx, &out);
@@ -613,15 +597,11 @@ mod tests {
     fn timing_1100_tiles() {
         // Full size in release; a tenth in debug builds to keep `cargo test` quick.
         let tiles = if cfg!(debug_assertions) { 110 } else { 1100 };
-        let data: Vec<(Vec<[f32; 3]>, Vec<u32>)> = (0..tiles)
-            .map(|t| grid(51, smooth((t % 37) as f32 * 50.0, (t / 37) as f32 * 50.0)))
-            .collect();
+        let data: Vec<(Vec<[f32; 3]>, Vec<u32>)> =
+            (0..tiles).map(|t| grid(51, smooth((t % 37) as f32 * 50.0, (t / 37) as f32 * 50.0))).collect();
         let tris_in: usize = data.iter().map(|(_, i)| i.len() / 3).sum();
         let t0 = Instant::now();
-        let outs: Vec<Vec<u32>> = data
-            .par_iter()
-            .map(|(p, i)| coarse_indices(p, i, 25.0))
-            .collect();
+        let outs: Vec<Vec<u32>> = data.par_iter().map(|(p, i)| coarse_indices(p, i, 25.0)).collect();
         let dt = t0.elapsed();
         let tris_out: usize = outs.iter().map(|o| o.len() / 3).sum();
         println!(

@@ -33,22 +33,37 @@ impl PyVolume {
     /// values: (nz, ny, nx) C-contiguous float32 or float64 array (copied once into the core's
     /// float32 buffer, with the GIL released).
     #[new]
-    fn new(py: Python<'_>, values: &Bound<'_, PyAny>, origin: (f64, f64, f64), spacing: (f64, f64, f64)) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        values: &Bound<'_, PyAny>,
+        origin: (f64, f64, f64),
+        spacing: (f64, f64, f64),
+    ) -> PyResult<Self> {
         let (data, shape): (Arc<[f32]>, [usize; 3]) = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
             let s = a.shape();
             let shape = [s[0], s[1], s[2]];
-            let sl = a.as_slice().map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
+            let sl = a
+                .as_slice()
+                .map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
             (run(py, move || Ok(Arc::<[f32]>::from(sl)))?, shape)
         } else if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f64>>() {
             let s = a.shape();
             let shape = [s[0], s[1], s[2]];
-            let sl = a.as_slice().map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
+            let sl = a
+                .as_slice()
+                .map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
             (run(py, move || Ok(sl.iter().map(|&v| v as f32).collect::<Arc<[f32]>>()))?, shape)
         } else {
             return Err(super::to_py(py, input_err("values", "expected a 3-D float32 or float64 array")));
         };
         let inner = run(py, move || {
-            Volume::new(data, (shape[2], shape[1], shape[0]), [origin.0, origin.1, origin.2], [spacing.0, spacing.1, spacing.2]).map_err(|m| input_err("values", m))
+            Volume::new(
+                data,
+                (shape[2], shape[1], shape[0]),
+                [origin.0, origin.1, origin.2],
+                [spacing.0, spacing.1, spacing.2],
+            )
+            .map_err(|m| input_err("values", m))
         })?;
         Ok(Self { inner, tree: OnceLock::new() })
     }
@@ -78,7 +93,10 @@ impl PyVolume {
     fn nodes<'py>(&self, py: Python<'py>, depth: u32) -> PyResult<Bound<'py, PyDict>> {
         let t = self.tree(py)?;
         if depth > t.max_depth() {
-            return Err(super::to_py(py, input_err("depth", format!("depth is {depth}; this volume's octree has depths 0..={}", t.max_depth()))));
+            return Err(super::to_py(
+                py,
+                input_err("depth", format!("depth is {depth}; this volume's octree has depths 0..={}", t.max_depth())),
+            ));
         }
         let nodes = t.nodes_at_depth(depth);
         let n = nodes.len();
@@ -101,7 +119,10 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     d.set_item("image", Array3::from_shape_vec((h, w, 4), out.image).unwrap().into_pyarray(py))?;
     d.set_item("depth", Array2::from_shape_vec((h, w), out.depth).unwrap().into_pyarray(py))?;
     let n = out.nodes.len();
-    d.set_item("nodes", Array2::from_shape_vec((n, 4), out.nodes.into_iter().flatten().collect()).unwrap().into_pyarray(py))?;
+    d.set_item(
+        "nodes",
+        Array2::from_shape_vec((n, 4), out.nodes.into_iter().flatten().collect()).unwrap().into_pyarray(py),
+    )?;
     d.set_item("tile_pixels", Array1::from_vec(out.node_pixels).into_pyarray(py))?;
     d.set_item("tile_drawn", Array1::from_vec(out.node_drawn).into_pyarray(py))?;
     if let Some(m) = out.map {
@@ -160,7 +181,14 @@ fn render_isosurface<'py>(
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
         let culling = IsoCulling::parse(&culling)?;
-        let opts = IsoOptions { culling, occluder_depth, cull_depth, color: [color.0 as f32, color.1 as f32, color.2 as f32], use_cache: cache, return_map };
+        let opts = IsoOptions {
+            culling,
+            occluder_depth,
+            cull_depth,
+            color: [color.0 as f32, color.1 as f32, color.2 as f32],
+            use_cache: cache,
+            return_map,
+        };
         r.render_isosurface(v, &tree, isovalue as f32, c, &opts)
     })?;
     iso_dict(py, out)

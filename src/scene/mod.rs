@@ -128,7 +128,13 @@ fn check_coarse_factor(cf: f64) -> Result<f32> {
 
 impl Scene {
     pub fn new() -> Self {
-        Self { uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed), geometry_version: 0, origin: None, objects: Vec::new(), next_id: 0 }
+        Self {
+            uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
+            geometry_version: 0,
+            origin: None,
+            objects: Vec::new(),
+            next_id: 0,
+        }
     }
 
     /// Identifies this scene and its geometry; renderers cache GPU buffers by it.
@@ -146,11 +152,17 @@ impl Scene {
     }
 
     pub fn object(&self, id: u32) -> Result<&Object> {
-        self.objects.iter().find(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
+        self.objects
+            .iter()
+            .find(|o| o.id == id)
+            .ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
     }
 
     fn object_mut(&mut self, id: u32) -> Result<&mut Object> {
-        self.objects.iter_mut().find(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
+        self.objects
+            .iter_mut()
+            .find(|o| o.id == id)
+            .ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))
     }
 
     pub fn n_tiles(&self) -> usize {
@@ -163,7 +175,11 @@ impl Scene {
 
     /// Origin-relative bounds of the visible objects (offsets applied, no exaggeration).
     pub fn visible_bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.objects.iter().filter(|o| o.visible).filter_map(|o| o.local_bounds().map(|(a, b)| (a + o.offset, b + o.offset))).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        self.objects
+            .iter()
+            .filter(|o| o.visible)
+            .filter_map(|o| o.local_bounds().map(|(a, b)| (a + o.offset, b + o.offset)))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
     fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
@@ -196,23 +212,39 @@ impl Scene {
         null_value: Option<f64>,
         opts: AddOptions,
     ) -> Result<u32> {
-        ensure(nx >= 2 && ny >= 2, "z", || format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples"))?;
+        ensure(nx >= 2 && ny >= 2, "z", || {
+            format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples")
+        })?;
         ensure(z.len() == nx * ny, "z", || format!("z has {} values, expected {ny} x {nx}", z.len()))?;
         for (i, v) in origin.iter().enumerate() {
             ensure(v.is_finite(), "origin", || format!("component {i} is {v}; expected a finite number"))?;
         }
         for (i, v) in spacing.iter().enumerate() {
-            ensure(v.is_finite() && *v > 0.0, "spacing", || format!("component {i} is {v}; expected a finite number > 0"))?;
+            ensure(v.is_finite() && *v > 0.0, "spacing", || {
+                format!("component {i} is {v}; expected a finite number > 0")
+            })?;
         }
         for (i, (o, (d, n))) in origin.iter().zip(spacing.iter().zip([nx, ny])).enumerate() {
             let end = o + d * (n - 1) as f64;
-            ensure(o.abs() <= MAX_COORD && end.abs() <= MAX_COORD, if o.abs() > MAX_COORD { "origin" } else { "spacing" }, || {
-                format!("component {i}: the grid spans {} .. {}; coordinates must be within +-{MAX_COORD:e}", num(*o), num(end))
-            })?;
+            ensure(
+                o.abs() <= MAX_COORD && end.abs() <= MAX_COORD,
+                if o.abs() > MAX_COORD { "origin" } else { "spacing" },
+                || {
+                    format!(
+                        "component {i}: the grid spans {} .. {}; coordinates must be within +-{MAX_COORD:e}",
+                        num(*o),
+                        num(end)
+                    )
+                },
+            )?;
         }
         let (tx, ty) = tiles;
-        ensure(tx >= 1 && tx < nx, "tiles", || format!("tiles[0] is {tx}; expected 1..={} for {nx} columns (each tile needs one cell)", nx - 1))?;
-        ensure(ty >= 1 && ty < ny, "tiles", || format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1))?;
+        ensure(tx >= 1 && tx < nx, "tiles", || {
+            format!("tiles[0] is {tx}; expected 1..={} for {nx} columns (each tile needs one cell)", nx - 1)
+        })?;
+        ensure(ty >= 1 && ty < ny, "tiles", || {
+            format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1)
+        })?;
         if let Some(nv) = null_value {
             ensure(!nv.is_infinite(), "null_value", || format!("null_value is {nv}; expected a finite number or NaN"))?;
         }
@@ -223,8 +255,12 @@ impl Scene {
         let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
         for (k, &v) in z.iter().enumerate() {
             let v = if null_value.is_some_and(|nv| v == nv) { f64::NAN } else { v };
-            ensure(!v.is_infinite(), "z", || format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx))?;
-            ensure(!(v.abs() > MAX_COORD), "z", || format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v)))?;
+            ensure(!v.is_infinite(), "z", || {
+                format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx)
+            })?;
+            ensure(!(v.abs() > MAX_COORD), "z", || {
+                format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v))
+            })?;
             if v.is_finite() {
                 zmin = zmin.min(v);
                 zmax = zmax.max(v);
@@ -246,18 +282,29 @@ impl Scene {
 
     /// Adds a triangle mesh. `vertices` is (n, 3) world coordinates, `faces` (m, 3) indices.
     /// `clusters` = None: one tile; Some(k): about k spatially coherent tiles.
-    pub fn add_mesh(&mut self, vertices: &[[f64; 3]], faces: &[[i64; 3]], kind: &str, clusters: Option<usize>, opts: AddOptions) -> Result<u32> {
+    pub fn add_mesh(
+        &mut self,
+        vertices: &[[f64; 3]],
+        faces: &[[i64; 3]],
+        kind: &str,
+        clusters: Option<usize>,
+        opts: AddOptions,
+    ) -> Result<u32> {
         let n = vertices.len();
         for (i, v) in vertices.iter().enumerate() {
             for (a, c) in v.iter().enumerate() {
                 ensure(c.is_finite(), "vertices", || format!("vertices[{i}, {a}] is {c}; vertices must be finite"))?;
-                ensure(c.abs() <= MAX_COORD, "vertices", || format!("vertices[{i}, {a}] is {}; coordinates must be within +-{MAX_COORD:e}", num(*c)))?;
+                ensure(c.abs() <= MAX_COORD, "vertices", || {
+                    format!("vertices[{i}, {a}] is {}; coordinates must be within +-{MAX_COORD:e}", num(*c))
+                })?;
             }
         }
         let mut f32faces: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
         for (i, f) in faces.iter().enumerate() {
             for (a, &k) in f.iter().enumerate() {
-                ensure(k >= 0 && (k as u64) < n as u64, "faces", || format!("faces[{i}, {a}] is {k}; indices must be in 0..{n}"))?;
+                ensure(k >= 0 && (k as u64) < n as u64, "faces", || {
+                    format!("faces[{i}, {a}] is {k}; indices must be in 0..{n}")
+                })?;
             }
             f32faces.push(f.map(|k| k as u32));
         }
@@ -286,7 +333,11 @@ impl Scene {
     }
 
     pub fn remove(&mut self, id: u32) -> Result<()> {
-        let idx = self.objects.iter().position(|o| o.id == id).ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))?;
+        let idx = self
+            .objects
+            .iter()
+            .position(|o| o.id == id)
+            .ok_or_else(|| input_err("id", format!("no object with id {id} in this scene")))?;
         self.objects.remove(idx);
         self.geometry_version += 1;
         Ok(())
@@ -304,7 +355,12 @@ impl Scene {
         let o = self.object_mut(id)?;
         let new = o.offset + DVec3::from_array(d);
         for (i, v) in new.to_array().iter().enumerate() {
-            ensure(v.abs() <= MAX_COORD, "offset", || format!("component {i}: the total offset would be {}; coordinates must be within +-{MAX_COORD:e}", num(*v)))?;
+            ensure(v.abs() <= MAX_COORD, "offset", || {
+                format!(
+                    "component {i}: the total offset would be {}; coordinates must be within +-{MAX_COORD:e}",
+                    num(*v)
+                )
+            })?;
         }
         o.offset = new;
         Ok(())
@@ -324,7 +380,9 @@ impl Scene {
         let mut faces = Vec::new();
         for t in &o.tiles {
             let base = verts.len() as u32;
-            verts.extend(t.positions.iter().map(|p| [p[0] as f64 + origin.x, p[1] as f64 + origin.y, p[2] as f64 + origin.z]));
+            verts.extend(
+                t.positions.iter().map(|p| [p[0] as f64 + origin.x, p[1] as f64 + origin.y, p[2] as f64 + origin.z]),
+            );
             faces.extend(t.fine.chunks_exact(3).map(|c| [c[0] + base, c[1] + base, c[2] + base]));
         }
         Ok((verts, faces))
