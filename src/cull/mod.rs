@@ -20,13 +20,18 @@ pub enum Culling {
 }
 
 impl Culling {
+    /// Every strategy, in the order Python lists them.
+    pub const ALL: [Culling; 4] = [Self::None, Self::ThreePass, Self::Oracle, Self::Horizon];
     pub fn parse(s: &str) -> Result<Self> {
         match s {
             "none" => Ok(Self::None),
             "three_pass" => Ok(Self::ThreePass),
             "oracle" => Ok(Self::Oracle),
             "horizon" => Ok(Self::Horizon),
-            _ => Err(input_err("culling", format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\", \"horizon\""))),
+            _ => Err(input_err(
+                "culling",
+                format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\", \"horizon\""),
+            )),
         }
     }
     pub fn name(self) -> &'static str {

@@ -41,7 +41,11 @@ pub(crate) fn run<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> 
         Ok(Ok(v)) => Ok(v),
         Ok(Err(e)) => Err(to_py(py, e)),
         Err(p) => {
-            let what = p.downcast_ref::<String>().cloned().or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
+            let what = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
             Err(raise(py, "GeocullError", format!("internal error in geocull (please report): {what}")))
         }
     }
@@ -82,7 +86,9 @@ impl PyScene {
         let data = slice2(&z, "z")?;
         let scene = &mut self.inner;
         let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        run(py, move || scene.add_heightfield(data, ny, nx, [origin.0, origin.1], [spacing.0, spacing.1], tiles, null_value, opts))
+        run(py, move || {
+            scene.add_heightfield(data, ny, nx, [origin.0, origin.1], [spacing.0, spacing.1], tiles, null_value, opts)
+        })
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -227,7 +233,8 @@ impl PyCamera {
         let v = |t: (f64, f64, f64)| [t.0, t.1, t.2];
         run(py, move || {
             let p = Projection::parse(&projection)?;
-            Camera::look_at(v(eye), v(target), v(up), fov_y, near, far, p, ortho_height, z_scale).map(|inner| Self { inner })
+            Camera::look_at(v(eye), v(target), v(up), fov_y, near, far, p, ortho_height, z_scale)
+                .map(|inner| Self { inner })
         })
     }
     #[getter]
@@ -358,11 +365,18 @@ impl PyRenderer {
     }
 }
 
+/// Names of the culling strategies `Renderer.render` accepts, from the core's registry.
+#[pyfunction]
+fn culling_modes() -> Vec<&'static str> {
+    Culling::ALL.iter().map(|c| c.name()).collect()
+}
+
 #[pymodule]
 fn _geocull(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScene>()?;
     m.add_class::<PyCamera>()?;
     m.add_class::<PyRenderer>()?;
+    m.add_function(wrap_pyfunction!(culling_modes, m)?)?;
     iso::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
