@@ -8,6 +8,8 @@
 //!   front to back with one horizon height per image column ([`horizon`]); meshes are not culled.
 
 pub mod horizon;
+#[cfg(test)]
+pub(crate) mod reference;
 
 use crate::error::{input_err, Result};
 
