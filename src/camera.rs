@@ -243,6 +243,15 @@ impl Camera {
 }
 
 impl FrameCamera {
+    /// Direction towards the head light, over the viewer's shoulder (up and to the right), so
+    /// surfaces facing the camera are lit. Render space, unit length.
+    pub fn light_dir(&self) -> DVec3 {
+        let inv = self.view.inverse();
+        let right = inv.transform_vector3(DVec3::X);
+        let up = inv.transform_vector3(DVec3::Y);
+        (-self.forward + 0.6 * up + 0.3 * right).normalize()
+    }
+
     /// Converts a reverse-Z depth-buffer value to the distance along the view axis (+inf where
     /// nothing was drawn, i.e. the cleared value 0).
     #[inline]

@@ -37,3 +37,15 @@ pub fn ensure(cond: bool, arg: &str, msg: impl FnOnce() -> String) -> Result<()>
         Err(input_err(arg, msg()))
     }
 }
+
+/// An integer argument `v` as a count in `lo..=hi` (bindings pass Python ints as i64, so range
+/// checks live here with the other value checks).
+pub fn int_in(v: i64, arg: &str, lo: i64, hi: i64) -> Result<usize> {
+    ensure((lo..=hi).contains(&v), arg, || format!("{v} is outside {lo}..{hi}"))?;
+    Ok(v as usize)
+}
+
+/// An object id (ids are u32; anything else names no object).
+pub fn object_id(v: i64) -> Result<u32> {
+    u32::try_from(v).map_err(|_| input_err("id", format!("no object with id {v} in this scene")))
+}

@@ -1,9 +1,13 @@
 //! geocull: occlusion-culled rendering of geoscience sub-surface scenes.
 //!
 //! The pure-Rust core: a [`scene::Scene`] of tiled objects with LOD levels ([`lod`]), an f64
-//! [`camera::Camera`], and a wgpu [`gpu::Renderer`] that draws a scene with one of the culling
-//! strategies in [`cull`]. The Python bindings live in `python` (feature `python`) and only convert
-//! arrays and errors.
+//! [`camera::Camera`], and a [`render::Renderer`] that draws a scene as a pipeline of named stages
+//! (upload → strategy → draw → read-back) with one of the culling strategies in [`cull`], on the
+//! wgpu mechanics of [`gpu`]; isosurfaces of volumes in [`iso`]. The Python bindings live in
+//! `python` (feature `python`) and only convert arrays and errors.
+//!
+//! Dependency rule (checked by `scripts/check_layers.py` in CI):
+//! `python → render → {cull, iso} → gpu → {scene, lod, camera, error}`; nothing imports upward.
 
 pub mod camera;
 pub mod cull;
@@ -11,6 +15,7 @@ pub mod error;
 pub mod gpu;
 pub mod iso;
 pub mod lod;
+pub mod render;
 pub mod scene;
 
 #[cfg(feature = "python")]
@@ -40,7 +45,6 @@ impl TestRng {
 }
 
 pub use camera::{Camera, Projection};
-pub use cull::Culling;
 pub use error::{Error, Result};
-pub use gpu::{RenderOptions, RenderOutput, Renderer};
+pub use render::{RenderOptions, RenderOutput, Renderer};
 pub use scene::Scene;

@@ -1,47 +1,169 @@
-//! Culling strategies. Each decides which fine tiles the final pass draws:
-//! - `None`: every tile (the reference image);
-//! - `ThreePass`: GPU depth prepass of coarse proxies, exact visible-pixel count per tile, fine draw
-//!   of tiles above a pixel threshold (all on the GPU in one submission; see `gpu`);
-//! - `Oracle`: exactly the tiles with at least one visible pixel in the unculled image (a lower
-//!   bound for benchmarks, not a practical method: it renders the reference first);
-//! - `Horizon`: CPU horizon occlusion culling of height fields over a quadtree of their tiles,
-//!   front to back with one horizon height per image column ([`horizon`]); meshes are not culled.
+//! Culling strategies: each decides which fine tiles the final pass of a frame draws.
+//!
+//! A strategy is one file implementing [`CullStrategy`] plus one line in [`REGISTRY`]; the
+//! renderer (`crate::render`) owns one instance of each (so a strategy may keep caches between
+//! frames), and Python's list of modes is [`names`]. A strategy sees the frame through
+//! [`FrameInputs`] and answers with a [`Visible`]: a CPU tile mask or an indirect-args buffer it
+//! recorded on the GPU, the per-tile pixel counts its decision rests on, and its own named stats.
+//! It builds on `crate::gpu`'s passes and never on the renderer.
+//!
+//! - [`none`]: every tile (the reference image);
+//! - [`three_pass`]: GPU depth prepass of coarse proxies, exact visible-pixel count per tile,
+//!   fine draw of tiles above a pixel threshold (one submission, no read-back);
+//! - [`oracle`]: exactly the tiles with at least one visible pixel in the unculled image (a lower
+//!   bound for benchmarks, not a practical method: it renders the reference first, untimed);
+//! - [`horizon`]: CPU horizon occlusion culling of height fields over a quadtree of their tiles,
+//!   front to back with one horizon height per image column; meshes are not culled.
 
 pub mod horizon;
+pub mod none;
+pub mod oracle;
+pub mod three_pass;
+
 #[cfg(test)]
 pub(crate) mod reference;
 
-use crate::error::{input_err, Result};
+use crate::camera::{Camera, FrameCamera};
+use crate::error::{ensure, input_err, Result};
+use crate::gpu::{DrawArgs, GpuContext, Passes, SceneGeometry, Targets, Timestamps};
+use crate::scene::Scene;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Culling {
-    None,
-    ThreePass,
-    Oracle,
-    Horizon,
+/// Every strategy, in the order Python lists them. Adding a strategy: its file, one line here.
+pub const REGISTRY: &[fn() -> Box<dyn CullStrategy>] = &[none::make, three_pass::make, oracle::make, horizon::make];
+
+/// Names of the registered strategies (what `culling=` accepts).
+pub fn names() -> Vec<&'static str> {
+    REGISTRY.iter().map(|make| make().name()).collect()
 }
 
-impl Culling {
-    /// Every strategy, in the order Python lists them.
-    pub const ALL: [Culling; 4] = [Self::None, Self::ThreePass, Self::Oracle, Self::Horizon];
-    pub fn parse(s: &str) -> Result<Self> {
-        match s {
-            "none" => Ok(Self::None),
-            "three_pass" => Ok(Self::ThreePass),
-            "oracle" => Ok(Self::Oracle),
-            "horizon" => Ok(Self::Horizon),
-            _ => Err(input_err(
-                "culling",
-                format!("unknown culling {s:?}; expected one of \"none\", \"three_pass\", \"oracle\", \"horizon\""),
-            )),
-        }
+/// The error for an unknown `culling=` name, listing the registered ones.
+pub fn unknown(name: &str) -> crate::error::Error {
+    let list: Vec<String> = names().iter().map(|n| format!("{n:?}")).collect();
+    input_err("culling", format!("unknown culling {name:?}; expected one of {}", list.join(", ")))
+}
+
+/// Options every strategy may read (validated once per frame, for every strategy).
+#[derive(Clone, Debug)]
+pub struct CullOptions {
+    /// Tiles with at most this many visible pixels (full-image units) are not drawn (three_pass).
+    pub pixel_threshold: f64,
+    /// Prepass resolution relative to the image, in (0, 1] (three_pass).
+    pub prepass_scale: f64,
+}
+
+impl Default for CullOptions {
+    fn default() -> Self {
+        Self { pixel_threshold: 10.0, prepass_scale: 1.0 }
     }
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::ThreePass => "three_pass",
-            Self::Oracle => "oracle",
-            Self::Horizon => "horizon",
-        }
+}
+
+impl CullOptions {
+    pub fn validate(&self) -> Result<()> {
+        let t = self.pixel_threshold;
+        ensure(t.is_finite() && t >= 0.0, "pixel_threshold", || {
+            format!("pixel_threshold is {t}; expected a number >= 0")
+        })?;
+        let s = self.prepass_scale;
+        ensure(s.is_finite() && s > 0.0 && s <= 1.0, "prepass_scale", || {
+            format!("prepass_scale is {s}; expected a number in (0, 1]")
+        })
     }
+}
+
+/// What a strategy sees of the frame being rendered.
+pub struct FrameInputs<'a> {
+    pub ctx: &'a GpuContext,
+    pub passes: &'a Passes,
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    /// The frame's camera in render space (origin-relative, exaggerated), near/far included.
+    pub fc: &'a FrameCamera,
+    pub geometry: &'a SceneGeometry,
+    /// Bind group of the scene passes for this frame.
+    pub scene_bg: &'a wgpu::BindGroup,
+    /// Per tile: its object is visible (`Scene::set_visible`). Hidden objects are never drawn.
+    pub object_visible: &'a [bool],
+    pub width: u32,
+    pub height: u32,
+    /// The final image's targets; a strategy may draw into them in `prepare` (the final pass
+    /// clears them).
+    pub main_targets: &'a Targets,
+    pub options: &'a CullOptions,
+    pub timestamps: Option<&'a Timestamps>,
+}
+
+impl FrameInputs<'_> {
+    /// `args` with the draws of hidden objects, and of tiles where `keep` is false, switched off.
+    pub fn pick(&self, args: &[DrawArgs], keep: impl Fn(usize) -> bool) -> Vec<DrawArgs> {
+        args.iter().enumerate().map(|(i, a)| if self.object_visible[i] && keep(i) { *a } else { a.off() }).collect()
+    }
+    pub fn n_tiles(&self) -> usize {
+        self.geometry.n_tiles()
+    }
+}
+
+/// Which fine tiles the final pass draws.
+pub enum Draw {
+    /// Every tile of a visible object.
+    All,
+    /// Per tile, decided on the CPU (hidden objects are switched off as well).
+    Mask(Vec<bool>),
+    /// Indirect args (one per tile) that the strategy's GPU passes write in this frame.
+    Gpu(wgpu::Buffer),
+}
+
+/// The per-tile pixel counts reported as `tile_pixels`: those the strategy's decision rests on,
+/// in full-image pixels; for strategies that count no pixels, those of the final image.
+pub enum Pixels {
+    /// Count the final image (after the frame time is taken).
+    FinalImage,
+    /// Counted on the host (e.g. oracle: the reference image's counts).
+    Host(Vec<u32>),
+    /// A u32 per tile that this frame's GPU passes write; multiplied by `scale` (to full-image
+    /// pixels) when read back.
+    Gpu { counts: wgpu::Buffer, scale: f64 },
+}
+
+/// A named statistic's value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stat {
+    /// A count (triangles, nodes, tiles).
+    Count(u64),
+    /// A duration in milliseconds.
+    Ms(f64),
+}
+
+/// A strategy's answer for one frame.
+pub struct Visible {
+    pub draw: Draw,
+    pub pixels: Pixels,
+    /// The strategy's own stats (e.g. "nodes_visited"), added to the frame's stats by name.
+    pub stats: Vec<(&'static str, Stat)>,
+    /// The strategy's own per-frame arrays (e.g. "horizon": one value per image column).
+    pub arrays: Vec<(&'static str, Vec<f32>)>,
+}
+
+impl Visible {
+    pub fn new(draw: Draw, pixels: Pixels) -> Self {
+        Self { draw, pixels, stats: Vec::new(), arrays: Vec::new() }
+    }
+}
+
+/// A culling strategy. One instance lives in each renderer, so it may cache between frames
+/// (keyed by what it depends on: `Scene::geometry_key`, object offsets, the camera's z_scale).
+pub trait CullStrategy: Send + Sync {
+    /// The `culling=` name.
+    fn name(&self) -> &'static str;
+    /// Device features this strategy needs beyond the renderer's own; the renderer asks for
+    /// them when the adapter has them and refuses the strategy, naming them, when it has not.
+    fn required_features(&self) -> wgpu::Features {
+        wgpu::Features::empty()
+    }
+    /// Work that is not part of the frame time (e.g. the oracle's reference render). May submit.
+    fn prepare(&mut self, _frame: &FrameInputs<'_>) -> Result<()> {
+        Ok(())
+    }
+    /// Decides the visible set. GPU work is recorded into `enc`, the frame's one encoder, which
+    /// the renderer submits after recording the final draw.
+    fn visible_set(&mut self, frame: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible>;
 }

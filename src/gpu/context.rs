@@ -13,6 +13,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
     pub timestamps: bool,
+    /// The features the device was opened with.
+    pub features: wgpu::Features,
     /// Errors the device reported outside an error scope, taken after each frame.
     errors: Arc<Mutex<Vec<String>>>,
 }
@@ -36,7 +38,9 @@ fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
 }
 
 impl GpuContext {
-    pub fn new(backend: &str) -> Result<Self> {
+    /// Opens a device on `backend`, with the features geocull always needs plus those of
+    /// `optional` that the adapter has (strategies check for theirs before use).
+    pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
         let backends = parse_backends(backend)?;
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
@@ -69,7 +73,9 @@ impl GpuContext {
             )));
         }
         let timestamps = available.contains(wgpu::Features::TIMESTAMP_QUERY);
-        let features = needed | if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() };
+        let features = needed
+            | (optional & available)
+            | if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() };
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("geocull"),
@@ -85,7 +91,7 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap().push(e.to_string());
         }));
-        Ok(Self { device, queue, info, limits, timestamps, errors })
+        Ok(Self { device, queue, info, limits, timestamps, features, errors })
     }
 
     /// Returns the first device error reported since the last call, as an Error.
@@ -112,4 +118,21 @@ impl GpuContext {
             self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info
         )
     }
+}
+
+impl GpuContext {
+    /// Checks an image size against this device's texture limit.
+    pub fn check_image_size(&self, width: u32, height: u32) -> Result<()> {
+        check_size(width, height, self.limits.max_texture_dimension_2d)
+    }
+}
+
+/// Checks an image size against a device limit `max`.
+pub fn check_size(width: u32, height: u32, max: u32) -> Result<()> {
+    use crate::error::ensure;
+    ensure(width >= 1, "width", || format!("width is {width}; expected 1..={max}"))?;
+    ensure(height >= 1, "height", || format!("height is {height}; expected 1..={max}"))?;
+    ensure(width <= max, "width", || format!("width is {width}; this device's max texture size is {max}"))?;
+    ensure(height <= max, "height", || format!("height is {height}; this device's max texture size is {max}"))?;
+    Ok(())
 }

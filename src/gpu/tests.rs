@@ -1,87 +1,9 @@
-//! GPU tests on scenes whose answer is known by construction (run on lavapipe without a GPU).
+//! Tests of the GPU mechanics on inputs whose answer is known by construction (lavapipe on
+//! machines without a GPU).
 
+use super::passes::{args_buffer, counts_buffer, empty_args_buffer};
 use super::*;
-use crate::camera::Projection;
-use crate::scene::AddOptions;
-
-fn opts(cf: f64) -> AddOptions {
-    AddOptions { coarse_factor: cf, name: None, color: Some([0.5, 0.5, 0.5]) }
-}
-
-fn plane(s: &mut Scene, z: f64, n: usize, size: f64, tiles: usize, cf: f64) -> u32 {
-    let zz = vec![z; n * n];
-    let d = size / (n - 1) as f64;
-    s.add_heightfield(&zz, n, n, [-size / 2.0, -size / 2.0], [d, d], (tiles, tiles), None, opts(cf)).unwrap()
-}
-
-fn top_down(h: f64) -> Camera {
-    Camera::look_at(
-        [0.0, 0.0, h],
-        [0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        90.0,
-        None,
-        None,
-        Projection::Perspective,
-        None,
-        1.0,
-    )
-    .unwrap()
-}
-
-#[test]
-fn plane_from_above_covers_and_has_exact_depth() {
-    let mut s = Scene::new();
-    // A 100 x 100 plane at z = 0 seen from 100 m with a 90° fov: it spans exactly the middle half.
-    plane(&mut s, 0.0, 11, 100.0, 2, 1.0);
-    let mut r = Renderer::new(64, 64, "auto").unwrap();
-    let out = r.render(&s, &top_down(100.0), &RenderOptions::default()).unwrap();
-    let covered: Vec<usize> = (0..64 * 64).filter(|&i| out.depth[i].is_finite()).collect();
-    assert_eq!(covered.len(), 32 * 32);
-    for &i in &covered {
-        let (x, y) = (i % 64, i / 64);
-        assert!((16..48).contains(&x) && (16..48).contains(&y));
-        assert!((out.depth[i] - 100.0).abs() < 1e-3 * 100.0, "{}", out.depth[i]);
-    }
-    // Visible pixels per tile: four quadrants of 16 x 16.
-    assert_eq!(out.tile_pixels, vec![256; 4]);
-    assert!(out.image.chunks(4).enumerate().all(|(i, px)| out.depth[i].is_finite() != (px == BACKGROUND)));
-}
-
-#[test]
-fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
-    let mut s = Scene::new();
-    plane(&mut s, 0.0, 21, 100.0, 4, 1.0);
-    let lower = plane(&mut s, -10.0, 21, 60.0, 3, 1.0);
-    let mut r = Renderer::new(80, 60, "auto").unwrap();
-    let cam = Camera::look_at(
-        [30.0, -120.0, 90.0],
-        [0.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0],
-        40.0,
-        None,
-        None,
-        Projection::Perspective,
-        None,
-        1.0,
-    )
-    .unwrap();
-    let none = r.render(&s, &cam, &RenderOptions::default()).unwrap();
-    let tp = r
-        .render(&s, &cam, &RenderOptions { culling: Culling::ThreePass, pixel_threshold: 0.0, prepass_scale: 1.0 })
-        .unwrap();
-    let covered = none.depth.iter().filter(|d| d.is_finite()).count() as u32;
-    assert!(covered > 0);
-    assert_eq!(tp.tile_pixels.iter().sum::<u32>(), covered);
-    assert_eq!(tp.tile_pixels, none.tile_pixels);
-    // The lower plane's 9 tiles are wholly hidden under the upper one.
-    let first_lower = 16;
-    assert!(s.object(lower).unwrap().tiles.len() == 9);
-    assert!(tp.tile_pixels[first_lower..].iter().all(|&c| c == 0));
-    assert!(tp.tile_drawn[first_lower..].iter().all(|&d| !d));
-    assert_eq!(tp.image, none.image);
-    assert!(tp.stats.triangles_drawn < none.stats.triangles_drawn);
-}
+use crate::error::Error;
 
 #[test]
 fn scenes_larger_than_a_buffer_get_a_clear_error() {
@@ -89,4 +11,93 @@ fn scenes_larger_than_a_buffer_get_a_clear_error() {
     let e = check_buffer_sizes(100_000, 300, 1 << 20).unwrap_err();
     assert!(matches!(e, Error::Device(ref m) if m.contains("too large")), "{e}");
     assert!(check_buffer_sizes(10, (u32::MAX as u64) + 1, u64::MAX).is_err());
+}
+
+fn device() -> Option<(GpuContext, Passes)> {
+    let ctx = GpuContext::new("auto", wgpu::Features::empty()).ok()?;
+    let p = Passes::new(&ctx.device);
+    Some((ctx, p))
+}
+
+fn read_u32s(ctx: &GpuContext, enc: wgpu::CommandEncoder, src: &wgpu::Buffer, n: usize) -> Vec<u32> {
+    let mut enc = enc;
+    let rb = readback::copy_buffer(&ctx.device, &mut enc, src, 4 * n as u64);
+    ctx.queue.submit([enc.finish()]);
+    readback::map_all([&rb]);
+    ctx.wait().unwrap();
+    readback::read_mapped(&rb).unwrap()
+}
+
+/// An id image with a known number of pixels per id (runs crossing the 16-wide workgroups,
+/// a partial last workgroup) is counted exactly.
+#[test]
+fn histogram_counts_every_pixel_once() {
+    let Some((ctx, p)) = device() else { return };
+    let (w, h) = (37u32, 5u32);
+    let ids: Vec<u32> = (0..w * h).map(|i| if i % 7 == 0 { 0 } else { 1 + (i / 3) % 4 }).collect();
+    let mut want = [0u32; 4];
+    for &i in &ids {
+        if i > 0 {
+            want[i as usize - 1] += 1;
+        }
+    }
+    let tex = targets::texture(
+        &ctx.device,
+        "ids",
+        w,
+        h,
+        targets::ID_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    ctx.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &tex,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: Default::default(),
+        },
+        bytemuck::cast_slice(&ids),
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * w), rows_per_image: Some(h) },
+        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    );
+    let counts = counts_buffer(&ctx.device, 4);
+    let mut enc = ctx.encoder("test");
+    enc.clear_buffer(&counts, 0, None);
+    p.record_histogram(&ctx.device, &mut enc, &tex.create_view(&Default::default()), (w, h), &counts, None);
+    assert_eq!(read_u32s(&ctx, enc, &counts, 4), want);
+}
+
+/// Draws whose count is at or below the threshold are switched off, the others copied as they are.
+#[test]
+fn select_switches_off_draws_at_or_below_the_threshold() {
+    let Some((ctx, p)) = device() else { return };
+    let d = &ctx.device;
+    let n = 70; // more than one workgroup of 64
+    let src: Vec<DrawArgs> = (0..n as u32)
+        .map(|i| DrawArgs {
+            index_count: 3 * (i + 1),
+            instance_count: 1,
+            first_index: i,
+            base_vertex: 0,
+            first_instance: i,
+        })
+        .collect();
+    let counts: Vec<u32> = (0..n as u32).map(|i| i % 5).collect();
+    let counts_buf = wgpu::util::DeviceExt::create_buffer_init(
+        d,
+        &wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: bytemuck::cast_slice(&counts),
+            usage: wgpu::BufferUsages::STORAGE,
+        },
+    );
+    let out = empty_args_buffer(d, "out", n);
+    let mut enc = ctx.encoder("test");
+    p.record_select(d, &mut enc, &counts_buf, &args_buffer(d, "src", &src), &out, n, 2.0, None);
+    let got: Vec<u32> = read_u32s(&ctx, enc, &out, 5 * n);
+    let got: &[DrawArgs] = bytemuck::cast_slice(&got);
+    for i in 0..n {
+        let want = if counts[i] <= 2 { src[i].off() } else { src[i] };
+        assert_eq!(got[i], want, "draw {i}");
+    }
 }

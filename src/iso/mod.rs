@@ -10,12 +10,12 @@
 //! * [`mc`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
 //!   cells, plus a patch cache keyed by isovalue and node.
 //!
-//! This file is meant to become `src/iso/mod.rs` of the main crate; the
-//! submodules refer to it only through `super::`.
 
 use std::sync::Arc;
 
 use rayon::prelude::*;
+
+use crate::error::{ensure, input_err, Result};
 
 pub mod mc;
 pub mod octree;
@@ -61,34 +61,32 @@ pub struct Volume {
 }
 
 impl Volume {
-    /// Checks that `values.len() == nx*ny*nz`, that every dimension has at
-    /// least 2 samples (one cell), that the cell count per axis fits in `u32`,
-    /// and that origin and spacing are finite with positive spacing.
-    pub fn new(
-        values: Arc<[f32]>,
-        dims: (usize, usize, usize),
-        origin: [f64; 3],
-        spacing: [f64; 3],
-    ) -> Result<Self, String> {
+    /// Checks that `values.len() == nx*ny*nz`, that every dimension has at least 2 samples (one
+    /// cell), that the cell count per axis fits in `u32`, and that origin and spacing are finite
+    /// with positive spacing. Errors name the argument: `values`, `origin` or `spacing`.
+    pub fn new(values: Arc<[f32]>, dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3]) -> Result<Self> {
         let (nx, ny, nz) = dims;
-        if nx < 2 || ny < 2 || nz < 2 {
-            return Err(format!("volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}"));
-        }
-        if nx > u32::MAX as usize / 2 || ny > u32::MAX as usize / 2 || nz > u32::MAX as usize / 2 {
-            return Err(format!("volume dimensions {nx}x{ny}x{nz} too large"));
-        }
+        ensure(nx >= 2 && ny >= 2 && nz >= 2, "values", || {
+            format!("volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}")
+        })?;
+        let max = u32::MAX as usize / 2;
+        ensure(nx <= max && ny <= max && nz <= max, "values", || {
+            format!("volume dimensions {nx}x{ny}x{nz} too large")
+        })?;
         let n = nx
             .checked_mul(ny)
             .and_then(|v| v.checked_mul(nz))
-            .ok_or_else(|| format!("volume dimensions {nx}x{ny}x{nz} overflow"))?;
-        if values.len() != n {
-            return Err(format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len()));
+            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        ensure(values.len() == n, "values", || {
+            format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len())
+        })?;
+        for (i, o) in origin.iter().enumerate() {
+            ensure(o.is_finite(), "origin", || format!("component {i} is {o}; expected a finite number"))?;
         }
-        if origin.iter().any(|o| !o.is_finite()) {
-            return Err(format!("volume origin {origin:?} is not finite"));
-        }
-        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return Err(format!("volume spacing {spacing:?} must be finite and > 0"));
+        for (i, d) in spacing.iter().enumerate() {
+            ensure(d.is_finite() && *d > 0.0, "spacing", || {
+                format!("component {i} is {d}; expected a finite number > 0")
+            })?;
         }
         Ok(Volume { values, nx, ny, nz, origin, spacing })
     }
@@ -128,13 +126,14 @@ impl Volume {
     }
 
     /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).
-    pub fn from_fn<F>(dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3], f: F) -> Result<Self, String>
+    pub fn from_fn<F>(dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3], f: F) -> Result<Self>
     where
         F: Fn(f64, f64, f64) -> f32 + Sync,
     {
         let (nx, ny, nz) = dims;
-        let slice = nx.checked_mul(ny).ok_or("volume dimensions overflow")?;
-        let total = slice.checked_mul(nz).ok_or("volume dimensions overflow")?;
+        let overflow = || input_err("values", "volume dimensions overflow");
+        let slice = nx.checked_mul(ny).ok_or_else(overflow)?;
+        let total = slice.checked_mul(nz).ok_or_else(overflow)?;
         let mut v = vec![0.0f32; total];
         if slice > 0 {
             v.par_chunks_mut(slice).enumerate().for_each(|(k, s)| {

@@ -1,6 +1,6 @@
 //! GPU side of implicit occluders (Pesco, Lindstrom, Pascucci, Silva, "Implicit Occluders").
 //!
-//! [`Renderer::render_isosurface`] draws the isosurface `f = w` of a [`Volume`], extracting surface
+//! [`IsoRenderer::render`] (through `Renderer::render_isosurface`) draws the isosurface `f = w` of a [`Volume`], extracting surface
 //! only inside octree nodes that can be seen:
 //!
 //! 1. **Occluders** (view independent, cached per isovalue and build depth): descending the
@@ -59,11 +59,8 @@ use super::octree::{Class, MinMaxOctree, NodeInfo};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
 use crate::error::{ensure, input_err, Error, Result};
-use crate::gpu::{light_dir, map_err, ReadbackTexture, Renderer};
-
-const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
+use crate::gpu::{map_err, GpuContext, ReadbackTexture};
 
 /// How the isosurface is culled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -223,8 +220,8 @@ struct Occluders {
 /// Straddling nodes of one (isovalue bits, depth).
 type StraddlingEntry = ((u32, u32), Arc<Vec<NodeInfo>>);
 
-/// Pipelines and caches of the isosurface renderer (lives in `Renderer::iso`).
-pub struct IsoGpu {
+/// Pipelines and caches of the isosurface passes (the scene renderer holds one, made on first use).
+pub struct IsoRenderer {
     globals_layout: wgpu::BindGroupLayout,
     ref_layout: wgpu::BindGroupLayout,
     test_layout: wgpu::BindGroupLayout,
@@ -248,8 +245,8 @@ fn box_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout { array_stride: 32, step_mode: wgpu::VertexStepMode::Instance, attributes: &ATTRS }
 }
 
-impl IsoGpu {
-    fn new(d: &wgpu::Device) -> Self {
+impl IsoRenderer {
+    pub fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
         let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
@@ -422,19 +419,7 @@ impl IsoGpu {
 
     fn targets(&mut self, d: &wgpu::Device, width: u32, height: u32) -> &Targets {
         if self.targets.as_ref().is_none_or(|t| (t.width, t.height) != (width, height)) {
-            let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
-            let tex = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-                d.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-            };
+            let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
             let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
             let tb = wgpu::TextureUsages::TEXTURE_BINDING;
             let cs = wgpu::TextureUsages::COPY_SRC;
@@ -570,25 +555,16 @@ fn reaches_near_plane(fc: &FrameCamera, b: &BoxInstance) -> bool {
     dmin <= fc.near * 1.001 + 1e-9
 }
 
-impl Renderer {
-    fn iso_gpu(&mut self) -> &mut IsoGpu {
-        if self.iso.is_none() {
-            self.iso = Some(Box::new(IsoGpu::new(&self.ctx.device)));
-        }
-        self.iso.as_mut().unwrap()
-    }
-
-    /// Drops cached isosurface patches and occluders.
-    pub fn clear_isosurface_cache(&mut self) {
-        if let Some(g) = self.iso.as_mut() {
-            g.clear_cache();
-        }
-    }
-
-    /// Renders the isosurface `vol = w` seen by `camera`; `tree` must be the octree of `vol`.
-    /// See the module docs for what `culling = Implicit` does.
-    pub fn render_isosurface(
+impl IsoRenderer {
+    /// Renders the isosurface `vol = w` seen by `camera` into `width` × `height` targets of its
+    /// own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
+    /// does.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
         &mut self,
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
         vol: &Volume,
         tree: &MinMaxOctree,
         w: f32,
@@ -613,12 +589,11 @@ impl Renderer {
         })?;
 
         let t0 = Instant::now();
-        let (width, height) = (self.width, self.height);
         let (lo, hi) = vol.bounds();
         let space = Space { origin: (DVec3::from_array(lo) + DVec3::from_array(hi)) * 0.5, z_scale: camera.z_scale };
         let rb = (space.point(lo).min(space.point(hi)), space.point(lo).max(space.point(hi)));
         let fc = camera.frame(space.origin, Some(rb), width as f64 / height as f64);
-        let light = light_dir(&fc);
+        let light = fc.light_dir();
         let globals = Globals {
             view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
             light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0],
@@ -629,10 +604,8 @@ impl Renderer {
         // cull a visible node.
         let eps = 1e-3 * min_spacing;
 
-        self.iso_gpu();
-        let ctx = &self.ctx;
         let d = &ctx.device;
-        let iso: &mut IsoGpu = self.iso.as_mut().unwrap();
+        let iso: &mut IsoRenderer = self;
         iso.bind_volume(vol);
         iso.targets(d, width, height);
         let candidates = iso.straddling(tree, w, cull_depth);
@@ -671,7 +644,7 @@ impl Renderer {
                 });
             }
         }
-        let iso: &IsoGpu = &*iso;
+        let iso: &IsoRenderer = &*iso;
         let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_globals"),
             contents: bytemuck::bytes_of(&globals),
@@ -761,7 +734,7 @@ impl Renderer {
         // ---- Marching tetrahedra in the visible nodes (cached per node).
         let t_ex = Instant::now();
         let patches: Vec<Arc<SurfacePatch>> = if opts.use_cache {
-            let iso = self.iso.as_mut().unwrap();
+            let iso = &mut *self;
             let before = iso.patches.len();
             let p = iso.patches.get_or_extract_many(vol, w, &visible);
             stats.patches_extracted = (iso.patches.len() - before) as u32;
@@ -775,9 +748,8 @@ impl Renderer {
 
         // ---- Draw.
         let t_draw = Instant::now();
-        let ctx = &self.ctx;
         let d = &ctx.device;
-        let iso: &IsoGpu = self.iso.as_ref().unwrap();
+        let iso: &IsoRenderer = &*self;
         let tg = iso.targets.as_ref().unwrap();
         let (tris, verts) = draw_surface(ctx, iso, &globals_bg, tg, &patches, &space)?;
         stats.surface_triangles = tris;
@@ -861,7 +833,7 @@ fn pass<'e>(
 }
 
 /// Passes 1–3 of the occlusion map (see the module docs); waits for the GPU.
-fn draw_map(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindGroup, occ: &Occluders) -> Result<()> {
+fn draw_map(ctx: &GpuContext, iso: &IsoRenderer, globals_bg: &wgpu::BindGroup, occ: &Occluders) -> Result<()> {
     let d = &ctx.device;
     let tg = iso.targets.as_ref().unwrap();
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_map") });
@@ -903,8 +875,8 @@ fn draw_map(ctx: &crate::gpu::GpuContext, iso: &IsoGpu, globals_bg: &wgpu::BindG
 
 /// Visible-pixel count of every box against the map (one submission and read-back).
 fn test_nodes(
-    ctx: &crate::gpu::GpuContext,
-    iso: &IsoGpu,
+    ctx: &GpuContext,
+    iso: &IsoRenderer,
     globals_bg: &wgpu::BindGroup,
     boxes: &[BoxInstance],
 ) -> Result<Vec<u32>> {
@@ -960,8 +932,8 @@ fn test_nodes(
 
 /// Uploads the patches (render space, f32) and draws them lit; waits for the GPU.
 fn draw_surface(
-    ctx: &crate::gpu::GpuContext,
-    iso: &IsoGpu,
+    ctx: &GpuContext,
+    iso: &IsoRenderer,
     globals_bg: &wgpu::BindGroup,
     tg: &Targets,
     patches: &[Arc<SurfacePatch>],
@@ -1053,8 +1025,8 @@ mod tests {
     use super::*;
     use crate::camera::Projection;
 
-    fn renderer() -> Option<Renderer> {
-        Renderer::new(64, 64, "auto").ok()
+    fn device() -> Option<GpuContext> {
+        GpuContext::new("auto", wgpu::Features::empty()).ok()
     }
 
     #[test]
@@ -1072,7 +1044,8 @@ mod tests {
 
     #[test]
     fn sphere_implicit_equals_none() {
-        let Some(mut r) = renderer() else { return };
+        let Some(ctx) = device() else { return };
+        let mut r = IsoRenderer::new(&ctx.device);
         let vol = super::super::sphere_field(24, 0.6);
         let tree = MinMaxOctree::build(&vol);
         let cam = Camera::look_at(
@@ -1088,11 +1061,23 @@ mod tests {
         )
         .unwrap();
         let none = r
-            .render_isosurface(&vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() })
+            .render(
+                &ctx,
+                64,
+                64,
+                &vol,
+                &tree,
+                0.0,
+                &cam,
+                &IsoOptions { culling: IsoCulling::None, ..Default::default() },
+            )
             .unwrap();
         let md = tree.max_depth();
         let imp = r
-            .render_isosurface(
+            .render(
+                &ctx,
+                64,
+                64,
                 &vol,
                 &tree,
                 0.0,

@@ -1,8 +1,10 @@
 //! PyO3 bindings for isosurfaces: `Volume` (a scalar grid plus its lazily built min/max octree)
 //! and `render_isosurface` (implicit-occluder culling, see `crate::iso::render`).
 
-use super::{run, PyCamera, PyRenderer};
-use crate::error::input_err;
+use super::camera::PyCamera;
+use super::renderer::PyRenderer;
+use super::{contiguous, run};
+use crate::error::{input_err, int_in};
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
 use crate::iso::{MinMaxOctree, Volume};
 use numpy::ndarray::{Array1, Array2, Array3};
@@ -42,19 +44,15 @@ impl PyVolume {
         let (data, shape): (Arc<[f32]>, [usize; 3]) = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
             let s = a.shape();
             let shape = [s[0], s[1], s[2]];
-            let sl = a
-                .as_slice()
-                .map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
+            let sl = contiguous(&a, "values")?;
             (run(py, move || Ok(Arc::<[f32]>::from(sl)))?, shape)
         } else if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f64>>() {
             let s = a.shape();
             let shape = [s[0], s[1], s[2]];
-            let sl = a
-                .as_slice()
-                .map_err(|_| pyo3::exceptions::PyValueError::new_err("values: array must be C-contiguous"))?;
+            let sl = contiguous(&a, "values")?;
             (run(py, move || Ok(sl.iter().map(|&v| v as f32).collect::<Arc<[f32]>>()))?, shape)
         } else {
-            return Err(super::to_py(py, input_err("values", "expected a 3-D float32 or float64 array")));
+            return Err(input_err("values", "expected a 3-D float32 or float64 array").into());
         };
         let inner = run(py, move || {
             Volume::new(
@@ -63,7 +61,6 @@ impl PyVolume {
                 [origin.0, origin.1, origin.2],
                 [spacing.0, spacing.1, spacing.2],
             )
-            .map_err(|m| input_err("values", m))
         })?;
         Ok(Self { inner, tree: OnceLock::new() })
     }
@@ -90,14 +87,9 @@ impl PyVolume {
 
     /// Octree nodes at `depth`: dict of index (n,3) [ix,iy,iz], bbox_min/bbox_max (n,3) world,
     /// min/max (n,) float32.
-    fn nodes<'py>(&self, py: Python<'py>, depth: u32) -> PyResult<Bound<'py, PyDict>> {
+    fn nodes<'py>(&self, py: Python<'py>, depth: i64) -> PyResult<Bound<'py, PyDict>> {
         let t = self.tree(py)?;
-        if depth > t.max_depth() {
-            return Err(super::to_py(
-                py,
-                input_err("depth", format!("depth is {depth}; this volume's octree has depths 0..={}", t.max_depth())),
-            ));
-        }
+        let depth = int_in(depth, "depth", 0, t.max_depth() as i64)? as u32;
         let nodes = t.nodes_at_depth(depth);
         let n = nodes.len();
         let d = PyDict::new(py);
@@ -170,8 +162,8 @@ fn render_isosurface<'py>(
     isovalue: f64,
     camera: PyRef<'py, PyCamera>,
     culling: String,
-    occluder_depth: Option<u32>,
-    cull_depth: Option<u32>,
+    occluder_depth: Option<i64>,
+    cull_depth: Option<i64>,
     color: (f64, f64, f64),
     cache: bool,
     return_map: bool,
@@ -181,6 +173,8 @@ fn render_isosurface<'py>(
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
         let culling = IsoCulling::parse(&culling)?;
+        let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
+        let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
         let opts = IsoOptions {
             culling,
             occluder_depth,

@@ -81,6 +81,9 @@ pub struct AddOptions {
     pub color: Option<[f64; 3]>,
 }
 
+/// An object's triangles in world coordinates: (vertices, faces).
+pub type Geometry = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
 pub struct Scene {
     uid: u64,
     geometry_version: u64,
@@ -258,7 +261,7 @@ impl Scene {
             ensure(!v.is_infinite(), "z", || {
                 format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx)
             })?;
-            ensure(!(v.abs() > MAX_COORD), "z", || {
+            ensure(v.is_nan() || v.abs() <= MAX_COORD, "z", || {
                 format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v))
             })?;
             if v.is_finite() {
@@ -373,7 +376,7 @@ impl Scene {
     }
 
     /// The fine triangles of an object in world coordinates (offset applied): (vertices, faces).
-    pub fn geometry(&self, id: u32) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+    pub fn geometry(&self, id: u32) -> Result<Geometry> {
         let o = self.object(id)?;
         let origin = self.origin() + o.offset;
         let mut verts = Vec::new();

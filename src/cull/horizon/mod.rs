@@ -124,11 +124,13 @@
 
 mod hull;
 mod occluder;
+mod strategy;
 #[cfg(test)]
 mod tests;
 mod tree;
 mod view;
 
+pub use strategy::{make, Horizon};
 pub use tree::{HeightGrid, HorizonResult, HorizonTree};
 
 /// Safety margin in pixels against floating-point round-off (of this module's f64 arithmetic).

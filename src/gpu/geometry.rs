@@ -1,0 +1,183 @@
+//! The scene's geometry on the GPU: one vertex buffer and one index buffer for every tile of
+//! every object, the tile → object table, and each tile's fine and coarse draw.
+
+use super::layout::DrawArgs;
+use super::readback::map_err;
+use super::GpuContext;
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use glam::DVec3;
+use wgpu::util::DeviceExt;
+
+/// GPU copy of a scene's geometry, keyed by [`Scene::geometry_key`].
+pub struct SceneGeometry {
+    pub key: (u64, u64),
+    pub vertices: Option<wgpu::Buffer>,
+    pub indices: Option<wgpu::Buffer>,
+    /// Object index (position in `scene.objects()`) of every tile.
+    pub tile_object: wgpu::Buffer,
+    pub tile_object_cpu: Vec<u32>,
+    /// The fine (level 0) draw of every tile, in tile order.
+    pub fine: Vec<DrawArgs>,
+    /// The coarse proxy's draw of every tile (its own compact vertex copy).
+    pub coarse: Vec<DrawArgs>,
+    /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
+    pub bbox: Vec<(DVec3, DVec3)>,
+    pub bytes: u64,
+}
+
+/// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
+/// at most `max` bytes, with u32 indices and offsets: a clear error rather than a wrong image.
+pub fn check_buffer_sizes(nv: u64, ni: u64, max: u64) -> Result<()> {
+    if nv * 12 > max || ni * 4 > max || nv > u32::MAX as u64 || ni > u32::MAX as u64 {
+        return Err(Error::Device(format!(
+            "scene too large for one GPU buffer on this device: {} MiB of vertices ({nv}), {} MiB of indices ({ni}), \
+             limit {} MiB per buffer and 2^32 elements; split it into several scenes or reduce its resolution",
+            (nv * 12) >> 20,
+            (ni * 4) >> 20,
+            max >> 20
+        )));
+    }
+    Ok(())
+}
+
+impl SceneGeometry {
+    pub fn n_tiles(&self) -> usize {
+        self.fine.len()
+    }
+
+    /// Uploads `scene`'s geometry. Sizes are computed first (the coarse proxies get compact
+    /// copies of the vertices they use), so that the geometry is written straight into mapped
+    /// GPU buffers without host temporaries.
+    pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
+        let d = &ctx.device;
+        let (mut nv, mut ni) = (0u64, 0u64);
+        let mut seen: Vec<bool> = Vec::new();
+        for t in scene.objects().iter().flat_map(|o| &o.tiles) {
+            seen.clear();
+            seen.resize(t.positions.len(), false);
+            let unique = t.coarse.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count();
+            nv += (t.positions.len() + unique) as u64;
+            ni += (t.fine.len() + t.coarse.len()) as u64;
+        }
+        check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
+        let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            (size > 0).then(|| {
+                d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true })
+            })
+        };
+        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX);
+        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX);
+        let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let tile_bbox = |t: &crate::lod::TileMesh| {
+            (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
+        };
+        if let (Some(vb), Some(ib)) = (&vb, &ib) {
+            let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
+            let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
+            // Mapped memory is write-only: append whole runs, counting in vertices and indices.
+            let (mut v, mut i) = (0usize, 0usize);
+            let mut put_v = |v: &mut usize, data: &[[f32; 3]]| {
+                vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
+                *v += data.len();
+            };
+            let mut put_i = |i: &mut usize, data: &[u32]| {
+                imap.slice(*i * 4..(*i + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(data));
+                *i += data.len();
+            };
+            let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) =
+                (Vec::new(), Vec::new(), Vec::new());
+            for (oi, o) in scene.objects().iter().enumerate() {
+                for t in &o.tiles {
+                    let tile = fine.len() as u32;
+                    fine.push(DrawArgs {
+                        index_count: t.fine.len() as u32,
+                        instance_count: 1,
+                        first_index: i as u32,
+                        base_vertex: v as i32,
+                        first_instance: tile,
+                    });
+                    put_v(&mut v, &t.positions);
+                    put_i(&mut i, &t.fine);
+                    // The coarse proxy gets its own compact copy of the vertices it uses: software
+                    // rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
+                    // indexing into the fine vertices would make the prepass cost as much as a fine draw.
+                    remap.clear();
+                    remap.resize(t.positions.len(), u32::MAX);
+                    cverts.clear();
+                    cidx.clear();
+                    for &k in &t.coarse {
+                        let slot = &mut remap[k as usize];
+                        if *slot == u32::MAX {
+                            *slot = cverts.len() as u32;
+                            cverts.push(t.positions[k as usize]);
+                        }
+                        cidx.push(*slot);
+                    }
+                    coarse.push(DrawArgs {
+                        index_count: cidx.len() as u32,
+                        instance_count: 1,
+                        first_index: i as u32,
+                        base_vertex: v as i32,
+                        first_instance: tile,
+                    });
+                    put_v(&mut v, &cverts);
+                    put_i(&mut i, &cidx);
+                    tile_object.push(oi as u32);
+                    bbox.push(tile_bbox(t));
+                }
+            }
+            debug_assert_eq!((v as u64, i as u64), (nv, ni));
+        } else {
+            // No triangles anywhere: keep the tile table (all tiles empty).
+            for (oi, o) in scene.objects().iter().enumerate() {
+                for t in &o.tiles {
+                    let tile = fine.len() as u32;
+                    fine.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    tile_object.push(oi as u32);
+                    bbox.push(tile_bbox(t));
+                }
+            }
+        }
+        for b in vb.iter().chain(ib.iter()) {
+            b.unmap();
+        }
+        // Storage buffers may not be empty: pad with one element.
+        let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
+        let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tile_object"),
+            contents: bytemuck::cast_slice(&to),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let bytes = nv * 12 + ni * 4 + to.len() as u64 * 4;
+        ctx.take_error()?;
+        Ok(Self {
+            key: scene.geometry_key(),
+            vertices: vb,
+            indices: ib,
+            tile_object: tob,
+            tile_object_cpu: tile_object,
+            fine,
+            coarse,
+            bbox,
+            bytes,
+        })
+    }
+
+    /// Squared distance from `eye` (render space) to each tile's box, with the objects' offsets
+    /// and the exaggeration `z_scale` applied: the key of front-to-back orders.
+    pub fn eye_distances(&self, scene: &Scene, eye: DVec3, z_scale: f64) -> Vec<f64> {
+        let zs = DVec3::new(1.0, 1.0, z_scale);
+        let objects = scene.objects();
+        self.bbox
+            .iter()
+            .zip(&self.tile_object_cpu)
+            .map(|((lo, hi), &oi)| {
+                let off = objects[oi as usize].offset;
+                let (lo, hi) = ((*lo + off) * zs, (*hi + off) * zs);
+                (eye.clamp(lo, hi) - eye).length_squared()
+            })
+            .collect()
+    }
+}

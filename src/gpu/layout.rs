@@ -1,0 +1,66 @@
+//! Structs shared with WGSL, byte for byte. Each has a compile-time size check against the
+//! layout its shader declares, so a field added on one side only fails the build.
+
+use bytemuck::{Pod, Zeroable};
+
+/// One indexed indirect draw (wgpu's `DrawIndexedIndirectArgs`); `first_instance` carries the
+/// global tile index, which the vertex shader reads as `instance_index`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, Default, PartialEq)]
+pub struct DrawArgs {
+    pub index_count: u32,
+    pub instance_count: u32,
+    pub first_index: u32,
+    pub base_vertex: i32,
+    pub first_instance: u32,
+}
+
+impl DrawArgs {
+    /// The same draw, switched off (instance_count 0), as the selection shader writes it.
+    pub fn off(self) -> Self {
+        Self { instance_count: 0, ..self }
+    }
+    /// Triangles this draw submits (0 when switched off).
+    pub fn triangles(&self) -> u64 {
+        if self.instance_count > 0 {
+            self.index_count as u64 / 3
+        } else {
+            0
+        }
+    }
+}
+
+/// Per-frame uniforms of the scene passes (`Globals` in common.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct Globals {
+    pub view_proj: [[f32; 4]; 4],
+    /// Towards the head light, render space; w unused.
+    pub light_dir: [f32; 4],
+    pub z_scale: f32,
+    pub _pad: [f32; 3],
+}
+
+/// Per-object state read every frame (`Object` in common.wgsl): translation (world units,
+/// before exaggeration) and colour.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct GpuObject {
+    pub offset: [f32; 4],
+    pub color: [f32; 4],
+}
+
+/// Uniforms of the selection pass (`Params` in select.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct SelectParams {
+    pub n_tiles: u32,
+    /// Draws whose count is at most this are switched off (in the counted image's pixels).
+    pub threshold: f32,
+    pub _pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<DrawArgs>() == 20);
+const _: () = assert!(std::mem::size_of::<Globals>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuObject>() == 32);
+const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);

@@ -1,0 +1,41 @@
+// Shared by the scene passes (prepended to draw.wgsl and prepass.wgsl): one vertex buffer of f32
+// positions relative to the scene origin, drawn with multi-draw-indirect where first_instance
+// carries the global tile index. Both passes use this one vertex shader, so their depths agree.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // Direction towards the head light (over the viewer's shoulder), render space, w unused.
+    light_dir: vec4<f32>,
+    z_scale: f32,
+    _pad0: f32,
+    _pad1: f32,
+    _pad2: f32,
+}
+
+struct Object {
+    // Translation (world units) applied before exaggeration.
+    offset: vec4<f32>,
+    color: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> g: Globals;
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+@group(0) @binding(2) var<storage, read> tile_object: array<u32>;
+
+struct VOut {
+    // Invariant so that the depth prepass and later passes rasterise identical depth.
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) @interpolate(flat) tile: u32,
+}
+
+@vertex
+fn vs_main(@location(0) pos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOut {
+    let o = objects[tile_object[tile]];
+    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    var out: VOut;
+    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.world = p;
+    out.tile = tile;
+    return out;
+}

@@ -1,0 +1,105 @@
+//! `geocull._geocull.Renderer`: frames as dicts of numpy arrays and stats.
+
+use super::camera::PyCamera;
+use super::run;
+use super::scene::PyScene;
+use crate::cull::{self, CullOptions, Stat};
+use crate::error::int_in;
+use crate::render::{RenderOptions, RenderOutput, Renderer};
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::IntoPyArray;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+#[pyclass(name = "Renderer", module = "geocull._geocull")]
+pub struct PyRenderer {
+    pub(crate) inner: Renderer,
+}
+
+/// Names of the culling strategies `Renderer.render` accepts, from the core's registry.
+#[pyfunction]
+pub fn culling_modes() -> Vec<&'static str> {
+    cull::names()
+}
+
+fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+    let (w, h) = (out.width as usize, out.height as usize);
+    let d = PyDict::new(py);
+    d.set_item("image", Array3::from_shape_vec((h, w, 4), out.image).unwrap().into_pyarray(py))?;
+    d.set_item("depth", Array2::from_shape_vec((h, w), out.depth).unwrap().into_pyarray(py))?;
+    d.set_item("tile_pixels", Array1::from_vec(out.tile_pixels).into_pyarray(py))?;
+    d.set_item("tile_drawn", Array1::from_vec(out.tile_drawn).into_pyarray(py))?;
+    d.set_item("near", out.near)?;
+    d.set_item("far", out.far)?;
+    let s = &out.stats;
+    let st = PyDict::new(py);
+    st.set_item("triangles_fine_total", s.triangles_fine_total)?;
+    st.set_item("triangles_drawn", s.triangles_drawn)?;
+    st.set_item("tiles_total", s.tiles_total)?;
+    st.set_item("tiles_drawn", s.tiles_drawn)?;
+    st.set_item("cull_ms", s.cull_ms)?;
+    st.set_item("draw_ms", s.draw_ms)?;
+    st.set_item("total_ms", s.total_ms)?;
+    st.set_item("readback_ms", s.readback_ms)?;
+    st.set_item("gpu_timestamps", s.gpu_timestamps)?;
+    for (name, v) in &s.extra {
+        match v {
+            Stat::Count(n) => st.set_item(*name, *n)?,
+            Stat::Ms(ms) => st.set_item(*name, *ms)?,
+        }
+    }
+    for (name, a) in out.arrays {
+        d.set_item(name, Array1::from_vec(a).into_pyarray(py))?;
+    }
+    d.set_item("stats", st)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyRenderer {
+    #[new]
+    fn new(py: Python<'_>, width: i64, height: i64, backend: String) -> PyResult<Self> {
+        run(py, move || {
+            let max = u32::MAX as i64;
+            let (w, h) = (int_in(width, "width", 1, max)? as u32, int_in(height, "height", 1, max)? as u32);
+            Renderer::new(w, h, &backend).map(|inner| Self { inner })
+        })
+    }
+    #[getter]
+    fn width(&self) -> u32 {
+        self.inner.width()
+    }
+    #[getter]
+    fn height(&self) -> u32 {
+        self.inner.height()
+    }
+    #[getter]
+    fn adapter_info(&self) -> String {
+        self.inner.adapter_info()
+    }
+    #[getter]
+    fn max_texture_size(&self) -> u32 {
+        self.inner.max_texture_size()
+    }
+    #[getter]
+    fn gpu_bytes(&self) -> u64 {
+        self.inner.gpu_bytes()
+    }
+
+    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale))]
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        scene: PyRef<'py, PyScene>,
+        camera: PyRef<'py, PyCamera>,
+        culling: String,
+        pixel_threshold: f64,
+        prepass_scale: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let r = &mut self.inner;
+        let (s, c) = (&scene.inner, &camera.inner);
+        let opts = RenderOptions { culling, cull: CullOptions { pixel_threshold, prepass_scale } };
+        let out = run(py, move || r.render(s, c, &opts))?;
+        output_dict(py, out)
+    }
+}

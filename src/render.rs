@@ -1,0 +1,397 @@
+//! The frame pipeline: a [`Renderer`] draws a scene as named stages,
+//! upload → strategy → draw → read-back, in one submission per frame:
+//!
+//! 1. [`Renderer::upload`]: the scene's geometry, when it changed since the last frame;
+//! 2. the frame's camera and per-object state (offsets, colours, visibility: no re-upload);
+//! 3. the culling strategy (`crate::cull`, chosen by name): untimed `prepare`, then
+//!    `visible_set`, which may record GPU passes into the frame's encoder;
+//! 4. [`draw`]: the lit fine pass of the visible set (one `multi_draw_indexed_indirect`);
+//!    submit and wait: the frame time ends here;
+//! 5. [`Renderer::read_back`]: image, linear depth, per-tile pixels, the draws made, stats.
+//!
+//! Isosurfaces ([`Renderer::render_isosurface`]) have their own passes in `crate::iso`, on the
+//! same device.
+
+use crate::camera::{Camera, FrameCamera};
+use crate::cull::{self, CullOptions, CullStrategy, Draw, FrameInputs, Pixels, Stat, Visible};
+use crate::error::{Error, Result};
+use crate::gpu::{
+    passes, readback, DrawArgs, Globals, GpuContext, GpuObject, Passes, SceneGeometry, Targets, Timestamps,
+};
+use crate::iso::render::{IsoOptions, IsoOutput, IsoRenderer};
+use crate::iso::{MinMaxOctree, Volume};
+use crate::scene::Scene;
+use glam::{DVec3, Mat4};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// How to render one frame.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// A registered strategy's name (`crate::cull::names()`).
+    pub culling: String,
+    pub cull: CullOptions,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self { culling: "none".into(), cull: CullOptions::default() }
+    }
+}
+
+impl RenderOptions {
+    /// `culling` with the default options.
+    pub fn culling(name: &str) -> Self {
+        Self { culling: name.into(), ..Default::default() }
+    }
+}
+
+/// Timings and counts of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub triangles_fine_total: u64,
+    /// Fine triangles of the tiles drawn by the final pass.
+    pub triangles_drawn: u64,
+    pub tiles_total: u32,
+    pub tiles_drawn: u32,
+    /// CPU time of the strategy's `visible_set` (CPU culling, or recording its GPU passes), ms.
+    pub cull_ms: f64,
+    /// GPU time of the final pass (timestamps; 0 where the adapter has none), ms.
+    pub draw_ms: f64,
+    /// Wall time from the call to the GPU finishing the frame (no read-back, no untimed
+    /// `prepare`), ms.
+    pub total_ms: f64,
+    /// Wall time to copy the image, depth and counts back and convert them, ms.
+    pub readback_ms: f64,
+    pub gpu_timestamps: bool,
+    /// GPU times of the strategy's passes by name (e.g. "prepass_ms") and the strategy's own
+    /// stats (e.g. "nodes_visited").
+    pub extra: Vec<(&'static str, Stat)>,
+}
+
+impl RenderStats {
+    /// A named extra stat, if the frame has it.
+    pub fn get(&self, name: &str) -> Option<Stat> {
+        self.extra.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+    }
+}
+
+/// The result of one frame, as plain host arrays.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, row-major, row 0 = top.
+    pub image: Vec<u8>,
+    /// Distance along the view axis (render-space units), +inf where empty.
+    pub depth: Vec<f32>,
+    /// Per tile: the pixel counts the strategy decided on, in full-image pixels (three_pass: the
+    /// pass-2 counts of the coarse proxies; oracle: the unculled image's); for strategies that
+    /// count no pixels (none, horizon), the final image's.
+    pub tile_pixels: Vec<u32>,
+    pub tile_drawn: Vec<bool>,
+    pub stats: RenderStats,
+    pub near: f64,
+    pub far: f64,
+    /// The strategy's per-frame arrays by name (horizon: "horizon", one value per column).
+    pub arrays: Vec<(&'static str, Vec<f32>)>,
+}
+
+impl RenderOutput {
+    pub fn array(&self, name: &str) -> Option<&[f32]> {
+        self.arrays.iter().find(|(n, _)| *n == name).map(|(_, a)| a.as_slice())
+    }
+}
+
+pub struct Renderer {
+    ctx: GpuContext,
+    width: u32,
+    height: u32,
+    passes: Passes,
+    main_targets: Targets,
+    geometry: Option<SceneGeometry>,
+    timestamps: Option<Timestamps>,
+    /// One instance of every registered strategy (they may cache between frames).
+    strategies: Vec<Box<dyn CullStrategy>>,
+    /// Isosurface pipelines and caches, created on first use.
+    iso: Option<Box<IsoRenderer>>,
+}
+
+impl Renderer {
+    /// Opens the device and builds the pipelines for `width` × `height` images.
+    pub fn new(width: u32, height: u32, backend: &str) -> Result<Self> {
+        // Validate the cheap things before touching the driver.
+        crate::error::ensure(width >= 1, "width", || format!("width is {width}; expected >= 1"))?;
+        crate::error::ensure(height >= 1, "height", || format!("height is {height}; expected >= 1"))?;
+        let strategies: Vec<Box<dyn CullStrategy>> = cull::REGISTRY.iter().map(|make| make()).collect();
+        let wanted = strategies.iter().fold(wgpu::Features::empty(), |f, s| f | s.required_features());
+        let ctx = GpuContext::new(backend, wanted)?;
+        ctx.check_image_size(width, height)?;
+        let passes = Passes::new(&ctx.device);
+        let timestamps = ctx.timestamps.then(|| Timestamps::new(&ctx.device));
+        let main_targets = Targets::new(&ctx.device, width, height, true);
+        ctx.take_error()?;
+        Ok(Self { ctx, width, height, passes, main_targets, geometry: None, timestamps, strategies, iso: None })
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    pub fn adapter_info(&self) -> String {
+        self.ctx.adapter_description()
+    }
+    pub fn max_texture_size(&self) -> u32 {
+        self.ctx.limits.max_texture_dimension_2d
+    }
+    /// Bytes of scene geometry currently held on the GPU.
+    pub fn gpu_bytes(&self) -> u64 {
+        self.geometry.as_ref().map_or(0, |g| g.bytes)
+    }
+
+    /// Stage 1: uploads the scene's geometry if it changed since the last frame.
+    fn upload(&mut self, scene: &Scene) -> Result<()> {
+        if self.geometry.as_ref().is_some_and(|g| g.key == scene.geometry_key()) {
+            return Ok(());
+        }
+        self.geometry = None; // free the old buffers first
+        self.geometry = Some(SceneGeometry::upload(&self.ctx, scene)?);
+        Ok(())
+    }
+
+    /// The frame's camera: near/far from the visible objects' bounds in render space.
+    fn frame_camera(&self, scene: &Scene, camera: &Camera) -> FrameCamera {
+        let zs = DVec3::new(1.0, 1.0, camera.z_scale);
+        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * zs, hi * zs));
+        camera.frame(scene.origin(), bounds, self.width as f64 / self.height as f64)
+    }
+
+    /// Renders `scene` from `camera` with the strategy `opts.culling`.
+    pub fn render(&mut self, scene: &Scene, camera: &Camera, opts: &RenderOptions) -> Result<RenderOutput> {
+        opts.cull.validate()?;
+        let si = self
+            .strategies
+            .iter()
+            .position(|s| s.name() == opts.culling)
+            .ok_or_else(|| cull::unknown(&opts.culling))?;
+        let missing = self.strategies[si].required_features() - self.ctx.features;
+        if !missing.is_empty() {
+            return Err(Error::Device(format!(
+                "culling={:?} needs the device features {missing:?}, which {} lacks",
+                opts.culling,
+                self.ctx.adapter_description()
+            )));
+        }
+        let t0 = Instant::now();
+        self.upload(scene)?;
+        let fc = self.frame_camera(scene, camera);
+        if let Some(ts) = self.timestamps.as_mut() {
+            ts.begin_frame();
+        }
+        let Self { ctx, passes, main_targets, geometry, timestamps, strategies, width, height, .. } = self;
+        let geometry = geometry.as_ref().expect("uploaded above");
+        let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, geometry);
+        let inputs = FrameInputs {
+            ctx,
+            passes,
+            scene,
+            camera,
+            fc: &fc,
+            geometry,
+            scene_bg: &scene_bg,
+            object_visible: &object_visible,
+            width: *width,
+            height: *height,
+            main_targets,
+            options: &opts.cull,
+            timestamps: timestamps.as_ref(),
+        };
+        let strategy = &mut strategies[si];
+        let tp = Instant::now();
+        strategy.prepare(&inputs)?;
+        let untimed = tp.elapsed();
+        let mut enc = ctx.encoder("frame");
+        let tc = Instant::now();
+        let visible = strategy.visible_set(&inputs, &mut enc)?;
+        let cull_ms = tc.elapsed().as_secs_f64() * 1e3;
+        let final_args = draw(&inputs, &mut enc, &visible);
+        let ts_rb = timestamps.as_ref().and_then(|t| t.resolve(&ctx.device, &mut enc));
+        ctx.queue.submit([enc.finish()]);
+        ctx.wait()?;
+        let total_ms = (t0.elapsed() - untimed).as_secs_f64() * 1e3;
+        ctx.take_error()?;
+        let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;
+        out.stats.cull_ms = cull_ms;
+        out.stats.total_ms = total_ms;
+        Ok(out)
+    }
+
+    /// Stage 5: image, depth, per-tile counts and the draws made, copied back and converted
+    /// (not part of the frame time). Counts the final image's tiles when the strategy asks for it.
+    fn read_back(
+        &self,
+        fc: &FrameCamera,
+        visible: Visible,
+        final_args: &wgpu::Buffer,
+        ts_rb: Option<wgpu::Buffer>,
+    ) -> Result<RenderOutput> {
+        let t1 = Instant::now();
+        let (ctx, mt) = (&self.ctx, &self.main_targets);
+        let d = &ctx.device;
+        let geom = self.geometry.as_ref().expect("uploaded");
+        let n = geom.n_tiles();
+        let (w, h) = (self.width, self.height);
+        let mut enc = ctx.encoder("readback");
+        let counted = match &visible.pixels {
+            Pixels::FinalImage => {
+                let c = passes::counts_buffer(d, n);
+                enc.clear_buffer(&c, 0, None);
+                self.passes.record_histogram(d, &mut enc, &mt.id, (w, h), &c, None);
+                Some((readback::copy_buffer(d, &mut enc, &c, 4 * n.max(1) as u64), 1.0))
+            }
+            Pixels::Gpu { counts, scale } => {
+                Some((readback::copy_buffer(d, &mut enc, counts, 4 * n.max(1) as u64), *scale))
+            }
+            Pixels::Host(_) => None,
+        };
+        let color_rb = readback::ReadbackTexture::new(
+            d,
+            &mut enc,
+            mt.color_tex.as_ref().unwrap(),
+            w,
+            h,
+            4,
+            wgpu::TextureAspect::All,
+        );
+        let depth_rb =
+            readback::ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
+        let args_rb =
+            readback::copy_buffer(d, &mut enc, final_args, (n.max(1) * std::mem::size_of::<DrawArgs>()) as u64);
+        ctx.queue.submit([enc.finish()]);
+        readback::map_all(
+            [&color_rb.buffer, &depth_rb.buffer, &args_rb]
+                .into_iter()
+                .chain(counted.as_ref().map(|c| &c.0))
+                .chain(ts_rb.as_ref()),
+        );
+        ctx.wait()?;
+        ctx.take_error()?;
+        let image = color_rb.read_rows()?;
+        let depth_raw: Vec<f32> = bytemuck::cast_slice(&depth_rb.read_rows()?).to_vec();
+        let depth: Vec<f32> = depth_raw.par_iter().map(|&v| fc.linear_depth(v)).collect();
+        let tile_pixels: Vec<u32> = match (visible.pixels, counted) {
+            (Pixels::Host(c), _) => c,
+            (_, Some((buf, scale))) => {
+                let mut c: Vec<u32> = readback::read_mapped(&buf)?;
+                c.truncate(n);
+                if scale == 1.0 {
+                    c
+                } else {
+                    c.iter().map(|&v| (v as f64 * scale).round() as u32).collect()
+                }
+            }
+            _ => unreachable!("counts are read back for every other kind"),
+        };
+        let drawn: Vec<DrawArgs> = readback::read_mapped(&args_rb)?;
+        let drawn = &drawn[..n];
+        let tile_drawn: Vec<bool> = drawn.iter().map(|a| a.instance_count > 0 && a.index_count > 0).collect();
+        let mut stats = RenderStats {
+            triangles_fine_total: geom.fine.iter().map(|a| a.index_count as u64 / 3).sum(),
+            triangles_drawn: drawn.iter().map(|a| a.triangles()).sum(),
+            tiles_total: n as u32,
+            tiles_drawn: tile_drawn.iter().filter(|&&b| b).count() as u32,
+            gpu_timestamps: ts_rb.is_some(),
+            ..Default::default()
+        };
+        if let (Some(b), Some(ts)) = (&ts_rb, &self.timestamps) {
+            for (name, ms) in ts.read(b, ctx.queue.get_timestamp_period())? {
+                if name == "draw_ms" {
+                    stats.draw_ms = ms;
+                } else {
+                    stats.extra.push((name, Stat::Ms(ms)));
+                }
+            }
+        }
+        stats.extra.extend(visible.stats);
+        stats.readback_ms = t1.elapsed().as_secs_f64() * 1e3;
+        Ok(RenderOutput {
+            width: w,
+            height: h,
+            image,
+            depth,
+            tile_pixels,
+            tile_drawn,
+            stats,
+            near: fc.near,
+            far: fc.far,
+            arrays: visible.arrays,
+        })
+    }
+
+    /// Drops cached isosurface patches and occluders.
+    pub fn clear_isosurface_cache(&mut self) {
+        if let Some(g) = self.iso.as_mut() {
+            g.clear_cache();
+        }
+    }
+
+    /// Renders the isosurface `vol = w` seen by `camera`; `tree` must be the octree of `vol`.
+    /// See `crate::iso::render` for what `culling = Implicit` does.
+    pub fn render_isosurface(
+        &mut self,
+        vol: &Volume,
+        tree: &MinMaxOctree,
+        w: f32,
+        camera: &Camera,
+        opts: &IsoOptions,
+    ) -> Result<IsoOutput> {
+        let iso = self.iso.get_or_insert_with(|| Box::new(IsoRenderer::new(&self.ctx.device)));
+        iso.render(&self.ctx, self.width, self.height, vol, tree, w, camera, opts)
+    }
+}
+
+/// Stage 2: the scene bind group of this frame (uniforms, per-object offsets and colours) and
+/// the per-tile object visibility.
+fn frame_state(
+    ctx: &GpuContext,
+    passes: &Passes,
+    scene: &Scene,
+    camera: &Camera,
+    fc: &FrameCamera,
+    geom: &SceneGeometry,
+) -> (wgpu::BindGroup, Vec<bool>) {
+    let objects = scene.objects();
+    let gpu_objects: Vec<GpuObject> = objects
+        .iter()
+        .map(|o| GpuObject {
+            offset: [o.offset.x as f32, o.offset.y as f32, o.offset.z as f32, 0.0],
+            color: [o.color[0], o.color[1], o.color[2], 1.0],
+        })
+        .collect();
+    let light = fc.light_dir();
+    let globals = Globals {
+        view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+        light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0],
+        z_scale: camera.z_scale as f32,
+        _pad: [0.0; 3],
+    };
+    let visible = geom.tile_object_cpu.iter().map(|&oi| objects[oi as usize].visible).collect();
+    (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, geom), visible)
+}
+
+/// Stage 4: records the lit fine pass of the visible set; returns the args it draws.
+fn draw(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, visible: &Visible) -> wgpu::Buffer {
+    let d = &f.ctx.device;
+    let args = match &visible.draw {
+        Draw::All => passes::args_buffer(d, "draw_args", &f.pick(&f.geometry.fine, |_| true)),
+        Draw::Mask(m) => passes::args_buffer(d, "draw_args", &f.pick(&f.geometry.fine, |i| m[i])),
+        Draw::Gpu(b) => b.clone(),
+    };
+    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &args, f.timestamps);
+    args
+}
+
+#[cfg(test)]
+mod tests;
