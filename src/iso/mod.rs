@@ -7,7 +7,7 @@
 //!
 //! * [`Volume`]: a regular scalar grid (x fastest, then y, then z).
 //! * [`octree::MinMaxOctree`]: per-node min/max over cells, built with rayon.
-//! * [`mc`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
+//! * [`tetra`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
 //!   cells, plus a patch cache keyed by isovalue and node.
 //!
 
@@ -17,12 +17,13 @@ use rayon::prelude::*;
 
 use crate::error::{ensure, input_err, Result};
 
-pub mod mc;
 pub mod octree;
+mod passes;
 pub mod render;
+pub mod tetra;
 
-pub use mc::{extract, extract_nodes, PatchCache, SurfacePatch};
 pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
+pub use tetra::{extract, extract_nodes, PatchCache, SurfacePatch};
 
 /// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
 /// address from being reused) and its geometry.

@@ -1,0 +1,518 @@
+//! The isosurface passes: pipelines (iso.wgsl), their targets, and the three steps that record
+//! and submit them: the occlusion map ([`draw_map`]), the node test ([`test_nodes`]) and the lit
+//! surface ([`draw_surface`]). `super::render` decides what goes into them.
+
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
+use wgpu::util::DeviceExt;
+
+use super::octree::NodeInfo;
+use super::tetra::SurfacePatch;
+use crate::error::{Error, Result};
+use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
+use crate::gpu::{map_err, GpuContext};
+use glam::DVec3;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(super) struct Globals {
+    pub(super) view_proj: [[f32; 4]; 4],
+    pub(super) light_dir: [f32; 4],
+    pub(super) color: [f32; 4],
+}
+
+/// Box instance: `lo.xyz, id bits, hi.xyz, 0` in render space.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub(super) struct BoxInstance {
+    pub(super) lo: [f32; 3],
+    pub(super) id: u32,
+    pub(super) hi: [f32; 3],
+    pub(super) _pad: u32,
+}
+
+pub(super) struct Targets {
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) color_tex: wgpu::Texture,
+    pub(super) color: wgpu::TextureView,
+    pub(super) id: wgpu::TextureView,
+    pub(super) depth_tex: wgpu::Texture,
+    pub(super) depth: wgpu::TextureView,
+    pub(super) below: wgpu::TextureView,
+    pub(super) above: wgpu::TextureView,
+    pub(super) map_tex: wgpu::Texture,
+    pub(super) map: wgpu::TextureView,
+}
+
+/// Occluder boxes of one (isovalue, occluder depth), on the GPU.
+pub(super) struct Occluders {
+    pub(super) key: (u32, u32, [u64; 4]),
+    pub(super) below: Option<wgpu::Buffer>,
+    pub(super) above: Option<wgpu::Buffer>,
+    pub(super) n_below: u32,
+    pub(super) n_above: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Globals>() == 96);
+const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
+
+fn box_layout() -> wgpu::VertexBufferLayout<'static> {
+    const ATTRS: [wgpu::VertexAttribute; 2] = [
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
+    ];
+    wgpu::VertexBufferLayout { array_stride: 32, step_mode: wgpu::VertexStepMode::Instance, attributes: &ATTRS }
+}
+
+/// Render-space frame of a volume: origin at its centre, z exaggerated.
+pub(super) struct Space {
+    pub(super) origin: DVec3,
+    pub(super) z_scale: f64,
+}
+
+impl Space {
+    pub(super) fn point(&self, p: [f64; 3]) -> DVec3 {
+        let r = DVec3::from_array(p) - self.origin;
+        DVec3::new(r.x, r.y, r.z * self.z_scale)
+    }
+    /// Box instance in render space, grown by `grow` (negative shrinks) world units per side.
+    pub(super) fn instance(&self, n: &NodeInfo, id: u32, grow: f64) -> BoxInstance {
+        let lo = self.point(n.bbox_min.map(|v| v - grow));
+        let hi = self.point(n.bbox_max.map(|v| v + grow));
+        let (lo, hi) = (lo.min(hi), lo.max(hi));
+        BoxInstance { lo: lo.as_vec3().to_array(), id, hi: hi.as_vec3().to_array(), _pad: 0 }
+    }
+}
+
+/// Bind-group layouts and pipelines of the isosurface passes.
+pub(super) struct IsoPasses {
+    pub(super) globals_layout: wgpu::BindGroupLayout,
+    pub(super) ref_layout: wgpu::BindGroupLayout,
+    pub(super) test_layout: wgpu::BindGroupLayout,
+    pub(super) near_pipeline: wgpu::RenderPipeline,
+    pub(super) beyond_pipeline: wgpu::RenderPipeline,
+    pub(super) test_pipeline: wgpu::RenderPipeline,
+    pub(super) surf_pipeline: wgpu::RenderPipeline,
+}
+
+impl IsoPasses {
+    pub(super) fn new(d: &wgpu::Device) -> Self {
+        let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: fs,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let globals_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_globals"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: vf,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let ref_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_ref"),
+            entries: &[depth_tex_entry(0)],
+        });
+        let test_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_test"),
+            entries: &[
+                depth_tex_entry(0),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("iso.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()),
+        });
+        let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: layouts,
+                immediate_size: 0,
+            })
+        };
+        let pl_globals = pl("iso_globals", &[Some(&globals_layout)]);
+        let pl_ref = pl("iso_ref", &[Some(&globals_layout), Some(&ref_layout)]);
+        let pl_test = pl("iso_test", &[Some(&globals_layout), Some(&test_layout)]);
+        let depth_write = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Greater),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        });
+        let box_vs = wgpu::VertexState {
+            module: &shader,
+            entry_point: Some("vs_box"),
+            compilation_options: Default::default(),
+            buffers: &[Some(box_layout())],
+        };
+        let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: cull,
+            front_face: wgpu::FrontFace::Ccw,
+            ..Default::default()
+        };
+        let near_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("iso_near"),
+            layout: Some(&pl_globals),
+            vertex: box_vs.clone(),
+            primitive: prim(None),
+            depth_stencil: depth_write.clone(),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        let beyond_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("iso_beyond"),
+            layout: Some(&pl_ref),
+            vertex: box_vs.clone(),
+            primitive: prim(None),
+            depth_stencil: depth_write.clone(),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_beyond"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let test_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("iso_test"),
+            layout: Some(&pl_test),
+            vertex: box_vs,
+            primitive: prim(Some(wgpu::Face::Back)),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_test"),
+                compilation_options: Default::default(),
+                targets: &[Some(ID_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        const SURF_ATTRS: [wgpu::VertexAttribute; 2] = [
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 },
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 12, shader_location: 1 },
+        ];
+        let surf_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("iso_surface"),
+            layout: Some(&pl_globals),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_surf"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 24,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &SURF_ATTRS,
+                })],
+            },
+            primitive: prim(None),
+            depth_stencil: depth_write,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_surf"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { globals_layout, ref_layout, test_layout, near_pipeline, beyond_pipeline, test_pipeline, surf_pipeline }
+    }
+}
+
+impl Targets {
+    /// Keeps `slot` holding targets of `width` × `height`.
+    pub(super) fn ensure<'a>(slot: &'a mut Option<Targets>, d: &wgpu::Device, width: u32, height: u32) -> &'a Targets {
+        if slot.as_ref().is_none_or(|t| (t.width, t.height) != (width, height)) {
+            let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
+            let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            let tb = wgpu::TextureUsages::TEXTURE_BINDING;
+            let cs = wgpu::TextureUsages::COPY_SRC;
+            let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
+            let id = tex("iso_id", ID_FORMAT, ra);
+            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | cs);
+            let below = tex("iso_below", DEPTH_FORMAT, ra | tb);
+            let above = tex("iso_above", DEPTH_FORMAT, ra | tb);
+            let map_tex = tex("iso_map", DEPTH_FORMAT, ra | tb | cs);
+            let v = |t: &wgpu::Texture| t.create_view(&Default::default());
+            *slot = Some(Targets {
+                width,
+                height,
+                color: v(&color_tex),
+                color_tex,
+                id: v(&id),
+                depth: v(&depth_tex),
+                depth_tex,
+                below: v(&below),
+                above: v(&above),
+                map: v(&map_tex),
+                map_tex,
+            });
+        }
+        slot.as_ref().unwrap()
+    }
+}
+
+fn depth_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
+    })
+}
+
+fn pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: Option<&wgpu::TextureView>,
+    depth: Option<&wgpu::TextureView>,
+) -> wgpu::RenderPass<'e> {
+    let colors = [color.map(|v| wgpu::RenderPassColorAttachment {
+        view: v,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }),
+            store: wgpu::StoreOp::Store,
+        },
+    })];
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: if color.is_some() { &colors } else { &[] },
+        depth_stencil_attachment: depth.and_then(depth_attachment),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+/// Passes 1–3 of the occlusion map (see the module docs); waits for the GPU.
+pub(super) fn draw_map(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    tg: &Targets,
+    globals_bg: &wgpu::BindGroup,
+    occ: &Occluders,
+) -> Result<()> {
+    let d = &ctx.device;
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_map") });
+    for (view, buf, n) in [(&tg.below, &occ.below, occ.n_below), (&tg.above, &occ.above, occ.n_above)] {
+        let mut p = pass(&mut enc, "iso_nearest", None, Some(view));
+        if let Some(b) = buf {
+            p.set_pipeline(&iso.near_pipeline);
+            p.set_bind_group(0, globals_bg, &[]);
+            p.set_vertex_buffer(0, b.slice(..));
+            p.draw(0..36, 0..n);
+        }
+    }
+    let ref_bg = |v: &wgpu::TextureView| {
+        d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("iso_ref"),
+            layout: &iso.ref_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(v) }],
+        })
+    };
+    let (bg_below, bg_above) = (ref_bg(&tg.below), ref_bg(&tg.above));
+    {
+        let mut p = pass(&mut enc, "iso_map", None, Some(&tg.map));
+        if occ.n_below > 0 && occ.n_above > 0 {
+            p.set_pipeline(&iso.beyond_pipeline);
+            p.set_bind_group(0, globals_bg, &[]);
+            // Above boxes behind the nearest Below point, then Below boxes behind the nearest Above point.
+            p.set_bind_group(1, &bg_below, &[]);
+            p.set_vertex_buffer(0, occ.above.as_ref().unwrap().slice(..));
+            p.draw(0..36, 0..occ.n_above);
+            p.set_bind_group(1, &bg_above, &[]);
+            p.set_vertex_buffer(0, occ.below.as_ref().unwrap().slice(..));
+            p.draw(0..36, 0..occ.n_below);
+        }
+    }
+    ctx.queue.submit([enc.finish()]);
+    ctx.wait()?;
+    ctx.take_error()
+}
+
+/// Visible-pixel count of every box against the map (one submission and read-back).
+pub(super) fn test_nodes(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    tg: &Targets,
+    globals_bg: &wgpu::BindGroup,
+    boxes: &[BoxInstance],
+) -> Result<Vec<u32>> {
+    if boxes.is_empty() {
+        return Ok(Vec::new());
+    }
+    let d = &ctx.device;
+    let size = 4 * boxes.len() as u64;
+    let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("iso_test_boxes"),
+        contents: bytemuck::cast_slice(boxes),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let counts = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_counts"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let rb = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_counts_rb"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("iso_test"),
+        layout: &iso.test_layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&tg.map) },
+            wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+        ],
+    });
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_test") });
+    enc.clear_buffer(&counts, 0, None);
+    {
+        let mut p = pass(&mut enc, "iso_test", Some(&tg.id), None);
+        p.set_pipeline(&iso.test_pipeline);
+        p.set_bind_group(0, globals_bg, &[]);
+        p.set_bind_group(1, &bg, &[]);
+        p.set_vertex_buffer(0, inst.slice(..));
+        p.draw(0..36, 0..boxes.len() as u32);
+    }
+    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, size);
+    ctx.queue.submit([enc.finish()]);
+    rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    ctx.wait()?;
+    ctx.take_error()?;
+    let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+    Ok(v)
+}
+
+/// Uploads the patches (render space, f32) and draws them lit; waits for the GPU.
+pub(super) fn draw_surface(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    globals_bg: &wgpu::BindGroup,
+    tg: &Targets,
+    patches: &[Arc<SurfacePatch>],
+    space: &Space,
+) -> Result<(u64, u64)> {
+    let d = &ctx.device;
+    let nv: usize = patches.iter().map(|p| p.positions.len()).sum();
+    let nt: usize = patches.iter().map(|p| p.triangles.len()).sum();
+    let max = ctx.limits.max_buffer_size;
+    if (nv as u64) * 24 > max || (nt as u64) * 12 > max {
+        return Err(Error::Device(format!(
+            "isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)",
+            max >> 20
+        )));
+    }
+    // Vertex offset of each patch in the shared buffer, then fill in parallel.
+    let mut voff = Vec::with_capacity(patches.len());
+    let mut a = 0usize;
+    for p in patches {
+        voff.push(a);
+        a += p.positions.len();
+    }
+    let mut verts = vec![[0f32; 6]; nv];
+    let mut idx = vec![[0u32; 3]; nt];
+    let zs = space.z_scale;
+    {
+        let mut vchunks: Vec<&mut [[f32; 6]]> = Vec::with_capacity(patches.len());
+        let mut rest = verts.as_mut_slice();
+        for p in patches {
+            let (h, t) = rest.split_at_mut(p.positions.len());
+            vchunks.push(h);
+            rest = t;
+        }
+        let mut ichunks: Vec<&mut [[u32; 3]]> = Vec::with_capacity(patches.len());
+        let mut rest = idx.as_mut_slice();
+        for p in patches {
+            let (h, t) = rest.split_at_mut(p.triangles.len());
+            ichunks.push(h);
+            rest = t;
+        }
+        vchunks.into_par_iter().zip(ichunks).zip(patches.par_iter().zip(&voff)).for_each(|((vc, ic), (p, &base))| {
+            for (k, v) in vc.iter_mut().enumerate() {
+                let q = space.point(p.positions[k]);
+                let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
+                // Normals transform with the inverse transpose of the exaggeration.
+                *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
+            }
+            let base = base as u32;
+            for (t, tri) in ic.iter_mut().zip(&p.triangles) {
+                *t = [tri[0] + base, tri[1] + base, tri[2] + base];
+            }
+        });
+    }
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
+    let (vb, ib) = if nt > 0 {
+        (
+            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_vertices"),
+                contents: bytemuck::cast_slice(&verts),
+                usage: wgpu::BufferUsages::VERTEX,
+            })),
+            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_indices"),
+                contents: bytemuck::cast_slice(&idx),
+                usage: wgpu::BufferUsages::INDEX,
+            })),
+        )
+    } else {
+        (None, None)
+    };
+    {
+        let mut p = pass(&mut enc, "iso_surface", Some(&tg.color), Some(&tg.depth));
+        if let (Some(vb), Some(ib)) = (&vb, &ib) {
+            p.set_pipeline(&iso.surf_pipeline);
+            p.set_bind_group(0, globals_bg, &[]);
+            p.set_vertex_buffer(0, vb.slice(..));
+            p.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            p.draw_indexed(0..(nt as u32 * 3), 0, 0..1);
+        }
+    }
+    ctx.queue.submit([enc.finish()]);
+    ctx.wait()?;
+    ctx.take_error()?;
+    Ok((nt as u64, nv as u64))
+}

@@ -1,0 +1,315 @@
+//! Tests of the marching-tetrahedra extraction and its patch cache.
+
+use super::super::octree::MinMaxOctree;
+use super::super::{pesco_synthetic, sphere_field};
+use super::*;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use crate::TestRng as Lcg;
+
+/// Uniform f32 in [0, 1) from the top 24 bits.
+fn unit(rng: &mut Lcg) -> f32 {
+    (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+}
+
+type PosKey = [u64; 3];
+fn pk(p: [f64; 3]) -> PosKey {
+    p.map(f64::to_bits)
+}
+
+/// Welds by bit-identical position; returns (unique positions, triangles
+/// as welded ids, with degenerate ones dropped).
+fn weld(patch: &SurfacePatch) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut ids: HashMap<PosKey, u32> = HashMap::new();
+    let mut pos = Vec::new();
+    let map: Vec<u32> = patch
+        .positions
+        .iter()
+        .map(|&p| {
+            *ids.entry(pk(p)).or_insert_with(|| {
+                pos.push(p);
+                pos.len() as u32 - 1
+            })
+        })
+        .collect();
+    let tris = patch
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| map[i as usize]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect();
+    (pos, tris)
+}
+
+/// Sorted triangles as position triples, rotated to a canonical start
+/// (keeps winding).
+fn tri_set(patch: &SurfacePatch) -> Vec<[PosKey; 3]> {
+    let mut v: Vec<[PosKey; 3]> = patch
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| pk(patch.positions[i as usize]));
+            let m = (0..3).min_by_key(|&r| p[r]).unwrap();
+            [p[m], p[(m + 1) % 3], p[(m + 2) % 3]]
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn vertex_set(patch: &SurfacePatch) -> Vec<PosKey> {
+    let mut v: Vec<PosKey> = patch.positions.iter().map(|&p| pk(p)).collect();
+    v.sort();
+    v.dedup();
+    v
+}
+
+fn assert_closed_oriented(patch: &SurfacePatch) {
+    let (_, tris) = weld(patch);
+    assert!(!tris.is_empty());
+    let mut directed: BTreeMap<(u32, u32), u32> = BTreeMap::new();
+    for t in &tris {
+        for e in 0..3 {
+            *directed.entry((t[e], t[(e + 1) % 3])).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
+        assert_eq!(directed.get(&(b, a)), Some(&1), "edge {a}-{b} is a border or non-manifold");
+    }
+}
+
+fn area(patch: &SurfacePatch) -> f64 {
+    patch
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| patch.positions[i as usize]);
+            let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            0.5 * dot(c, c).sqrt()
+        })
+        .sum()
+}
+
+fn full(vol: &Volume, w: f32) -> SurfacePatch {
+    extract(vol, w, [0; 3], [u32::MAX; 3])
+}
+
+#[test]
+fn table_is_sane() {
+    let t = tables();
+    assert_eq!(t.start[0], t.start[1]);
+    assert_eq!(t.start[255], t.start[256]);
+    // complementary cases cut the same edges, with opposite orientation
+    let area_vec = |m: usize| {
+        let mut e: Vec<u8> = Vec::new();
+        let mut n = [0.0; 3];
+        for tri in &t.tris[t.start[m] as usize..t.start[m + 1] as usize] {
+            e.extend_from_slice(tri);
+            let p = tri.map(|id| {
+                let (lo, d) = t.edges[id as usize];
+                let (a, b) = (corner_pos(lo), corner_pos(lo | d));
+                [0, 1, 2].map(|i| 0.5 * (a[i] + b[i]))
+            });
+            let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            n = [0, 1, 2].map(|i| n[i] + c[i]);
+        }
+        e.sort();
+        e.dedup();
+        (e, n)
+    };
+    for m in 0..256usize {
+        let (ea, na) = area_vec(m);
+        let (eb, nb) = area_vec(255 - m);
+        assert_eq!(ea, eb);
+        assert!((0..3).all(|i| (na[i] + nb[i]).abs() < 1e-12));
+    }
+    // at most 12 triangles per cell (6 tets x 2)
+    assert!((0..256).all(|m| t.start[m + 1] - t.start[m] <= 12));
+}
+
+#[test]
+fn per_node_matches_whole_volume() {
+    let mut rng = Lcg(7);
+    let vols = vec![pesco_synthetic(37), sphere_field(29, 0.63), {
+        // random field with some NaNs, odd dims
+        let dims = (13, 9, 21);
+        let v: Vec<f32> = (0..dims.0 * dims.1 * dims.2)
+            .map(|_| if unit(&mut rng) < 0.03 { f32::NAN } else { unit(&mut rng) - 0.5 })
+            .collect();
+        Volume::new(v.into(), dims, [0.25, 1.0, -3.0], [0.3, 0.7, 0.11]).unwrap()
+    }];
+    for vol in &vols {
+        let w = 0.0;
+        let whole = full(vol, w);
+        assert!(!whole.is_empty());
+        let tree = MinMaxOctree::build(vol);
+        for d in [tree.max_depth(), tree.max_depth().saturating_sub(2), 0] {
+            let nodes = tree.straddling_at_depth(w, d);
+            let patches = extract_nodes(vol, w, &nodes);
+            let joined = SurfacePatch::concat(&patches);
+            assert_eq!(joined.triangle_count(), whole.triangle_count(), "depth {d}");
+            assert_eq!(vertex_set(&joined), vertex_set(&whole), "depth {d}");
+            assert_eq!(tri_set(&joined), tri_set(&whole), "depth {d}");
+            // non-straddling nodes yield nothing
+            for n in tree.nodes_at_depth(d) {
+                if !n.straddles(w) {
+                    assert!(extract(vol, w, n.cell_lo, n.cell_hi).is_empty());
+                }
+            }
+        }
+        // serial == parallel chunked
+        let cells = vol.cells();
+        let serial = extract_serial(vol, w, [0; 3], cells, false).patch;
+        assert_eq!(serial.triangle_count(), whole.triangle_count());
+        assert_eq!(tri_set(&serial), tri_set(&whole));
+        assert_eq!(serial.vertex_count(), whole.vertex_count());
+    }
+}
+
+#[test]
+fn sphere_closed_area_normals() {
+    let r = 0.7;
+    let vol = sphere_field(64, r);
+    let p = full(&vol, 0.0);
+    assert_closed_oriented(&p);
+    let a = area(&p);
+    let exact = 4.0 * std::f64::consts::PI * r * r;
+    let err = (a - exact).abs() / exact;
+    println!("sphere n=64: {} tris, area {a:.5} vs {exact:.5} ({:.3}%)", p.triangle_count(), err * 100.0);
+    assert!(err < 0.02);
+    // vertices on the sphere, normals outward, winding agrees with normals
+    for (q, n) in p.positions.iter().zip(&p.normals) {
+        let len = dot(*q, *q).sqrt();
+        assert!((len - r).abs() < 0.01);
+        let nn = n.map(|x| x as f64);
+        assert!((dot(nn, nn).sqrt() - 1.0).abs() < 1e-5);
+        assert!(dot(nn, *q) / len > 0.95);
+    }
+    for t in &p.triangles {
+        let q = t.map(|i| p.positions[i as usize]);
+        let c = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+        let centre = centroid(&q);
+        assert!(dot(c, centre) >= 0.0);
+    }
+    // patches per octree node, joined, are also closed (crack-free)
+    let tree = MinMaxOctree::build(&vol);
+    for d in [tree.max_depth(), tree.max_depth() - 2, 1] {
+        let nodes = tree.straddling_at_depth(0.0, d);
+        let joined = SurfacePatch::concat(&extract_nodes(&vol, 0.0, &nodes));
+        assert_closed_oriented(&joined);
+    }
+}
+
+#[test]
+fn samples_exactly_at_isovalue() {
+    // isovalue hitting samples exactly: no panic, still closed after welding
+    let vol = sphere_field(21, 0.5);
+    let vals: Vec<f32> = vol.values.iter().map(|v| (v * 10.0).round() / 10.0).collect();
+    let q = Volume::new(vals.into(), (21, 21, 21), vol.origin, vol.spacing).unwrap();
+    let p = full(&q, 0.0);
+    assert_closed_oriented(&p);
+}
+
+#[test]
+fn no_surface_cases() {
+    let vol = sphere_field(17, 0.5);
+    // wholly above: every value >= w
+    assert!(full(&vol, -10.0).is_empty());
+    // wholly below
+    assert!(full(&vol, 10.0).is_empty());
+    // constant field equal to w counts as above
+    let c = Volume::new(vec![1.0f32; 27].into(), (3, 3, 3), [0.0; 3], [1.0; 3]).unwrap();
+    assert!(full(&c, 1.0).is_empty());
+    // empty / out-of-range boxes
+    assert!(extract(&vol, 0.0, [5, 5, 5], [5, 9, 9]).is_empty());
+    assert!(extract(&vol, 0.0, [100, 0, 0], [200, 9, 9]).is_empty());
+    assert!(full(&vol, f32::NAN).is_empty());
+}
+
+#[test]
+fn nan_handling() {
+    let mut rng = Lcg(99);
+    let base = pesco_synthetic(24);
+    let vals: Vec<f32> = base.values.iter().map(|&v| if unit(&mut rng) < 0.1 { f32::NAN } else { v }).collect();
+    let vol = Volume::new(vals.into(), (24, 24, 24), base.origin, base.spacing).unwrap();
+    let p = full(&vol, 0.0);
+    assert!(!p.is_empty());
+    assert!(p.positions.iter().flatten().all(|x| x.is_finite()));
+    assert!(p.normals.iter().flatten().all(|x| x.is_finite()));
+    let tree = MinMaxOctree::build(&vol);
+    let nodes = tree.straddling_at_depth(0.0, tree.max_depth() - 1);
+    let joined = SurfacePatch::concat(&extract_nodes(&vol, 0.0, &nodes));
+    assert_eq!(tri_set(&joined), tri_set(&p));
+    // all-NaN volume
+    let nanv = Volume::new(vec![f32::NAN; 64].into(), (4, 4, 4), [0.0; 3], [1.0; 3]).unwrap();
+    assert!(full(&nanv, 0.0).is_empty());
+    let t = MinMaxOctree::build(&nanv);
+    assert!(t.straddling_at_depth(0.0, 5).is_empty());
+}
+
+#[test]
+fn cache_reuses_patches() {
+    let vol = pesco_synthetic(33);
+    let tree = MinMaxOctree::build(&vol);
+    let nodes = tree.straddling_at_depth(0.0, 3);
+    let mut cache = PatchCache::new();
+    let a = cache.get_or_extract_many(&vol, 0.0, &nodes);
+    assert_eq!(cache.len(), nodes.len());
+    let b = cache.get_or_extract_many(&vol, 0.0, &nodes);
+    assert_eq!(a.len(), b.len());
+    assert!(a.iter().zip(&b).all(|(x, y)| Arc::ptr_eq(x, y)));
+    assert!(Arc::ptr_eq(&cache.get(-0.0, &nodes[0]).unwrap(), &a[0]));
+    // duplicates in one request share one patch
+    let dup = vec![nodes[0], nodes[0]];
+    let c = cache.get_or_extract_many(&vol, 0.0, &dup);
+    assert!(Arc::ptr_eq(&c[0], &c[1]) && Arc::ptr_eq(&c[0], &a[0]));
+    // another isovalue adds entries
+    let _ = cache.get_or_extract_many(&vol, 0.5, &nodes[..1]);
+    assert_eq!(cache.len(), nodes.len() + 1);
+    cache.retain_isovalue(0.0);
+    assert_eq!(cache.len(), nodes.len());
+    // a different volume clears the cache
+    let other = pesco_synthetic(33);
+    let d = cache.get_or_extract_many(&other, 0.0, &nodes[..1]);
+    assert_eq!(cache.len(), 1);
+    assert!(!Arc::ptr_eq(&d[0], &a[0]));
+    assert_eq!(*d[0], *a[0]);
+    cache.clear();
+    assert!(cache.is_empty());
+}
+
+#[test]
+fn timing_pesco() {
+    for n in [128usize, 256] {
+        let t0 = Instant::now();
+        let vol = pesco_synthetic(n);
+        let t_vol = t0.elapsed();
+        let t1 = Instant::now();
+        let tree = MinMaxOctree::build(&vol);
+        let t_tree = t1.elapsed();
+        let t2 = Instant::now();
+        let p = full(&vol, 0.0);
+        let t_full = t2.elapsed();
+        let t3 = Instant::now();
+        let nodes = tree.straddling_at_depth(0.0, tree.max_depth().saturating_sub(4));
+        let patches = extract_nodes(&vol, 0.0, &nodes);
+        let t_nodes = t3.elapsed();
+        let nt: usize = patches.iter().map(|p| p.triangle_count()).sum();
+        assert_eq!(nt, p.triangle_count());
+        println!(
+            "pesco_synthetic({n}) on {} threads: sample {:?}, octree {:?}, full extract {:?} \
+             -> {} triangles, {} vertices; {} straddling nodes at depth {} extract {:?}",
+            rayon::current_num_threads(),
+            t_vol,
+            t_tree,
+            t_full,
+            p.triangle_count(),
+            p.vertex_count(),
+            nodes.len(),
+            tree.max_depth().saturating_sub(4),
+            t_nodes
+        );
+    }
+}
