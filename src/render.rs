@@ -1,13 +1,13 @@
 //! The frame pipeline: a [`Renderer`] draws a scene as named stages,
 //! upload → strategy → draw → read-back, in one submission per frame:
 //!
-//! 1. [`Renderer::upload`]: the scene's geometry, when it changed since the last frame;
+//! 1. `Renderer::upload`: the scene's geometry, when it changed since the last frame;
 //! 2. the frame's camera and per-object state (offsets, colours, visibility: no re-upload);
 //! 3. the culling strategy (`crate::cull`, chosen by name): untimed `prepare`, then
 //!    `visible_set`, which may record GPU passes into the frame's encoder;
-//! 4. [`draw`]: the lit fine pass of the visible set (one `multi_draw_indexed_indirect`);
+//! 4. `draw`: the lit fine pass of the visible set (one `multi_draw_indexed_indirect`);
 //!    submit and wait: the frame time ends here;
-//! 5. [`Renderer::read_back`]: image, linear depth, per-tile pixels, the draws made, stats.
+//! 5. `Renderer::read_back`: image, linear depth, per-tile pixels, the draws made, stats.
 //!
 //! Isosurfaces ([`Renderer::render_isosurface`]) have their own passes in `crate::iso`, on the
 //! same device.

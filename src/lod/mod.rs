@@ -64,7 +64,7 @@ impl TileMesh {
 }
 
 /// Tile boundaries: `n_samples` samples cut into `n_tiles` runs sharing their end samples,
-/// b[t] = round(t (n_samples - 1) / n_tiles) for t = 0..=n_tiles, in exact integer arithmetic
+/// `b[t] = round(t (n_samples - 1) / n_tiles) for t = 0..=n_tiles`, in exact integer arithmetic
 /// (halves round up). The renderer's tiles and the horizon culler's quadtree both use it.
 pub fn tile_bounds(n_samples: usize, n_tiles: usize) -> Vec<usize> {
     (0..=n_tiles).map(|t| (2 * t * (n_samples - 1) + n_tiles) / (2 * n_tiles)).collect()

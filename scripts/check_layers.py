@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Checks the dependency rule of geocull's code (run by CI; exits 1 on a violation).
+
+Rust (src/): every `crate::<module>` path in code (comments ignored) must point to the same module
+or to a lower layer:
+
+    python -> render -> {cull, iso} -> gpu -> scene -> {lod, camera} -> error
+
+(`cull` and `iso` do not use each other; `crate::TestRng`, `crate::Result`, `crate::Error` are the
+crate root's re-exports and allowed everywhere.)
+
+Python (python/geocull/): no import cycle among the package's modules at import time (module-level
+imports), and no module imports another module's underscore-prefixed name (``from .x import _y``),
+anywhere in the file. Private *modules* with public names (``_convert``, ``_errors``, ``_geocull``)
+are the package's internal API and may be imported.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# module -> the modules it may use (besides itself)
+BELOW: dict[str, set[str]] = {
+    "error": set(),
+    "camera": {"error"},
+    "lod": {"error"},
+    "scene": {"error", "camera", "lod"},
+    "gpu": {"error", "camera", "lod", "scene"},
+    "cull": {"error", "camera", "lod", "scene", "gpu"},
+    "iso": {"error", "camera", "lod", "scene", "gpu"},
+    "render": {"error", "camera", "lod", "scene", "gpu", "cull", "iso"},
+    "python": {"error", "camera", "lod", "scene", "gpu", "cull", "iso", "render"},
+}
+ROOT_ITEMS = {"TestRng", "Result", "Error"}
+
+
+def rust_module(path: Path) -> str | None:
+    rel = path.relative_to(ROOT / "src")
+    if rel.parts == ("lib.rs",):
+        return None
+    return rel.parts[0].removesuffix(".rs")
+
+
+def strip_comments(text: str) -> str:
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    return "\n".join(line.split("//", 1)[0] for line in text.splitlines())
+
+
+def check_rust() -> list[str]:
+    errors = []
+    for path in sorted((ROOT / "src").rglob("*.rs")):
+        mod = rust_module(path)
+        if mod is None:
+            continue
+        if mod not in BELOW:
+            errors.append(f"{path.relative_to(ROOT)}: module `{mod}` has no layer in scripts/check_layers.py")
+            continue
+        code = strip_comments(path.read_text())
+        for m in re.finditer(r"\bcrate::([A-Za-z_][A-Za-z0-9_]*)", code):
+            target = m.group(1)
+            if target == mod or target in ROOT_ITEMS or target in BELOW[mod]:
+                continue
+            line = code[: m.start()].count("\n") + 1
+            errors.append(f"{path.relative_to(ROOT)}:{line}: `{mod}` may not use `crate::{target}`")
+    return errors
+
+
+def check_python() -> list[str]:
+    pkg = ROOT / "python" / "geocull"
+    modules = {p.stem: p for p in pkg.glob("*.py")}
+    errors = []
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text(), filename=str(path))
+        top_level = set(id(n) for n in tree.body)
+        for node in ast.walk(tree):
+            targets: list[tuple[str, list[str]]] = []
+            if isinstance(node, ast.ImportFrom):
+                if node.level == 1:
+                    base = node.module or ""
+                    names = [a.name for a in node.names]
+                    if base:
+                        targets.append((base.split(".")[0], names))
+                    else:  # from . import x, y
+                        targets.extend((n, []) for n in names)
+                elif node.level == 0 and (node.module or "").startswith("geocull."):
+                    targets.append((node.module.split(".")[1], [a.name for a in node.names]))
+            elif isinstance(node, ast.Import):
+                for a in node.names:
+                    if a.name.startswith("geocull."):
+                        targets.append((a.name.split(".")[1], []))
+            for mod, names in targets:
+                for n in names:
+                    if n.startswith("_") and not n.startswith("__"):
+                        errors.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports private name {mod}.{n}")
+                if id(node) in top_level and mod in modules and mod != name:
+                    graph[name].add(mod)
+    # cycles among module-level imports
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(m: str) -> None:
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(graph[m]):
+            if state.get(n) == 1:
+                cycle = stack[stack.index(n):] + [n]
+                errors.append("python import cycle: " + " -> ".join(cycle))
+            elif n not in state:
+                visit(n)
+        stack.pop()
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m)
+    return errors
+
+
+def main() -> int:
+    errors = check_rust() + check_python()
+    for e in errors:
+        print(e)
+    if errors:
+        print(f"check_layers: {len(errors)} violation(s)")
+        return 1
+    print("check_layers: dependency rule holds (Rust layers, Python: no cycle, no private cross-imports)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
