@@ -7,13 +7,7 @@
 //! recorded on the GPU, the per-tile pixel counts its decision rests on, and its own named stats.
 //! It builds on `crate::gpu`'s passes and never on the renderer.
 //!
-//! - [`none`]: every tile (the reference image);
-//! - [`three_pass`]: GPU depth prepass of coarse proxies, exact visible-pixel count per tile,
-//!   fine draw of tiles above a pixel threshold (one submission, no read-back);
-//! - [`oracle`]: exactly the tiles with at least one visible pixel in the unculled image (a lower
-//!   bound for benchmarks, not a practical method: it renders the reference first, untimed);
-//! - [`horizon`]: CPU horizon occlusion culling of height fields over a quadtree of their tiles,
-//!   front to back with one horizon height per image column; meshes are not culled.
+//! Each strategy's file documents what it draws and when that is exact; [`REGISTRY`] lists them.
 
 pub mod horizon;
 pub mod none;
