@@ -6,9 +6,12 @@
 
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, input_err, num, Result};
-use crate::lod::{self, GridSpec, TileMesh};
+use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+mod heightfield;
+mod mesh;
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
@@ -43,24 +46,6 @@ impl Object {
     pub fn fine_triangles(&self) -> usize {
         self.tiles.iter().map(|t| t.fine_triangles()).sum()
     }
-    /// The heights of a height field as a row-major (ny, nx) grid relative to the origin's z
-    /// (NaN where no triangle uses the sample), rebuilt from the tiles' vertices: every vertex is
-    /// a grid sample, and its origin-relative x, y give back its integer column and row.
-    pub fn height_grid(&self) -> Option<Vec<f32>> {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, .. } = self.kind else { return None };
-        let mut z = vec![f32::NAN; nx * ny];
-        for t in &self.tiles {
-            for p in &t.positions {
-                let i = ((p[0] as f64 - x0) / dx).round();
-                let j = ((p[1] as f64 - y0) / dy).round();
-                if (0.0..nx as f64).contains(&i) && (0.0..ny as f64).contains(&j) {
-                    z[j as usize * nx + i as usize] = p[2];
-                }
-            }
-        }
-        Some(z)
-    }
-
     /// Origin-relative bounds of the object's geometry without its offset, or None when empty.
     pub fn local_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -110,7 +95,7 @@ const PALETTE: [[f32; 3]; 8] = [
     [0.85, 0.85, 0.85],
 ];
 
-fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
+pub(super) fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
     match c {
         None => Ok(PALETTE[id as usize % PALETTE.len()]),
         Some(c) => {
@@ -124,7 +109,7 @@ fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
     }
 }
 
-fn check_coarse_factor(cf: f64) -> Result<f32> {
+pub(super) fn check_coarse_factor(cf: f64) -> Result<f32> {
     ensure(cf.is_finite() && cf >= 1.0, "coarse_factor", || format!("coarse_factor is {cf}; expected a number >= 1"))?;
     Ok(cf as f32)
 }
@@ -185,154 +170,26 @@ impl Scene {
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
-    fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
+    pub(super) fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
         *self.origin.get_or_insert_with(|| {
             // Round to a metre so the origin is a tidy number in reports.
             ((lo + hi) * 0.5).round()
         })
     }
 
-    fn push(&mut self, name: Option<String>, kind: ObjectKind, color: [f32; 3], tiles: Vec<TileMesh>) -> u32 {
+    pub(super) fn push(
+        &mut self,
+        name: Option<String>,
+        kind: ObjectKind,
+        color: [f32; 3],
+        tiles: Vec<TileMesh>,
+    ) -> u32 {
         let id = self.next_id;
         self.next_id += 1;
         let name = name.unwrap_or_else(|| format!("object{id}"));
         self.objects.push(Object { id, name, kind, color, visible: true, offset: DVec3::ZERO, tiles });
         self.geometry_version += 1;
         id
-    }
-
-    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows. NaN samples
-    /// (and samples equal to `null_value`) are holes; triangles touching a hole are dropped.
-    #[allow(clippy::too_many_arguments)]
-    pub fn add_heightfield(
-        &mut self,
-        z: &[f64],
-        ny: usize,
-        nx: usize,
-        origin: [f64; 2],
-        spacing: [f64; 2],
-        tiles: (usize, usize),
-        null_value: Option<f64>,
-        opts: AddOptions,
-    ) -> Result<u32> {
-        ensure(nx >= 2 && ny >= 2, "z", || {
-            format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples")
-        })?;
-        ensure(z.len() == nx * ny, "z", || format!("z has {} values, expected {ny} x {nx}", z.len()))?;
-        for (i, v) in origin.iter().enumerate() {
-            ensure(v.is_finite(), "origin", || format!("component {i} is {v}; expected a finite number"))?;
-        }
-        for (i, v) in spacing.iter().enumerate() {
-            ensure(v.is_finite() && *v > 0.0, "spacing", || {
-                format!("component {i} is {v}; expected a finite number > 0")
-            })?;
-        }
-        for (i, (o, (d, n))) in origin.iter().zip(spacing.iter().zip([nx, ny])).enumerate() {
-            let end = o + d * (n - 1) as f64;
-            ensure(
-                o.abs() <= MAX_COORD && end.abs() <= MAX_COORD,
-                if o.abs() > MAX_COORD { "origin" } else { "spacing" },
-                || {
-                    format!(
-                        "component {i}: the grid spans {} .. {}; coordinates must be within +-{MAX_COORD:e}",
-                        num(*o),
-                        num(end)
-                    )
-                },
-            )?;
-        }
-        let (tx, ty) = tiles;
-        ensure(tx >= 1 && tx < nx, "tiles", || {
-            format!("tiles[0] is {tx}; expected 1..={} for {nx} columns (each tile needs one cell)", nx - 1)
-        })?;
-        ensure(ty >= 1 && ty < ny, "tiles", || {
-            format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1)
-        })?;
-        if let Some(nv) = null_value {
-            ensure(!nv.is_infinite(), "null_value", || format!("null_value is {nv}; expected a finite number or NaN"))?;
-        }
-        let cf = check_coarse_factor(opts.coarse_factor)?;
-        let color = check_color(opts.color, self.next_id)?;
-        // Holes: NaN and null_value become NaN; infinities are an error.
-        let mut zz: Vec<f64> = Vec::with_capacity(z.len());
-        let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (k, &v) in z.iter().enumerate() {
-            let v = if null_value.is_some_and(|nv| v == nv) { f64::NAN } else { v };
-            ensure(!v.is_infinite(), "z", || {
-                format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx)
-            })?;
-            ensure(v.is_nan() || v.abs() <= MAX_COORD, "z", || {
-                format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v))
-            })?;
-            if v.is_finite() {
-                zmin = zmin.min(v);
-                zmax = zmax.max(v);
-            }
-            zz.push(v);
-        }
-        let (x0, y0) = (origin[0], origin[1]);
-        let (dx, dy) = (spacing[0], spacing[1]);
-        let (x1, y1) = (x0 + dx * (nx - 1) as f64, y0 + dy * (ny - 1) as f64);
-        if zmin > zmax {
-            (zmin, zmax) = (0.0, 0.0);
-        }
-        let o = self.set_origin_from(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
-        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy };
-        let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
-        let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, tiles: (tx, ty) };
-        Ok(self.push(opts.name, kind, color, tile_meshes))
-    }
-
-    /// Adds a triangle mesh. `vertices` is (n, 3) world coordinates, `faces` (m, 3) indices.
-    /// `clusters` = None: one tile; Some(k): about k spatially coherent tiles.
-    pub fn add_mesh(
-        &mut self,
-        vertices: &[[f64; 3]],
-        faces: &[[i64; 3]],
-        kind: &str,
-        clusters: Option<usize>,
-        opts: AddOptions,
-    ) -> Result<u32> {
-        let n = vertices.len();
-        for (i, v) in vertices.iter().enumerate() {
-            for (a, c) in v.iter().enumerate() {
-                ensure(c.is_finite(), "vertices", || format!("vertices[{i}, {a}] is {c}; vertices must be finite"))?;
-                ensure(c.abs() <= MAX_COORD, "vertices", || {
-                    format!("vertices[{i}, {a}] is {}; coordinates must be within +-{MAX_COORD:e}", num(*c))
-                })?;
-            }
-        }
-        let mut f32faces: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
-        for (i, f) in faces.iter().enumerate() {
-            for (a, &k) in f.iter().enumerate() {
-                ensure(k >= 0 && (k as u64) < n as u64, "faces", || {
-                    format!("faces[{i}, {a}] is {k}; indices must be in 0..{n}")
-                })?;
-            }
-            f32faces.push(f.map(|k| k as u32));
-        }
-        if let Some(k) = clusters {
-            ensure(k >= 1, "tiles", || format!("tiles is {k}; expected an integer >= 1 (or None for one tile)"))?;
-        }
-        let cf = check_coarse_factor(opts.coarse_factor)?;
-        let color = check_color(opts.color, self.next_id)?;
-        // Bounds of the referenced vertices only.
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for f in &f32faces {
-            for &k in f {
-                let p = DVec3::from_array(vertices[k as usize]);
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
-        if lo.x > hi.x {
-            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
-        }
-        let o = self.set_origin_from(lo, hi);
-        let k = clusters.unwrap_or(1).min(f32faces.len().max(1));
-        let tiles = lod::tile_mesh(vertices, &f32faces, o, k, cf);
-        Ok(self.push(opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
     }
 
     pub fn remove(&mut self, id: u32) -> Result<()> {

@@ -1,0 +1,62 @@
+//! Triangle meshes (faults, isosurfaces, any surface): one tile, or about k spatially coherent
+//! clusters, with QEM coarse proxies (`crate::lod::tile_mesh`).
+
+use super::{check_coarse_factor, check_color, AddOptions, ObjectKind, Scene};
+use crate::camera::MAX_COORD;
+use crate::error::{ensure, num, Result};
+use crate::lod;
+use glam::DVec3;
+
+impl Scene {
+    /// Adds a triangle mesh. `vertices` is (n, 3) world coordinates, `faces` (m, 3) indices.
+    /// `clusters` = None: one tile; Some(k): about k spatially coherent tiles.
+    pub fn add_mesh(
+        &mut self,
+        vertices: &[[f64; 3]],
+        faces: &[[i64; 3]],
+        kind: &str,
+        clusters: Option<usize>,
+        opts: AddOptions,
+    ) -> Result<u32> {
+        let n = vertices.len();
+        for (i, v) in vertices.iter().enumerate() {
+            for (a, c) in v.iter().enumerate() {
+                ensure(c.is_finite(), "vertices", || format!("vertices[{i}, {a}] is {c}; vertices must be finite"))?;
+                ensure(c.abs() <= MAX_COORD, "vertices", || {
+                    format!("vertices[{i}, {a}] is {}; coordinates must be within +-{MAX_COORD:e}", num(*c))
+                })?;
+            }
+        }
+        let mut f32faces: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
+        for (i, f) in faces.iter().enumerate() {
+            for (a, &k) in f.iter().enumerate() {
+                ensure(k >= 0 && (k as u64) < n as u64, "faces", || {
+                    format!("faces[{i}, {a}] is {k}; indices must be in 0..{n}")
+                })?;
+            }
+            f32faces.push(f.map(|k| k as u32));
+        }
+        if let Some(k) = clusters {
+            ensure(k >= 1, "tiles", || format!("tiles is {k}; expected an integer >= 1 (or None for one tile)"))?;
+        }
+        let cf = check_coarse_factor(opts.coarse_factor)?;
+        let color = check_color(opts.color, self.next_id)?;
+        // Bounds of the referenced vertices only.
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for f in &f32faces {
+            for &k in f {
+                let p = DVec3::from_array(vertices[k as usize]);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        if lo.x > hi.x {
+            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
+        }
+        let o = self.set_origin_from(lo, hi);
+        let k = clusters.unwrap_or(1).min(f32faces.len().max(1));
+        let tiles = lod::tile_mesh(vertices, &f32faces, o, k, cf);
+        Ok(self.push(opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
+    }
+}
