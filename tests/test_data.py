@@ -182,12 +182,12 @@ def test_build_needs_extension(small):
 
 
 def test_generator_and_sweep_arguments_raise_input_error():
-    from geocull._errors import InputError
+    import geocull as gc
     from geocull import data, report
 
-    with pytest.raises(InputError, match="^nx, ny"):
+    with pytest.raises(gc.InputError, match="^nx, ny"):
         data.gullfaks_like(nx=1)
-    with pytest.raises(InputError, match="^n:"):
+    with pytest.raises(gc.InputError, match="^n:"):
         data.pesco_synthetic(1)
-    with pytest.raises(InputError, match="^scene_or_spec"):
+    with pytest.raises(gc.InputError, match="^scene_or_spec"):
         report.sweep(object())

@@ -19,7 +19,6 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import geocull as gc  # noqa: E402
-from geocull._api import CULLING  # noqa: E402
 
 W, H = 16, 16
 EXAMPLES = int(os.environ.get("GEOCULL_FUZZ_EXAMPLES", "300"))
@@ -201,7 +200,7 @@ CAM_BAD = {
     "projection": st.one_of(st.text(max_size=4), small_ints), "ortho_height": numbers, "z_scale": numbers,
 }
 RENDER_GOOD = {
-    "culling": st.sampled_from(CULLING),
+    "culling": st.sampled_from(gc.CULLING_MODES),
     "pixel_threshold": st.sampled_from([0, 10, 2.5]),
     "prepass_scale": st.sampled_from([1.0, 0.5, 0.1]),
 }
@@ -245,7 +244,7 @@ def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):
     if res is not None:
         check_result(res, scene)
     # The same scene and camera always render in every mode with valid options.
-    for m in CULLING:
+    for m in gc.CULLING_MODES:
         check_result(renderer.render(scene, cam, culling=m, pixel_threshold=0), scene)
 
 
@@ -265,7 +264,7 @@ def test_fuzz_valid_heightfields_render_the_same_in_every_mode(renderer, z, tile
     cam = gc.Camera.look_at(eye, c, fov_y=50)
     ref = renderer.render(scene, cam, culling="none")
     check_result(ref, scene)
-    for m in CULLING[1:]:
+    for m in gc.CULLING_MODES[1:]:
         res = renderer.render(scene, cam, culling=m, pixel_threshold=0)
         check_result(res, scene)
         np.testing.assert_array_equal(res.image, ref.image, err_msg=m)
