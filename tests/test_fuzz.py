@@ -91,7 +91,8 @@ def grid_z():
     def good(draw):
         ny, nx = draw(st.integers(1, 7)), draw(st.integers(1, 7))
         z = np.array(draw(st.lists(st.floats(-50, 50), min_size=nx * ny, max_size=nx * ny))).reshape(ny, nx)
-        mask = np.array(draw(st.lists(st.sampled_from([0, 0, 0, 1, 2]), min_size=nx * ny, max_size=nx * ny))).reshape(ny, nx)
+        mask = np.array(draw(st.lists(st.sampled_from([0, 0, 0, 1, 2]), min_size=nx * ny, max_size=nx * ny)))
+        mask = mask.reshape(ny, nx)
         z[mask == 1] = np.nan
         z[mask == 2] = -999.25
         return z
@@ -183,7 +184,12 @@ MESH_GOOD = {
     "color": maybe(st.tuples(unit, unit, unit)),
     "kind": st.sampled_from(["fault", "mesh"]),
 }
-MESH_BAD = {"tiles": maybe(small_ints), "coarse_factor": numbers, "color": vec(3), "kind": st.one_of(small_ints, st.none())}
+MESH_BAD = {
+    "tiles": maybe(small_ints),
+    "coarse_factor": numbers,
+    "color": vec(3),
+    "kind": st.one_of(small_ints, st.none()),
+}
 CAM_GOOD = {
     "eye": st.tuples(st.floats(-30, 30), st.floats(-30, 30), st.floats(-30, 30)),
     "target": st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)),
@@ -218,7 +224,8 @@ RENDER_BAD = {
     cam_kw=kwargs(CAM_GOOD, CAM_BAD),
     render_kw=kwargs(RENDER_GOOD, RENDER_BAD),
     ops=st.lists(st.tuples(st.sampled_from(["translate", "set_visible", "set_color", "remove"]),
-                           st.one_of(st.integers(0, 1), st.integers(0, 1), small_ints), st.one_of(st.tuples(unit, unit, unit), vec(3))),
+                           st.one_of(st.integers(0, 1), st.integers(0, 1), small_ints),
+                           st.one_of(st.tuples(unit, unit, unit), vec(3))),
                  max_size=2),
 )
 def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):

@@ -35,9 +35,10 @@ class Camera:
         """eye, target: (x, y, z) world points (metres); up: approximate up vector (if parallel to the
         view direction, e.g. looking straight down with up=z, another axis is used). fov_y: vertical
         field of view in degrees, (0, 180). near/far: clip distances along the view axis in world units
-        (metres, exaggerated by z_scale; None = from the scene bounds). projection: "perspective" or "orthographic"; ortho_height: height of
-        the orthographic view in world units (metres; None = what fov_y sees at the target). z_scale:
-        vertical exaggeration, applied to the scene and to eye/target alike (z -> z * z_scale)."""
+        (metres, exaggerated by z_scale; None = from the scene bounds). projection: "perspective" or
+        "orthographic"; ortho_height: height of the orthographic view in world units (metres; None =
+        what fov_y sees at the target). z_scale: vertical exaggeration, applied to the scene and to
+        eye/target alike (z -> z * z_scale)."""
         if not isinstance(projection, str):
             raise InputError(f"projection: {projection!r} is not a string")
         inner = _geocull.Camera.look_at(

@@ -20,8 +20,9 @@ in [0, 1]. Bounds are ``(xmin, xmax, ymin, ymax, zmin, zmax)`` as in PyVista.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -104,7 +105,7 @@ class SceneSpec:
         """Total triangles (see :attr:`n_horizon_triangles` for how holes are counted)."""
         return self.n_horizon_triangles + self.n_fault_triangles
 
-    def mesh_scene(self) -> "MeshScene":
+    def mesh_scene(self) -> MeshScene:
         """The spec as a :class:`MeshScene` (pure numpy, no extension), e.g. for PyVista renders."""
         ms = MeshScene()
         for h in self.horizons:
@@ -288,7 +289,9 @@ def gullfaks_like(
         w = np.linspace(0.0, 1.0, nv)  # 0 = top, 1 = bottom
         wave_k, wave_phase = rng.uniform(1.0, 2.5), rng.uniform(0, np.pi)
 
-        def fault_vertices(length: float) -> np.ndarray:
+        # shorten the fault until it lies inside the horizons' footprint
+        for _ in range(40):
+            # the fault's (nv, nu) grid of vertices at this length
             U, Wf = np.meshgrid(np.linspace(-0.5, 0.5, nu) * length, w)  # (nv, nu)
             # listric: the dip flattens by up to 8° towards the bottom (offset ~ ∫cot(dip) dz)
             dip_local = dip - np.radians(8.0) * Wf**2
@@ -296,15 +299,11 @@ def gullfaks_like(
             horiz = horiz - (zspan * 0.5) / np.tan(dip)  # centred on (cx, cy) at mid depth
             warp = 0.02 * length * np.sin(np.pi * (U / length + 0.5) * wave_k + wave_phase)
             off = horiz + warp * (1.0 - (2.0 * U / length) ** 2)  # warp vanishes at the tips
-            V = np.empty((nv, nu, 3))
-            V[..., 0] = cx + U * s[0] + off * h[0]
-            V[..., 1] = cy + U * s[1] + off * h[1]
-            V[..., 2] = ztop - Wf * zspan
-            return V.reshape(-1, 3)
-
-        # shorten the fault until it lies inside the horizons' footprint
-        for _ in range(40):
-            V = fault_vertices(length)
+            grid = np.empty((nv, nu, 3))
+            grid[..., 0] = cx + U * s[0] + off * h[0]
+            grid[..., 1] = cy + U * s[1] + off * h[1]
+            grid[..., 2] = ztop - Wf * zspan
+            V = grid.reshape(-1, 3)
             inside = (
                 (V[:, 0] >= x0) & (V[:, 0] <= x0 + Lx) & (V[:, 1] >= y0) & (V[:, 1] <= y0 + Ly)
             ).all()
