@@ -528,7 +528,7 @@ def jacksboro_dem() -> tuple[np.ndarray, tuple[float, float], tuple[float, float
     """
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    d: Any = cbook.get_sample_data("jacksboro_fault_dem.npz")  # an NpzFile; matplotlib types it ndarray | IO
     elev = np.asarray(d["elevation"], dtype=np.float64)
     # The raster is stored north-up (row 0 = northern edge; the file's 'ymin' key holds that row's
     # latitude): flip so rows run south → north.
@@ -546,7 +546,7 @@ def topobathy() -> tuple[np.ndarray, tuple[float, float], tuple[float, float]]:
     """
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("topobathy.npz")
+    d: Any = cbook.get_sample_data("topobathy.npz")  # an NpzFile; matplotlib types it ndarray | IO
     z = np.asarray(d["topo"], dtype=np.float64)
     lon = np.asarray(d["longitude"], dtype=np.float64)
     lat = np.asarray(d["latitude"], dtype=np.float64)

@@ -289,9 +289,9 @@ def _config_key(r: dict[str, Any]) -> tuple:
     return (r.get("tiles"), r.get("coarse_factor"), r["method"], r.get("pixel_threshold"), r.get("prepass_scale"))
 
 
-def _gmean(xs: Iterable[float]) -> float | None:
-    xs = [float(x) for x in xs if x is not None and x > 0]
-    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+def _gmean(xs: Iterable[float | None]) -> float | None:
+    vals = [float(x) for x in xs if x is not None and x > 0]
+    return math.exp(sum(math.log(x) for x in vals) / len(vals)) if vals else None
 
 
 def _mean(xs):
