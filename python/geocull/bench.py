@@ -403,6 +403,7 @@ def format_table(result: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m geocull bench [options]``: run the benchmark and print its table; returns the exit status."""
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     cfg = _config(a)
     result = run(cfg)

@@ -98,6 +98,7 @@ class SceneSpec:
 
     @property
     def n_fault_triangles(self) -> int:
+        """Total triangles of the faults."""
         return int(sum(len(f["faces"]) for f in self.faults))
 
     @property
@@ -378,6 +379,8 @@ class MeshScene:
         self._next = 0
 
     def add_mesh(self, vertices, faces, kind: str = "fault", name: str | None = None, color=None, **_ignored) -> int:
+        """Add a mesh: vertices (n, 3) world coordinates (metres), faces (m, 3) indices in [0, n); color
+        (r, g, b) in [0, 1]. Other keyword arguments of ``geocull.Scene.add_mesh`` are ignored. Returns the id."""
         v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64).reshape(-1, 3))
         f = np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
         if f.size and (f.min() < 0 or f.max() >= len(v)):
@@ -391,6 +394,9 @@ class MeshScene:
 
     def add_heightfield(self, z, origin=(0.0, 0.0), spacing=(1.0, 1.0), name: str | None = None, color=None,
                         null_value: float | None = None, **_ignored) -> int:
+        """Add a height field: z (ny, nx) heights (metres; NaN or ``null_value`` = holes), origin (x0, y0) and
+        spacing (dx, dy) in metres as for ``geocull.Scene.add_heightfield``; triangulated with
+        :func:`heightfield_mesh`. Other keyword arguments are ignored. Returns the id."""
         z = np.array(z, dtype=np.float64)
         if null_value is not None:
             z[z == null_value] = np.nan
@@ -398,17 +404,21 @@ class MeshScene:
         return self.add_mesh(v, f, kind="horizon", name=name, color=color)
 
     def geometry(self, object_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """vertices (n, 3) float64 world coordinates (metres) and faces (m, 3) int64 of an object."""
         v, f, _ = self._objects[object_id]
         return v, f
 
     def object_ids(self) -> list[int]:
+        """Ids of the objects, in the order they were added."""
         return list(self._objects)
 
     def object_info(self, object_id: int) -> dict[str, Any]:
+        """name, kind and color (r, g, b) of an object."""
         return dict(self._objects[object_id][2])
 
     @property
     def n_triangles(self) -> int:
+        """Triangles over all objects."""
         return int(sum(len(f) for _, f, _ in self._objects.values()))
 
 

@@ -407,6 +407,7 @@ def jsonable(x: Any) -> Any:
 
 
 def write_json(obj: Any, path: str) -> None:
+    """Write ``obj`` to ``path`` as indented JSON (numpy values converted, non-finite floats as null)."""
     with open(path, "w") as f:
         json.dump(jsonable(obj), f, indent=1, allow_nan=False)
         f.write("\n")
