@@ -78,7 +78,8 @@ def main() -> None:
         res = r.render_isosurface(vol, 0.0, cam, culling="none", cull_depth=ref_cd, cache=False)
         refs.append(res.image)
         ref_rows.append(res.stats)
-    none = {k: avg(ref_rows, k) for k in ("surface_triangles", "nodes_straddling", "extract_ms", "draw_ms", "surface_ms", "total_ms")}
+    none = {k: avg(ref_rows, k)
+            for k in ("surface_triangles", "nodes_straddling", "extract_ms", "draw_ms", "surface_ms", "total_ms")}
     print(f"none: {none['surface_triangles']:.0f} triangles, {none['total_ms']:.0f} ms "
           f"(extract {none['extract_ms']:.0f}, draw {none['draw_ms']:.0f})")
 
@@ -99,7 +100,7 @@ def main() -> None:
         occ_build_ms = (time.perf_counter() - t) * 1e3
         for c in culls:
             stats, errs = [], []
-            for cam, ref in zip(cams, refs):
+            for cam, ref in zip(cams, refs, strict=True):
                 res = r.render_isosurface(vol, 0.0, cam, occluder_depth=b - shift, cull_depth=c - shift, cache=False)
                 stats.append(res.stats)
                 errs.append(float(np.any(res.image != ref, axis=-1).mean()))
@@ -112,9 +113,11 @@ def main() -> None:
             row["image_error"] = float(np.mean(errs))
             row["image_error_max"] = float(np.max(errs))
             rows.append(row)
-            print(f"{b:>5} {c:>4} | {row['surface_triangles']:>10.0f} {row['surface_triangles'] / none['surface_triangles']:>6.2f} | "
+            print(f"{b:>5} {c:>4} | {row['surface_triangles']:>10.0f} "
+                  f"{row['surface_triangles'] / none['surface_triangles']:>6.2f} | "
                   f"{row['nodes_tested']:>7.0f} {row['nodes_visible']:>7.0f} {row['nodes_straddling']:>7.0f} | "
-                  f"{row['occluder_ms']:>8.0f} {row['cull_ms']:>8.0f} {row['surface_ms']:>8.0f} {row['total_ms']:>8.0f} "
+                  f"{row['occluder_ms']:>8.0f} {row['cull_ms']:>8.0f} {row['surface_ms']:>8.0f} "
+                  f"{row['total_ms']:>8.0f} "
                   f"{none['total_ms'] / row['total_ms']:>8.2f} | {row['image_error']:>8.1e}", flush=True)
     best = min(rows, key=lambda x: x["total_ms"])
     fewest = min(rows, key=lambda x: x["surface_triangles"])
@@ -122,7 +125,8 @@ def main() -> None:
     print(f"fastest: build {best['paper_build']} / cull {best['paper_cull']} (paper numbering): "
           f"{none['surface_triangles'] / 1e6:.2f}M -> {best['surface_triangles'] / 1e6:.2f}M triangles, "
           f"{none['total_ms'] / 1e3:.2f} s -> {best['total_ms'] / 1e3:.2f} s")
-    print(f"fewest triangles: build {fewest['paper_build']} / cull {fewest['paper_cull']}: {fewest['surface_triangles'] / 1e6:.2f}M")
+    print(f"fewest triangles: build {fewest['paper_build']} / cull {fewest['paper_cull']}: "
+          f"{fewest['surface_triangles'] / 1e6:.2f}M")
     print(PAPER_BEST)
 
     os.makedirs(os.path.dirname(os.path.abspath(args.out)) or ".", exist_ok=True)
@@ -134,12 +138,14 @@ def main() -> None:
         f.write(f"Synthetic field n={args.n}^3, {args.size}x{args.size}, mean of {len(cams)} views; depths in the "
                 f"paper's numbering (octree depth + {shift}). Unculled: {none['surface_triangles']:.0f} triangles, "
                 f"{none['total_ms']:.0f} ms.\n\n")
-        f.write("| build | cull | triangles | ratio | nodes tested | visible | candidates | occluder ms | cull ms | surface ms | total ms | speed-up | image error |\n")
+        f.write("| build | cull | triangles | ratio | nodes tested | visible | candidates | occluder ms | cull ms "
+                "| surface ms | total ms | speed-up | image error |\n")
         f.write("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
         for x in rows:
             f.write(f"| {x['paper_build']} | {x['paper_cull']} | {x['surface_triangles']:.0f} | "
-                    f"{x['surface_triangles'] / none['surface_triangles']:.2f} | {x['nodes_tested']:.0f} | {x['nodes_visible']:.0f} | "
-                    f"{x['nodes_straddling']:.0f} | {x['occluder_ms']:.0f} | {x['cull_ms']:.0f} | {x['surface_ms']:.0f} | "
+                    f"{x['surface_triangles'] / none['surface_triangles']:.2f} | {x['nodes_tested']:.0f} | "
+                    f"{x['nodes_visible']:.0f} | {x['nodes_straddling']:.0f} | {x['occluder_ms']:.0f} | "
+                    f"{x['cull_ms']:.0f} | {x['surface_ms']:.0f} | "
                     f"{x['total_ms']:.0f} | {none['total_ms'] / x['total_ms']:.2f} | {x['image_error']:.1e} |\n")
     print(f"wrote {args.out}.json and {args.out}.md")
 

@@ -71,7 +71,8 @@ def findings(s_tiles, s_thr, s_coarse, quick: bool) -> tuple[str, list[dict]]:
     close = ten["ratio_to_none"] <= best["ratio_to_none"] * 1.05
     holds = best["tiles"] == "10x10" or close
     out.append("### 1. Tiles per horizon: seeds say 10×10 is best\n")
-    out.append("| tiles | × none | × oracle | tiles drawn | triangles drawn | Δ triangles vs oracle | diff px | missing tiles |")
+    out.append("| tiles | × none | × oracle | tiles drawn | triangles drawn | Δ triangles vs oracle | diff px "
+               "| missing tiles |")
     out.append("|---|---|---|---|---|---|---|---|")
     for r in rows:
         out.append(f"| {r['tiles']} | {r['ratio_to_none']:.3f} | {r['ratio_to_oracle']:.3f} | {r['tiles_drawn']:.0f} | "
@@ -85,27 +86,32 @@ def findings(s_tiles, s_thr, s_coarse, quick: bool) -> tuple[str, list[dict]]:
 
     # 2. threshold 10 ~ no visible error
     out.append("### 2. Pixel threshold: seeds say threshold 10 gives (almost) no visible error\n")
-    out.append("| threshold | prepass scale | × none | × oracle | diff px (mean) | diff px (max view) | missing tiles | Δ triangles vs oracle |")
+    out.append("| threshold | prepass scale | × none | × oracle | diff px (mean) | diff px (max view) | missing tiles "
+               "| Δ triangles vs oracle |")
     out.append("|---|---|---|---|---|---|---|---|")
     for r in sorted(pick(s_thr), key=lambda r: (r["pixel_threshold"], -r["prepass_scale"])):
         out.append(f"| {r['pixel_threshold']:g} | {r['prepass_scale']:g} | {r['ratio_to_none']:.3f} | "
                    f"{r['ratio_to_oracle']:.3f} | {pct(r['differing_pixel_fraction'])} | "
-                   f"{pct(r['max_differing_pixel_fraction'])} | {r['missing_tiles']} | {pct(r['triangle_diff_vs_oracle'])} |")
+                   f"{pct(r['max_differing_pixel_fraction'])} | {r['missing_tiles']} | "
+                   f"{pct(r['triangle_diff_vs_oracle'])} |")
     t10 = one(s_thr, pixel_threshold=10.0, prepass_scale=1.0)
     t0 = one(s_thr, pixel_threshold=0.0, prepass_scale=1.0)
     ok = t10["differing_pixel_fraction"] <= 1e-3 and t10["max_differing_pixel_fraction"] <= 5e-3
-    out.append(f"\n**{'HOLDS' if ok else 'DOES NOT HOLD'}** (criterion: mean differing pixels ≤ 0.1 %, worst view ≤ 0.5 %): "
+    out.append(f"\n**{'HOLDS' if ok else 'DOES NOT HOLD'}** "
+               f"(criterion: mean differing pixels ≤ 0.1 %, worst view ≤ 0.5 %): "
                f"threshold 10 differs from the unculled image in {pct(t10['differing_pixel_fraction'])} of pixels on "
                f"average (worst view {pct(t10['max_differing_pixel_fraction'])}, {t10['missing_tiles']} missing tiles "
                f"over all views) at {t10['ratio_to_none']:.3f} × none; threshold 0: "
-               f"{pct(t0['differing_pixel_fraction'])}, {t0['missing_tiles']} missing tiles, {t0['ratio_to_none']:.3f} × none.\n")
+               f"{pct(t0['differing_pixel_fraction'])}, {t0['missing_tiles']} missing tiles, "
+               f"{t0['ratio_to_none']:.3f} × none.\n")
     verdicts.append(dict(finding="threshold 10 ~ no visible error", holds=ok,
                          dpf_mean=t10["differing_pixel_fraction"], dpf_max=t10["max_differing_pixel_fraction"],
                          missing_tiles=t10["missing_tiles"], ratio=t10["ratio_to_none"]))
 
     # 3. coarse factor: 25-100 ~1 % triangle difference, 400 breaks
     out.append("### 3. Coarse factor: seeds say 25–100 changes drawn triangles by ≈ 1 %, 400 breaks\n")
-    out.append("| coarse factor | threshold | × none | prepass triangles | triangles drawn | Δ triangles vs coarse 25 | Δ triangles vs oracle | diff px | missing tiles |")
+    out.append("| coarse factor | threshold | × none | prepass triangles | triangles drawn | Δ triangles vs coarse 25 "
+               "| Δ triangles vs oracle | diff px | missing tiles |")
     out.append("|---|---|---|---|---|---|---|---|---|")
     base = {thr: one(s_coarse, coarse_factor=25, pixel_threshold=float(thr), prepass_scale=1.0) for thr in (0, 10)}
     for r in sorted(pick(s_coarse), key=lambda r: (r["pixel_threshold"], r["coarse_factor"])):
@@ -114,7 +120,8 @@ def findings(s_tiles, s_thr, s_coarse, quick: bool) -> tuple[str, list[dict]]:
         r["triangle_diff_vs_c25"] = d25
         out.append(f"| {r['coarse_factor']:g} | {r['pixel_threshold']:g} | {r['ratio_to_none']:.3f} | "
                    f"{r.get('triangles_prepass', 0) or 0:,.0f} | {r['triangles_drawn']:,.0f} | {pct(d25)} | "
-                   f"{pct(r['triangle_diff_vs_oracle'])} | {pct(r['differing_pixel_fraction'])} | {r['missing_tiles']} |")
+                   f"{pct(r['triangle_diff_vs_oracle'])} | {pct(r['differing_pixel_fraction'])} | "
+                   f"{r['missing_tiles']} |")
     c = {cf: one(s_coarse, coarse_factor=cf, pixel_threshold=0.0, prepass_scale=1.0) for cf in COARSE}
     d100 = abs(c[100]["triangles_drawn"] - c[25]["triangles_drawn"]) / c[25]["triangles_drawn"]
     d400 = abs(c[400]["triangles_drawn"] - c[25]["triangles_drawn"]) / c[25]["triangles_drawn"]
@@ -182,7 +189,8 @@ def main(argv=None) -> int:
     common = dict(renderer=renderer, repeats=repeats, progress=say)
     sweeps = {}
     say("sweep 1/3: tiles")
-    sweeps["tiles"] = report.sweep(spec, views, thresholds=[10], coarse_factors=[25], tiles=TILES, prepass_scales=[1.0], **common)
+    sweeps["tiles"] = report.sweep(spec, views, thresholds=[10], coarse_factors=[25], tiles=TILES, prepass_scales=[1.0],
+                                   **common)
     say("sweep 2/3: threshold x prepass scale")
     sweeps["threshold_prepass"] = report.sweep(spec, views, thresholds=THRESHOLDS, coarse_factors=[25], tiles=[10],
                                                prepass_scales=PREPASS, **common)

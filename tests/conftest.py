@@ -14,9 +14,9 @@ import pytest
 def renderer_small():
     import geocull as gc
 
-    cache: dict[tuple[int, int], "gc.Renderer"] = {}
+    cache: dict[tuple[int, int], gc.Renderer] = {}
 
-    def get(width: int = 32, height: int = 32) -> "gc.Renderer":
+    def get(width: int = 32, height: int = 32) -> gc.Renderer:
         key = (width, height)
         if key not in cache:
             cache[key] = gc.Renderer(width, height)

@@ -1,5 +1,6 @@
 """geocull.data: scene generators and sample data (pure numpy; build() needs the extension)."""
 
+import itertools
 import math
 
 import numpy as np
@@ -34,7 +35,7 @@ def test_shapes_and_counts(small):
 
 def test_horizons_stacked_downwards(small):
     zs = [h["z"] for h in small.horizons]
-    for upper, lower in zip(zs, zs[1:]):
+    for upper, lower in itertools.pairwise(zs):
         both = np.isfinite(upper) & np.isfinite(lower)
         assert (upper[both] > lower[both]).all()
 
@@ -62,9 +63,9 @@ def test_determinism():
     a = data.stacked_test_scene(n=32, seed=5)
     b = data.stacked_test_scene(n=32, seed=5)
     c = data.stacked_test_scene(n=32, seed=6)
-    for ha, hb in zip(a.horizons, b.horizons):
+    for ha, hb in zip(a.horizons, b.horizons, strict=True):
         np.testing.assert_array_equal(ha["z"], hb["z"])
-    for fa, fb in zip(a.faults, b.faults):
+    for fa, fb in zip(a.faults, b.faults, strict=True):
         np.testing.assert_array_equal(fa["vertices"], fb["vertices"])
         np.testing.assert_array_equal(fa["faces"], fb["faces"])
     assert not np.array_equal(a.horizons[0]["z"], c.horizons[0]["z"], equal_nan=True)
@@ -182,12 +183,12 @@ def test_build_needs_extension(small):
 
 
 def test_generator_and_sweep_arguments_raise_input_error():
-    from geocull._errors import InputError
+    import geocull as gc
     from geocull import data, report
 
-    with pytest.raises(InputError, match="^nx, ny"):
+    with pytest.raises(gc.InputError, match="^nx, ny"):
         data.gullfaks_like(nx=1)
-    with pytest.raises(InputError, match="^n:"):
+    with pytest.raises(gc.InputError, match="^n:"):
         data.pesco_synthetic(1)
-    with pytest.raises(InputError, match="^scene_or_spec"):
+    with pytest.raises(gc.InputError, match="^scene_or_spec"):
         report.sweep(object())

@@ -19,7 +19,6 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import geocull as gc  # noqa: E402
-from geocull._api import CULLING  # noqa: E402
 
 W, H = 16, 16
 EXAMPLES = int(os.environ.get("GEOCULL_FUZZ_EXAMPLES", "300"))
@@ -92,7 +91,8 @@ def grid_z():
     def good(draw):
         ny, nx = draw(st.integers(1, 7)), draw(st.integers(1, 7))
         z = np.array(draw(st.lists(st.floats(-50, 50), min_size=nx * ny, max_size=nx * ny))).reshape(ny, nx)
-        mask = np.array(draw(st.lists(st.sampled_from([0, 0, 0, 1, 2]), min_size=nx * ny, max_size=nx * ny))).reshape(ny, nx)
+        mask = np.array(draw(st.lists(st.sampled_from([0, 0, 0, 1, 2]), min_size=nx * ny, max_size=nx * ny)))
+        mask = mask.reshape(ny, nx)
         z[mask == 1] = np.nan
         z[mask == 2] = -999.25
         return z
@@ -184,7 +184,12 @@ MESH_GOOD = {
     "color": maybe(st.tuples(unit, unit, unit)),
     "kind": st.sampled_from(["fault", "mesh"]),
 }
-MESH_BAD = {"tiles": maybe(small_ints), "coarse_factor": numbers, "color": vec(3), "kind": st.one_of(small_ints, st.none())}
+MESH_BAD = {
+    "tiles": maybe(small_ints),
+    "coarse_factor": numbers,
+    "color": vec(3),
+    "kind": st.one_of(small_ints, st.none()),
+}
 CAM_GOOD = {
     "eye": st.tuples(st.floats(-30, 30), st.floats(-30, 30), st.floats(-30, 30)),
     "target": st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)),
@@ -201,7 +206,7 @@ CAM_BAD = {
     "projection": st.one_of(st.text(max_size=4), small_ints), "ortho_height": numbers, "z_scale": numbers,
 }
 RENDER_GOOD = {
-    "culling": st.sampled_from(CULLING),
+    "culling": st.sampled_from(gc.CULLING_MODES),
     "pixel_threshold": st.sampled_from([0, 10, 2.5]),
     "prepass_scale": st.sampled_from([1.0, 0.5, 0.1]),
 }
@@ -219,7 +224,8 @@ RENDER_BAD = {
     cam_kw=kwargs(CAM_GOOD, CAM_BAD),
     render_kw=kwargs(RENDER_GOOD, RENDER_BAD),
     ops=st.lists(st.tuples(st.sampled_from(["translate", "set_visible", "set_color", "remove"]),
-                           st.one_of(st.integers(0, 1), st.integers(0, 1), small_ints), st.one_of(st.tuples(unit, unit, unit), vec(3))),
+                           st.one_of(st.integers(0, 1), st.integers(0, 1), small_ints),
+                           st.one_of(st.tuples(unit, unit, unit), vec(3))),
                  max_size=2),
 )
 def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):
@@ -245,7 +251,7 @@ def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):
     if res is not None:
         check_result(res, scene)
     # The same scene and camera always render in every mode with valid options.
-    for m in CULLING:
+    for m in gc.CULLING_MODES:
         check_result(renderer.render(scene, cam, culling=m, pixel_threshold=0), scene)
 
 
@@ -265,7 +271,7 @@ def test_fuzz_valid_heightfields_render_the_same_in_every_mode(renderer, z, tile
     cam = gc.Camera.look_at(eye, c, fov_y=50)
     ref = renderer.render(scene, cam, culling="none")
     check_result(ref, scene)
-    for m in CULLING[1:]:
+    for m in gc.CULLING_MODES[1:]:
         res = renderer.render(scene, cam, culling=m, pixel_threshold=0)
         check_result(res, scene)
         np.testing.assert_array_equal(res.image, ref.image, err_msg=m)

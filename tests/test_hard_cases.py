@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import geocull as gc
-from geocull._api import CULLING
 
 BG = np.array([0, 0, 0, 255], np.uint8)
 RED, BLUE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
@@ -26,7 +25,7 @@ RED, BLUE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
 def render_all(r, scene, cam, **kw):
     """{culling: RenderResult} over every mode, threshold 0 (nothing visible may be culled)."""
     kw.setdefault("pixel_threshold", 0)
-    return {m: r.render(scene, cam, culling=m, **kw) for m in CULLING}
+    return {m: r.render(scene, cam, culling=m, **kw) for m in gc.CULLING_MODES}
 
 
 def assert_modes_agree(res):

@@ -183,7 +183,8 @@ RENDER_BAD = [
 ]
 
 
-@pytest.mark.parametrize("kw,arg,detail", RENDER_BAD, ids=[f"{k}={v!r}" for (kw, _, _) in RENDER_BAD for k, v in kw.items()])
+@pytest.mark.parametrize("kw,arg,detail", RENDER_BAD,
+                         ids=[f"{k}={v!r}" for (kw, _, _) in RENDER_BAD for k, v in kw.items()])
 @pytest.mark.parametrize("culling", ["none", "three_pass", "oracle", "horizon"])
 def test_bad_render_arguments(small_world, kw, arg, detail, culling):
     r, s, _, c = small_world

@@ -14,12 +14,12 @@ from geocull import data  # noqa: E402
 from geocull import pyvista as gpv  # noqa: E402
 from geocull.compare import coverage_agreement, depth_error  # noqa: E402
 
-O = np.array([451000.0, 6780000.0, -2000.0])  # UTM-sized, as in real scenes
+ORIGIN = np.array([451000.0, 6780000.0, -2000.0])  # UTM-sized, as in real scenes
 
 
 def _square_scene(half=10.0, z=0.0, color=(1.0, 0.0, 0.0)):
     sc = data.MeshScene()
-    v = O + np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]])
+    v = ORIGIN + np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]])
     sc.add_mesh(v, [[0, 1, 2], [0, 2, 3]], kind="mesh", name="square", color=color)
     return sc
 
@@ -30,8 +30,8 @@ def test_flat_square_from_above_depth_is_distance(projection, z_scale):
     sc = _square_scene()
     dist = 100.0
     cam = dict(
-        eye=tuple(O + [0.0, 0.0, dist / z_scale]),  # world eye; render space multiplies z by z_scale
-        target=tuple(O),
+        eye=tuple(ORIGIN + [0.0, 0.0, dist / z_scale]),  # world eye; render space multiplies z by z_scale
+        target=tuple(ORIGIN),
         up=(0.0, 1.0, 0.0),
         fov_y=30.0,
         projection=projection,
@@ -55,9 +55,9 @@ def test_flat_square_from_above_depth_is_distance(projection, z_scale):
 def test_orientation_row0_is_top_and_x_is_right():
     # a square only in the +x, +y quadrant, camera above looking down with north (+y) up
     sc = data.MeshScene()
-    v = O + np.array([[1.0, 1.0, 0], [10, 1, 0], [10, 10, 0], [1, 10, 0]])
+    v = ORIGIN + np.array([[1.0, 1.0, 0], [10, 1, 0], [10, 10, 0], [1, 10, 0]])
     sc.add_mesh(v, [[0, 1, 2], [0, 2, 3]], color=(0.0, 1.0, 0.0))
-    cam = dict(eye=tuple(O + [0, 0, 100.0]), target=tuple(O), up=(0, 1, 0), fov_y=30.0, near=1.0, far=1000.0)
+    cam = dict(eye=tuple(ORIGIN + [0, 0, 100.0]), target=tuple(ORIGIN), up=(0, 1, 0), fov_y=30.0, near=1.0, far=1000.0)
     r = gpv.reference_image(sc, cam, 40, 40, lighting=False)
     cov = np.isfinite(r["depth"])
     assert cov[:20, 20:].any() and not cov[20:, :].any() and not cov[:, :20].any()
@@ -69,7 +69,7 @@ def test_orientation_row0_is_top_and_x_is_right():
 def test_tilted_plane_depth_gradient():
     sc = _square_scene(half=50.0)
     d = 100.0
-    cam = dict(eye=tuple(O + [0, -d / math.sqrt(2), d / math.sqrt(2)]), target=tuple(O), fov_y=30.0)
+    cam = dict(eye=tuple(ORIGIN + [0, -d / math.sqrt(2), d / math.sqrt(2)]), target=tuple(ORIGIN), fov_y=30.0)
     r = gpv.reference_image(sc, cam, 64, 48)
     col = r["depth"][:, 32]
     ok = np.isfinite(col)

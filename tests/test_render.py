@@ -150,7 +150,7 @@ def test_submodules_are_reachable_as_attributes():
     assert callable(gc.compare.image_error) and callable(gc.data.gullfaks_like)
     assert callable(gc.report.sweep)
     with pytest.raises(AttributeError):
-        gc.no_such_thing
+        _ = gc.no_such_thing
     # PyVista (VTK) is not imported until gc.pyvista is used.
     if "pyvista" not in sys.modules:
         assert "vtk" not in sys.modules

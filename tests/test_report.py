@@ -143,7 +143,8 @@ def test_bench_tiny_json(tmp_path):
         assert k in s, k
     assert s["n_triangles"] > 0 and s["bytes_per_triangle"] > 0 and s["peak_rss_mb"] > 0
     methods = [r["method"] for r in rows]
-    assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)", "oracle", "horizon", "pyvista", "pyvista_msaa"]
+    assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)", "oracle", "horizon",
+                       "pyvista", "pyvista_msaa"]
     for r in rows:
         assert BENCH_KEYS <= set(r), BENCH_KEYS - set(r)
         assert r["total_ms"] > 0 and r["ratio_to_none"] > 0 and r["triangles_drawn"] > 0
@@ -170,5 +171,6 @@ def test_bench_views_by_name_without_pyvista(tmp_path):
     assert p.returncode == 0, p.stderr[-3000:]
     d = json.loads(out.read_text())
     assert d["summary"]["views"] == ["top_down", "low_az200"]
-    assert {r["method"] for r in d["rows"]} == {"none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)", "oracle"}
+    assert {r["method"] for r in d["rows"]} == {"none", "three_pass(s=1)", "three_pass(s=0.5)",
+                                                "three_pass(cf=100,s=0.5)", "oracle"}
     assert np.isclose(d["summary"]["per_method"]["none"]["ratio_to_none"], 1.0)

@@ -63,7 +63,7 @@ def test_counts_do_not_depend_on_draw_order(r):
     ib = [plane(b, -10.0, size=140.0, tiles=(5, 5), name="low"), plane(b, 0.0, name="top")]
     ra = r.render(a, cam, culling="three_pass", pixel_threshold=0)
     rb = r.render(b, cam, culling="three_pass", pixel_threshold=0)
-    for oa, ob in zip(ia, reversed(ib)):  # same object: top with top, low with low
+    for oa, ob in zip(ia, reversed(ib), strict=True):  # same object: top with top, low with low
         assert np.array_equal(ra.tile_pixels[tiles_of(a, oa)], rb.tile_pixels[tiles_of(b, ob)])
     # Default colours follow the object id, and the scene origin (set by the first object) shifts
     # f32 rounding, so compare coverage exactly and depth to f32 precision.
@@ -112,7 +112,7 @@ def test_tile_table_is_a_structured_array():
     assert len(t) == s.n_tiles == 8
     assert set(t.dtype.names) >= {"object", "ix", "iy", "tris_fine", "tris_coarse", "bbox_min", "bbox_max"}
     assert np.all(t["object"] == hid)
-    assert sorted(zip(t["iy"], t["ix"])) == [(j, i) for j in range(2) for i in range(4)]
+    assert sorted(zip(t["iy"], t["ix"], strict=True)) == [(j, i) for j in range(2) for i in range(4)]
     assert t["tris_fine"].sum() == s.n_triangles == 2 * 20 * 20
     assert np.all(t["tris_coarse"] <= t["tris_fine"]) and np.all(t["tris_coarse"] > 0)
     assert np.all(t["bbox_min"][:, 2] == 0.0) and np.all(t["bbox_max"][:, 2] == 0.0)

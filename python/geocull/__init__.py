@@ -6,23 +6,62 @@
 >>> cam = gc.Camera.look_at(eye, target)
 >>> res = gc.Renderer(1280, 1024).render(scene, cam, culling="three_pass")
 >>> res.image, res.depth, res.tile_pixels, res.stats
+
+Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`,
+:mod:`~geocull.results`, :mod:`~geocull.volume` (re-exported here), and, imported on first use,
+:mod:`~geocull.iso`, :mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`,
+:mod:`~geocull.report`, :mod:`~geocull.bench`.
 """
 
+import importlib as _importlib
+from types import ModuleType as _ModuleType
+from typing import TYPE_CHECKING as _TYPE_CHECKING
+
 from ._errors import DeviceError, GeocullError, InputError
-from ._api import Camera, Renderer, RenderResult, Scene
-from .iso import Volume
+from .camera import Camera
+from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, Renderer
+from .results import IsoResult, IsoStats, RenderResult, RenderStats
+from .scene import Scene
+from .volume import Volume
+
+if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getattr__ imports them on first use
+    from . import bench as bench
+    from . import compare as compare
+    from . import data as data
+    from . import iso as iso
+    from . import pyvista as pyvista
+    from . import report as report
 
 __version__ = "0.1.0"
-__all__ = ["Scene", "Camera", "Renderer", "RenderResult", "Volume", "GeocullError", "InputError", "DeviceError"]
+__all__ = [
+    "Scene",
+    "Camera",
+    "Renderer",
+    "RenderResult",
+    "IsoResult",
+    "Volume",
+    "GeocullError",
+    "InputError",
+    "DeviceError",
+    "CULLING_MODES",
+    "ISO_CULLING_MODES",
+    "CullingMode",
+    "IsoCullingMode",
+    "RenderStats",
+    "IsoStats",
+]
 
 _SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso")
 
 
-def __getattr__(name: str):
-    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``: imported on first use (PyVista
-    and VTK are only loaded when ``gc.pyvista`` is touched)."""
+def __getattr__(name: str) -> _ModuleType:
+    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.iso``: imported
+    on first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched)."""
     if name in _SUBMODULES:
-        import importlib
-
-        return importlib.import_module(f".{name}", __name__)
+        return _importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'geocull' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The module's attributes plus the lazily imported submodules, for tab completion."""
+    return sorted(set(globals()) | set(_SUBMODULES))

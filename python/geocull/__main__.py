@@ -9,6 +9,7 @@ import time
 
 
 def demo(argv: list[str]) -> int:
+    """``python -m geocull demo [options]``: render the demo scene to a PNG; returns the exit status."""
     p = argparse.ArgumentParser(prog="python -m geocull demo", description="Render the demo scene to a PNG.")
     p.add_argument("--out", default="demo.png")
     p.add_argument("--width", type=int, default=1280)
@@ -45,6 +46,7 @@ def demo(argv: list[str]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m geocull {demo,bench} ...``; returns the exit status."""
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help"):
         print("usage: python -m geocull {demo,bench} [options]  (each takes --help)")

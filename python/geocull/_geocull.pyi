@@ -1,15 +1,96 @@
-"""Type stub of the Rust extension. Users call the wrappers in geocull (_api.py), which coerce
-and check arguments; these are the raw entry points they call."""
+"""Type stub of the Rust extension (src/python/). Users call the wrappers in geocull (scene.py,
+camera.py, renderer.py, volume.py), which coerce and check arguments; these are the raw entry points
+they call. Arrays must already have the dtype and layout given here (C-contiguous); the extension
+raises TypeError otherwise.
 
-from typing import Any
+The dict shapes below (``@type_check_only`` TypedDicts) exist only for type checkers: at runtime the
+extension returns plain dicts with exactly these keys.
+"""
+
+from typing import Final, NotRequired, Self, TypedDict, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
 
-__version__: str
+from geocull.results import IsoStats, RenderStats
 
+__version__: Final[str]
+__all__ = [
+    "Scene",
+    "Camera",
+    "Renderer",
+    "culling_modes",
+    "Volume",
+    "render_isosurface",
+    "clear_isosurface_cache",
+    "__version__",
+]
+
+@type_check_only
+class ObjectInfo(TypedDict):
+    """``Scene.object_info(id)``."""
+
+    id: int
+    name: str | None
+    kind: str  # "heightfield", "mesh", "fault", ... (the label given to add_mesh)
+    color: tuple[float, float, float]  # (r, g, b) in [0, 1]
+    visible: bool
+    offset: tuple[float, float, float]  # (dx, dy, dz) metres, from translate()
+    n_tiles: int
+    n_triangles: int  # fine (level 0)
+
+@type_check_only
+class TileTable(TypedDict):
+    """``Scene.tile_table()``: one column per key, one row per tile in the renderer's tile order."""
+
+    object: npt.NDArray[np.uint32]  # (n,) object id
+    ix: npt.NDArray[np.uint32]  # (n,) tile column within its object
+    iy: npt.NDArray[np.uint32]  # (n,) tile row within its object
+    tris_fine: npt.NDArray[np.uint32]  # (n,)
+    tris_coarse: npt.NDArray[np.uint32]  # (n,)
+    bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates (metres), NaN for empty tiles
+    bbox_max: npt.NDArray[np.float64]  # (n, 3)
+
+@type_check_only
+class RenderOutput(TypedDict):
+    """``Renderer.render(...)``."""
+
+    image: npt.NDArray[np.uint8]  # (H, W, 4) RGBA, row 0 at the top
+    depth: npt.NDArray[np.float32]  # (H, W) distance along the view axis, +inf where empty
+    tile_pixels: npt.NDArray[np.uint32]  # (n_tiles,) visible pixels per tile
+    tile_drawn: npt.NDArray[np.bool_]  # (n_tiles,)
+    near: float
+    far: float
+    stats: RenderStats
+    horizon: NotRequired[npt.NDArray[np.float32]]  # (W,), only for culling="horizon"
+
+@type_check_only
+class IsoOutput(TypedDict):
+    """``render_isosurface(...)``."""
+
+    image: npt.NDArray[np.uint8]  # (H, W, 4) RGBA, row 0 at the top
+    depth: npt.NDArray[np.float32]  # (H, W) distance along the view axis, +inf where empty
+    nodes: npt.NDArray[np.uint32]  # (n, 4) [depth, ix, iy, iz] of the straddling nodes at cull_depth
+    tile_pixels: npt.NDArray[np.uint32]  # (n,) per node of `nodes`
+    tile_drawn: npt.NDArray[np.bool_]  # (n,) per node of `nodes`
+    occlusion_map: NotRequired[npt.NDArray[np.float32]]  # (H, W), only with return_map=True
+    near: float
+    far: float
+    stats: IsoStats
+
+@type_check_only
+class OctreeNodes(TypedDict):
+    """``Volume.nodes(depth)``."""
+
+    index: npt.NDArray[np.uint32]  # (n, 3) [ix, iy, iz]
+    bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates
+    bbox_max: npt.NDArray[np.float64]  # (n, 3)
+    min: npt.NDArray[np.float32]  # (n,)
+    max: npt.NDArray[np.float32]  # (n,)
+
+@final
 class Scene:
-    def __init__(self) -> None: ...
+    def __new__(cls) -> Self: ...
     def add_heightfield(
         self,
         z: npt.NDArray[np.float64],  # (ny, nx), C-contiguous
@@ -23,8 +104,8 @@ class Scene:
     ) -> int: ...
     def add_mesh(
         self,
-        vertices: npt.NDArray[np.float64],  # (n, 3)
-        faces: npt.NDArray[np.int64],  # (m, 3)
+        vertices: npt.NDArray[np.float64],  # (n, 3), C-contiguous
+        faces: npt.NDArray[np.int64],  # (m, 3), C-contiguous
         kind: str,
         tiles: int | None,
         coarse_factor: float,
@@ -44,11 +125,13 @@ class Scene:
     @property
     def host_bytes(self) -> int: ...
     def object_ids(self) -> list[int]: ...
-    def object_info(self, id: int) -> dict[str, Any]: ...
-    def tile_table(self) -> dict[str, np.ndarray]: ...
+    def object_info(self, id: int) -> ObjectInfo: ...
+    def tile_table(self) -> TileTable: ...
     def geometry(self, id: int) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
 
+@final
 class Camera:
+    # No constructor: Camera() raises TypeError; look_at builds one.
     @staticmethod
     def look_at(
         eye: tuple[float, float, float],
@@ -79,10 +162,11 @@ class Camera:
     def ortho_height(self) -> float | None: ...
     @property
     def z_scale(self) -> float: ...
-    def view_matrix(self) -> npt.NDArray[np.float64]: ...
+    def view_matrix(self) -> npt.NDArray[np.float64]: ...  # (4, 4), row-major
 
+@final
 class Renderer:
-    def __init__(self, width: int, height: int, backend: str) -> None: ...
+    def __new__(cls, width: int, height: int, backend: str) -> Self: ...
     @property
     def width(self) -> int: ...
     @property
@@ -95,15 +179,18 @@ class Renderer:
     def gpu_bytes(self) -> int: ...
     def render(
         self, scene: Scene, camera: Camera, culling: str, pixel_threshold: float, prepass_scale: float
-    ) -> dict[str, Any]: ...
+    ) -> RenderOutput: ...
 
+def culling_modes() -> list[str]: ...
+
+@final
 class Volume:
-    def __init__(
-        self,
+    def __new__(
+        cls,
         values: npt.NDArray[np.float32] | npt.NDArray[np.float64],  # (nz, ny, nx), C-contiguous
         origin: tuple[float, float, float],
         spacing: tuple[float, float, float],
-    ) -> None: ...
+    ) -> Self: ...
     @property
     def shape(self) -> tuple[int, int, int]: ...
     @property
@@ -111,7 +198,7 @@ class Volume:
     @property
     def spacing(self) -> tuple[float, float, float]: ...
     def max_depth(self) -> int: ...
-    def nodes(self, depth: int) -> dict[str, np.ndarray]: ...
+    def nodes(self, depth: int) -> OctreeNodes: ...
 
 def render_isosurface(
     renderer: Renderer,
@@ -124,5 +211,5 @@ def render_isosurface(
     color: tuple[float, float, float],
     cache: bool,
     return_map: bool,
-) -> dict[str, Any]: ...
+) -> IsoOutput: ...
 def clear_isosurface_cache(renderer: Renderer) -> None: ...

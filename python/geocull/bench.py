@@ -117,6 +117,7 @@ def _select_views(views, spec_arg) -> list:
 def run(cfg: dict[str, Any]) -> dict[str, Any]:
     """Run the benchmark described by ``cfg`` (see :func:`_config`); returns summary and rows."""
     import geocull as gc
+
     from . import report
     from .compare import coverage_agreement, depth_error, image_error
     from .data import gullfaks_like
@@ -125,7 +126,8 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     w, h = int(cfg["width"]), int(cfg["height"])
     _say(f"bench[{cfg['mode']}]: generating scene {cfg['size']}x{cfg['size']} samples, {cfg['n_faults']} faults")
     t0 = time.perf_counter()
-    spec = gullfaks_like(nx=cfg["size"], ny=cfg["size"], n_faults=cfg["n_faults"], fault_triangles=cfg["fault_triangles"])
+    spec = gullfaks_like(nx=cfg["size"], ny=cfg["size"], n_faults=cfg["n_faults"],
+                         fault_triangles=cfg["fault_triangles"])
     gen_s = time.perf_counter() - t0
     _say(f"bench: building tiles + LOD (tiles {TILES[0]}x{TILES[1]}, coarse factor {COARSE_FACTOR})")
     t0 = time.perf_counter()
@@ -162,9 +164,10 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
         # imported after geocull's first view so that peak_rss_geocull_mb excludes VTK
         nonlocal gpv
         try:
-            from . import pyvista as gpv_mod
             import pyvista
             import vtk
+
+            from . import pyvista as gpv_mod
 
             pv_versions.update(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
             gpv = gpv_mod
@@ -188,7 +191,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             if cfg["pyvista"]:
                 import_pyvista()
 
-        def gjob(rk):
+        def gjob(rk, cam=cam):  # cam bound at definition (B023); the jobs run in this iteration
             return lambda: render(cam, rk).stats["total_ms"]
 
         jobs = [(name, gjob(rk)) for name, rk in methods]
@@ -344,7 +347,8 @@ def format_table(result: dict[str, Any]) -> str:
     rows = result["rows"]
     lines = []
     lines.append(
-        f"geocull bench ({s['mode']}): {s['n_horizons']} horizons {s['samples']}x{s['samples']} + {s['n_faults']} faults, "
+        f"geocull bench ({s['mode']}): {s['n_horizons']} horizons {s['samples']}x{s['samples']} + "
+        f"{s['n_faults']} faults, "
         f"{s['width']}x{s['height']}, {len(s['views'])} view(s), best of {s['repeats']} round(s) after a warm-up; "
         f"three_pass: threshold {s['pixel_threshold']}, coarse factor {s['coarse_factor']}, tiles {s['tiles']}"
     )
@@ -375,26 +379,31 @@ def format_table(result: dict[str, Any]) -> str:
         lines.append(
             f"  {name:<24} x none {_f(m['ratio_to_none'], '.3f')}  x oracle {_f(m['ratio_to_oracle'], '.3f')}  "
             f"x pyvista {_f(m['ratio_to_pyvista'], '.3f')}  x pyvista_msaa {_f(m['ratio_to_pyvista_msaa'], '.3f')}  "
-            f"diff px {_f(None if dp is None else 100 * dp, '.4f')} % (max {_f(None if mx is None else 100 * mx, '.4f')} %)  "
+            f"diff px {_f(None if dp is None else 100 * dp, '.4f')} % "
+            f"(max {_f(None if mx is None else 100 * mx, '.4f')} %)  "
             f"missing tiles {_f(m['missing_tiles'], 'd')}"
         )
     lines.append("")
     bpt = s["bytes_per_triangle"]
-    lines.append(f"scene: {s['n_triangles']:,} triangles in {s['n_tiles']:,} tiles; generated in {s['scene_generate_s']:.2f} s, "
+    lines.append(f"scene: {s['n_triangles']:,} triangles in {s['n_tiles']:,} tiles; "
+                 f"generated in {s['scene_generate_s']:.2f} s, "
                  f"tiles + LOD built in {s['scene_build_s']:.2f} s (target < 2 s on 2 cores for the full scene)")
     lines.append(f"memory: host {s['host_bytes'] / 2**20:.1f} MiB + GPU {(s['gpu_bytes'] or 0) / 2**20:.1f} MiB = "
-                 f"{_f(bpt, '.1f')} bytes per fine triangle (target <= 40); peak RSS {s['peak_rss_geocull_mb']:.0f} MiB "
+                 f"{_f(bpt, '.1f')} bytes per fine triangle (target <= 40); "
+                 f"peak RSS {s['peak_rss_geocull_mb']:.0f} MiB "
                  f"after geocull's first view, {s['peak_rss_mb']:.0f} MiB at the end (PyVista included)")
     pv = f"; PyVista {s['pyvista']}, VTK {s['vtk']}" if "pyvista" in s else ""
     lines.append(f"adapter: {s['adapter']}{pv}; {s['cpu_count']} CPU(s); wall {s['wall_s']:.0f} s")
     lines.append("columns: ms = best frame time (geocull stats total_ms: call -> GPU done; PyVista: Render + "
                  "WaitForCompletion); x = ratio of frame times, same view, same run; diff px = differing pixels vs "
-                 "geocull none; missing = tiles visible unculled but not drawn; cov agree = coverage agreement vs none; "
+                 "geocull none; missing = tiles visible unculled but not drawn; "
+                 "cov agree = coverage agreement vs none; "
                  "depth err = median relative depth difference vs none (PyVista)")
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m geocull bench [options]``: run the benchmark and print its table; returns the exit status."""
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     cfg = _config(a)
     result = run(cfg)

@@ -112,7 +112,8 @@ def image_error(
 
 
 def coverage(depth: np.ndarray) -> np.ndarray:
-    """Boolean mask of pixels where something was drawn (finite depth; ``inf``/NaN = empty)."""
+    """(H, W) bool mask of the pixels of an (H, W) depth image where something was drawn (finite depth;
+    ``inf``/NaN = empty)."""
     return np.isfinite(_depth("depth", depth))
 
 
@@ -125,8 +126,8 @@ def _pair(depth_a, depth_b) -> tuple[np.ndarray, np.ndarray]:
 
 
 def coverage_agreement(depth_a: np.ndarray, depth_b: np.ndarray) -> float:
-    """Fraction of pixels where ``depth_a`` and ``depth_b`` agree on whether something is drawn
-    (1.0 for empty images)."""
+    """Fraction of pixels where the (H, W) depth images ``depth_a`` and ``depth_b`` agree on whether
+    something is drawn (1.0 for empty images)."""
     a, b = _pair(depth_a, depth_b)
     if a.size == 0:
         return 1.0

@@ -20,8 +20,9 @@ in [0, 1]. Bounds are ``(xmin, xmax, ymin, ymax, zmin, zmax)`` as in PyVista.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -97,6 +98,7 @@ class SceneSpec:
 
     @property
     def n_fault_triangles(self) -> int:
+        """Total triangles of the faults."""
         return int(sum(len(f["faces"]) for f in self.faults))
 
     @property
@@ -104,7 +106,7 @@ class SceneSpec:
         """Total triangles (see :attr:`n_horizon_triangles` for how holes are counted)."""
         return self.n_horizon_triangles + self.n_fault_triangles
 
-    def mesh_scene(self) -> "MeshScene":
+    def mesh_scene(self) -> MeshScene:
         """The spec as a :class:`MeshScene` (pure numpy, no extension), e.g. for PyVista renders."""
         ms = MeshScene()
         for h in self.horizons:
@@ -288,7 +290,9 @@ def gullfaks_like(
         w = np.linspace(0.0, 1.0, nv)  # 0 = top, 1 = bottom
         wave_k, wave_phase = rng.uniform(1.0, 2.5), rng.uniform(0, np.pi)
 
-        def fault_vertices(length: float) -> np.ndarray:
+        # shorten the fault until it lies inside the horizons' footprint
+        for _ in range(40):
+            # the fault's (nv, nu) grid of vertices at this length
             U, Wf = np.meshgrid(np.linspace(-0.5, 0.5, nu) * length, w)  # (nv, nu)
             # listric: the dip flattens by up to 8° towards the bottom (offset ~ ∫cot(dip) dz)
             dip_local = dip - np.radians(8.0) * Wf**2
@@ -296,15 +300,11 @@ def gullfaks_like(
             horiz = horiz - (zspan * 0.5) / np.tan(dip)  # centred on (cx, cy) at mid depth
             warp = 0.02 * length * np.sin(np.pi * (U / length + 0.5) * wave_k + wave_phase)
             off = horiz + warp * (1.0 - (2.0 * U / length) ** 2)  # warp vanishes at the tips
-            V = np.empty((nv, nu, 3))
-            V[..., 0] = cx + U * s[0] + off * h[0]
-            V[..., 1] = cy + U * s[1] + off * h[1]
-            V[..., 2] = ztop - Wf * zspan
-            return V.reshape(-1, 3)
-
-        # shorten the fault until it lies inside the horizons' footprint
-        for _ in range(40):
-            V = fault_vertices(length)
+            grid = np.empty((nv, nu, 3))
+            grid[..., 0] = cx + U * s[0] + off * h[0]
+            grid[..., 1] = cy + U * s[1] + off * h[1]
+            grid[..., 2] = ztop - Wf * zspan
+            V = grid.reshape(-1, 3)
             inside = (
                 (V[:, 0] >= x0) & (V[:, 0] <= x0 + Lx) & (V[:, 1] >= y0) & (V[:, 1] <= y0 + Ly)
             ).all()
@@ -379,6 +379,8 @@ class MeshScene:
         self._next = 0
 
     def add_mesh(self, vertices, faces, kind: str = "fault", name: str | None = None, color=None, **_ignored) -> int:
+        """Add a mesh: vertices (n, 3) world coordinates (metres), faces (m, 3) indices in [0, n); color
+        (r, g, b) in [0, 1]. Other keyword arguments of ``geocull.Scene.add_mesh`` are ignored. Returns the id."""
         v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64).reshape(-1, 3))
         f = np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
         if f.size and (f.min() < 0 or f.max() >= len(v)):
@@ -392,6 +394,9 @@ class MeshScene:
 
     def add_heightfield(self, z, origin=(0.0, 0.0), spacing=(1.0, 1.0), name: str | None = None, color=None,
                         null_value: float | None = None, **_ignored) -> int:
+        """Add a height field: z (ny, nx) heights (metres; NaN or ``null_value`` = holes), origin (x0, y0) and
+        spacing (dx, dy) in metres as for ``geocull.Scene.add_heightfield``; triangulated with
+        :func:`heightfield_mesh`. Other keyword arguments are ignored. Returns the id."""
         z = np.array(z, dtype=np.float64)
         if null_value is not None:
             z[z == null_value] = np.nan
@@ -399,17 +404,21 @@ class MeshScene:
         return self.add_mesh(v, f, kind="horizon", name=name, color=color)
 
     def geometry(self, object_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """vertices (n, 3) float64 world coordinates (metres) and faces (m, 3) int64 of an object."""
         v, f, _ = self._objects[object_id]
         return v, f
 
     def object_ids(self) -> list[int]:
+        """Ids of the objects, in the order they were added."""
         return list(self._objects)
 
     def object_info(self, object_id: int) -> dict[str, Any]:
+        """name, kind and color (r, g, b) of an object."""
         return dict(self._objects[object_id][2])
 
     @property
     def n_triangles(self) -> int:
+        """Triangles over all objects."""
         return int(sum(len(f) for _, f, _ in self._objects.values()))
 
 
@@ -529,7 +538,7 @@ def jacksboro_dem() -> tuple[np.ndarray, tuple[float, float], tuple[float, float
     """
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    d: Any = cbook.get_sample_data("jacksboro_fault_dem.npz")  # an NpzFile; matplotlib types it ndarray | IO
     elev = np.asarray(d["elevation"], dtype=np.float64)
     # The raster is stored north-up (row 0 = northern edge; the file's 'ymin' key holds that row's
     # latitude): flip so rows run south → north.
@@ -547,7 +556,7 @@ def topobathy() -> tuple[np.ndarray, tuple[float, float], tuple[float, float]]:
     """
     from matplotlib import cbook
 
-    d = cbook.get_sample_data("topobathy.npz")
+    d: Any = cbook.get_sample_data("topobathy.npz")  # an NpzFile; matplotlib types it ndarray | IO
     z = np.asarray(d["topo"], dtype=np.float64)
     lon = np.asarray(d["longitude"], dtype=np.float64)
     lat = np.asarray(d["latitude"], dtype=np.float64)

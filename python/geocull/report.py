@@ -29,7 +29,8 @@ import math
 import statistics
 import sys
 import time
-from typing import Any, Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -135,7 +136,8 @@ def _sweep_scene(
     if "three_pass" in methods:
         for thr, ps in itertools.product(thresholds, prepass_scales):
             configs.append(
-                (("three_pass", float(thr), float(ps)), dict(culling="three_pass", pixel_threshold=thr, prepass_scale=ps))
+                (("three_pass", float(thr), float(ps)),
+                 dict(culling="three_pass", pixel_threshold=thr, prepass_scale=ps))
             )
 
     rows: list[dict[str, Any]] = []
@@ -148,7 +150,7 @@ def _sweep_scene(
         oracle = first[("oracle",)]
         visible = np.asarray(oracle.tile_pixels)
 
-        def job(kw):
+        def job(kw, cam=cam):  # cam bound at definition (B023); the jobs run in this iteration
             return lambda: renderer.render(scene, cam, **kw).stats["total_ms"]
 
         say(f"  view {vname}: {repeats} timed round(s)")
@@ -156,7 +158,7 @@ def _sweep_scene(
         t_none = min(times[("none",)])
         t_oracle = min(times[("oracle",)])
         tri_oracle = oracle.stats["triangles_drawn"]
-        for key, kw in configs:
+        for key, _kw in configs:
             res = first[key]
             s = res.stats
             t = min(times[key])
@@ -230,6 +232,7 @@ def sweep(
     ``as_frame=True`` a pandas DataFrame instead.
     """
     import geocull as gc
+
     from .data import SceneSpec
 
     say = _progress_fn(progress)
@@ -249,7 +252,9 @@ def sweep(
                 "coarse_factors, tiles: sweeping them rebuilds the scene; pass a geocull.data.SceneSpec, not a Scene"
             )
         if not isinstance(scene_or_spec, gc.Scene):
-            raise InputError(f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}")
+            raise InputError(
+                f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}"
+            )
     if not list(thresholds) or not list(prepass_scales):
         raise InputError("thresholds, prepass_scales: need at least one value each")
 
@@ -268,7 +273,8 @@ def sweep(
         for tl, cf in itertools.product(tls, cfs):
             say(f"sweep: building scene tiles={tl[0]}x{tl[1]} coarse_factor={cf}")
             t0 = time.perf_counter()
-            scene = spec.build(tiles=tl, coarse_factor=cf, fault_tiles=fault_tiles, fault_coarse_factor=fault_coarse_factor)
+            scene = spec.build(tiles=tl, coarse_factor=cf, fault_tiles=fault_tiles,
+                               fault_coarse_factor=fault_coarse_factor)
             build_s = time.perf_counter() - t0
             base = dict(tiles=f"{tl[0]}x{tl[1]}", coarse_factor=cf, build_s=build_s)
             rows += _sweep_scene(scene, cams, renderer, thresholds, prepass_scales, repeats, methods, base, say)
@@ -283,9 +289,9 @@ def _config_key(r: dict[str, Any]) -> tuple:
     return (r.get("tiles"), r.get("coarse_factor"), r["method"], r.get("pixel_threshold"), r.get("prepass_scale"))
 
 
-def _gmean(xs: Iterable[float]) -> float | None:
-    xs = [float(x) for x in xs if x is not None and x > 0]
-    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else None
+def _gmean(xs: Iterable[float | None]) -> float | None:
+    vals = [float(x) for x in xs if x is not None and x > 0]
+    return math.exp(sum(math.log(x) for x in vals) / len(vals)) if vals else None
 
 
 def _mean(xs):
@@ -401,6 +407,7 @@ def jsonable(x: Any) -> Any:
 
 
 def write_json(obj: Any, path: str) -> None:
+    """Write ``obj`` to ``path`` as indented JSON (numpy values converted, non-finite floats as null)."""
     with open(path, "w") as f:
         json.dump(jsonable(obj), f, indent=1, allow_nan=False)
         f.write("\n")

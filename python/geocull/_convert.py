@@ -1,0 +1,116 @@
+"""Argument coercion and checking shared by the public wrappers: numpy in, plain Python values out.
+
+Every helper takes the value and ``arg``, the argument's name, and raises
+:class:`geocull.InputError` whose message starts with that name. Shape and dtype are checked here;
+values and ranges are checked again in Rust. The integer range checks below (:func:`integer`'s
+``lo``/``hi``) duplicate what the core will own eventually; they live only in this file so that
+they are easy to remove.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+
+from ._errors import InputError
+
+__all__ = [
+    "FLOAT_KINDS",
+    "INT_KINDS",
+    "checked_array",
+    "float_array",
+    "int_array",
+    "vec",
+    "vec2",
+    "vec3",
+    "number",
+    "integer",
+    "expect_instance",
+    "color",
+    "name",
+]
+
+FLOAT_KINDS = "fiu"  # numpy dtype kinds accepted as real numbers: float, signed int, unsigned int
+INT_KINDS = "iu"  # numpy dtype kinds accepted as integers: signed int, unsigned int
+
+
+def checked_array(x: Any, arg: str, ndim: int, last: int | None = None, kinds: str = FLOAT_KINDS) -> np.ndarray:
+    """numpy view of ``x`` (no copy) with rank ``ndim``, last axis ``last`` (if given), dtype kind in ``kinds``."""
+    try:
+        a = np.asarray(x)
+    except Exception as e:  # ragged lists, objects that refuse conversion
+        raise InputError(f"{arg}: cannot be read as an array ({e})") from None
+    if a.dtype.kind not in kinds:
+        want = "integers" if kinds == INT_KINDS else "real numbers (float or int)"
+        raise InputError(f"{arg}: dtype {a.dtype} is not supported; expected {want}")
+    if a.ndim != ndim or (last is not None and a.shape[-1] != last):
+        want = f"({', '.join(['n'] * (ndim - 1) + [str(last)])})" if last is not None else f"{ndim}-D"
+        raise InputError(f"{arg}: shape {a.shape} is not {want}")
+    return a
+
+
+def float_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:
+    """C-contiguous float64 copy (or view) of a real-valued array checked as by :func:`checked_array`."""
+    a = checked_array(x, arg, ndim, last)
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def int_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:
+    """numpy view of an integer-valued array (signed or unsigned, dtype kept) checked as by :func:`checked_array`."""
+    return checked_array(x, arg, ndim, last, kinds=INT_KINDS)
+
+
+def vec(x: Any, arg: str, n: int) -> tuple[float, ...]:
+    """Tuple of ``n`` Python floats from a length-``n`` 1-D sequence or array of real numbers."""
+    a = checked_array(x, arg, 1, n)
+    return tuple(float(v) for v in a)
+
+
+def vec2(x: Any, arg: str) -> tuple[float, float]:
+    """:func:`vec` with n = 2, typed as a pair (e.g. (x, y) or (dx, dy))."""
+    u, v = vec(x, arg, 2)
+    return u, v
+
+
+def vec3(x: Any, arg: str) -> tuple[float, float, float]:
+    """:func:`vec` with n = 3, typed as a triple (e.g. a point (x, y, z) or a colour (r, g, b))."""
+    u, v, w = vec(x, arg, 3)
+    return u, v, w
+
+
+def number(x: Any, arg: str) -> float:
+    """Python float of a real number (``numbers.Real``, not bool); finiteness is checked in Rust."""
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise InputError(f"{arg}: {x!r} is not a real number")
+    return float(x)
+
+
+def integer(x: Any, arg: str, lo: int = 0, hi: int = 2**31 - 1) -> int:
+    """Python int of an integer (``numbers.Integral``, not bool) in ``lo..hi`` inclusive."""
+    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
+        raise InputError(f"{arg}: {x!r} is not an integer")
+    v = int(x)
+    if not lo <= v <= hi:
+        raise InputError(f"{arg}: {v} is outside {lo}..{hi}")
+    return v
+
+
+def expect_instance(x: Any, cls: type, arg: str) -> Any:
+    """``x`` itself if it is an instance of ``cls`` (a geocull class), else InputError naming the argument."""
+    if not isinstance(x, cls):
+        raise InputError(f"{arg}: expected a geocull.{cls.__name__}, got {type(x).__name__}")
+    return x
+
+
+def color(c: Any) -> tuple[float, float, float] | None:
+    """None, or an (r, g, b) tuple of floats from a length-3 sequence (the [0, 1] range is checked in Rust)."""
+    return None if c is None else vec3(c, "color")
+
+
+def name(n: Any) -> str | None:
+    """None or a str (an object's name), else InputError."""
+    if n is not None and not isinstance(n, str):
+        raise InputError(f"name: {n!r} is not a string")
+    return n

@@ -1,0 +1,154 @@
+"""The off-screen renderer: scenes (:meth:`Renderer.render`) and isosurfaces of volumes
+(:meth:`Renderer.render_isosurface`), and the names of the culling modes each accepts."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Literal, get_args
+
+import numpy as np
+
+from . import _convert as cv
+from . import _geocull
+from ._errors import InputError
+from .camera import Camera
+from .results import IsoResult, RenderResult, RenderStats
+from .scene import Scene
+from .volume import Volume
+
+__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode"]
+
+#: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
+#: :data:`CULLING_MODES`, which comes from the core.
+CullingMode = Literal["none", "three_pass", "oracle", "horizon"]
+
+#: Culling modes :meth:`Renderer.render` accepts, in the core's order (its registry).
+CULLING_MODES: tuple[str, ...] = tuple(_geocull.culling_modes())
+
+#: Culling modes of :meth:`Renderer.render_isosurface` ("implicit": implicit occluders; "none": the reference).
+IsoCullingMode = Literal["implicit", "none"]
+
+#: The same names at runtime, in that order.
+ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
+
+
+class Renderer:
+    """Off-screen wgpu renderer of width x height pixel images. backend: "auto" (a GPU if present,
+    else Mesa's lavapipe on the CPU), "vulkan", "gl", ... Raises DeviceError if no adapter is found."""
+
+    def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
+        if not isinstance(backend, str):
+            raise InputError(f"backend: {backend!r} is not a string")
+        self._r = _geocull.Renderer(cv.integer(width, "width", 1), cv.integer(height, "height", 1), backend)
+
+    @property
+    def width(self) -> int:
+        """Image width, pixels."""
+        return self._r.width
+
+    @property
+    def height(self) -> int:
+        """Image height, pixels."""
+        return self._r.height
+
+    @property
+    def adapter_info(self) -> str:
+        """The adapter in use, in words."""
+        return self._r.adapter_info
+
+    @property
+    def max_texture_size(self) -> int:
+        """The adapter's largest 2-D texture side, pixels."""
+        return self._r.max_texture_size
+
+    @property
+    def gpu_bytes(self) -> int:
+        """Bytes of scene geometry held on the GPU."""
+        return self._r.gpu_bytes
+
+    def render(
+        self,
+        scene: Scene,
+        camera: Camera,
+        culling: CullingMode = "none",
+        pixel_threshold: float = 10,
+        prepass_scale: float = 1.0,
+    ) -> RenderResult[RenderStats]:
+        """Render ``scene`` seen by ``camera`` into a :class:`RenderResult` (see there for the arrays:
+        image (H, W, 4), depth (H, W), per-tile counts).
+
+        culling: one of :data:`CULLING_MODES`: "none" (every fine tile, the reference), "three_pass"
+        (GPU depth prepass of coarse proxies, exact visible-pixel count per tile, fine draw of tiles
+        with more than ``pixel_threshold`` pixels), "oracle" (exactly the tiles visible in the
+        unculled image; a benchmark lower bound), "horizon" (CPU horizon culling of height fields).
+        pixel_threshold: >= 0, in full-image pixels.  prepass_scale: (0, 1], prepass resolution as a
+        fraction of the image's width and height.
+
+        Accuracy: "none", "oracle" and "horizon" give the unculled image. "three_pass" is exact
+        with pixel_threshold=0 and coarse_factor=1; with coarser proxies it is approximate, as in
+        the method's paper: a proxy that bulges above its fine tile can hide a tile that is
+        visible. Measured: at most 0.03 % of pixels on the stacked Gullfaks-like scene, but up
+        to 9 % for low, near-horizontal views over rough terrain at coarse_factor=25 (0.3 % at 4);
+        use culling="horizon" (exact) for such views.
+        """
+        cv.expect_instance(scene, Scene, "scene")
+        cv.expect_instance(camera, Camera, "camera")
+        if not isinstance(culling, str):
+            raise InputError(f"culling: {culling!r} is not a string")
+        d = self._r.render(scene._s, camera._c, culling, cv.number(pixel_threshold, "pixel_threshold"),
+                           cv.number(prepass_scale, "prepass_scale"))
+        return RenderResult(d, culling)
+
+    def render_isosurface(
+        self,
+        volume: Volume,
+        isovalue: float,
+        camera: Camera,
+        culling: IsoCullingMode = "implicit",
+        *,
+        occluder_depth: int | None = None,
+        cull_depth: int | None = None,
+        color: Sequence[float] = (0.85, 0.72, 0.45),
+        cache: bool = True,
+        return_map: bool = False,
+    ) -> IsoResult:
+        """Render the isosurface ``volume == isovalue`` seen by ``camera`` into an :class:`IsoResult`
+        (image (H, W, 4), depth (H, W), per-node arrays; see there).
+
+        isovalue: a finite number, in the volume's value units.
+        culling: one of :data:`ISO_CULLING_MODES`: "implicit" (occlusion map of implicit occluders,
+        extract only visible nodes) or "none" (extract and draw every node that may hold surface:
+        the reference).
+        occluder_depth: octree depth of the occluder nodes (root = 0; default max_depth - 1).
+        cull_depth: octree depth of the nodes tested and extracted (default max_depth - 2).
+        color: (r, g, b) in [0, 1].  cache: reuse patches extracted by earlier frames (per volume,
+        isovalue and node); False extracts afresh (for timing).  return_map: also return the occlusion
+        map as ``result.occlusion_map`` ((H, W) distance along the view axis, inf where nothing is
+        proven).
+
+        The result's ``tile_pixels`` / ``tile_drawn`` are per *node*: one entry per node at
+        ``cull_depth`` that may hold surface (``result.nodes``: (n, 4) [depth, ix, iy, iz]) — the
+        pixels where its box is in front of the occlusion map (0 if a coarser ancestor was hidden or for
+        culling="none") and whether it was extracted and drawn. ``stats``: :class:`IsoStats`
+        (surface_triangles, nodes_tested (all levels), nodes_visible, nodes_straddling,
+        occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
+        (= extract + draw), total_ms, patches_cached/extracted, ...).
+
+        Same as :func:`geocull.iso.render_isosurface` with this renderer as its first argument.
+        """
+        cv.expect_instance(volume, Volume, "volume")
+        cv.expect_instance(camera, Camera, "camera")
+        if not isinstance(culling, str) or culling not in ISO_CULLING_MODES:
+            raise InputError(f"culling: {culling!r} is not one of {ISO_CULLING_MODES}")
+        w = cv.number(isovalue, "isovalue")
+        if not np.isfinite(w):
+            raise InputError(f"isovalue: {w} is not finite")
+        od = None if occluder_depth is None else cv.integer(occluder_depth, "occluder_depth", 0, 64)
+        cd = None if cull_depth is None else cv.integer(cull_depth, "cull_depth", 0, 64)
+        c = cv.vec3(color, "color")
+        d = _geocull.render_isosurface(self._r, volume._v, w, camera._c, culling, od, cd, c,
+                                       bool(cache), bool(return_map))
+        return IsoResult(d, culling)
+
+    def __repr__(self) -> str:
+        return f"<geocull.Renderer {self.width}x{self.height} on {self.adapter_info}>"

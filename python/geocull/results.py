@@ -1,0 +1,153 @@
+"""Rendered frames: :class:`RenderResult` (scenes), :class:`IsoResult` (isosurfaces), their typed
+``stats`` dicts :class:`RenderStats` / :class:`IsoStats`, and a dependency-free PNG encoder.
+
+Image conventions shared by every frame: arrays are (H, W, ...) with row 0 at the top of the image
+and column 0 at its left; depths are distances along the camera's view axis in world units
+(metres, exaggerated by the camera's ``z_scale``), +inf where nothing was drawn.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import TYPE_CHECKING, Generic, TypedDict, TypeVar, cast
+
+import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from ._geocull import IsoOutput, RenderOutput
+
+__all__ = ["RenderStats", "IsoStats", "RenderResult", "IsoResult", "encode_png"]
+
+
+class RenderStats(TypedDict):
+    """``RenderResult.stats`` of a scene frame (:meth:`geocull.Renderer.render`). Every key is always
+    present; times are wall-clock or GPU milliseconds, counts are whole numbers."""
+
+    triangles_fine_total: int  # fine (level 0) triangles over every tile of the scene (hidden objects included)
+    triangles_drawn: int  # fine triangles drawn in the final pass
+    triangles_prepass: int  # coarse-proxy triangles drawn in the depth prepass (three_pass; else 0)
+    tiles_total: int  # tiles in the scene (= len(tile_pixels))
+    tiles_drawn: int  # tiles drawn in the final pass (= tile_drawn.sum())
+    prepass_ms: float  # ms, GPU time of the coarse depth prepass (three_pass with GPU timestamps; else 0)
+    count_ms: float  # ms, GPU time of the visible-pixel count pass (three_pass with GPU timestamps; else 0)
+    draw_ms: float  # ms, GPU time of the final lit pass (0 without GPU timestamps)
+    cull_ms: float  # ms, CPU culling time (horizon; else 0)
+    total_ms: float  # ms, wall time from the call to the GPU finishing the frame, read-back excluded
+    readback_ms: float  # ms, wall time to copy image, depth and counts back and convert them
+    gpu_timestamps: bool  # whether the adapter gave GPU timestamps (the *_ms GPU times are 0 without)
+    nodes_visited: int  # horizon: quadtree nodes visited, all height fields together (else 0)
+    nodes_culled: int  # horizon: quadtree nodes culled, all height fields together (else 0)
+
+
+class IsoStats(TypedDict):
+    """``IsoResult.stats`` of an isosurface frame (:func:`geocull.iso.render_isosurface`). Every key is
+    always present; depths count octree levels from the root (0); times are milliseconds."""
+
+    surface_triangles: int  # triangles of the drawn surface
+    surface_vertices: int  # vertices of the drawn surface
+    nodes_tested: int  # octree nodes tested against the occlusion map, all levels together
+    nodes_tested_cull_depth: int  # nodes tested at cull_depth itself
+    nodes_visible: int  # visible nodes at cull_depth (every straddling node for culling="none")
+    nodes_straddling: int  # nodes at cull_depth that may hold surface (= len(nodes))
+    occluder_boxes_below: int  # occluder boxes wholly below the isovalue drawn into the map
+    occluder_boxes_above: int  # occluder boxes wholly above the isovalue drawn into the map
+    occluder_depth: int  # octree depth of the occluder nodes used
+    cull_depth: int  # octree depth of the nodes tested and extracted
+    max_depth: int  # octree depth of the single-cell leaves
+    patches_cached: int  # surface patches found in the renderer's cache
+    patches_extracted: int  # surface patches extracted this frame
+    occluder_ms: float  # ms, occluder selection + occlusion map (GPU finished)
+    cull_ms: float  # ms, coarse-to-fine node tests, read-backs included
+    extract_ms: float  # ms, marching tetrahedra (cache look-ups included)
+    draw_ms: float  # ms, vertex assembly, upload and the lit draw (GPU finished)
+    surface_ms: float  # ms, extract_ms + draw_ms
+    total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back excluded
+    readback_ms: float  # ms, wall time to copy image and depth back
+    triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
+    tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
+    tiles_total: int  # = nodes_straddling (name shared with RenderStats)
+
+
+def encode_png(image: np.ndarray) -> bytes:
+    """PNG file bytes of an (H, W, 4) uint8 RGBA image, row 0 at the top (no dependency beyond zlib)."""
+    h, w = image.shape[:2]
+    raw = b"".join(b"\x00" + image[r].tobytes() for r in range(h))
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
+
+
+# The stats dict type of a frame: RenderStats for scene frames, IsoStats for isosurface frames.
+StatsT = TypeVar("StatsT", RenderStats, IsoStats)
+
+
+class RenderResult(Generic[StatsT]):
+    """One rendered frame (:meth:`geocull.Renderer.render` returns ``RenderResult[RenderStats]``).
+
+    image: (H, W, 4) uint8 RGBA, row 0 at the top.  depth: (H, W) float32 distance along the view
+    axis in (exaggerated) world units, +inf where empty.  tile_pixels: (n_tiles,) uint32 visible
+    pixels per tile, in :meth:`geocull.Scene.tile_table` order (three_pass: the pass-2 counts in
+    full-image pixels; none/oracle: in the final image).  tile_drawn: (n_tiles,) bool.
+    stats: :class:`RenderStats` (triangles, tiles and per-pass milliseconds).  near, far: the clip
+    distances used (exaggerated world units).  culling: the mode rendered.  horizon: for
+    culling="horizon", (W,) float32 per image column, the pixel rows from the bottom known hidden
+    (-inf where none); else None.
+    """
+
+    def __init__(self, d: RenderOutput | IsoOutput, culling: str) -> None:
+        self.image: npt.NDArray[np.uint8] = d["image"]
+        self.depth: npt.NDArray[np.float32] = d["depth"]
+        self.tile_pixels: npt.NDArray[np.uint32] = d["tile_pixels"]
+        self.tile_drawn: npt.NDArray[np.bool_] = d["tile_drawn"]
+        self.stats: StatsT = cast(StatsT, d["stats"])
+        self.near: float = d["near"]
+        self.far: float = d["far"]
+        self.culling = culling
+        # Only scene frames rendered with culling="horizon" carry "horizon" (IsoOutput never does).
+        self.horizon = cast("npt.NDArray[np.float32] | None", d.get("horizon"))
+
+    @property
+    def coverage(self) -> np.ndarray:
+        """(H, W) bool: pixels where something was drawn."""
+        return np.isfinite(self.depth)
+
+    def png(self) -> bytes:
+        """The image as PNG file bytes (RGBA, W x H pixels)."""
+        return encode_png(self.image)
+
+    def save_png(self, path: str) -> None:
+        """Write the image to ``path`` as a PNG file."""
+        with open(path, "wb") as f:
+            f.write(self.png())
+
+    def _repr_png_(self) -> bytes:
+        return self.png()
+
+    def __repr__(self) -> str:
+        s = self.stats
+        return (f"<geocull.RenderResult {self.image.shape[1]}x{self.image.shape[0]} culling={self.culling} "
+                f"triangles_drawn={s['triangles_drawn']} tiles_drawn={s['tiles_drawn']}/{s['tiles_total']} "
+                f"total_ms={s['total_ms']:.1f}>")
+
+
+class IsoResult(RenderResult[IsoStats]):
+    """One rendered isosurface frame (:func:`geocull.iso.render_isosurface`); a :class:`RenderResult`
+    whose per-tile arrays are per octree *node*.
+
+    nodes: (n, 4) uint32 [depth, ix, iy, iz], the nodes at ``cull_depth`` that may hold surface, in
+    octree order (ix along x, iy along y, iz along z, in units of the node's size).  tile_pixels: (n,)
+    uint32 pixels where each node's box is in front of the occlusion map (0 if a coarser ancestor was
+    hidden, or for culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
+    :class:`IsoStats`.  occlusion_map: (H, W) float32 distance along the view axis (exaggerated world
+    units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
+    """
+
+    def __init__(self, d: IsoOutput, culling: str) -> None:
+        super().__init__(d, culling)
+        self.nodes: npt.NDArray[np.uint32] = d["nodes"]
+        self.occlusion_map: npt.NDArray[np.float32] | None = d.get("occlusion_map")

@@ -1,0 +1,98 @@
+"""Scalar volumes on regular grids, with a lazily built min/max octree (for isosurfaces, see
+:mod:`geocull.iso`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import _convert as cv
+from . import _geocull
+from ._errors import InputError
+
+if TYPE_CHECKING:
+    from ._geocull import OctreeNodes
+
+__all__ = ["Volume"]
+
+
+def _values(values: Any) -> np.ndarray:
+    """A C-contiguous float32/float64 (nz, ny, nx) view of ``values`` (numpy, np.memmap, xarray,
+    anything with ``__array__``), copied only when the layout or dtype demands it."""
+    if hasattr(values, "variable") and hasattr(values, "dims") and hasattr(values, "data"):
+        values = values.data  # xarray.DataArray: its backing array (numpy, or dask -> computed below)
+    try:
+        a = np.asarray(values)
+    except Exception as e:
+        raise InputError(f"values: cannot be read as an array ({e})") from None
+    if a.ndim != 3:
+        raise InputError(f"values: shape {a.shape} is not 3-D (nz, ny, nx)")
+    if a.dtype.kind not in "fiu" or a.dtype.kind == "c":
+        raise InputError(f"values: dtype {a.dtype} is not supported; expected real numbers")
+    if min(a.shape) < 2:
+        raise InputError(f"values: shape {a.shape} needs at least 2 samples per axis")
+    if a.dtype == np.float32 or a.dtype == np.float64:
+        if not a.dtype.isnative:
+            a = a.astype(a.dtype.newbyteorder("="))
+        return np.ascontiguousarray(a)
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
+class Volume:
+    """A scalar field on a regular grid: ``values[k, j, i]`` sits at
+    ``origin + (i*dx, j*dy, k*dz)``; x varies fastest. NaN samples are "no data".
+
+    values: (nz, ny, nx) array, float32 or float64 (other real dtypes are converted); numpy
+    arrays, memory maps and numpy-backed xarray DataArrays are read in place and copied exactly once,
+    into the core's float32 buffer (the octree and the surface extraction read that buffer).
+    origin: (x0, y0, z0) world position of ``values[0, 0, 0]`` (metres).  spacing: (dx, dy, dz) > 0
+    sample spacing (metres).
+    """
+
+    def __init__(self, values: Any, origin: Sequence[float] = (0.0, 0.0, 0.0),
+                 spacing: Sequence[float] = (1.0, 1.0, 1.0)) -> None:
+        a = _values(values)
+        self._v = _geocull.Volume(a, cv.vec3(origin, "origin"), cv.vec3(spacing, "spacing"))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(nz, ny, nx)"""
+        return self._v.shape
+
+    @property
+    def origin(self) -> tuple[float, float, float]:
+        """(x0, y0, z0) world position of ``values[0, 0, 0]`` (metres)."""
+        return self._v.origin
+
+    @property
+    def spacing(self) -> tuple[float, float, float]:
+        """(dx, dy, dz) sample spacing (metres)."""
+        return self._v.spacing
+
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """((xmin, ymin, zmin), (xmax, ymax, zmax)) in world units (metres)."""
+        nz, ny, nx = self.shape
+        o, s = self.origin, self.spacing
+        return o, (o[0] + (nx - 1) * s[0], o[1] + (ny - 1) * s[1], o[2] + (nz - 1) * s[2])
+
+    @property
+    def center(self) -> tuple[float, float, float]:
+        """(x, y, z) centre of :attr:`bounds` (metres)."""
+        lo, hi = self.bounds
+        return (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2
+
+    def max_depth(self) -> int:
+        """Depth of the octree's single-cell leaves (root = 0). Builds the octree on first use."""
+        return self._v.max_depth()
+
+    def nodes(self, depth: int) -> OctreeNodes:
+        """Octree nodes at ``depth`` (0..max_depth()): dict of index (n, 3) uint32 [ix, iy, iz] (in units
+        of the node's size), bbox_min / bbox_max (n, 3) float64 world (metres), min / max (n,) float32
+        value range."""
+        return self._v.nodes(cv.integer(depth, "depth"))
+
+    def __repr__(self) -> str:
+        return f"<geocull.Volume shape={self.shape} origin={self.origin} spacing={self.spacing}>"
