@@ -1,10 +1,9 @@
 """Argument coercion and checking shared by the public wrappers: numpy in, plain Python values out.
 
 Every helper takes the value and ``arg``, the argument's name, and raises
-:class:`geocull.InputError` whose message starts with that name. Shape and dtype are checked here;
-values and ranges are checked again in Rust. The integer range checks below (:func:`integer`'s
-``lo``/``hi``) duplicate what the core will own eventually; they live only in this file so that
-they are easy to remove.
+:class:`geocull.InputError` whose message starts with that name. Only types and shapes are checked
+here; every value and range check (finite, positive, in range, index bounds) has one owner, the
+Rust core, which raises the same InputError naming the argument.
 """
 
 from __future__ import annotations
@@ -87,13 +86,14 @@ def number(x: Any, arg: str) -> float:
     return float(x)
 
 
-def integer(x: Any, arg: str, lo: int = 0, hi: int = 2**31 - 1) -> int:
-    """Python int of an integer (``numbers.Integral``, not bool) in ``lo..hi`` inclusive."""
+def integer(x: Any, arg: str) -> int:
+    """Python int of an integer (``numbers.Integral``, not bool) that fits a signed 64-bit integer
+    (the core's argument type; it checks the range)."""
     if isinstance(x, bool) or not isinstance(x, numbers.Integral):
         raise InputError(f"{arg}: {x!r} is not an integer")
     v = int(x)
-    if not lo <= v <= hi:
-        raise InputError(f"{arg}: {v} is outside {lo}..{hi}")
+    if not -(2**63) <= v < 2**63:
+        raise InputError(f"{arg}: {v} is too large")
     return v
 
 

@@ -6,11 +6,9 @@ and column 0 at its left; depths are distances along the camera's view axis in w
 (metres, exaggerated by the camera's ``z_scale``), +inf where nothing was drawn.
 """
 
-from __future__ import annotations
-
 import struct
 import zlib
-from typing import TYPE_CHECKING, Generic, TypedDict, TypeVar, cast
+from typing import TYPE_CHECKING, Generic, NotRequired, TypedDict, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -22,23 +20,24 @@ __all__ = ["RenderStats", "IsoStats", "RenderResult", "IsoResult", "encode_png"]
 
 
 class RenderStats(TypedDict):
-    """``RenderResult.stats`` of a scene frame (:meth:`geocull.Renderer.render`). Every key is always
-    present; times are wall-clock or GPU milliseconds, counts are whole numbers."""
+    """``RenderResult.stats`` of a scene frame (:meth:`geocull.Renderer.render`). The keys without
+    ``NotRequired`` are present for every strategy; the others belong to one strategy (or need GPU
+    timestamps) and are absent elsewhere. Times are milliseconds, counts whole numbers."""
 
     triangles_fine_total: int  # fine (level 0) triangles over every tile of the scene (hidden objects included)
     triangles_drawn: int  # fine triangles drawn in the final pass
-    triangles_prepass: int  # coarse-proxy triangles drawn in the depth prepass (three_pass; else 0)
     tiles_total: int  # tiles in the scene (= len(tile_pixels))
     tiles_drawn: int  # tiles drawn in the final pass (= tile_drawn.sum())
-    prepass_ms: float  # ms, GPU time of the coarse depth prepass (three_pass with GPU timestamps; else 0)
-    count_ms: float  # ms, GPU time of the visible-pixel count pass (three_pass with GPU timestamps; else 0)
+    cull_ms: float  # ms, CPU time of the strategy's decision (CPU culling, or recording its GPU passes)
     draw_ms: float  # ms, GPU time of the final lit pass (0 without GPU timestamps)
-    cull_ms: float  # ms, CPU culling time (horizon; else 0)
     total_ms: float  # ms, wall time from the call to the GPU finishing the frame, read-back excluded
     readback_ms: float  # ms, wall time to copy image, depth and counts back and convert them
-    gpu_timestamps: bool  # whether the adapter gave GPU timestamps (the *_ms GPU times are 0 without)
-    nodes_visited: int  # horizon: quadtree nodes visited, all height fields together (else 0)
-    nodes_culled: int  # horizon: quadtree nodes culled, all height fields together (else 0)
+    gpu_timestamps: bool  # whether the adapter gave GPU timestamps (draw_ms is 0 without)
+    triangles_prepass: NotRequired[int]  # three_pass: coarse-proxy triangles drawn in the depth prepass
+    prepass_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the depth prepass
+    count_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the count + select passes
+    nodes_visited: NotRequired[int]  # horizon: quadtree nodes visited, all height fields together
+    nodes_culled: NotRequired[int]  # horizon: quadtree nodes culled, all height fields together
 
 
 class IsoStats(TypedDict):
@@ -99,7 +98,7 @@ class RenderResult(Generic[StatsT]):
     (-inf where none); else None.
     """
 
-    def __init__(self, d: RenderOutput | IsoOutput, culling: str) -> None:
+    def __init__(self, d: "RenderOutput | IsoOutput", culling: str) -> None:
         self.image: npt.NDArray[np.uint8] = d["image"]
         self.depth: npt.NDArray[np.float32] = d["depth"]
         self.tile_pixels: npt.NDArray[np.uint32] = d["tile_pixels"]
@@ -147,7 +146,7 @@ class IsoResult(RenderResult[IsoStats]):
     units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
     """
 
-    def __init__(self, d: IsoOutput, culling: str) -> None:
+    def __init__(self, d: "IsoOutput", culling: str) -> None:
         super().__init__(d, culling)
         self.nodes: npt.NDArray[np.uint32] = d["nodes"]
         self.occlusion_map: npt.NDArray[np.float32] | None = d.get("occlusion_map")

@@ -59,7 +59,7 @@ class Scene:
         o = cv.vec2(origin, "origin")
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
-        tt = (cv.integer(t[0], "tiles[0]", 1), cv.integer(t[1], "tiles[1]", 1))
+        tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
         nv = None if null_value is None else cv.number(null_value, "null_value")
         return self._s.add_heightfield(
             za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv
@@ -89,7 +89,7 @@ class Scene:
         f = np.ascontiguousarray(f, dtype=np.int64)
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
-        k = None if tiles is None else cv.integer(tiles, "tiles", 1)
+        k = None if tiles is None else cv.integer(tiles, "tiles")
         return self._s.add_mesh(
             v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color)
         )

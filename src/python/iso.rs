@@ -172,6 +172,9 @@ fn render_isosurface<'py>(
     let r = &mut renderer.inner;
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
+        crate::error::ensure(isovalue.is_finite() && isovalue.abs() <= f32::MAX as f64, "isovalue", || {
+            format!("isovalue is {isovalue}; expected a finite number within the float32 range")
+        })?;
         let culling = IsoCulling::parse(&culling)?;
         let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
         let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
