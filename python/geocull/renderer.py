@@ -18,7 +18,7 @@ __all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "Iso
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
-CullingMode = Literal["none", "three_pass", "oracle", "horizon"]
+CullingMode = Literal["none", "three_pass", "oracle", "horizon", "frustum"]
 
 #: Culling modes :meth:`Renderer.render` accepts, in the core's order (its registry).
 CULLING_MODES: tuple[str, ...] = tuple(_geocull.culling_modes())
@@ -78,11 +78,12 @@ class Renderer:
         culling: one of :data:`CULLING_MODES`: "none" (every fine tile, the reference), "three_pass"
         (GPU depth prepass of coarse proxies, exact visible-pixel count per tile, fine draw of tiles
         with more than ``pixel_threshold`` pixels), "oracle" (exactly the tiles visible in the
-        unculled image; a benchmark lower bound), "horizon" (CPU horizon culling of height fields).
+        unculled image; a benchmark lower bound), "horizon" (CPU horizon culling of height fields),
+        "frustum" (CPU view-frustum culling of the tiles' boxes).
         pixel_threshold: >= 0, in full-image pixels.  prepass_scale: (0, 1], prepass resolution as a
         fraction of the image's width and height.
 
-        Accuracy: "none", "oracle" and "horizon" give the unculled image. "three_pass" is
+        Accuracy: "none", "oracle", "horizon" and "frustum" give the unculled image. "three_pass" is
         exact with pixel_threshold=0, coarse_factor=1 and prepass_scale=1 (a smaller prepass
         counts at a coarser pixel grid and can miss tiles a few pixels wide); with coarser proxies
         it is approximate, as in

@@ -38,6 +38,7 @@ class RenderStats(TypedDict):
     count_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the count + select passes
     nodes_visited: NotRequired[int]  # horizon: quadtree nodes visited, all height fields together
     nodes_culled: NotRequired[int]  # horizon: quadtree nodes culled, all height fields together
+    tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
 
 
 class IsoStats(TypedDict):

@@ -9,6 +9,7 @@
 //!
 //! Each strategy's file documents what it draws and when that is exact; [`REGISTRY`] lists them.
 
+pub mod frustum;
 pub mod horizon;
 pub mod none;
 pub mod oracle;
@@ -23,7 +24,8 @@ use crate::gpu::{DrawArgs, GpuContext, Passes, SceneGeometry, Targets, Timestamp
 use crate::scene::Scene;
 
 /// Every strategy, in the order Python lists them. Adding a strategy: its file, one line here.
-pub const REGISTRY: &[fn() -> Box<dyn CullStrategy>] = &[none::make, three_pass::make, oracle::make, horizon::make];
+pub const REGISTRY: &[fn() -> Box<dyn CullStrategy>] =
+    &[none::make, three_pass::make, oracle::make, horizon::make, frustum::make];
 
 /// Names of the registered strategies (what `culling=` accepts).
 pub fn names() -> Vec<&'static str> {
