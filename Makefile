@@ -9,7 +9,7 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan build demo test test-rust test-python bench bench-quick examples-quick clean
+.PHONY: setup vulkan build demo test test-rust test-python lint bench bench-quick examples-quick clean
 
 setup: vulkan build
 
@@ -43,6 +43,17 @@ test-python: setup
 	$(PY) -m pytest -q
 
 test: setup test-rust test-python
+
+# The gates (CI runs them after the tests): formatting, lints, the type stub against the built
+# extension, and the dependency rule of the code (docs/DESIGN.md).
+lint: setup
+	cargo fmt --check
+	cargo clippy --release --all-targets -- -D warnings
+	cargo clippy --release --all-targets --features python -- -D warnings
+	$(VENV)/bin/ruff check python tests examples scripts
+	PYTHONPATH=python $(PY) -m mypy python/geocull
+	PYTHONPATH=python $(PY) -m mypy.stubtest geocull._geocull
+	$(PY) scripts/check_layers.py
 
 bench: setup
 	$(PY) -m geocull bench
