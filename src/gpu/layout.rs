@@ -60,7 +60,19 @@ pub struct SelectParams {
     pub _pad: [u32; 2],
 }
 
+/// One box instance of the box passes (box.wgsl): `lo.xyz, id, hi.xyz, 0` in render space; `id`
+/// is the tile (scene box test) or the octree node (isosurface passes).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
+pub struct BoxInstance {
+    pub lo: [f32; 3],
+    pub id: u32,
+    pub hi: [f32; 3],
+    pub _pad: u32,
+}
+
 const _: () = assert!(std::mem::size_of::<DrawArgs>() == 20);
+const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 const _: () = assert!(std::mem::size_of::<GpuObject>() == 32);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);

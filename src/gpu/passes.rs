@@ -5,7 +5,10 @@
 //! - [`Passes::record_histogram`]: exact pixels per tile id of an id image (histogram.wgsl);
 //! - [`Passes::record_select`]: draw args switched off where a count is at or under a threshold
 //!   (select.wgsl), so the next draw needs no read-back;
-//! - [`Passes::record_draw`]: the lit draw of a set of draws, colour + tile id (draw.wgsl).
+//! - [`Passes::record_draw`]: the lit draw of a set of draws, colour + tile id (draw.wgsl);
+//! - [`Passes::record_box_test`]: per tile, the pixels where its box is at or in front of a
+//!   depth image (box_test.wgsl, with box.wgsl);
+//! - [`Passes::record_select_rest`]: the draws not yet made whose count is above a threshold.
 //!
 //! Sets of draws are indirect buffers of [`DrawArgs`], one per tile, drawn with one
 //! `multi_draw_indexed_indirect`.
@@ -18,6 +21,21 @@ use super::GpuContext;
 use wgpu::util::DeviceExt;
 
 const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
+const BOX_WGSL: &str = include_str!("shaders/box.wgsl");
+
+/// `source` with the shared box geometry (box.wgsl: `CUBE`, `box_corner`) prepended.
+pub fn with_box_wgsl(source: &str) -> String {
+    format!("{BOX_WGSL}\n{source}")
+}
+
+/// Vertex layout of [`BoxInstance`](super::layout::BoxInstance) instances (two vec4s).
+pub fn box_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    const ATTRS: [wgpu::VertexAttribute; 2] = [
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
+    ];
+    wgpu::VertexBufferLayout { array_stride: 32, step_mode: wgpu::VertexStepMode::Instance, attributes: &ATTRS }
+}
 
 /// Usage of every indirect-args buffer: drawn from, written by compute, copied for read-back.
 pub const ARGS_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::INDIRECT
@@ -34,6 +52,10 @@ pub struct Passes {
     prepass: wgpu::RenderPipeline,
     histogram: wgpu::ComputePipeline,
     select: wgpu::ComputePipeline,
+    rest_layout: wgpu::BindGroupLayout,
+    select_rest: wgpu::ComputePipeline,
+    box_layout: wgpu::BindGroupLayout,
+    box_test: wgpu::RenderPipeline,
 }
 
 pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
@@ -91,16 +113,21 @@ fn compute(
     })
 }
 
-/// A render pass over `targets`, cleared: colour to the background, ids to 0, depth to far (0).
+/// A render pass over `targets`, cleared (colour to the background, ids to 0, depth to far = 0)
+/// unless `load`, which keeps what an earlier pass of the frame drew.
 fn begin<'e>(
     enc: &'e mut wgpu::CommandEncoder,
     label: &str,
     targets: &'e Targets,
     with_color: bool,
     keep_depth: bool,
+    load: bool,
     ts: Option<wgpu::RenderPassTimestampWrites<'e>>,
 ) -> wgpu::RenderPass<'e> {
-    let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
+    let clear = |c: wgpu::Color| wgpu::Operations {
+        load: if load { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(c) },
+        store: wgpu::StoreOp::Store,
+    };
     let view = |v: &'e wgpu::TextureView, c: wgpu::Color| {
         Some(wgpu::RenderPassColorAttachment { view: v, depth_slice: None, resolve_target: None, ops: clear(c) })
     };
@@ -114,7 +141,10 @@ fn begin<'e>(
         color_attachments: if with_color { &attachments[..] } else { &attachments[1..] },
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: &targets.depth,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store }),
+            depth_ops: Some(wgpu::Operations {
+                load: if load { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(0.0) },
+                store,
+            }),
             stencil_ops: None,
         }),
         timestamp_writes: ts,
@@ -221,7 +251,87 @@ impl Passes {
         let select_shader = shader(d, "select.wgsl", include_str!("shaders/select.wgsl").into());
         let histogram = compute(d, "histogram", &hist_layout, &hist_shader, "histogram");
         let select = compute(d, "select", &select_layout, &select_shader, "select_draws");
-        Self { scene_layout, hist_layout, select_layout, draw, prepass, histogram, select }
+        let rest_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("select_rest"),
+            entries: &[
+                uniform_entry(0, cs),
+                storage_entry(1, true, cs),
+                storage_entry(2, true, cs),
+                storage_entry(3, true, cs),
+                storage_entry(4, false, cs),
+            ],
+        });
+        let rest_shader = shader(d, "select_rest.wgsl", include_str!("shaders/select_rest.wgsl").into());
+        let select_rest = compute(d, "select_rest", &rest_layout, &rest_shader, "select_rest");
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let box_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("box_test"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                storage_entry(1, false, fs),
+                storage_entry(2, true, wgpu::ShaderStages::VERTEX),
+            ],
+        });
+        let box_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("box_test"),
+            bind_group_layouts: &[Some(&scene_layout), Some(&box_layout)],
+            immediate_size: 0,
+        });
+        let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(include_str!("shaders/box_test.wgsl")));
+        let box_test = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("box_test"),
+            layout: Some(&box_pl),
+            vertex: wgpu::VertexState {
+                module: &box_shader,
+                entry_point: Some("vs_box"),
+                compilation_options: Default::default(),
+                buffers: &[Some(box_vertex_layout())],
+            },
+            // Front faces only: one fragment per pixel of a convex box.
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: Some(wgpu::Face::Back),
+                front_face: wgpu::FrontFace::Ccw,
+                ..Default::default()
+            },
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &box_shader,
+                entry_point: Some("fs_box"),
+                compilation_options: Default::default(),
+                // A render pass needs an attachment: the id target, never written.
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: ID_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::empty(),
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            scene_layout,
+            hist_layout,
+            select_layout,
+            draw,
+            prepass,
+            histogram,
+            select,
+            rest_layout,
+            select_rest,
+            box_layout,
+            box_test,
+        }
     }
 
     /// Pass: depth + tile id of `args` (one draw per tile) into `targets` (no colour). Depth is
@@ -235,11 +345,13 @@ impl Passes {
         args: &wgpu::Buffer,
         ts: Option<&Timestamps>,
     ) {
-        let mut pass = begin(enc, "prepass", targets, false, false, ts.and_then(|t| t.render("prepass_ms")));
+        let mut pass = begin(enc, "prepass", targets, false, false, false, ts.and_then(|t| t.render("prepass_ms")));
         self.draw_into(&mut pass, &self.prepass, scene_bg, geom, args);
     }
 
-    /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back).
+    /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
+    /// clearing them first unless `load` (then it adds to what an earlier pass drew).
+    #[allow(clippy::too_many_arguments)]
     pub fn record_draw(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -247,9 +359,10 @@ impl Passes {
         scene_bg: &wgpu::BindGroup,
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
+        load: bool,
         ts: Option<&Timestamps>,
     ) {
-        let mut pass = begin(enc, "draw", targets, true, true, ts.and_then(|t| t.render("draw_ms")));
+        let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
         self.draw_into(&mut pass, &self.draw, scene_bg, geom, args);
     }
 
@@ -331,6 +444,119 @@ impl Passes {
         pass.set_bind_group(0, &bg, &[]);
         pass.dispatch_workgroups((n as u32).div_ceil(64).max(1), 1, 1);
     }
+}
+
+impl Passes {
+    /// Pass: for every box of `boxes` (render space; its `id` is a tile index) whose tile's draw in
+    /// `skip` is off, adds to `counts[id]` the pixels where the front faces of the box are at or in
+    /// front of the depth of `targets` (drawn by an earlier pass, reverse-Z). Writes nothing to
+    /// `targets`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_box_test(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        scene_bg: &wgpu::BindGroup,
+        targets: &Targets,
+        boxes: &wgpu::Buffer,
+        n: usize,
+        skip: &wgpu::Buffer,
+        counts: &wgpu::Buffer,
+        ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("box_test"),
+            layout: &self.box_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
+                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
+            ],
+        });
+        // No depth attachment: the fragment shader reads the depth texture and counts by hand.
+        let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("box_test"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.id,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep,
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: ts,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if n > 0 {
+            pass.set_pipeline(&self.box_test);
+            pass.set_bind_group(0, scene_bg, &[]);
+            pass.set_bind_group(1, &bg, &[]);
+            pass.set_vertex_buffer(0, boxes.slice(..));
+            pass.draw(0..36, 0..n as u32);
+        }
+    }
+
+    /// Pass: `out[i] = src[i]` where `done[i]` is off and `counts[i] > threshold`, else switched
+    /// off: the draws a second phase adds to those an earlier one made.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_select_rest(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        counts: &wgpu::Buffer,
+        src: &wgpu::Buffer,
+        done: &wgpu::Buffer,
+        out: &wgpu::Buffer,
+        n: usize,
+        threshold: f32,
+        ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let params = SelectParams { n_tiles: n as u32, threshold, _pad: [0; 2] };
+        let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("select_rest_params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("select_rest"),
+            layout: &self.rest_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: src.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: done.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: out.as_entire_binding() },
+            ],
+        });
+        let mut pass =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("select_rest"), timestamp_writes: ts });
+        pass.set_pipeline(&self.select_rest);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.dispatch_workgroups((n as u32).div_ceil(64).max(1), 1, 1);
+    }
+}
+
+/// A vertex buffer of box instances (one zeroed box when empty).
+pub fn boxes_buffer(d: &wgpu::Device, boxes: &[super::layout::BoxInstance]) -> wgpu::Buffer {
+    let one = [super::layout::BoxInstance::default()];
+    let b = if boxes.is_empty() { &one[..] } else { boxes };
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("boxes"),
+        contents: bytemuck::cast_slice(b),
+        usage: wgpu::BufferUsages::VERTEX,
+    })
+}
+
+/// A u32 per tile initialised from `values` (e.g. counts that start above zero).
+pub fn counts_buffer_init(d: &wgpu::Device, values: &[u32]) -> wgpu::Buffer {
+    let one = [0u32];
+    let v = if values.is_empty() { &one[..] } else { values };
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("counts"),
+        contents: bytemuck::cast_slice(v),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+    })
 }
 
 /// An indirect-args buffer holding `args` (one zeroed draw when empty: buffers may not be empty).

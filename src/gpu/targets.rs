@@ -48,7 +48,14 @@ impl Targets {
         let color_tex =
             with_color.then(|| texture(d, "color", width, height, COLOR_FORMAT, ra | wgpu::TextureUsages::COPY_SRC));
         let id = texture(d, "id", width, height, ID_FORMAT, ra | wgpu::TextureUsages::TEXTURE_BINDING);
-        let depth_tex = texture(d, "depth", width, height, DEPTH_FORMAT, ra | wgpu::TextureUsages::COPY_SRC);
+        let depth_tex = texture(
+            d,
+            "depth",
+            width,
+            height,
+            DEPTH_FORMAT,
+            ra | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         Self {
             width,
             height,

@@ -11,16 +11,7 @@ struct Globals {
 
 @group(0) @binding(0) var<uniform> g: Globals;
 
-// The 12 triangles of a box, wound counter-clockwise seen from outside. Corner c has
-// x = bit 0, y = bit 1, z = bit 2 (0 = lo, 1 = hi).
-var<private> CUBE: array<u32, 36> = array<u32, 36>(
-    0u, 4u, 6u, 0u, 6u, 2u,  // -x
-    1u, 3u, 7u, 1u, 7u, 5u,  // +x
-    0u, 1u, 5u, 0u, 5u, 4u,  // -y
-    2u, 6u, 7u, 2u, 7u, 3u,  // +y
-    0u, 2u, 3u, 0u, 3u, 1u,  // -z
-    4u, 5u, 7u, 4u, 7u, 6u,  // +z
-);
+// CUBE and box_corner come from gpu/shaders/box.wgsl (prepended).
 
 struct BoxOut {
     // Invariant: the map passes and the test pass rasterise identical depths for identical boxes.
@@ -31,11 +22,8 @@ struct BoxOut {
 // One instance per box: lo.xyz + id (bit pattern in w), hi.xyz.
 @vertex
 fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
-    let c = CUBE[vi];
-    let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
-    let p = select(lo.xyz, hi.xyz, sel);
     var out: BoxOut;
-    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
     out.id = bitcast<u32>(lo.w);
     return out;
 }

@@ -11,6 +11,8 @@ use wgpu::util::DeviceExt;
 use super::octree::NodeInfo;
 use super::tetra::SurfacePatch;
 use crate::error::{Error, Result};
+pub(super) use crate::gpu::layout::BoxInstance;
+use crate::gpu::passes::box_vertex_layout;
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
 use crate::gpu::{map_err, GpuContext};
 use glam::DVec3;
@@ -21,16 +23,6 @@ pub(super) struct Globals {
     pub(super) view_proj: [[f32; 4]; 4],
     pub(super) light_dir: [f32; 4],
     pub(super) color: [f32; 4],
-}
-
-/// Box instance: `lo.xyz, id bits, hi.xyz, 0` in render space.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable, Debug)]
-pub(super) struct BoxInstance {
-    pub(super) lo: [f32; 3],
-    pub(super) id: u32,
-    pub(super) hi: [f32; 3],
-    pub(super) _pad: u32,
 }
 
 pub(super) struct Targets {
@@ -57,15 +49,6 @@ pub(super) struct Occluders {
 }
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
-const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
-
-fn box_layout() -> wgpu::VertexBufferLayout<'static> {
-    const ATTRS: [wgpu::VertexAttribute; 2] = [
-        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
-        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
-    ];
-    wgpu::VertexBufferLayout { array_stride: 32, step_mode: wgpu::VertexStepMode::Instance, attributes: &ATTRS }
-}
 
 /// Render-space frame of a volume: origin at its centre, z exaggerated.
 pub(super) struct Space {
@@ -147,7 +130,7 @@ impl IsoPasses {
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("iso.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(crate::gpu::passes::with_box_wgsl(include_str!("iso.wgsl")).into()),
         });
         let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
             d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -170,7 +153,7 @@ impl IsoPasses {
             module: &shader,
             entry_point: Some("vs_box"),
             compilation_options: Default::default(),
-            buffers: &[Some(box_layout())],
+            buffers: &[Some(box_vertex_layout())],
         };
         let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,

@@ -1,0 +1,55 @@
+// Box test (box.wgsl is prepended): per tile, the pixels where the front faces of its box are at
+// or in front of a depth image (reverse-Z: nearer = larger). The comparison is done here by hand,
+// with no depth attachment, so hidden fragments are never counted and no early-depth-test feature
+// is needed. Tiles whose draw is already on (`skip`) are not tested: their box collapses.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    light_dir: vec4<f32>,
+    z_scale: f32,
+    _pad0: f32,
+    _pad1: f32,
+    _pad2: f32,
+}
+
+struct DrawArgs {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    first_instance: u32,
+}
+
+@group(0) @binding(0) var<uniform> g: Globals;
+@group(1) @binding(0) var depth: texture_depth_2d;
+@group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
+@group(1) @binding(2) var<storage, read> skip: array<DrawArgs>;
+
+struct BoxOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) tile: u32,
+}
+
+// One instance per tile: lo.xyz + tile index (bits in w), hi.xyz (render space).
+@vertex
+fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
+    let tile = bitcast<u32>(lo.w);
+    var out: BoxOut;
+    out.tile = tile;
+    if (skip[tile].instance_count > 0u) {
+        out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all 36 vertices equal: nothing rasterised
+        return out;
+    }
+    out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
+    return out;
+}
+
+// The render pass's one attachment (the id image) has its writes masked off.
+@fragment
+fn fs_box(v: BoxOut) -> @location(0) u32 {
+    let d = textureLoad(depth, vec2<i32>(floor(v.clip.xy)), 0);
+    if (v.clip.z >= d) {
+        atomicAdd(&counts[v.tile], 1u);
+    }
+    return 0u;
+}
