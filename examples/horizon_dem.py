@@ -9,7 +9,9 @@ along the valley (and across it / back up it). Each view is rendered with
 - ``horizon``     CPU horizon culling over a quadtree of the tiles (front to back, one horizon
                   height per image column),
 - ``three_pass``  GPU depth prepass of coarse proxies (coarse_factor 25) + exact per-tile pixel
-                  counts, pixel threshold 0 and 10,
+                  counts, pixel threshold 0 and 10, in the paper's approximate mode ("approx") and
+                  in the conservative mode ("cons": the tiles the prepass missed are found by a
+                  box test against the first image's depth),
 - ``oracle``      exactly the tiles with >= 1 visible pixel in the reference (the lower bound),
 
 and the table gives tiles and triangles drawn, culling milliseconds (horizon: CPU traversal;
@@ -49,8 +51,10 @@ except ImportError:  # pragma: no cover
 METHODS = [
     ("none", dict(culling="none")),
     ("horizon", dict(culling="horizon")),
-    ("three_pass t=0", dict(culling="three_pass", pixel_threshold=0)),
-    ("three_pass t=10", dict(culling="three_pass", pixel_threshold=10)),
+    ("three_pass approx t=0", dict(culling="three_pass", pixel_threshold=0, conservative=False)),
+    ("three_pass approx t=10", dict(culling="three_pass", pixel_threshold=10, conservative=False)),
+    ("three_pass cons t=0", dict(culling="three_pass", pixel_threshold=0)),
+    ("three_pass cons t=10", dict(culling="three_pass", pixel_threshold=10)),
     ("oracle", dict(culling="oracle")),
 ]
 

@@ -13,7 +13,7 @@
 //! same device.
 
 use crate::camera::{Camera, FrameCamera};
-use crate::cull::{self, CullOptions, CullStrategy, Draw, FrameInputs, Pixels, Stat, Visible};
+use crate::cull::{self, CullOptions, CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::{Error, Result};
 use crate::gpu::{
     passes, readback, DrawArgs, Globals, GpuContext, GpuObject, Passes, SceneGeometry, Targets, Timestamps,
@@ -95,6 +95,8 @@ pub struct RenderOutput {
     pub far: f64,
     /// The strategy's per-frame arrays by name (horizon: "horizon", one value per column).
     pub arrays: Vec<(&'static str, Vec<f32>)>,
+    /// The strategy's per-tile counts by name (three_pass: "box_pixels").
+    pub tile_counts: Vec<(&'static str, Vec<u32>)>,
 }
 
 impl RenderOutput {
@@ -225,6 +227,15 @@ impl Renderer {
         let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;
         out.stats.cull_ms = cull_ms;
         out.stats.total_ms = total_ms;
+        let report = FrameReport {
+            tile_drawn: &out.tile_drawn,
+            tile_pixels: &out.tile_pixels,
+            tile_counts: &out.tile_counts,
+            width: out.width,
+            height: out.height,
+        };
+        let extra = self.strategies[si].report(&report);
+        out.stats.extra.extend(extra);
         Ok(out)
     }
 
@@ -267,14 +278,22 @@ impl Renderer {
         );
         let depth_rb =
             readback::ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
-        let args_rb =
-            readback::copy_buffer(d, &mut enc, final_args, (n.max(1) * std::mem::size_of::<DrawArgs>()) as u64);
+        let args_bytes = (n.max(1) * std::mem::size_of::<DrawArgs>()) as u64;
+        let args_rb = readback::copy_buffer(d, &mut enc, final_args, args_bytes);
+        let pre_rb = visible.predrawn.as_ref().map(|b| readback::copy_buffer(d, &mut enc, b, args_bytes));
+        let counts_rb: Vec<(&'static str, wgpu::Buffer)> = visible
+            .tile_counts
+            .iter()
+            .map(|(name, b)| (*name, readback::copy_buffer(d, &mut enc, b, 4 * n.max(1) as u64)))
+            .collect();
         ctx.queue.submit([enc.finish()]);
         readback::map_all(
             [&color_rb.buffer, &depth_rb.buffer, &args_rb]
                 .into_iter()
                 .chain(counted.as_ref().map(|c| &c.0))
-                .chain(ts_rb.as_ref()),
+                .chain(ts_rb.as_ref())
+                .chain(pre_rb.as_ref())
+                .chain(counts_rb.iter().map(|(_, b)| b)),
         );
         ctx.wait()?;
         ctx.take_error()?;
@@ -294,12 +313,34 @@ impl Renderer {
             }
             _ => unreachable!("counts are read back for every other kind"),
         };
-        let drawn: Vec<DrawArgs> = readback::read_mapped(&args_rb)?;
-        let drawn = &drawn[..n];
-        let tile_drawn: Vec<bool> = drawn.iter().map(|a| a.instance_count > 0 && a.index_count > 0).collect();
+        let on = |a: &DrawArgs| a.instance_count > 0 && a.index_count > 0;
+        let mut drawn: Vec<DrawArgs> = readback::read_mapped(&args_rb)?;
+        drawn.truncate(n);
+        let mut extra = Vec::new();
+        if let Some(pre) = &pre_rb {
+            // Tiles drawn by the strategy's own first phase, then by the final pass.
+            let pre: Vec<DrawArgs> = readback::read_mapped(pre)?;
+            extra.push(("tiles_drawn_first", Stat::Count(pre[..n].iter().filter(|a| on(a)).count() as u64)));
+            extra.push(("tiles_drawn_second", Stat::Count(drawn.iter().filter(|a| on(a)).count() as u64)));
+            for (a, p) in drawn.iter_mut().zip(&pre[..n]) {
+                if on(p) {
+                    *a = *p;
+                }
+            }
+        }
+        let tile_counts = counts_rb
+            .iter()
+            .map(|(name, b)| {
+                let mut c: Vec<u32> = readback::read_mapped(b)?;
+                c.truncate(n);
+                Ok((*name, c))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let tile_drawn: Vec<bool> = drawn.iter().map(on).collect();
         let mut stats = RenderStats {
             triangles_fine_total: geom.fine.iter().map(|a| a.index_count as u64 / 3).sum(),
             triangles_drawn: drawn.iter().map(|a| a.triangles()).sum(),
+            extra,
             tiles_total: n as u32,
             tiles_drawn: tile_drawn.iter().filter(|&&b| b).count() as u32,
             gpu_timestamps: ts_rb.is_some(),
@@ -327,6 +368,7 @@ impl Renderer {
             near: fc.near,
             far: fc.far,
             arrays: visible.arrays,
+            tile_counts,
         })
     }
 
@@ -389,7 +431,8 @@ fn draw(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, visible: &Visible) 
         Draw::Mask(m) => passes::args_buffer(d, "draw_args", &f.pick(&f.geometry.fine, |i| m[i])),
         Draw::Gpu(b) => b.clone(),
     };
-    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &args, f.timestamps);
+    let load = visible.predrawn.is_some();
+    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &args, load, f.timestamps);
     args
 }
 

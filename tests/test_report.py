@@ -143,7 +143,8 @@ def test_bench_tiny_json(tmp_path):
         assert k in s, k
     assert s["n_triangles"] > 0 and s["bytes_per_triangle"] > 0 and s["peak_rss_mb"] > 0
     methods = [r["method"] for r in rows]
-    assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)", "oracle", "horizon",
+    assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)",
+                       "three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)", "oracle", "horizon",
                        "pyvista", "pyvista_msaa"]
     for r in rows:
         assert BENCH_KEYS <= set(r), BENCH_KEYS - set(r)
@@ -158,6 +159,8 @@ def test_bench_tiny_json(tmp_path):
     assert none["ratio_to_none"] == 1.0 and none["differing_pixel_fraction"] == 0.0
     oracle = rows[methods.index("oracle")]
     assert oracle["missing_tiles"] == 0 and oracle["differing_pixel_fraction"] == 0.0
+    for m in ("three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)"):  # conservative: nothing lost
+        assert rows[methods.index(m)]["missing_tiles"] == 0, m
 
 
 def test_bench_views_by_name_without_pyvista(tmp_path):
@@ -172,5 +175,6 @@ def test_bench_views_by_name_without_pyvista(tmp_path):
     d = json.loads(out.read_text())
     assert d["summary"]["views"] == ["top_down", "low_az200"]
     assert {r["method"] for r in d["rows"]} == {"none", "three_pass(s=1)", "three_pass(s=0.5)",
-                                                "three_pass(cf=100,s=0.5)", "oracle"}
+                                                "three_pass(cf=100,s=0.5)", "three_pass(cons,t=0)",
+                                                "three_pass(cons,t=0,cf=100,s=0.5)", "oracle"}
     assert np.isclose(d["summary"]["per_method"]["none"]["ratio_to_none"], 1.0)

@@ -48,6 +48,7 @@ class TileTable(TypedDict):
     iy: npt.NDArray[np.uint32]  # (n,) tile row within its object
     tris_fine: npt.NDArray[np.uint32]  # (n,)
     tris_coarse: npt.NDArray[np.uint32]  # (n,)
+    proxy_error: npt.NDArray[np.float64]  # (n,) metres
     bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates (metres), NaN for empty tiles
     bbox_max: npt.NDArray[np.float64]  # (n, 3)
 
@@ -63,6 +64,8 @@ class RenderOutput(TypedDict):
     far: float
     stats: RenderStats
     horizon: NotRequired[npt.NDArray[np.float32]]  # (W,), only for culling="horizon"
+    box_pixels: NotRequired[npt.NDArray[np.uint32]]  # (n_tiles,), three_pass conservative / predict_errors
+    proxy_error_px: NotRequired[npt.NDArray[np.float32]]  # (n_tiles,), three_pass: proxy error in pixels
 
 @type_check_only
 class IsoOutput(TypedDict):
@@ -178,7 +181,14 @@ class Renderer:
     @property
     def gpu_bytes(self) -> int: ...
     def render(
-        self, scene: Scene, camera: Camera, culling: str, pixel_threshold: float, prepass_scale: float
+        self,
+        scene: Scene,
+        camera: Camera,
+        culling: str,
+        pixel_threshold: float,
+        prepass_scale: float,
+        conservative: bool,
+        predict_errors: bool,
     ) -> RenderOutput: ...
 
 def culling_modes() -> list[str]: ...

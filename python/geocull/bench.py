@@ -4,8 +4,10 @@ For every view of a Gullfaks-like scene (default: 11 horizons of 418×418 sample
 ≈ 3.9 M triangles, 1280×1024, all :func:`geocull.data.standard_views`) it renders, side by side in
 one process and one run (a warm-up round, then ``--repeats`` rounds in rotated order):
 
-- geocull ``none`` (every fine tile: the reference image), ``three_pass`` (pixel threshold 10,
-  coarse factor 25, prepass scale 1.0 and 0.5), ``oracle`` (exactly the tiles visible in the
+- geocull ``none`` (every fine tile: the reference image), ``three_pass`` in the paper's
+  approximate mode (``conservative=False``; pixel threshold 10, coarse factor 25, prepass scale 1.0
+  and 0.5; coarse factor 100 at 0.5) and in the conservative mode (``cons``: threshold 0, coarse
+  factor 25 at scale 1, coarse factor 100 at 0.5), ``oracle`` (exactly the tiles visible in the
   unculled image: the lower bound), ``horizon`` (CPU horizon culling);
 - PyVista/VTK off-screen with MSAA off and with MSAA on (PyVista's default), same camera and clip
   range.
@@ -148,10 +150,16 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
 
     methods: list[tuple[str, dict[str, Any]]] = [
         ("none", dict(culling="none")),
-        ("three_pass(s=1)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=1.0)),
-        ("three_pass(s=0.5)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5)),
+        ("three_pass(s=1)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=1.0,
+                                 conservative=False)),
+        ("three_pass(s=0.5)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5,
+                                   conservative=False)),
         (f"three_pass(cf={COARSE_ALT},s=0.5)",
-         dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5, coarse_factor=COARSE_ALT)),
+         dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5, coarse_factor=COARSE_ALT,
+              conservative=False)),
+        ("three_pass(cons,t=0)", dict(culling="three_pass", pixel_threshold=0, prepass_scale=1.0)),
+        (f"three_pass(cons,t=0,cf={COARSE_ALT},s=0.5)",
+         dict(culling="three_pass", pixel_threshold=0, prepass_scale=0.5, coarse_factor=COARSE_ALT)),
         ("oracle", dict(culling="oracle")),
     ]
     if cfg["horizon"]:

@@ -133,12 +133,14 @@ def _sweep_scene(
     configs.append((("oracle",), dict(culling="oracle")))
     if "horizon" in methods:
         configs.append((("horizon",), dict(culling="horizon")))
-    if "three_pass" in methods:
-        for thr, ps in itertools.product(thresholds, prepass_scales):
-            configs.append(
-                (("three_pass", float(thr), float(ps)),
-                 dict(culling="three_pass", pixel_threshold=thr, prepass_scale=ps))
-            )
+    # "three_pass" is the paper's approximate mode; "three_pass_cons" the conservative one.
+    for name, conservative in (("three_pass", False), ("three_pass_cons", True)):
+        if name in methods:
+            for thr, ps in itertools.product(thresholds, prepass_scales):
+                configs.append(
+                    ((name, float(thr), float(ps)),
+                     dict(culling="three_pass", pixel_threshold=thr, prepass_scale=ps, conservative=conservative))
+                )
 
     rows: list[dict[str, Any]] = []
     for vname, cam in cams:
@@ -158,11 +160,21 @@ def _sweep_scene(
         t_none = min(times[("none",)])
         t_oracle = min(times[("oracle",)])
         tri_oracle = oracle.stats["triangles_drawn"]
-        for key, _kw in configs:
+        for key, kw in configs:
             res = first[key]
             s = res.stats
             t = min(times[key])
             err = image_error(res.image, ref.image, tile_drawn=res.tile_drawn, reference_tile_pixels=visible)
+            # Predicted against measured misses of the approximate mode (an extra, untimed render).
+            risk: dict[str, Any] = dict(tiles_at_risk=None, predicted_max_missing_pixels=None, missed_not_at_risk=None)
+            if key[0] == "three_pass":
+                pred = renderer.render(scene, cam, **kw, predict_errors=True)
+                missed = (visible > 0) & ~np.asarray(pred.tile_drawn)
+                at_risk = pred.tile_at_risk
+                assert at_risk is not None
+                risk = dict(tiles_at_risk=int(pred.stats.get("tiles_at_risk", 0)),
+                            predicted_max_missing_pixels=int(pred.stats.get("predicted_max_missing_pixels", 0)),
+                            missed_not_at_risk=int((missed & ~at_risk).sum()))
             rows.append(
                 dict(
                     base,
@@ -187,6 +199,7 @@ def _sweep_scene(
                     count_ms=float(s.get("count_ms", 0.0)),
                     draw_ms=float(s.get("draw_ms", 0.0)),
                     times_ms=list(times[key]),
+                    **risk,
                 )
             )
     return rows
@@ -220,8 +233,12 @@ def sweep(
     coarse_factors (default for a spec: 25, 100, 400) × tiles (int n = n × n tiles per horizon, or
         (tx, ty); default for a spec: 10 × 10): one scene build each (faults: ``fault_tiles``,
         ``fault_coarse_factor``).
-    methods: ``none`` and ``oracle`` always run (they are the references); add ``"horizon"`` for
-        CPU horizon culling; leave out ``"three_pass"`` to time only the references.
+    methods: ``none`` and ``oracle`` always run (they are the references); ``"three_pass"`` is the
+        paper's approximate mode (``conservative=False``; its rows also carry the error predictor's
+        ``tiles_at_risk``, ``predicted_max_missing_pixels`` and ``missed_not_at_risk``, the missed
+        tiles the predictor called safe, from an extra untimed render); add ``"three_pass_cons"``
+        for the conservative mode and ``"horizon"`` for CPU horizon culling; leave out
+        ``"three_pass"`` to time only the references.
     repeats: timed rounds after the warm-up round (times are the minimum; ``median_ms`` too).
     renderer: a ``geocull.Renderer`` to reuse (its size wins over width/height).
 
@@ -325,6 +342,8 @@ def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 differing_pixel_fraction=_mean(dpf),
                 max_differing_pixel_fraction=max(dpf) if dpf else None,
                 missing_tiles=sum(miss) if miss else None,
+                tiles_at_risk=_total(r.get("tiles_at_risk") for r in rs),
+                missed_not_at_risk=_total(r.get("missed_not_at_risk") for r in rs),
                 triangles_drawn=_mean(r["triangles_drawn"] for r in rs),
                 triangles_prepass=_mean(r.get("triangles_prepass") for r in rs),
                 triangle_diff_vs_oracle=_mean(r.get("triangle_diff_vs_oracle") for r in rs),
@@ -333,6 +352,12 @@ def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             )
         )
     return out
+
+
+def _total(values: Iterable[Any]) -> int | None:
+    """Sum of the values that are not None (None when all are)."""
+    v = [x for x in values if x is not None]
+    return int(sum(v)) if v else None
 
 
 def point_label(r: dict[str, Any]) -> str:
@@ -429,8 +454,9 @@ def plot(table: Sequence[dict[str, Any]], path: str, title: str | None = None, a
 
     rows = summarize(table) if aggregate else list(table)
     rows = [r for r in rows if r.get("ratio_to_none") is not None and r.get("differing_pixel_fraction") is not None]
-    colors = {"none": "black", "oracle": "tab:green", "three_pass": "tab:blue", "horizon": "tab:orange"}
-    markers = {"none": "s", "oracle": "*", "three_pass": "o", "horizon": "^"}
+    colors = {"none": "black", "oracle": "tab:green", "three_pass": "tab:blue", "three_pass_cons": "tab:purple",
+              "horizon": "tab:orange"}
+    markers = {"none": "s", "oracle": "*", "three_pass": "o", "three_pass_cons": "D", "horizon": "^"}
     fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
     xs = [r["differing_pixel_fraction"] for r in rows]
     for r in rows:

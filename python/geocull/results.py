@@ -39,6 +39,12 @@ class RenderStats(TypedDict):
     nodes_visited: NotRequired[int]  # horizon: quadtree nodes visited, all height fields together
     nodes_culled: NotRequired[int]  # horizon: quadtree nodes culled, all height fields together
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
+    tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors: boxes submitted to the test
+    tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
+    tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test
+    test_ms: NotRequired[float]  # three_pass conservative / predict_errors with GPU timestamps: ms, box test
+    tiles_at_risk: NotRequired[int]  # three_pass predict_errors: culled tiles whose box shows in front
+    predicted_max_missing_pixels: NotRequired[int]  # three_pass predict_errors: upper bound of missed pixels
 
 
 class IsoStats(TypedDict):
@@ -96,7 +102,11 @@ class RenderResult(Generic[StatsT]):
     stats: :class:`RenderStats` (triangles, tiles and per-pass milliseconds).  near, far: the clip
     distances used (exaggerated world units).  culling: the mode rendered.  horizon: for
     culling="horizon", (W,) float32 per image column, the pixel rows from the bottom known hidden
-    (-inf where none); else None.
+    (-inf where none); else None.  box_pixels: for three_pass with conservative=True or
+    predict_errors=True, (n_tiles,) uint32 pixels where each tile's box shows in front of the
+    first phase's image (0 for tiles drawn in that phase); else None.  proxy_error_px: for
+    three_pass, (n_tiles,) float32 each tile's proxy error (``tile_table()["proxy_error"]``,
+    exaggerated) projected to pixels at the tile's nearest point; else None.
     """
 
     def __init__(self, d: "RenderOutput | IsoOutput", culling: str) -> None:
@@ -110,6 +120,18 @@ class RenderResult(Generic[StatsT]):
         self.culling = culling
         # Only scene frames rendered with culling="horizon" carry "horizon" (IsoOutput never does).
         self.horizon = cast("npt.NDArray[np.float32] | None", d.get("horizon"))
+        # three_pass with conservative=True or predict_errors=True: per-tile box-test counts.
+        self.box_pixels = cast("npt.NDArray[np.uint32] | None", d.get("box_pixels"))
+        # three_pass: each tile's proxy error (tile_table()["proxy_error"]) in pixels at its nearest point.
+        self.proxy_error_px = cast("npt.NDArray[np.float32] | None", d.get("proxy_error_px"))
+
+    @property
+    def tile_at_risk(self) -> npt.NDArray[np.bool_] | None:
+        """(n_tiles,) bool for three_pass with predict_errors=True: tiles culled although their box
+        shows in front of the image (every wrongly culled tile is among them); else None."""
+        if self.box_pixels is None or self.stats.get("tiles_at_risk") is None:
+            return None
+        return (~self.tile_drawn) & (self.box_pixels > 0)
 
     @property
     def coverage(self) -> np.ndarray:

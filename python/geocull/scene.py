@@ -22,7 +22,8 @@ __all__ = ["Scene"]
 
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
-                        ("tris_coarse", "u4"), ("bbox_min", "f8", (3,)), ("bbox_max", "f8", (3,))])
+                        ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
+                        ("bbox_max", "f8", (3,))])
 
 
 class Scene:
@@ -147,7 +148,10 @@ class Scene:
     def tile_table(self) -> np.ndarray:
         """One row per tile, in the renderer's tile order (the index of ``tile_pixels``), a structured
         array with fields object (id), ix, iy (tile position in its object),
-        tris_fine, tris_coarse, bbox_min (3,), bbox_max (3,) (world coordinates, metres; NaN if empty)."""
+        tris_fine, tris_coarse, proxy_error (metres: how far the coarse proxy may lie from the fine
+        triangles; height-field lattice proxies: the exact largest vertical distance, other proxies:
+        meshoptimizer's estimate), bbox_min (3,), bbox_max (3,) (world coordinates, metres; NaN if
+        empty)."""
         c: Mapping[str, Any] = self._s.tile_table()
         t = np.zeros(len(c["object"]), dtype=_TILE_DTYPE)
         for k in _TILE_DTYPE.names or ():

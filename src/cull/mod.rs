@@ -45,11 +45,17 @@ pub struct CullOptions {
     pub pixel_threshold: f64,
     /// Prepass resolution relative to the image, in (0, 1] (three_pass).
     pub prepass_scale: f64,
+    /// three_pass: never cull a tile with a visible pixel (beyond what the threshold allows);
+    /// false: the paper's approximate method.
+    pub conservative: bool,
+    /// three_pass with `conservative: false`: also find the tiles at risk of being wrongly culled
+    /// (stats `tiles_at_risk`, `predicted_max_missing_pixels`; costs the box-test pass).
+    pub predict_errors: bool,
 }
 
 impl Default for CullOptions {
     fn default() -> Self {
-        Self { pixel_threshold: 10.0, prepass_scale: 1.0 }
+        Self { pixel_threshold: 10.0, prepass_scale: 1.0, conservative: true, predict_errors: false }
     }
 }
 
@@ -132,7 +138,12 @@ pub enum Stat {
 /// A strategy's answer for one frame.
 pub struct Visible {
     pub draw: Draw,
+    /// Draw args the strategy itself already drew into the main targets in this frame (clearing
+    /// them); the final pass then adds `draw` to that image instead of clearing it.
+    pub predrawn: Option<wgpu::Buffer>,
     pub pixels: Pixels,
+    /// Per-tile u32 counts the strategy's GPU passes write, read back by name (e.g. "box_pixels").
+    pub tile_counts: Vec<(&'static str, wgpu::Buffer)>,
     /// The strategy's own stats (e.g. "nodes_visited"), added to the frame's stats by name.
     pub stats: Vec<(&'static str, Stat)>,
     /// The strategy's own per-frame arrays (e.g. "horizon": one value per image column).
@@ -141,7 +152,7 @@ pub struct Visible {
 
 impl Visible {
     pub fn new(draw: Draw, pixels: Pixels) -> Self {
-        Self { draw, pixels, stats: Vec::new(), arrays: Vec::new() }
+        Self { draw, predrawn: None, pixels, tile_counts: Vec::new(), stats: Vec::new(), arrays: Vec::new() }
     }
 }
 
@@ -162,4 +173,24 @@ pub trait CullStrategy: Send + Sync {
     /// Decides the visible set. GPU work is recorded into `enc`, the frame's one encoder, which
     /// the renderer submits after recording the final draw.
     fn visible_set(&mut self, frame: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible>;
+    /// Stats computed from what was read back after the frame (e.g. from `tile_counts`).
+    fn report(&mut self, _frame: &FrameReport<'_>) -> Vec<(&'static str, Stat)> {
+        Vec::new()
+    }
+}
+
+/// What was read back after a frame, for [`CullStrategy::report`].
+pub struct FrameReport<'a> {
+    pub tile_drawn: &'a [bool],
+    pub tile_pixels: &'a [u32],
+    /// The strategy's `tile_counts`, read back, by name.
+    pub tile_counts: &'a [(&'static str, Vec<u32>)],
+    pub width: u32,
+    pub height: u32,
+}
+
+impl FrameReport<'_> {
+    pub fn counts(&self, name: &str) -> Option<&[u32]> {
+        self.tile_counts.iter().find(|(n, _)| *n == name).map(|(_, c)| c.as_slice())
+    }
 }

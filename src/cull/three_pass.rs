@@ -9,22 +9,132 @@
 //!    (compared in prepass pixels, threshold × scale²); the final pass draws the result with
 //!    one `multi_draw_indexed_indirect`.
 //!
-//! Exact (the image equals `none`) when the proxies are the fine tiles (`coarse_factor` 1), the
-//! threshold is 0 and the prepass has the image's size; otherwise approximate, as in the paper:
-//! a proxy that bulges above its fine tile can hide a tile that is visible.
+//! With `conservative: false` that is all (the paper's method): exact (the image equals `none`)
+//! when the proxies are the fine tiles (`coarse_factor` 1), the threshold is 0 and the prepass has
+//! the image's size; otherwise approximate: a proxy that bulges above its fine tile can hide a tile
+//! that is visible, and a prepass at a lower resolution can miss tiles a few pixels wide.
+//!
+//! # Conservative mode (`conservative: true`, the default)
+//!
+//! Steps 1–3 choose a first set A, whose fine tiles are drawn at once into the final targets.
+//! Then every other visible tile's bounding box is tested against the depth of that image, at
+//! full resolution: a render pass rasterises the front faces of each box and counts,
+//! per tile, the pixels where the box is at or in front of the stored depth (the comparison is
+//! done in the fragment shader against the depth texture, so hidden fragments are never counted).
+//! Tiles whose count exceeds the threshold are drawn too (into the same image, depth-tested), in a
+//! second indirect draw built on the GPU. Why nothing visible is lost:
+//!
+//! * the depth D(p) after drawing A is that of a subset of the scene's fine triangles, so at every
+//!   pixel it is at or behind the nearest fine surface F(p) of the whole scene;
+//! * a tile T that has a visible fine fragment at p lies at F(p) there, inside T's box, so the
+//!   box's entry point on p's ray is at or in front of F(p), hence of D(p): T's count is at least
+//!   its number of visible pixels. It is culled only if that count is ≤ the threshold.
+//!
+//! So with threshold 0 the image equals `none` for any camera (above, below, between or inside
+//! stacked horizons, perspective or orthographic, any z_scale), with holes, faults and UTM
+//! coordinates, and whatever the coarse proxies and the prepass scale are: they only decide how
+//! much is drawn in the first phase. With a threshold t > 0 the only tiles lost are those with at
+//! most t visible pixels (the counts are upper bounds). Where the argument is given up:
+//!
+//! * a box that reaches the near plane (or contains the eye) is clipped, so its front faces may
+//!   not cover the pixels of its tile: such tiles are drawn untested (counted as visible);
+//! * f32 round-off of the GPU's transform: boxes are grown by 1e-6 of the coordinates' magnitude
+//!   plus 1e-4 of their diagonal, far above that round-off, and ties count as visible.
+//!
+//! # Error predictor (`conservative: false, predict_errors: true`)
+//!
+//! The same box test, run after the approximate frame without drawing anything more, finds the
+//! tiles that are culled but whose box shows in front of the image: the tiles at risk. Every tile
+//! that the approximate mode really misses is among them (the argument above), and the sum of
+//! their box counts bounds the missing pixels from above. Stats `tiles_at_risk`,
+//! `predicted_max_missing_pixels`; per-tile counts `box_pixels`. Every frame also reports each
+//! tile's proxy error (`TileMesh::proxy_error`, metres, from the build) projected to pixels at the
+//! tile's nearest point (array `proxy_error_px`): how far the proxy the prepass drew may be off.
 
-use super::{CullStrategy, Draw, FrameInputs, Pixels, Stat, Visible};
+use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
+use crate::gpu::layout::BoxInstance;
 use crate::gpu::{passes, Targets};
+use glam::DVec3;
+
+/// Initial box count of tiles drawn untested (their box reaches the near plane).
+const FORCED: u32 = 1 << 30;
 
 #[derive(Default)]
 pub struct ThreePass {
     /// Id + depth targets of the prepass, re-created when its size changes.
     targets: Option<Targets>,
+    /// This frame ran the box test (conservative or predictor).
+    tested: bool,
+    /// This frame only predicts (approximate mode).
+    predicting: bool,
 }
 
 pub fn make() -> Box<dyn CullStrategy> {
     Box::new(ThreePass::default())
+}
+
+/// Render-space boxes of the visible, non-empty tiles (instance id = tile index), grown against
+/// f32 round-off, and for each the initial count (FORCED when the box reaches the near plane).
+fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
+    let zs = DVec3::new(1.0, 1.0, f.camera.z_scale);
+    let objects = f.scene.objects();
+    let g = f.geometry;
+    let mut init = vec![0u32; g.n_tiles()];
+    let mut boxes = Vec::new();
+    for (i, ((lo, hi), &oi)) in g.bbox.iter().zip(&g.tile_object_cpu).enumerate() {
+        if !f.object_visible[i] || g.fine[i].index_count == 0 {
+            continue;
+        }
+        let off = objects[oi as usize].offset;
+        let (a, b) = ((*lo + off) * zs, (*hi + off) * zs);
+        let (lo, hi) = (a.min(b), a.max(b));
+        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
+        let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
+        let nearest = (0..8)
+            .map(|c| {
+                let p = DVec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                );
+                (p - f.fc.eye).dot(f.fc.forward)
+            })
+            .fold(f64::INFINITY, f64::min);
+        if nearest <= f.fc.near * 1.001 + 1e-9 {
+            init[i] = FORCED;
+        }
+        boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
+    }
+    (boxes, init)
+}
+
+/// Each tile's proxy error (`TileMesh::proxy_error`, exaggerated by z_scale where that enlarges
+/// it) projected to pixels at the tile's nearest point (`dist2`: squared eye distance to its box);
+/// +inf for a box that contains the eye.
+fn proxy_error_px(f: &FrameInputs<'_>, dist2: &[f64]) -> Vec<f32> {
+    let proj = f.fc.view_proj * f.fc.view.inverse();
+    let px_per_unit = proj.y_axis.y.abs() * f.height as f64 / 2.0; // at unit distance (perspective)
+    let perspective = f.fc.projection == crate::camera::Projection::Perspective;
+    let zs = f.camera.z_scale.max(1.0);
+    let objects = f.scene.objects();
+    let mut err = Vec::with_capacity(f.n_tiles());
+    for o in objects {
+        err.extend(o.tiles.iter().map(|t| t.proxy_error as f64 * zs));
+    }
+    err.iter()
+        .zip(dist2)
+        .map(|(&e, &d2)| {
+            let d = if perspective { d2.sqrt().max(f.fc.near) } else { 1.0 };
+            if e == 0.0 {
+                0.0
+            } else if perspective && d2 == 0.0 {
+                f32::INFINITY
+            } else {
+                (e * px_per_unit / d) as f32
+            }
+        })
+        .collect()
 }
 
 impl CullStrategy for ThreePass {
@@ -54,14 +164,71 @@ impl CullStrategy for ThreePass {
         let ts = |name| f.timestamps.and_then(|t| t.compute(name));
         f.passes.record_histogram(d, enc, &pt.id, (pw, ph), &counts, ts("count_ms"));
 
-        // Pass 3a: the final draws, selected on the GPU.
+        // Pass 3a: the first set of fine draws, selected on the GPU.
         let fine = passes::args_buffer(d, "fine_args", &f.pick(&f.geometry.fine, |_| true));
-        let out = passes::empty_args_buffer(d, "draw_args", n);
-        let threshold = (f.options.pixel_threshold * scale * scale) as f32;
-        f.passes.record_select(d, enc, &counts, &fine, &out, n, threshold, ts("count_ms"));
+        let first = passes::empty_args_buffer(d, "draw_args", n);
+        let threshold = f.options.pixel_threshold;
+        let scaled = (threshold * scale * scale) as f32;
+        f.passes.record_select(d, enc, &counts, &fine, &first, n, scaled, ts("count_ms"));
 
-        let mut v = Visible::new(Draw::Gpu(out), Pixels::Gpu { counts, scale: 1.0 / (scale * scale) });
+        let pixels = Pixels::Gpu { counts, scale: 1.0 / (scale * scale) };
+        self.predicting = !f.options.conservative && f.options.predict_errors;
+        self.tested = f.options.conservative || self.predicting;
+        let error_px = ("proxy_error_px", proxy_error_px(f, &dist));
+        if !self.tested {
+            let mut v = Visible::new(Draw::Gpu(first), pixels);
+            v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
+            v.arrays.push(error_px);
+            return Ok(v);
+        }
+
+        // Conservative second phase (or the predictor): draw the first set now, test every other
+        // tile's box against its depth at full resolution, draw (or report) those that show.
+        f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &first, false, f.timestamps);
+        let (boxes, init) = tile_boxes(f);
+        let box_counts = passes::counts_buffer_init(d, &init);
+        let boxes_buf = passes::boxes_buffer(d, &boxes);
+        let ts_test = f.timestamps.and_then(|t| t.render("test_ms"));
+        f.passes.record_box_test(
+            d,
+            enc,
+            f.scene_bg,
+            f.main_targets,
+            &boxes_buf,
+            boxes.len(),
+            &first,
+            &box_counts,
+            ts_test,
+        );
+        let draw = if self.predicting {
+            Draw::Mask(vec![false; n])
+        } else {
+            let rest = passes::empty_args_buffer(d, "rest_args", n);
+            f.passes.record_select_rest(d, enc, &box_counts, &fine, &first, &rest, n, threshold as f32, ts("count_ms"));
+            Draw::Gpu(rest)
+        };
+        let mut v = Visible::new(draw, pixels);
+        v.arrays.push(error_px);
+        v.predrawn = Some(first);
+        v.tile_counts.push(("box_pixels", box_counts));
         v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
+        v.stats.push(("tiles_box_tested", Stat::Count(boxes.len() as u64)));
         Ok(v)
+    }
+
+    fn report(&mut self, r: &FrameReport<'_>) -> Vec<(&'static str, Stat)> {
+        if !self.predicting {
+            return Vec::new();
+        }
+        let Some(box_px) = r.counts("box_pixels") else { return Vec::new() };
+        let image = r.width as u64 * r.height as u64;
+        let (mut at_risk, mut pixels) = (0u64, 0u64);
+        for (&drawn, &c) in r.tile_drawn.iter().zip(box_px) {
+            if !drawn && c > 0 {
+                at_risk += 1;
+                pixels += (c as u64).min(image);
+            }
+        }
+        vec![("tiles_at_risk", Stat::Count(at_risk)), ("predicted_max_missing_pixels", Stat::Count(pixels.min(image)))]
     }
 }

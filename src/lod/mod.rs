@@ -29,6 +29,11 @@ pub struct TileMesh {
     pub coarse: Vec<u32>,
     pub bbox_min: [f32; 3],
     pub bbox_max: [f32; 3],
+    /// How far the coarse proxy may lie from the fine triangles, world units (not exaggerated):
+    /// lattice proxies of height fields, the exact largest vertical distance at any fine sample;
+    /// quadric simplification, meshoptimizer's own error estimate scaled by the tile's extent;
+    /// 0 when the proxy is the fine level itself.
+    pub proxy_error: f32,
 }
 
 impl TileMesh {
@@ -42,8 +47,9 @@ impl TileMesh {
         self.coarse.len() / 3
     }
 
-    /// Bounding box, and the coarse proxy by quadric simplification unless `coarse` is given.
-    fn finish(mut self, coarse_factor: f32, coarse: Option<Vec<u32>>) -> Self {
+    /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
+    /// `coarse` is given.
+    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.positions {
@@ -58,7 +64,8 @@ impl TileMesh {
         }
         self.bbox_min = lo;
         self.bbox_max = hi;
-        self.coarse = coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
+        (self.coarse, self.proxy_error) =
+            coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         self
     }
 }
@@ -142,14 +149,31 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
                 let steps = |n: usize| -> Vec<usize> { (0..n - 1).step_by(k).chain(std::iter::once(n - 1)).collect() };
                 let (xs, ys) = (steps(w), steps(h));
                 let mut idx = Vec::with_capacity(6 * xs.len() * ys.len());
+                let mut err = 0.0f64;
+                let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 for jj in ys.windows(2) {
                     for ii in xs.windows(2) {
                         let m = |li: usize, lj: usize| map[lj * w + li];
                         let (a, b, c, d) = (m(ii[0], jj[0]), m(ii[1], jj[0]), m(ii[1], jj[1]), m(ii[0], jj[1]));
                         idx.extend_from_slice(&[a, b, c, a, c, d]);
+                        // Vertical distance of every fine sample of the quad to the two proxy
+                        // triangles (a, b, c) below the diagonal a-c and (a, c, d) above it.
+                        let (za, zb, zc, zd) = (zl(ii[0], jj[0]), zl(ii[1], jj[0]), zl(ii[1], jj[1]), zl(ii[0], jj[1]));
+                        let (sx, sy) = ((ii[1] - ii[0]) as f64, (jj[1] - jj[0]) as f64);
+                        for lj in jj[0]..=jj[1] {
+                            for li in ii[0]..=ii[1] {
+                                let (u, v) = ((li - ii[0]) as f64 / sx, (lj - jj[0]) as f64 / sy);
+                                let p = if u >= v {
+                                    za + u * (zb - za) + v * (zc - zb)
+                                } else {
+                                    za + u * (zc - zd) + v * (zd - za)
+                                };
+                                err = err.max((zl(li, lj) - p).abs());
+                            }
+                        }
                     }
                 }
-                idx
+                (idx, err as f32)
             });
             tile.finish(coarse_factor, lattice)
         })

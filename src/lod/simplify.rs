@@ -62,10 +62,12 @@ const ERROR_STEPS: [f32; 3] = [1e-2, 1e-1, 1.0];
 /// locked outline) but at ~9 % of the tile extent of error, so the 2x rule stops at 1e-2 for
 /// smooth tiles; rough tiles (noise of ±1 on a 50-wide tile) take the second pass (~204 triangles).
 /// Cost: ~2.4 ms per 5000-triangle tile per thread on this machine (meshopt itself ~2.1 ms).
-pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f32) -> Vec<u32> {
+/// Returns the proxy's indices and its error in world units (meshoptimizer's estimate, relative to
+/// the mesh extent, times that extent; 0 when the fine triangles are returned unchanged).
+pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f32) -> (Vec<u32>, f32) {
     // NaN compares false with everything: handle it together with `<= 1.0`.
     if coarse_factor.is_nan() || coarse_factor <= 1.0 || indices.len() < 3 {
-        return indices.to_vec();
+        return (indices.to_vec(), 0.0);
     }
     let tri_len = indices.len() / 3 * 3;
     let tris = &indices[..tri_len];
@@ -74,10 +76,10 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
     let n_vert = positions.len();
     for &i in tris {
         let Some(p) = positions.get(i as usize) else {
-            return indices.to_vec();
+            return (indices.to_vec(), 0.0);
         };
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
-            return indices.to_vec();
+            return (indices.to_vec(), 0.0);
         }
     }
 
@@ -87,7 +89,7 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
     let fallback = |clean: Vec<u32>| if clean.is_empty() { indices.to_vec() } else { clean };
     let n_tris = clean.len() / 3;
     if n_tris <= 1 {
-        return fallback(clean);
+        return (fallback(clean), 0.0);
     }
 
     // Compact the referenced vertices into a local array (unreferenced vertices may be NaN and
@@ -117,16 +119,27 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
     let reachable_tris = target_tris.max(border_edges);
 
     let Ok(adapter) = VertexDataAdapter::new(meshopt::typed_to_bytes(&local_pos), 12, 0) else {
-        return fallback(clean);
+        return (fallback(clean), 0.0);
     };
     let options = SimplifyOptions::LockBorder;
 
     let mut best: Vec<u32> = Vec::new();
+    let mut best_err = 0.0f32;
     for &err in ERROR_STEPS.iter() {
-        let out = meshopt::simplify_with_locks(&local_idx, &adapter, &locks, target_index_count, err, options, None);
+        let mut got = 0.0f32;
+        let out = meshopt::simplify_with_locks(
+            &local_idx,
+            &adapter,
+            &locks,
+            target_index_count,
+            err,
+            options,
+            Some(&mut got),
+        );
         let out = drop_degenerate(out);
         if !out.is_empty() && (best.is_empty() || out.len() < best.len()) {
             best = out;
+            best_err = got;
         }
         if !best.is_empty() && best.len() / 3 <= 2 * reachable_tris {
             break;
@@ -134,9 +147,18 @@ pub fn coarse_indices(positions: &[[f32; 3]], indices: &[u32], coarse_factor: f3
     }
 
     if best.is_empty() {
-        return fallback(clean);
+        return (fallback(clean), 0.0);
     }
-    best.iter().map(|&l| to_global[l as usize]).collect()
+    // meshoptimizer reports its error relative to the mesh extent (the largest side of its box).
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in &local_pos {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+    (best.iter().map(|&l| to_global[l as usize]).collect(), best_err * extent)
 }
 
 fn drop_degenerate(idx: Vec<u32>) -> Vec<u32> {
@@ -410,7 +432,7 @@ mod tests {
         let n = 51;
         let (pos, idx) = grid(n, smooth(0.0, 0.0));
         for f in [2.0, 25.0, 100.0, 400.0, 1e9] {
-            let out = coarse_indices(&pos, &idx, f);
+            let out = coarse_indices(&pos, &idx, f).0;
             check_border_kept(&pos, &idx, &out);
             // Explicitly: every outline vertex of the tile is still used.
             let u = used(&out);
@@ -436,7 +458,7 @@ mod tests {
                 base(x, y)
             }
         });
-        let out = coarse_indices(&pos, &idx, 25.0);
+        let out = coarse_indices(&pos, &idx, 25.0).0;
         check_border_kept(&pos, &idx, &out);
         for &v in &out {
             assert!(pos[v as usize][2].is_finite());
@@ -469,7 +491,7 @@ mod tests {
                 }
             }
             let lpos: Vec<[f32; 3]> = global.iter().map(|&g| pos32[g as usize]).collect();
-            let out = coarse_indices(&lpos, &lidx, 50.0);
+            let out = coarse_indices(&lpos, &lidx, 50.0).0;
             check_border_kept(&lpos, &lidx, &out);
             assert!(out.len() < lidx.len() / 3);
         }
@@ -484,7 +506,7 @@ mod tests {
             let (mut mn, mut mx) = (usize::MAX, 0usize);
             for t in 0..20 {
                 let (pos, idx) = grid(n, smooth(t as f32 * 50.0, t as f32 * 31.0));
-                let out = coarse_indices(&pos, &idx, f);
+                let out = coarse_indices(&pos, &idx, f).0;
                 tot_in += idx.len() / 3;
                 tot_out += out.len() / 3;
                 mn = mn.min(out.len() / 3);
@@ -507,35 +529,35 @@ mod tests {
     #[test]
     fn factor_one_or_less_unchanged() {
         let (pos, idx) = grid(11, smooth(0.0, 0.0));
-        assert_eq!(coarse_indices(&pos, &idx, 1.0), idx);
-        assert_eq!(coarse_indices(&pos, &idx, 0.5), idx);
-        assert_eq!(coarse_indices(&pos, &idx, -3.0), idx);
-        assert_eq!(coarse_indices(&pos, &idx, f32::NAN), idx);
+        assert_eq!(coarse_indices(&pos, &idx, 1.0).0, idx);
+        assert_eq!(coarse_indices(&pos, &idx, 0.5).0, idx);
+        assert_eq!(coarse_indices(&pos, &idx, -3.0).0, idx);
+        assert_eq!(coarse_indices(&pos, &idx, f32::NAN).0, idx);
     }
 
     #[test]
     fn degenerate_and_empty_input() {
         let pos = vec![[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        assert!(coarse_indices(&pos, &[], 25.0).is_empty());
-        assert!(coarse_indices(&[], &[], 25.0).is_empty());
+        assert!(coarse_indices(&pos, &[], 25.0).0.is_empty());
+        assert!(coarse_indices(&[], &[], 25.0).0.is_empty());
         // All degenerate: input returned (never empty).
         let deg = vec![0u32, 0, 1, 2, 2, 2];
-        assert_eq!(coarse_indices(&pos, &deg, 25.0), deg);
+        assert_eq!(coarse_indices(&pos, &deg, 25.0).0, deg);
         // Out-of-range index: unchanged, no UB.
         let bad = vec![0u32, 1, 7];
-        assert_eq!(coarse_indices(&pos, &bad, 25.0), bad);
+        assert_eq!(coarse_indices(&pos, &bad, 25.0).0, bad);
         // Single triangle.
-        assert_eq!(coarse_indices(&pos, &[0, 1, 2], 25.0), vec![0, 1, 2]);
+        assert_eq!(coarse_indices(&pos, &[0, 1, 2], 25.0).0, vec![0, 1, 2]);
         // Grid with degenerate triangles mixed in: they are dropped, border kept.
         let (gpos, mut idx) = grid(21, smooth(0.0, 0.0));
         let clean = idx.clone();
         for v in [3u32, 50, 99] {
             idx.extend_from_slice(&[v, v, v + 1]);
         }
-        let out = coarse_indices(&gpos, &idx, 10.0);
+        let out = coarse_indices(&gpos, &idx, 10.0).0;
         check_border_kept(&gpos, &clean, &out);
         // Infinite factor: still non-empty.
-        assert!(!coarse_indices(&gpos, &clean, f32::INFINITY).is_empty());
+        assert!(!coarse_indices(&gpos, &clean, f32::INFINITY).0.is_empty());
         // Clustering with degenerate faces and empty input.
         let p64 = vec![[0.0f64; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let faces = vec![[0u32, 0, 0], [0, 1, 2], [1, 1, 2], [2, 2, 2], [0, 9, 9]];
@@ -601,7 +623,7 @@ mod tests {
             (0..tiles).map(|t| grid(51, smooth((t % 37) as f32 * 50.0, (t / 37) as f32 * 50.0))).collect();
         let tris_in: usize = data.iter().map(|(_, i)| i.len() / 3).sum();
         let t0 = Instant::now();
-        let outs: Vec<Vec<u32>> = data.par_iter().map(|(p, i)| coarse_indices(p, i, 25.0)).collect();
+        let outs: Vec<Vec<u32>> = data.par_iter().map(|(p, i)| coarse_indices(p, i, 25.0).0).collect();
         let dt = t0.elapsed();
         let tris_out: usize = outs.iter().map(|o| o.len() / 3).sum();
         println!(

@@ -51,6 +51,9 @@ fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, P
     for (name, a) in out.arrays {
         d.set_item(name, Array1::from_vec(a).into_pyarray(py))?;
     }
+    for (name, c) in out.tile_counts {
+        d.set_item(name, Array1::from_vec(c).into_pyarray(py))?;
+    }
     d.set_item("stats", st)?;
     Ok(d)
 }
@@ -86,7 +89,8 @@ impl PyRenderer {
         self.inner.gpu_bytes()
     }
 
-    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale))]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors))]
     fn render<'py>(
         &mut self,
         py: Python<'py>,
@@ -95,10 +99,13 @@ impl PyRenderer {
         culling: String,
         pixel_threshold: f64,
         prepass_scale: f64,
+        conservative: bool,
+        predict_errors: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let r = &mut self.inner;
         let (s, c) = (&scene.inner, &camera.inner);
-        let opts = RenderOptions { culling, cull: CullOptions { pixel_threshold, prepass_scale } };
+        let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
+        let opts = RenderOptions { culling, cull };
         let out = run(py, move || r.render(s, c, &opts))?;
         output_dict(py, out)
     }

@@ -128,6 +128,7 @@ impl PyScene {
     fn tile_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let mut object = Vec::new();
         let (mut ix, mut iy, mut fine, mut coarse) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut proxy_error = Vec::new();
         let (mut lo, mut hi) = (Vec::new(), Vec::new());
         let origin = self.inner.origin();
         for o in self.inner.objects() {
@@ -137,6 +138,7 @@ impl PyScene {
                 iy.push(t.iy);
                 fine.push(t.fine_triangles() as u32);
                 coarse.push(t.coarse_triangles() as u32);
+                proxy_error.push(t.proxy_error as f64);
                 for a in 0..3 {
                     let off = origin[a] + o.offset[a];
                     lo.push(if t.is_empty() { f64::NAN } else { t.bbox_min[a] as f64 + off });
@@ -151,6 +153,7 @@ impl PyScene {
         d.set_item("iy", iy.into_pyarray(py))?;
         d.set_item("tris_fine", fine.into_pyarray(py))?;
         d.set_item("tris_coarse", coarse.into_pyarray(py))?;
+        d.set_item("proxy_error", proxy_error.into_pyarray(py))?;
         d.set_item("bbox_min", Array2::from_shape_vec((n, 3), lo).unwrap().into_pyarray(py))?;
         d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
         Ok(d)

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::camera::Projection;
+use crate::cull::Stat;
 use crate::gpu::BACKGROUND;
 use crate::scene::AddOptions;
 
@@ -68,16 +69,11 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     )
     .unwrap();
     let none = r.render(&s, &cam, &RenderOptions::default()).unwrap();
-    let tp = r
-        .render(
-            &s,
-            &cam,
-            &RenderOptions {
-                culling: "three_pass".into(),
-                cull: CullOptions { pixel_threshold: 0.0, prepass_scale: 1.0 },
-            },
-        )
-        .unwrap();
+    let three_pass = |conservative| RenderOptions {
+        culling: "three_pass".into(),
+        cull: CullOptions { pixel_threshold: 0.0, conservative, ..Default::default() },
+    };
+    let tp = r.render(&s, &cam, &three_pass(false)).unwrap();
     let covered = none.depth.iter().filter(|d| d.is_finite()).count() as u32;
     assert!(covered > 0);
     assert_eq!(tp.tile_pixels.iter().sum::<u32>(), covered);
@@ -89,4 +85,9 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     assert!(tp.tile_drawn[first_lower..].iter().all(|&d| !d));
     assert_eq!(tp.image, none.image);
     assert!(tp.stats.triangles_drawn < none.stats.triangles_drawn);
+    // Conservative: the box test finds nothing more to draw (the lower boxes lie behind).
+    let cons = r.render(&s, &cam, &three_pass(true)).unwrap();
+    assert_eq!(cons.tile_drawn, tp.tile_drawn);
+    assert_eq!(cons.stats.get("tiles_drawn_second"), Some(Stat::Count(0)));
+    assert_eq!(cons.image, none.image);
 }
