@@ -25,19 +25,58 @@ use glam::{DVec3, Mat4};
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// Which level of detail each drawn tile uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lod {
+    /// Level 0 (the fine triangles) everywhere: the reference.
+    Full,
+    /// The coarsest level whose geometric error projects to at most `max_pixel_error` pixels at
+    /// the tile's nearest point (`crate::lod::levels`).
+    ScreenError { max_pixel_error: f64 },
+}
+
+impl Lod {
+    pub fn parse(name: &str, max_pixel_error: f64) -> Result<Self> {
+        match name {
+            "full" => Ok(Self::Full),
+            "screen_error" => {
+                crate::error::ensure(max_pixel_error.is_finite() && max_pixel_error > 0.0, "max_pixel_error", || {
+                    format!("max_pixel_error is {max_pixel_error}; expected pixels > 0")
+                })?;
+                Ok(Self::ScreenError { max_pixel_error })
+            }
+            _ => Err(crate::error::input_err(
+                "lod",
+                format!("unknown lod {name:?}; expected \"full\" or \"screen_error\""),
+            )),
+        }
+    }
+}
+
 /// How to render one frame.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     /// A registered strategy's name (`crate::cull::names()`).
     pub culling: String,
     pub cull: CullOptions,
+    pub lod: Lod,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { culling: "none".into(), cull: CullOptions::default() }
+        Self { culling: "none".into(), cull: CullOptions::default(), lod: Lod::Full }
     }
 }
+
+/// Names of the per-level triangle counts in the stats (`triangles_level{l}`).
+const LEVEL_STATS: [&str; 1 + crate::lod::levels::MAX_LEVELS] = [
+    "triangles_level0",
+    "triangles_level1",
+    "triangles_level2",
+    "triangles_level3",
+    "triangles_level4",
+    "triangles_level5",
+];
 
 impl RenderOptions {
     /// `culling` with the default options.
@@ -195,6 +234,7 @@ impl Renderer {
         let Self { ctx, passes, main_targets, geometry, timestamps, strategies, width, height, .. } = self;
         let geometry = geometry.as_ref().expect("uploaded above");
         let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, geometry);
+        let (draw_args, chosen) = choose_levels(geometry, scene, camera, &fc, *height, opts.lod);
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -202,6 +242,7 @@ impl Renderer {
             camera,
             fc: &fc,
             geometry,
+            draw_args: &draw_args,
             scene_bg: &scene_bg,
             object_visible: &object_visible,
             width: *width,
@@ -236,7 +277,34 @@ impl Renderer {
         };
         let extra = self.strategies[si].report(&report);
         out.stats.extra.extend(extra);
+        if let Some((level, err_px)) = chosen {
+            self.lod_stats(&mut out, &level, &err_px);
+            out.tile_counts.push(("tile_level", level.iter().map(|&l| l as u32).collect()));
+            out.arrays.push(("tile_error_px", err_px));
+        }
         Ok(out)
+    }
+
+    /// LOD stats of a frame: triangles drawn per level, the largest error used (pixels, metres).
+    fn lod_stats(&self, out: &mut RenderOutput, level: &[u8], err_px: &[f32]) {
+        let g = self.geometry.as_ref().expect("uploaded");
+        let mut tris = [0u64; LEVEL_STATS.len()];
+        let (mut max_px, mut max_m) = (0.0f64, 0.0f64);
+        for (i, &drawn) in out.tile_drawn.iter().enumerate() {
+            if !drawn {
+                continue;
+            }
+            let l = level[i] as usize;
+            let (args, err) = if l == 0 { (g.fine[i], 0.0) } else { g.levels[i][l - 1] };
+            tris[l] += args.index_count as u64 / 3;
+            max_px = max_px.max(err_px[i] as f64);
+            max_m = max_m.max(err as f64);
+        }
+        for (name, t) in LEVEL_STATS.iter().zip(tris) {
+            out.stats.extra.push((name, Stat::Count(t)));
+        }
+        out.stats.extra.push(("lod_max_error_px", Stat::Float(max_px)));
+        out.stats.extra.push(("lod_max_error_m", Stat::Float(max_m)));
     }
 
     /// Stage 5: image, depth, per-tile counts and the draws made, copied back and converted
@@ -423,12 +491,61 @@ fn frame_state(
     (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, geom), visible)
 }
 
+/// Per tile: the level chosen (0 = fine) and its error in pixels.
+type ChosenLevels = (Vec<u8>, Vec<f32>);
+
+/// Stage 2b: the level of detail of every tile for this frame, and with `Lod::ScreenError` each
+/// tile's chosen level and its error in pixels. The error of a level (world units) is scaled by the
+/// exaggeration where that enlarges it and projected at the tile box's nearest point (perspective)
+/// or with the orthographic scale; a box that contains the eye gets level 0. Cheap on the CPU (one
+/// pass over the tiles), so it runs there, before the strategy, with no read-back.
+fn choose_levels(
+    g: &SceneGeometry,
+    scene: &Scene,
+    camera: &Camera,
+    fc: &FrameCamera,
+    height: u32,
+    lod: Lod,
+) -> (Vec<DrawArgs>, Option<ChosenLevels>) {
+    let Lod::ScreenError { max_pixel_error } = lod else { return (g.fine.clone(), None) };
+    let proj = fc.view_proj * fc.view.inverse();
+    let px_per_unit = proj.y_axis.y.abs() * height as f64 / 2.0;
+    let perspective = fc.projection == crate::camera::Projection::Perspective;
+    let zs = camera.z_scale.max(1.0);
+    let dist2 = g.eye_distances(scene, fc.eye, camera.z_scale);
+    let mut args = Vec::with_capacity(g.n_tiles());
+    let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
+    for (i, &d2) in dist2.iter().enumerate() {
+        let scale = if perspective {
+            if d2 > 0.0 {
+                zs * px_per_unit / d2.sqrt()
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            zs * px_per_unit
+        };
+        let (mut a, mut l, mut e) = (g.fine[i], 0u8, 0.0f32);
+        for (k, &(la, lerr)) in g.levels[i].iter().enumerate() {
+            let px = if lerr == 0.0 { 0.0 } else { lerr as f64 * scale };
+            if px > max_pixel_error {
+                break;
+            }
+            (a, l, e) = (la, k as u8 + 1, px as f32);
+        }
+        args.push(a);
+        level.push(l);
+        err_px.push(e);
+    }
+    (args, Some((level, err_px)))
+}
+
 /// Stage 4: records the lit fine pass of the visible set; returns the args it draws.
 fn draw(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, visible: &Visible) -> wgpu::Buffer {
     let d = &f.ctx.device;
     let args = match &visible.draw {
-        Draw::All => passes::args_buffer(d, "draw_args", &f.pick(&f.geometry.fine, |_| true)),
-        Draw::Mask(m) => passes::args_buffer(d, "draw_args", &f.pick(&f.geometry.fine, |i| m[i])),
+        Draw::All => passes::args_buffer(d, "draw_args", &f.pick(f.draw_args, |_| true)),
+        Draw::Mask(m) => passes::args_buffer(d, "draw_args", &f.pick(f.draw_args, |i| m[i])),
         Draw::Gpu(b) => b.clone(),
     };
     let load = visible.predrawn.is_some();

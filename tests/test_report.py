@@ -144,8 +144,9 @@ def test_bench_tiny_json(tmp_path):
     assert s["n_triangles"] > 0 and s["bytes_per_triangle"] > 0 and s["peak_rss_mb"] > 0
     methods = [r["method"] for r in rows]
     assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)",
-                       "three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)", "oracle", "horizon",
-                       "pyvista", "pyvista_msaa"]
+                       "three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)", "none(lod=0.5)",
+                       "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)", "three_pass(cons,lod=2)", "oracle",
+                       "horizon", "pyvista", "pyvista_msaa"]
     for r in rows:
         assert BENCH_KEYS <= set(r), BENCH_KEYS - set(r)
         assert r["total_ms"] > 0 and r["ratio_to_none"] > 0 and r["triangles_drawn"] > 0
@@ -176,5 +177,7 @@ def test_bench_views_by_name_without_pyvista(tmp_path):
     assert d["summary"]["views"] == ["top_down", "low_az200"]
     assert {r["method"] for r in d["rows"]} == {"none", "three_pass(s=1)", "three_pass(s=0.5)",
                                                 "three_pass(cf=100,s=0.5)", "three_pass(cons,t=0)",
-                                                "three_pass(cons,t=0,cf=100,s=0.5)", "oracle"}
+                                                "three_pass(cons,t=0,cf=100,s=0.5)", "none(lod=0.5)",
+                                                "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)",
+                                                "three_pass(cons,lod=2)", "oracle"}
     assert np.isclose(d["summary"]["per_method"]["none"]["ratio_to_none"], 1.0)

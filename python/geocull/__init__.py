@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 from ._errors import DeviceError, GeocullError, InputError
 from .camera import Camera
-from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, Renderer
+from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, LodMode, Renderer
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume
@@ -47,6 +47,7 @@ __all__ = [
     "ISO_CULLING_MODES",
     "CullingMode",
     "IsoCullingMode",
+    "LodMode",
     "RenderStats",
     "IsoStats",
 ]

@@ -97,6 +97,11 @@ def integer(x: Any, arg: str) -> int:
     return v
 
 
+def fail_type(x: Any, arg: str, expected: str) -> Any:
+    """Raises InputError: ``arg`` is ``x``, which is not ``expected`` (e.g. "a string")."""
+    raise InputError(f"{arg}: {x!r} is not {expected}")
+
+
 def expect_instance(x: Any, cls: type, arg: str) -> Any:
     """``x`` itself if it is an instance of ``cls`` (a geocull class), else InputError naming the argument."""
     if not isinstance(x, cls):

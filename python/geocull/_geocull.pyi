@@ -49,6 +49,8 @@ class TileTable(TypedDict):
     tris_fine: npt.NDArray[np.uint32]  # (n,)
     tris_coarse: npt.NDArray[np.uint32]  # (n,)
     proxy_error: npt.NDArray[np.float64]  # (n,) metres
+    level_triangles: npt.NDArray[np.uint32]  # (n, 6)
+    level_error: npt.NDArray[np.float64]  # (n, 6) metres, NaN past a tile's last level
     bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates (metres), NaN for empty tiles
     bbox_max: npt.NDArray[np.float64]  # (n, 3)
 
@@ -66,6 +68,8 @@ class RenderOutput(TypedDict):
     horizon: NotRequired[npt.NDArray[np.float32]]  # (W,), only for culling="horizon"
     box_pixels: NotRequired[npt.NDArray[np.uint32]]  # (n_tiles,), three_pass conservative / predict_errors
     proxy_error_px: NotRequired[npt.NDArray[np.float32]]  # (n_tiles,), three_pass: proxy error in pixels
+    tile_level: NotRequired[npt.NDArray[np.uint32]]  # (n_tiles,), lod="screen_error": level drawn
+    tile_error_px: NotRequired[npt.NDArray[np.float32]]  # (n_tiles,), lod="screen_error": its error, pixels
 
 @type_check_only
 class IsoOutput(TypedDict):
@@ -189,6 +193,8 @@ class Renderer:
         prepass_scale: float,
         conservative: bool,
         predict_errors: bool,
+        lod: str,
+        max_pixel_error: float,
     ) -> RenderOutput: ...
 
 def culling_modes() -> list[str]: ...

@@ -14,7 +14,7 @@ from .results import IsoResult, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume
 
-__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode"]
+__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "LodMode"]
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
@@ -28,6 +28,9 @@ IsoCullingMode = Literal["implicit", "none"]
 
 #: The same names at runtime, in that order.
 ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
+
+#: Level-of-detail choice of :meth:`Renderer.render` (``lod=``).
+LodMode = Literal["full", "screen_error"]
 
 
 class Renderer:
@@ -73,6 +76,8 @@ class Renderer:
         prepass_scale: float = 1.0,
         conservative: bool = True,
         predict_errors: bool = False,
+        lod: LodMode = "full",
+        max_pixel_error: float = 0.5,
     ) -> RenderResult[RenderStats]:
         """Render ``scene`` seen by ``camera`` into a :class:`RenderResult` (see there for the arrays:
         image (H, W, 4), depth (H, W), per-tile counts).
@@ -94,6 +99,13 @@ class Renderer:
         to report the tiles at risk of being wrongly culled (``stats["tiles_at_risk"]``,
         ``stats["predicted_max_missing_pixels"]``, :attr:`RenderResult.tile_at_risk`). Every tile the
         approximate mode misses is among them.
+        lod: "full" (level 0, the fine triangles, everywhere: the reference) or "screen_error" (each
+        drawn tile at the coarsest of its levels whose geometric error, ``tile_table()`` levels
+        built with the scene, projects to at most ``max_pixel_error`` pixels at the tile's nearest
+        point; neighbouring tiles at different levels meet without cracks: every level keeps its
+        tile's border at full resolution). Works with every culling mode. Stats
+        ``triangles_level0`` .. ``triangles_level5``, ``lod_max_error_px``, ``lod_max_error_m``.
+        max_pixel_error: > 0, pixels (lod="screen_error").
 
         Accuracy: "none", "oracle", "horizon" and "frustum" give the unculled image, and so does
         "three_pass" with conservative=True and pixel_threshold=0 (for any camera and proxies).
@@ -109,7 +121,9 @@ class Renderer:
         if not isinstance(culling, str):
             raise InputError(f"culling: {culling!r} is not a string")
         d = self._r.render(scene._s, camera._c, culling, cv.number(pixel_threshold, "pixel_threshold"),
-                           cv.number(prepass_scale, "prepass_scale"), bool(conservative), bool(predict_errors))
+                           cv.number(prepass_scale, "prepass_scale"), bool(conservative), bool(predict_errors),
+                           lod if isinstance(lod, str) else cv.fail_type(lod, "lod", "a string"),
+                           cv.number(max_pixel_error, "max_pixel_error"))
         return RenderResult(d, culling)
 
     def render_isosurface(

@@ -45,6 +45,14 @@ class RenderStats(TypedDict):
     test_ms: NotRequired[float]  # three_pass conservative / predict_errors with GPU timestamps: ms, box test
     tiles_at_risk: NotRequired[int]  # three_pass predict_errors: culled tiles whose box shows in front
     predicted_max_missing_pixels: NotRequired[int]  # three_pass predict_errors: upper bound of missed pixels
+    triangles_level0: NotRequired[int]  # lod="screen_error": triangles drawn at level 0 (fine)
+    triangles_level1: NotRequired[int]  # lod="screen_error": ... at level 1 (about 1/4 of level 0)
+    triangles_level2: NotRequired[int]
+    triangles_level3: NotRequired[int]
+    triangles_level4: NotRequired[int]
+    triangles_level5: NotRequired[int]
+    lod_max_error_px: NotRequired[float]  # lod="screen_error": largest projected error drawn, pixels
+    lod_max_error_m: NotRequired[float]  # lod="screen_error": largest geometric error drawn, world units
 
 
 class IsoStats(TypedDict):
@@ -106,7 +114,9 @@ class RenderResult(Generic[StatsT]):
     predict_errors=True, (n_tiles,) uint32 pixels where each tile's box shows in front of the
     first phase's image (0 for tiles drawn in that phase); else None.  proxy_error_px: for
     three_pass, (n_tiles,) float32 each tile's proxy error (``tile_table()["proxy_error"]``,
-    exaggerated) projected to pixels at the tile's nearest point; else None.
+    exaggerated) projected to pixels at the tile's nearest point; else None.  tile_level,
+    tile_error_px: for lod="screen_error", (n_tiles,) the level chosen for each tile (0 = fine;
+    ``tile_table()["level_error"]``) and its error projected to pixels; else None.
     """
 
     def __init__(self, d: "RenderOutput | IsoOutput", culling: str) -> None:
@@ -124,6 +134,9 @@ class RenderResult(Generic[StatsT]):
         self.box_pixels = cast("npt.NDArray[np.uint32] | None", d.get("box_pixels"))
         # three_pass: each tile's proxy error (tile_table()["proxy_error"]) in pixels at its nearest point.
         self.proxy_error_px = cast("npt.NDArray[np.float32] | None", d.get("proxy_error_px"))
+        # lod="screen_error": the level each tile was given and that level's error in pixels.
+        self.tile_level = cast("npt.NDArray[np.uint32] | None", d.get("tile_level"))
+        self.tile_error_px = cast("npt.NDArray[np.float32] | None", d.get("tile_error_px"))
 
     @property
     def tile_at_risk(self) -> npt.NDArray[np.bool_] | None:

@@ -23,7 +23,7 @@ __all__ = ["Scene"]
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
                         ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
-                        ("bbox_max", "f8", (3,))])
+                        ("bbox_max", "f8", (3,)), ("level_triangles", "u4", (6,)), ("level_error", "f8", (6,))])
 
 
 class Scene:
@@ -151,7 +151,9 @@ class Scene:
         tris_fine, tris_coarse, proxy_error (metres: how far the coarse proxy may lie from the fine
         triangles; height-field lattice proxies: the exact largest vertical distance, other proxies:
         meshoptimizer's estimate), bbox_min (3,), bbox_max (3,) (world coordinates, metres; NaN if
-        empty)."""
+        empty), level_triangles (6,) and level_error (6,): the LOD levels 0..5 of the tile (level 0
+        = fine, error 0; each further level about a quarter of the triangles; error in metres, NaN
+        past the tile's last level) that ``lod="screen_error"`` chooses from."""
         c: Mapping[str, Any] = self._s.tile_table()
         t = np.zeros(len(c["object"]), dtype=_TILE_DTYPE)
         for k in _TILE_DTYPE.names or ():

@@ -81,6 +81,9 @@ pub struct FrameInputs<'a> {
     /// The frame's camera in render space (origin-relative, exaggerated), near/far included.
     pub fc: &'a FrameCamera,
     pub geometry: &'a SceneGeometry,
+    /// Per tile, the draw of the level of detail chosen for this frame (`geometry.fine` with
+    /// lod = full): what every strategy draws in place of the fine tiles.
+    pub draw_args: &'a [DrawArgs],
     /// Bind group of the scene passes for this frame.
     pub scene_bg: &'a wgpu::BindGroup,
     /// Per tile: its object is visible (`Scene::set_visible`). Hidden objects are never drawn.
@@ -133,6 +136,8 @@ pub enum Stat {
     Count(u64),
     /// A duration in milliseconds.
     Ms(f64),
+    /// Any other real number (its name says the unit, e.g. `_px`, `_m`).
+    Float(f64),
 }
 
 /// A strategy's answer for one frame.

@@ -25,7 +25,7 @@ impl CullStrategy for Oracle {
     fn prepare(&mut self, f: &FrameInputs<'_>) -> Result<()> {
         let d = &f.ctx.device;
         let n = f.n_tiles();
-        let all = passes::args_buffer(d, "reference_args", &f.pick(&f.geometry.fine, |_| true));
+        let all = passes::args_buffer(d, "reference_args", &f.pick(f.draw_args, |_| true));
         let counts = passes::counts_buffer(d, n);
         let mut enc = f.ctx.encoder("oracle_reference");
         f.passes.record_draw(&mut enc, f.main_targets, f.scene_bg, f.geometry, &all, false, None);

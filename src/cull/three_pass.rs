@@ -165,7 +165,7 @@ impl CullStrategy for ThreePass {
         f.passes.record_histogram(d, enc, &pt.id, (pw, ph), &counts, ts("count_ms"));
 
         // Pass 3a: the first set of fine draws, selected on the GPU.
-        let fine = passes::args_buffer(d, "fine_args", &f.pick(&f.geometry.fine, |_| true));
+        let fine = passes::args_buffer(d, "fine_args", &f.pick(f.draw_args, |_| true));
         let first = passes::empty_args_buffer(d, "draw_args", n);
         let threshold = f.options.pixel_threshold;
         let scaled = (threshold * scale * scale) as f32;

@@ -21,6 +21,9 @@ pub struct SceneGeometry {
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
     pub coarse: Vec<DrawArgs>,
+    /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
+    /// vertex copy) and their errors in world units.
+    pub levels: Vec<Vec<(DrawArgs, f32)>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
     pub bytes: u64,
@@ -54,11 +57,14 @@ impl SceneGeometry {
         let (mut nv, mut ni) = (0u64, 0u64);
         let mut seen: Vec<bool> = Vec::new();
         for t in scene.objects().iter().flat_map(|o| &o.tiles) {
-            seen.clear();
-            seen.resize(t.positions.len(), false);
-            let unique = t.coarse.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count();
-            nv += (t.positions.len() + unique) as u64;
-            ni += (t.fine.len() + t.coarse.len()) as u64;
+            nv += t.positions.len() as u64;
+            ni += t.fine.len() as u64;
+            for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
+                seen.clear();
+                seen.resize(t.positions.len(), false);
+                nv += idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
+                ni += idx.len() as u64;
+            }
         }
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -69,6 +75,7 @@ impl SceneGeometry {
         let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX);
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut levels = Vec::new();
         let tile_bbox = |t: &crate::lod::TileMesh| {
             (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
         };
@@ -99,30 +106,36 @@ impl SceneGeometry {
                     });
                     put_v(&mut v, &t.positions);
                     put_i(&mut i, &t.fine);
-                    // The coarse proxy gets its own compact copy of the vertices it uses: software
-                    // rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
-                    // indexing into the fine vertices would make the prepass cost as much as a fine draw.
-                    remap.clear();
-                    remap.resize(t.positions.len(), u32::MAX);
-                    cverts.clear();
-                    cidx.clear();
-                    for &k in &t.coarse {
-                        let slot = &mut remap[k as usize];
-                        if *slot == u32::MAX {
-                            *slot = cverts.len() as u32;
-                            cverts.push(t.positions[k as usize]);
+                    // The coarse proxy and each LOD level get their own compact copy of the
+                    // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
+                    // indexed draw's index range, so indexing into the fine vertices would make
+                    // them cost as much as a fine draw.
+                    let mut compact = |indices: &[u32], v: &mut usize, i: &mut usize| {
+                        remap.clear();
+                        remap.resize(t.positions.len(), u32::MAX);
+                        cverts.clear();
+                        cidx.clear();
+                        for &k in indices {
+                            let slot = &mut remap[k as usize];
+                            if *slot == u32::MAX {
+                                *slot = cverts.len() as u32;
+                                cverts.push(t.positions[k as usize]);
+                            }
+                            cidx.push(*slot);
                         }
-                        cidx.push(*slot);
-                    }
-                    coarse.push(DrawArgs {
-                        index_count: cidx.len() as u32,
-                        instance_count: 1,
-                        first_index: i as u32,
-                        base_vertex: v as i32,
-                        first_instance: tile,
-                    });
-                    put_v(&mut v, &cverts);
-                    put_i(&mut i, &cidx);
+                        let args = DrawArgs {
+                            index_count: cidx.len() as u32,
+                            instance_count: 1,
+                            first_index: *i as u32,
+                            base_vertex: *v as i32,
+                            first_instance: tile,
+                        };
+                        put_v(v, &cverts);
+                        put_i(i, &cidx);
+                        args
+                    };
+                    coarse.push(compact(&t.coarse, &mut v, &mut i));
+                    levels.push(t.levels.iter().map(|l| (compact(&l.indices, &mut v, &mut i), l.error)).collect());
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
                 }
@@ -135,6 +148,7 @@ impl SceneGeometry {
                     let tile = fine.len() as u32;
                     fine.push(DrawArgs { first_instance: tile, ..Default::default() });
                     coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    levels.push(Vec::new());
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
                 }
@@ -160,6 +174,7 @@ impl SceneGeometry {
             tile_object_cpu: tile_object,
             fine,
             coarse,
+            levels,
             bbox,
             bytes,
         })

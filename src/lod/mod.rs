@@ -11,6 +11,7 @@
 //! along x are `round(t * (nx-1) / tx)` for t = 0..=tx (likewise y), and neighbouring tiles share
 //! their border samples so the fine level has no cracks.
 
+pub mod levels;
 pub mod simplify;
 
 use glam::DVec3;
@@ -34,6 +35,9 @@ pub struct TileMesh {
     /// quadric simplification, meshoptimizer's own error estimate scaled by the tile's extent;
     /// 0 when the proxy is the fine level itself.
     pub proxy_error: f32,
+    /// Levels 1.. for screen-space-error LOD ([`levels`]): each about a quarter of the triangles
+    /// of the one before, the tile's border at full resolution; level 0 is `fine`.
+    pub levels: Vec<levels::Level>,
 }
 
 impl TileMesh {
@@ -66,6 +70,9 @@ impl TileMesh {
         self.bbox_max = hi;
         (self.coarse, self.proxy_error) =
             coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
+        if self.levels.is_empty() && !self.fine.is_empty() {
+            self.levels = levels::simplified_levels(&self.positions, &self.fine);
+        }
         self
     }
 }
@@ -175,6 +182,10 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
                 }
                 (idx, err as f32)
             });
+            if !holes {
+                let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
+                tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
+            }
             tile.finish(coarse_factor, lattice)
         })
         .collect()

@@ -5,7 +5,7 @@ use super::run;
 use super::scene::PyScene;
 use crate::cull::{self, CullOptions, Stat};
 use crate::error::int_in;
-use crate::render::{RenderOptions, RenderOutput, Renderer};
+use crate::render::{Lod, RenderOptions, RenderOutput, Renderer};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -46,6 +46,7 @@ fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, P
         match v {
             Stat::Count(n) => st.set_item(*name, *n)?,
             Stat::Ms(ms) => st.set_item(*name, *ms)?,
+            Stat::Float(v) => st.set_item(*name, *v)?,
         }
     }
     for (name, a) in out.arrays {
@@ -90,7 +91,7 @@ impl PyRenderer {
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors))]
+    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error))]
     fn render<'py>(
         &mut self,
         py: Python<'py>,
@@ -101,12 +102,16 @@ impl PyRenderer {
         prepass_scale: f64,
         conservative: bool,
         predict_errors: bool,
+        lod: String,
+        max_pixel_error: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let r = &mut self.inner;
         let (s, c) = (&scene.inner, &camera.inner);
         let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
-        let opts = RenderOptions { culling, cull };
-        let out = run(py, move || r.render(s, c, &opts))?;
+        let out = run(py, move || {
+            let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)? };
+            r.render(s, c, &opts)
+        })?;
         output_dict(py, out)
     }
 }

@@ -129,6 +129,9 @@ impl PyScene {
         let mut object = Vec::new();
         let (mut ix, mut iy, mut fine, mut coarse) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut proxy_error = Vec::new();
+        // LOD levels 0..=MAX_LEVELS: triangles and error (NaN error where a tile has fewer levels).
+        const NL: usize = 1 + crate::lod::levels::MAX_LEVELS;
+        let (mut level_tris, mut level_err) = (Vec::new(), Vec::new());
         let (mut lo, mut hi) = (Vec::new(), Vec::new());
         let origin = self.inner.origin();
         for o in self.inner.objects() {
@@ -139,6 +142,15 @@ impl PyScene {
                 fine.push(t.fine_triangles() as u32);
                 coarse.push(t.coarse_triangles() as u32);
                 proxy_error.push(t.proxy_error as f64);
+                for l in 0..NL {
+                    let lv = if l == 0 {
+                        Some((t.fine_triangles(), 0.0))
+                    } else {
+                        t.levels.get(l - 1).map(|v| (v.indices.len() / 3, v.error))
+                    };
+                    level_tris.push(lv.map_or(0, |v| v.0 as u32));
+                    level_err.push(lv.map_or(f64::NAN, |v| v.1 as f64));
+                }
                 for a in 0..3 {
                     let off = origin[a] + o.offset[a];
                     lo.push(if t.is_empty() { f64::NAN } else { t.bbox_min[a] as f64 + off });
@@ -154,6 +166,8 @@ impl PyScene {
         d.set_item("tris_fine", fine.into_pyarray(py))?;
         d.set_item("tris_coarse", coarse.into_pyarray(py))?;
         d.set_item("proxy_error", proxy_error.into_pyarray(py))?;
+        d.set_item("level_triangles", Array2::from_shape_vec((n, NL), level_tris).unwrap().into_pyarray(py))?;
+        d.set_item("level_error", Array2::from_shape_vec((n, NL), level_err).unwrap().into_pyarray(py))?;
         d.set_item("bbox_min", Array2::from_shape_vec((n, 3), lo).unwrap().into_pyarray(py))?;
         d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
         Ok(d)

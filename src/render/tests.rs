@@ -72,6 +72,7 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     let three_pass = |conservative| RenderOptions {
         culling: "three_pass".into(),
         cull: CullOptions { pixel_threshold: 0.0, conservative, ..Default::default() },
+        ..Default::default()
     };
     let tp = r.render(&s, &cam, &three_pass(false)).unwrap();
     let covered = none.depth.iter().filter(|d| d.is_finite()).count() as u32;

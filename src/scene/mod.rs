@@ -253,7 +253,13 @@ impl Scene {
         self.objects
             .iter()
             .map(|o| {
-                o.tiles.iter().map(|t| t.positions.len() * 12 + (t.fine.len() + t.coarse.len()) * 4).sum::<usize>()
+                o.tiles
+                    .iter()
+                    .map(|t| {
+                        let levels: usize = t.levels.iter().map(|l| l.indices.len()).sum();
+                        t.positions.len() * 12 + (t.fine.len() + t.coarse.len() + levels) * 4
+                    })
+                    .sum::<usize>()
             })
             .sum()
     }

@@ -1,0 +1,274 @@
+//! Levels of detail for screen-space-error LOD: every tile gets a chain of levels 1, 2, ... each
+//! with about a quarter of the triangles of the one before and its geometric error in world
+//! units (level 0 is the tile's fine triangles, error 0).
+//!
+//! Every level of every tile keeps the tile's border at full resolution, so neighbouring tiles
+//! drawn at different levels share the same border vertices and meet without cracks, by
+//! construction (no skirts: skirts hide cracks with extra geometry that the full-resolution image
+//! does not have, visible from below and at grazing angles; a locked border costs triangles on
+//! the border instead, about 4 × the tile's side, which bounds the reduction of small tiles).
+//!
+//! * Hole-free height-field tiles ([`lattice_levels`]): the sample lattice at strides 2, 4, 8, ...;
+//!   lattice cells that touch the tile border are fanned from their centre sample to every border
+//!   sample. Error: the largest vertical distance between the level and the fine surface, at the
+//!   fine samples and where the level's edges cross the grid lines.
+//! * Every other tile ([`simplified_levels`]): meshoptimizer's quadric simplification of the
+//!   previous level to a quarter of its triangles with the border (and hole outlines) locked.
+//!   Error: the sum of meshoptimizer's estimates of each step (relative to the tile's extent, times
+//!   that extent), which bounds the distance to level 0 as far as those estimates are right.
+//!
+//! The chain stops when a level would not reach 0.6 × the triangles of the one before (the border
+//! then dominates), or after [`MAX_LEVELS`] levels.
+
+use super::simplify;
+
+/// The most levels beyond level 0.
+pub const MAX_LEVELS: usize = 5;
+
+/// One level of a tile: a triangle list into the tile's vertices and its error (world units).
+#[derive(Clone, Debug, Default)]
+pub struct Level {
+    pub indices: Vec<u32>,
+    pub error: f32,
+}
+
+/// Lattice positions 0, k, 2k, ..., n - 1 along a side of n samples, with every gap at least 2
+/// (so that a cell has a centre sample), or None when the side is too short (n < 3).
+fn lattice_steps(n: usize, k: usize) -> Option<Vec<usize>> {
+    if n < 3 {
+        return None;
+    }
+    let mut s: Vec<usize> = (0..n - 1).step_by(k).collect();
+    s.push(n - 1);
+    if s.len() >= 3 && s[s.len() - 1] - s[s.len() - 2] < 2 {
+        s.remove(s.len() - 2);
+    }
+    Some(s)
+}
+
+/// Levels of a hole-free height-field tile of `w` × `h` samples: `vid(li, lj)` is the vertex of
+/// local sample (li, lj), `z(li, lj)` its height. Empty when the tile is too small to coarsen.
+pub fn lattice_levels(
+    w: usize,
+    h: usize,
+    vid: impl Fn(usize, usize) -> u32,
+    z: impl Fn(usize, usize) -> f64,
+) -> Vec<Level> {
+    let mut levels = Vec::new();
+    let mut prev = 2 * (w - 1) * (h - 1);
+    for l in 1..=MAX_LEVELS {
+        let k = 1 << l;
+        let (Some(xs), Some(ys)) = (lattice_steps(w, k), lattice_steps(h, k)) else { break };
+        let mut tris: Vec<[(usize, usize); 3]> = Vec::new();
+        for jj in ys.windows(2) {
+            for ii in xs.windows(2) {
+                cell_triangles((ii[0], jj[0]), (ii[1], jj[1]), (w, h), &mut tris);
+            }
+        }
+        if tris.len() as f64 > 0.6 * prev as f64 {
+            break;
+        }
+        prev = tris.len();
+        let error = lattice_error(&tris, &z) as f32;
+        let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
+        levels.push(Level { indices, error });
+    }
+    levels
+}
+
+/// Triangles (counter-clockwise in x, y) of the lattice cell `lo..hi` (local sample indices) of a
+/// tile of `size` samples: two if no side lies on the tile border, else a fan from the cell's
+/// centre sample to every sample of its border sides and the corners of its other sides.
+fn cell_triangles(lo: (usize, usize), hi: (usize, usize), size: (usize, usize), out: &mut Vec<[(usize, usize); 3]>) {
+    let (a, b) = lo;
+    let (a1, b1) = hi;
+    let (bottom, right, top, left) = (b == 0, a1 == size.0 - 1, b1 == size.1 - 1, a == 0);
+    if !(bottom || right || top || left) {
+        out.push([(a, b), (a1, b), (a1, b1)]);
+        out.push([(a, b), (a1, b1), (a, b1)]);
+        return;
+    }
+    // The cell's outline, counter-clockwise from (a, b), full resolution on border sides.
+    let mut ring: Vec<(usize, usize)> = Vec::new();
+    let side = |ring: &mut Vec<(usize, usize)>, full: bool, pts: &dyn Fn(usize) -> (usize, usize), n: usize| {
+        if full {
+            ring.extend((0..n).map(pts));
+        } else {
+            ring.push(pts(0));
+        }
+    };
+    side(&mut ring, bottom, &|t| (a + t, b), a1 - a);
+    side(&mut ring, right, &|t| (a1, b + t), b1 - b);
+    side(&mut ring, top, &|t| (a1 - t, b1), a1 - a);
+    side(&mut ring, left, &|t| (a, b1 - t), b1 - b);
+    let c = (a + (a1 - a) / 2, b + (b1 - b) / 2);
+    for i in 0..ring.len() {
+        out.push([c, ring[i], ring[(i + 1) % ring.len()]]);
+    }
+}
+
+/// Height of the fine surface at a point (x, y) of local sample coordinates: two triangles per
+/// cell, split along the diagonal from (i, j) to (i + 1, j + 1), as the fine level is built.
+fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
+    let i = (x.floor() as usize).min(max.0 - 1);
+    let j = (y.floor() as usize).min(max.1 - 1);
+    let (u, v) = (x - i as f64, y - j as f64);
+    let (z00, z10, z11, z01) = (z(i, j), z(i + 1, j), z(i + 1, j + 1), z(i, j + 1));
+    if u >= v {
+        z00 + u * (z10 - z00) + v * (z11 - z10)
+    } else {
+        z00 + u * (z11 - z01) + v * (z01 - z00)
+    }
+}
+
+/// The largest vertical distance between the triangles `tris` and the fine surface, at the fine
+/// samples inside each triangle and where each edge crosses a grid line x = i or y = j.
+fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
+    let max = tris.iter().flatten().fold((1, 1), |m, &(i, j)| (m.0.max(i), m.1.max(j)));
+    let mut err = 0.0f64;
+    for t in tris {
+        let p: Vec<(f64, f64, f64)> = t.iter().map(|&(i, j)| (i as f64, j as f64, z(i, j))).collect();
+        let det = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
+        if det == 0.0 {
+            continue;
+        }
+        let plane = |x: f64, y: f64| {
+            let l1 = ((x - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (y - p[0].1)) / det;
+            let l2 = ((p[1].0 - p[0].0) * (y - p[0].1) - (x - p[0].0) * (p[1].1 - p[0].1)) / det;
+            (1.0 - l1 - l2, l1, l2)
+        };
+        let (x0, x1) = (t.iter().map(|q| q.0).min().unwrap(), t.iter().map(|q| q.0).max().unwrap());
+        let (y0, y1) = (t.iter().map(|q| q.1).min().unwrap(), t.iter().map(|q| q.1).max().unwrap());
+        for j in y0..=y1 {
+            for i in x0..=x1 {
+                let (l0, l1, l2) = plane(i as f64, j as f64);
+                if l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9 {
+                    let g = l0 * p[0].2 + l1 * p[1].2 + l2 * p[2].2;
+                    err = err.max((z(i, j) - g).abs());
+                }
+            }
+        }
+        for e in 0..3 {
+            let (a, b) = (p[e], p[(e + 1) % 3]);
+            let mut check = |s: f64| {
+                let (x, y, g) = (a.0 + s * (b.0 - a.0), a.1 + s * (b.1 - a.1), a.2 + s * (b.2 - a.2));
+                err = err.max((fine_height(x, y, z, max) - g).abs());
+            };
+            for (u, v) in [(a.0, b.0), (a.1, b.1)] {
+                if u != v {
+                    let (lo, hi) = (u.min(v).ceil() as i64, u.max(v).floor() as i64);
+                    for g in lo..=hi {
+                        check((g as f64 - u) / (v - u));
+                    }
+                }
+            }
+        }
+    }
+    err
+}
+
+/// Levels of any tile by quadric simplification: each level a quarter of the previous one's
+/// triangles, border and hole outlines locked (see the module docs for the error).
+pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32]) -> Vec<Level> {
+    let mut levels: Vec<Level> = Vec::new();
+    let mut prev: Vec<u32> = fine.to_vec();
+    let mut error = 0.0f32;
+    for _ in 0..MAX_LEVELS {
+        let (idx, step) = simplify::coarse_indices(positions, &prev, 4.0);
+        if idx.len() as f64 > 0.6 * prev.len() as f64 || idx.is_empty() {
+            break;
+        }
+        error += step;
+        levels.push(Level { indices: idx.clone(), error });
+        prev = idx;
+    }
+    levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f64) -> (Vec<Level>, Vec<f64>) {
+        let z: Vec<f64> = (0..w * h).map(|k| f(k % w, k / w)).collect();
+        let zz = z.clone();
+        (lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]), z)
+    }
+
+    /// Undirected edge -> number of triangles using it.
+    fn edges(idx: &[u32]) -> HashMap<(u32, u32), usize> {
+        let mut m = HashMap::new();
+        for t in idx.chunks_exact(3) {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *m.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn lattice_levels_quarter_keep_the_border_and_cover_the_tile() {
+        let (w, h) = (65, 49);
+        let (levels, _) = grid(w, h, |i, j| ((i * 7 + j * 3) % 5) as f64);
+        assert!(levels.len() >= 3, "{}", levels.len());
+        let mut prev = 2 * (w - 1) * (h - 1);
+        for lv in &levels {
+            let n = lv.indices.len() / 3;
+            assert!(n as f64 <= 0.6 * prev as f64, "{n} vs {prev}");
+            prev = n;
+            // Every fine border edge is an edge of the level, used once: the same border as level 0.
+            let e = edges(&lv.indices);
+            let id = |i: usize, j: usize| (j * w + i) as u32;
+            for i in 0..w - 1 {
+                for j in [0, h - 1] {
+                    let (a, b) = (id(i, j), id(i + 1, j));
+                    assert_eq!(e.get(&(a.min(b), a.max(b))), Some(&1), "border edge ({i},{j})");
+                }
+            }
+            for j in 0..h - 1 {
+                for i in [0, w - 1] {
+                    let (a, b) = (id(i, j), id(i, j + 1));
+                    assert_eq!(e.get(&(a.min(b), a.max(b))), Some(&1), "border edge ({i},{j})");
+                }
+            }
+            // Interior edges are shared by two triangles: a closed disc, no holes or overlaps.
+            let border = 2 * (w - 1) + 2 * (h - 1);
+            assert_eq!(e.values().filter(|&&c| c == 1).count(), border);
+            assert!(e.values().all(|&c| c <= 2));
+            // Counter-clockwise and covering the tile: signed areas add up to the tile's area.
+            let pos = |k: u32| ((k as usize % w) as f64, (k as usize / w) as f64);
+            let area: f64 = lv
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let (a, b, c) = (pos(t[0]), pos(t[1]), pos(t[2]));
+                    let s = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+                    assert!(s > 0.0, "triangle {t:?} is not counter-clockwise");
+                    s / 2.0
+                })
+                .sum();
+            assert!((area - ((w - 1) * (h - 1)) as f64).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn lattice_error_is_zero_on_planes_and_exact_on_a_bump() {
+        let (levels, _) = grid(17, 17, |i, j| 2.0 * i as f64 - 0.5 * j as f64 + 3.0);
+        assert!(!levels.is_empty() && levels.iter().all(|l| l.error < 1e-5));
+        // A single raised sample off every lattice: each level that skips it misses it by its height.
+        let (levels, _) = grid(17, 17, |i, j| if (i, j) == (5, 7) { 4.0 } else { 0.0 });
+        assert!(
+            levels.iter().all(|l| (l.error - 4.0).abs() < 1e-5),
+            "{:?}",
+            levels.iter().map(|l| l.error).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn small_tiles_have_no_levels() {
+        assert!(grid(2, 9, |_, _| 0.0).0.is_empty());
+        assert!(grid(3, 3, |_, _| 0.0).0.is_empty());
+    }
+}

@@ -1,0 +1,119 @@
+"""lod="screen_error": each drawn tile at the coarsest level whose error projects to at most
+max_pixel_error pixels at its nearest point; levels keep their tile's border, so tiles at
+different levels meet without cracks."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import geocull as gc
+
+SPACING = 10.0
+
+
+def wavy(n: int = 65, amp: float = 20.0, tiles: int = 4) -> gc.Scene:
+    """A smooth n x n height field (x, y in [0, (n-1) * SPACING]) of tiles x tiles tiles."""
+    x = np.arange(n) * SPACING
+    z = amp * np.sin(x[None, :] / 90.0) * np.cos(x[:, None] / 70.0)
+    s = gc.Scene()
+    s.add_heightfield(z, origin=(0.0, 0.0), spacing=(SPACING, SPACING), tiles=(tiles, tiles))
+    return s
+
+
+def nearest_distance(box_min, box_max, eye) -> float:
+    q = np.clip(eye, box_min, box_max)
+    return float(np.linalg.norm(q - eye))
+
+
+def test_levels_exist_and_shrink():
+    t = wavy().tile_table()
+    assert (t["level_triangles"][:, 0] == t["tris_fine"]).all()
+    assert (t["level_error"][:, 0] == 0).all()
+    for row in t:
+        n = row["level_triangles"][row["level_triangles"] > 0]
+        assert len(n) >= 3 and (n[1:] <= 0.6 * n[:-1]).all()
+        e = row["level_error"][: len(n)]
+        assert np.isfinite(e).all() and (e[1:] > 0).all()
+
+
+@pytest.mark.parametrize("bound", [0.5, 2.0, 8.0])
+def test_chosen_level_respects_the_bound_at_hand_computed_distances(renderer_small, bound):
+    s = wavy()
+    r = renderer_small(160, 120)
+    eye = np.array([-200.0, -300.0, 400.0])
+    cam = gc.Camera.look_at(eye, (320.0, 320.0, 0.0), fov_y=40.0)
+    res = r.render(s, cam, lod="screen_error", max_pixel_error=bound)
+    assert res.tile_level is not None and res.tile_error_px is not None
+    t = s.tile_table()
+    f_px = 120 / 2 / math.tan(math.radians(40.0) / 2)  # pixels per unit at unit distance
+    for i, row in enumerate(t):
+        d = nearest_distance(row["bbox_min"], row["bbox_max"], eye)
+        px = row["level_error"] * f_px / d
+        ok = [lv for lv in range(6) if np.isfinite(px[lv]) and (px[: lv + 1] <= bound).all()]
+        expected = max(ok)
+        assert res.tile_level[i] == expected, (i, res.tile_level[i], expected, px)
+        assert res.tile_error_px[i] == pytest.approx(px[expected], rel=1e-4, abs=1e-6)
+        assert res.tile_error_px[i] <= bound
+    assert res.stats["lod_max_error_px"] <= bound
+
+
+def test_close_camera_gets_level_zero(renderer_small):
+    s = wavy()
+    r = renderer_small(64, 48)
+    cam = gc.Camera.look_at((100.0, 100.0, 30.0), (150.0, 150.0, 0.0))
+    res = r.render(s, cam, lod="screen_error", max_pixel_error=0.5)
+    t = s.tile_table()
+    near = (t["ix"] == 0) & (t["iy"] == 0)
+    assert res.tile_level[near][0] == 0
+
+
+@pytest.mark.parametrize("culling", ["none", "three_pass", "frustum"])
+def test_no_cracks_between_tiles_at_different_levels(renderer_small, culling):
+    """A grazing view over the field: near tiles fine, far ones coarse. No background pixel opens
+    inside the surface: every pixel the full-resolution image covers is covered, except on the
+    full image's own silhouette (where a coarser ridge may move by up to the bound)."""
+    s = wavy(amp=20.0)
+    r = renderer_small(200, 150)
+    cam = gc.Camera.look_at((-60.0, -60.0, 40.0), (400.0, 400.0, 0.0), fov_y=50.0)
+    full = r.render(s, cam, culling=culling, pixel_threshold=0)
+    lod = r.render(s, cam, culling=culling, pixel_threshold=0, lod="screen_error", max_pixel_error=0.5)
+    levels = set(lod.tile_level[lod.tile_drawn].tolist())
+    assert len(levels) >= 3, levels  # the test needs neighbours at different levels
+    empty = ~full.coverage
+    near_silhouette = empty.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            near_silhouette |= np.roll(np.roll(empty, dy, axis=0), dx, axis=1)
+    cracks = full.coverage & ~lod.coverage & ~near_silhouette
+    assert not cracks.any(), np.argwhere(cracks)[:10]
+    assert (full.coverage != lod.coverage).mean() < 0.001
+    assert lod.stats["triangles_drawn"] < full.stats["triangles_drawn"]
+
+
+def test_image_equals_full_within_the_bound(renderer_small):
+    """Differing pixels measured, not assumed: with 0.5 px the depth moves by less than the bound
+    allows and colours differ only by shading of the coarser facets."""
+    s = wavy()
+    r = renderer_small(160, 120)
+    cam = gc.Camera.look_at((-300.0, -400.0, 500.0), (320.0, 320.0, 0.0))
+    full = r.render(s, cam)
+    lod = r.render(s, cam, lod="screen_error", max_pixel_error=0.5)
+    assert lod.stats["triangles_drawn"] < 0.6 * full.stats["triangles_drawn"]
+    np.testing.assert_array_equal(lod.coverage, full.coverage)
+    diff = np.abs(lod.image.astype(int) - full.image.astype(int)).max(axis=2)
+    assert (diff > 8).mean() < 0.005, (diff > 8).mean()
+    cov = full.coverage
+    rel = np.abs(lod.depth[cov] - full.depth[cov]) / full.depth[cov]
+    assert np.median(rel) < 1e-3
+
+
+def test_bad_lod_arguments(renderer_small):
+    s, r = wavy(), renderer_small(16, 16)
+    cam = gc.Camera.look_at((0.0, 0.0, 100.0), (300.0, 300.0, 0.0))
+    with pytest.raises(gc.InputError, match="^lod"):
+        r.render(s, cam, lod="fast")  # type: ignore[arg-type]
+    with pytest.raises(gc.InputError, match="^max_pixel_error"):
+        r.render(s, cam, lod="screen_error", max_pixel_error=0)
