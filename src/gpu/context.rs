@@ -73,7 +73,12 @@ impl GpuContext {
             )));
         }
         let timestamps = available.contains(wgpu::Features::TIMESTAMP_QUERY);
+        // Where the adapter allows it (Vulkan, e.g. lavapipe), vertex and index buffers are
+        // written in place at creation instead of through a staging copy: on a CPU adapter GPU
+        // memory is host memory, and the staging copy doubled the peak memory of an upload.
+        let mappable = available & wgpu::Features::MAPPABLE_PRIMARY_BUFFERS;
         let features = needed
+            | mappable
             | (optional & available)
             | if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() };
         let limits = adapter.limits();

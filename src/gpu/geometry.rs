@@ -72,8 +72,13 @@ impl SceneGeometry {
                 d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true })
             })
         };
-        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX);
-        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX);
+        let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
+            wgpu::BufferUsages::MAP_WRITE
+        } else {
+            wgpu::BufferUsages::empty()
+        };
+        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | direct);
+        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut levels = Vec::new();
         let tile_bbox = |t: &crate::lod::TileMesh| {
