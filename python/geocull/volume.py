@@ -23,6 +23,7 @@ def _values(values: Any) -> np.ndarray:
     anything with ``__array__``), copied only when the layout or dtype demands it."""
     if hasattr(values, "variable") and hasattr(values, "dims") and hasattr(values, "data"):
         values = values.data  # xarray.DataArray: its backing array (numpy, or dask -> computed below)
+    values, mask = cv.unmasked(values, "values")
     try:
         a = np.asarray(values)
     except Exception as e:
@@ -33,6 +34,9 @@ def _values(values: Any) -> np.ndarray:
         raise InputError(f"values: dtype {a.dtype} is not supported; expected real numbers")
     if min(a.shape) < 2:
         raise InputError(f"values: shape {a.shape} needs at least 2 samples per axis")
+    if mask is not None:  # masked samples are no data (NaN): a float copy with them set
+        a = np.array(a, dtype=a.dtype if a.dtype.kind == "f" and a.dtype.itemsize >= 4 else np.float64)
+        a[mask] = np.nan
     if a.dtype == np.float32 or a.dtype == np.float64:
         if not a.dtype.isnative:
             a = a.astype(a.dtype.newbyteorder("="))
@@ -42,7 +46,8 @@ def _values(values: Any) -> np.ndarray:
 
 class Volume:
     """A scalar field on a regular grid: ``values[k, j, i]`` sits at
-    ``origin + (i*dx, j*dy, k*dz)``; x varies fastest. NaN samples are "no data".
+    ``origin + (i*dx, j*dy, k*dz)``; x varies fastest. NaN samples, and the masked samples of a
+    ``numpy.ma.MaskedArray``, are "no data" (outside the domain: no surface in cells touching them).
 
     values: (nz, ny, nx) array, float32 or float64 (other real dtypes are converted); numpy
     arrays, memory maps and numpy-backed xarray DataArrays are read in place and copied exactly once,
