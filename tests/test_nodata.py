@@ -93,6 +93,21 @@ def test_integer_null_value():
     assert _triangles_with(z, null_value=-999.25) == _triangles_with(z.astype(float))
 
 
+@pytest.mark.parametrize("undef", [1e30, 1e33])
+def test_xtgeo_undefined_value_without_mask_is_named(undef):
+    z = _z()
+    z[1, 4] = undef
+    with pytest.raises(gc.InputError, match=r"^z\[1, 4\]") as e:
+        gc.Scene().add_heightfield(z)
+    msg = str(e.value)
+    assert "xtgeo" in msg and "null_value=" in msg and "masked array" in msg
+    # an ordinary out-of-range value gets no such hint
+    z[1, 4] = 1e20
+    with pytest.raises(gc.InputError) as e:
+        gc.Scene().add_heightfield(z)
+    assert "xtgeo" not in str(e.value)
+
+
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_null_value_1e30_works(dtype):
     z = _z().astype(dtype)

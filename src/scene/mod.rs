@@ -302,4 +302,20 @@ mod tests {
         s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(-999.25), opts()).unwrap();
         assert_eq!(s.n_triangles(), 8 - 6);
     }
+
+    #[test]
+    fn undefined_marker_is_named() {
+        let mut s = Scene::new();
+        for undef in [1e30, -1e30, 1e33] {
+            let mut z = vec![0.0; 9];
+            z[5] = undef;
+            let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+            assert!(e.starts_with("z[1, 2]") && e.contains("xtgeo") && e.contains("null_value="), "{e}");
+            s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(undef), opts()).unwrap();
+        }
+        let mut z = vec![0.0; 9];
+        z[5] = 1e20;
+        let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+        assert!(!e.contains("xtgeo"), "{e}");
+    }
 }
