@@ -3,7 +3,7 @@
 
 use super::camera::PyCamera;
 use super::renderer::PyRenderer;
-use super::{contiguous, run};
+use super::{contiguous, lock, run};
 use crate::error::{input_err, int_in};
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
 use crate::iso::{MinMaxOctree, Volume};
@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::{Arc, OnceLock};
 
-#[pyclass(name = "Volume", module = "geocull._geocull")]
+#[pyclass(name = "Volume", module = "geocull._geocull", frozen)]
 pub struct PyVolume {
     pub(crate) inner: Volume,
     tree: OnceLock<Arc<MinMaxOctree>>,
@@ -157,7 +157,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
 #[pyo3(signature = (renderer, volume, isovalue, camera, culling, occluder_depth, cull_depth, color, cache, return_map))]
 fn render_isosurface<'py>(
     py: Python<'py>,
-    mut renderer: PyRefMut<'py, PyRenderer>,
+    renderer: PyRef<'py, PyRenderer>,
     volume: PyRef<'py, PyVolume>,
     isovalue: f64,
     camera: PyRef<'py, PyCamera>,
@@ -169,7 +169,7 @@ fn render_isosurface<'py>(
     return_map: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let tree = volume.tree(py)?;
-    let r = &mut renderer.inner;
+    let r = &renderer.inner;
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
         crate::error::ensure(isovalue.is_finite() && isovalue.abs() <= f32::MAX as f64, "isovalue", || {
@@ -186,14 +186,17 @@ fn render_isosurface<'py>(
             use_cache: cache,
             return_map,
         };
-        r.render_isosurface(v, &tree, isovalue as f32, c, &opts)
+        lock(r).render_isosurface(v, &tree, isovalue as f32, c, &opts)
     })?;
     iso_dict(py, out)
 }
 
 #[pyfunction]
-fn clear_isosurface_cache(mut renderer: PyRefMut<'_, PyRenderer>) {
-    renderer.inner.clear_isosurface_cache();
+fn clear_isosurface_cache(py: Python<'_>, renderer: PyRef<'_, PyRenderer>) -> PyResult<()> {
+    super::with_lock(py, &renderer.inner, |r| {
+        r.clear_isosurface_cache();
+        Ok(())
+    })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
