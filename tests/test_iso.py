@@ -195,3 +195,26 @@ def test_renderresult_fields(renderer):
     for k in ("surface_triangles", "nodes_tested", "nodes_visible", "occluder_ms", "cull_ms", "surface_ms", "total_ms"):
         assert k in res.stats
     assert "RenderResult" in repr(res)
+
+
+def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
+    # A sphere-like field of 0 +- 1, and the same field plus 1e8: float32 alone holds every sample
+    # of the second as 1e8, so without the value offset its isosurface at 1e8 is empty.
+    z, y, x, h = grid(24)
+    base = np.sqrt(x * x + y * y + z * z) - 0.6  # float64, in [-0.6, 1.1]
+    cam, _ = cam_around(40)
+    small = gc.Volume(base, origin=(-1, -1, -1), spacing=(h, h, h))
+    big = gc.Volume(base + 1e8, origin=(-1, -1, -1), spacing=(h, h, h))
+    assert abs(big.offset - 1e8) < 1.0 and big.nodes(0)["max"][0] == pytest.approx(1e8 + base.max(), abs=1e-6)
+    for culling in ("none", "implicit"):
+        a = renderer.render_isosurface(small, 0.0, cam, culling=culling)
+        b = renderer.render_isosurface(big, 1e8, cam, culling=culling)
+        assert a.stats["surface_triangles"] > 0
+        assert b.stats["surface_triangles"] == a.stats["surface_triangles"]
+        np.testing.assert_array_equal(a.image, b.image)
+    # integers too: 1e8 and 1e8 + 1 differ
+    ints = (base > 0).astype(np.int64) + 10**8
+    res = renderer.render_isosurface(gc.Volume(ints), 1e8 + 0.5, cam)
+    assert res.stats["surface_triangles"] > 0
+    with pytest.raises(gc.InputError, match="^isovalue"):
+        renderer.render_isosurface(big, 1e300, cam)

@@ -85,8 +85,8 @@ class OctreeNodes(TypedDict):
     index: npt.NDArray[np.uint32]  # (n, 3) [ix, iy, iz]
     bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates
     bbox_max: npt.NDArray[np.float64]  # (n, 3)
-    min: npt.NDArray[np.float32]  # (n,)
-    max: npt.NDArray[np.float32]  # (n,)
+    min: npt.NDArray[np.float64]  # (n,) in the values' units (offset + float32 residual)
+    max: npt.NDArray[np.float64]  # (n,)
 
 @final
 class Scene:
@@ -197,6 +197,8 @@ class Volume:
     def origin(self) -> tuple[float, float, float]: ...
     @property
     def spacing(self) -> tuple[float, float, float]: ...
+    @property
+    def offset(self) -> float: ...
     def max_depth(self) -> int: ...
     def nodes(self, depth: int) -> OctreeNodes: ...
 

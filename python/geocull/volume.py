@@ -41,7 +41,9 @@ def _values(values: Any) -> np.ndarray:
         if not a.dtype.isnative:
             a = a.astype(a.dtype.newbyteorder("="))
         return np.ascontiguousarray(a)
-    return np.ascontiguousarray(a, dtype=np.float32)
+    # float16 fits float32 exactly; integers go through float64, whose residuals keep them
+    # (int32 / int64 samples of 1e8 and 1e8 + 1 differ in float64 but not in float32).
+    return np.ascontiguousarray(a, dtype=np.float32 if a.dtype.kind == "f" else np.float64)
 
 
 class Volume:
@@ -52,6 +54,10 @@ class Volume:
     values: (nz, ny, nx) array, float32 or float64 (other real dtypes are converted); numpy
     arrays, memory maps and numpy-backed xarray DataArrays are read in place and copied exactly once,
     into the core's float32 buffer (the octree and the surface extraction read that buffer).
+    float64 (and integer) values are stored as float32 *residuals* about :attr:`offset`, the
+    midrange of the finite samples, so values such as 1e8 ± 1 keep their differences; float32
+    values are stored as they are (offset 0). Isovalues and the octree's min/max are in the
+    values' own units either way.
     origin: (x0, y0, z0) world position of ``values[0, 0, 0]`` (metres).  spacing: (dx, dy, dz) > 0
     sample spacing (metres).
     """
@@ -77,6 +83,12 @@ class Volume:
         return self._v.spacing
 
     @property
+    def offset(self) -> float:
+        """The float64 value the stored float32 residuals are relative to (value = offset + residual;
+        the midrange of the finite samples for float64 input, 0 for float32)."""
+        return self._v.offset
+
+    @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """((xmin, ymin, zmin), (xmax, ymax, zmax)) in world units (metres)."""
         nz, ny, nx = self.shape
@@ -95,8 +107,8 @@ class Volume:
 
     def nodes(self, depth: int) -> OctreeNodes:
         """Octree nodes at ``depth`` (0..max_depth()): dict of index (n, 3) uint32 [ix, iy, iz] (in units
-        of the node's size), bbox_min / bbox_max (n, 3) float64 world (metres), min / max (n,) float32
-        value range."""
+        of the node's size), bbox_min / bbox_max (n, 3) float64 world (metres), min / max (n,) float64
+        value range in the values' units (+inf / -inf for nodes whose samples are all NaN)."""
         return self._v.nodes(cv.integer(depth, "depth"))
 
     def __repr__(self) -> str:

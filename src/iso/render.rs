@@ -290,8 +290,8 @@ fn reaches_near_plane(fc: &FrameCamera, b: &BoxInstance) -> bool {
 }
 
 impl IsoRenderer {
-    /// Renders the isosurface `vol = w` seen by `camera` into `width` × `height` targets of its
-    /// own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
+    /// Renders the isosurface `vol = isovalue` (in the volume's units, f64) seen by `camera` into
+    /// `width` × `height` targets of its own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
     /// does.
     #[allow(clippy::too_many_arguments)]
     pub fn render(
@@ -301,11 +301,12 @@ impl IsoRenderer {
         height: u32,
         vol: &Volume,
         tree: &MinMaxOctree,
-        w: f32,
+        isovalue: f64,
         camera: &Camera,
         opts: &IsoOptions,
     ) -> Result<IsoOutput> {
-        ensure(w.is_finite(), "isovalue", || format!("isovalue is {w}; expected a finite number"))?;
+        // In the volume's units; from here on everything is a residual about `vol.offset`.
+        let w = vol.residual(isovalue, "isovalue")?;
         ensure(opts.color.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)), "color", || {
             format!("color is {:?}; expected (r, g, b) in [0, 1]", opts.color)
         })?;

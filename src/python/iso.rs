@@ -33,7 +33,7 @@ impl PyVolume {
 #[pymethods]
 impl PyVolume {
     /// values: (nz, ny, nx) C-contiguous float32 or float64 array (copied once into the core's
-    /// float32 buffer, with the GIL released).
+    /// float32 buffer, with the GIL released: float64 as residuals about `offset`).
     #[new]
     fn new(
         py: Python<'_>,
@@ -41,27 +41,21 @@ impl PyVolume {
         origin: (f64, f64, f64),
         spacing: (f64, f64, f64),
     ) -> PyResult<Self> {
-        let (data, shape): (Arc<[f32]>, [usize; 3]) = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
+        let (o, sp) = ([origin.0, origin.1, origin.2], [spacing.0, spacing.1, spacing.2]);
+        let inner = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
             let s = a.shape();
-            let shape = [s[0], s[1], s[2]];
+            let dims = (s[2], s[1], s[0]);
             let sl = contiguous(&a, "values")?;
-            (run(py, move || Ok(Arc::<[f32]>::from(sl)))?, shape)
+            run(py, move || Volume::new(Arc::<[f32]>::from(sl), dims, o, sp))?
         } else if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f64>>() {
+            // f64 samples: f32 residuals about the midrange (see `Volume::from_f64`).
             let s = a.shape();
-            let shape = [s[0], s[1], s[2]];
+            let dims = (s[2], s[1], s[0]);
             let sl = contiguous(&a, "values")?;
-            (run(py, move || Ok(sl.iter().map(|&v| v as f32).collect::<Arc<[f32]>>()))?, shape)
+            run(py, move || Volume::from_f64(sl, dims, o, sp))?
         } else {
             return Err(input_err("values", "expected a 3-D float32 or float64 array").into());
         };
-        let inner = run(py, move || {
-            Volume::new(
-                data,
-                (shape[2], shape[1], shape[0]),
-                [origin.0, origin.1, origin.2],
-                [spacing.0, spacing.1, spacing.2],
-            )
-        })?;
         Ok(Self { inner, tree: OnceLock::new() })
     }
 
@@ -80,13 +74,18 @@ impl PyVolume {
         let s = self.inner.spacing;
         (s[0], s[1], s[2])
     }
+    /// The f64 value the stored float32 residuals are relative to.
+    #[getter]
+    fn offset(&self) -> f64 {
+        self.inner.offset
+    }
     /// Depth of the single-cell leaves of the octree (root = 0); builds the octree if needed.
     fn max_depth(&self, py: Python<'_>) -> PyResult<u32> {
         Ok(self.tree(py)?.max_depth())
     }
 
     /// Octree nodes at `depth`: dict of index (n,3) [ix,iy,iz], bbox_min/bbox_max (n,3) world,
-    /// min/max (n,) float32.
+    /// min/max (n,) float64 in the volume's units.
     fn nodes<'py>(&self, py: Python<'py>, depth: i64) -> PyResult<Bound<'py, PyDict>> {
         let t = self.tree(py)?;
         let depth = int_in(depth, "depth", 0, t.max_depth() as i64)? as u32;
@@ -99,8 +98,10 @@ impl PyVolume {
         d.set_item("index", Array2::from_shape_vec((n, 3), idx).unwrap().into_pyarray(py))?;
         d.set_item("bbox_min", Array2::from_shape_vec((n, 3), lo).unwrap().into_pyarray(py))?;
         d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
-        d.set_item("min", Array1::from_vec(nodes.iter().map(|n| n.min).collect::<Vec<f32>>()).into_pyarray(py))?;
-        d.set_item("max", Array1::from_vec(nodes.iter().map(|n| n.max).collect::<Vec<f32>>()).into_pyarray(py))?;
+        // In the volume's units (residual + offset); +inf / -inf for nodes without data.
+        let v = &self.inner;
+        d.set_item("min", Array1::from_vec(nodes.iter().map(|n| v.value(n.min)).collect::<Vec<f64>>()).into_pyarray(py))?;
+        d.set_item("max", Array1::from_vec(nodes.iter().map(|n| v.value(n.max)).collect::<Vec<f64>>()).into_pyarray(py))?;
         Ok(d)
     }
 }
@@ -172,9 +173,6 @@ fn render_isosurface<'py>(
     let r = &renderer.inner;
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
-        crate::error::ensure(isovalue.is_finite() && isovalue.abs() <= f32::MAX as f64, "isovalue", || {
-            format!("isovalue is {isovalue}; expected a finite number within the float32 range")
-        })?;
         let culling = IsoCulling::parse(&culling)?;
         let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
         let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
@@ -186,7 +184,7 @@ fn render_isosurface<'py>(
             use_cache: cache,
             return_map,
         };
-        lock(r).render_isosurface(v, &tree, isovalue as f32, c, &opts)
+        lock(r).render_isosurface(v, &tree, isovalue, c, &opts)
     })?;
     iso_dict(py, out)
 }
