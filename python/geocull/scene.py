@@ -34,6 +34,40 @@ class Scene:
     def __init__(self) -> None:
         self._s = _geocull.Scene()
 
+    @classmethod
+    def _wrap(cls, inner: _geocull.Scene) -> Scene:
+        s = cls.__new__(cls)
+        s._s = inner
+        return s
+
+    def copy(self) -> Scene:
+        """An independent copy: the same objects (ids, names, tiles, colours, visibility, offsets)
+        in a new scene; editing either leaves the other as it is. ``copy.copy`` and
+        ``copy.deepcopy`` do the same."""
+        return Scene._wrap(self._s.copy())
+
+    def __copy__(self) -> Scene:
+        return self.copy()
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Scene:
+        return self.copy()
+
+    def to_bytes(self) -> bytes:
+        """The scene as bytes (a versioned little-endian layout of its objects and their tiles, as
+        stored), for files and other processes; :meth:`from_bytes` reads them. Pickling uses it."""
+        return self._s.to_bytes()
+
+    @staticmethod
+    def from_bytes(data: bytes) -> Scene:
+        """A scene from :meth:`to_bytes`' bytes: it renders exactly the same images (InputError
+        naming ``data`` if they are damaged or not a geocull scene)."""
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise InputError(f"data: expected bytes, got {type(data).__name__}")
+        return Scene._wrap(_geocull.Scene.from_bytes(bytes(data)))
+
+    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+        return (Scene.from_bytes, (self.to_bytes(),))
+
     def add_heightfield(
         self,
         z: Any,

@@ -67,6 +67,33 @@ class Volume:
         a = _values(values)
         self._v = _geocull.Volume(a, cv.vec3(origin, "origin"), cv.vec3(spacing, "spacing"))
 
+    @classmethod
+    def _wrap(cls, inner: _geocull.Volume) -> Volume:
+        v = cls.__new__(cls)
+        v._v = inner
+        return v
+
+    def to_bytes(self) -> bytes:
+        """The volume as bytes (shape, origin, spacing, :attr:`offset` and the float32 residuals,
+        versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it."""
+        return self._v.to_bytes()
+
+    @staticmethod
+    def from_bytes(data: bytes) -> Volume:
+        """A volume from :meth:`to_bytes`' bytes (InputError naming ``data`` if damaged)."""
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise InputError(f"data: expected bytes, got {type(data).__name__}")
+        return Volume._wrap(_geocull.Volume.from_bytes(bytes(data)))
+
+    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+        return (Volume.from_bytes, (self.to_bytes(),))
+
+    def __copy__(self) -> Volume:
+        return self  # immutable: copies may share it
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Volume:
+        return self
+
     @property
     def shape(self) -> tuple[int, int, int]:
         """(nz, ny, nx)"""

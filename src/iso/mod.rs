@@ -16,6 +16,9 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::error::{ensure, input_err, Result};
+use crate::scene::serial::{Reader, Writer};
+
+const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
 pub mod octree;
 mod passes;
@@ -173,6 +176,36 @@ impl Volume {
         Ok(r)
     }
 
+    /// The volume as bytes: magic `b"GCVOLUM\0"`, version u32 (1), then little-endian
+    /// nx, ny, nz (u64), origin, spacing (f64 x 3), offset (f64) and the residuals (u64 count,
+    /// f32 each); [`Volume::from_bytes`] reads them back.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer(Vec::with_capacity(96 + 4 * self.values.len()));
+        w.bytes(VOLUME_MAGIC);
+        w.u32(1);
+        for n in [self.nx, self.ny, self.nz] {
+            w.u64(n as u64);
+        }
+        for v in self.origin.iter().chain(&self.spacing) {
+            w.f64(*v);
+        }
+        w.f64(self.offset);
+        w.f32s(&self.values);
+        w.0
+    }
+
+    /// A volume from [`Volume::to_bytes`]'s bytes (checked as by [`Volume::with_offset`]; a
+    /// damaged or foreign buffer is an InputError naming `data`).
+    pub fn from_bytes(data: &[u8]) -> Result<Self> {
+        let mut r = Reader::new(data, "data");
+        r.header(VOLUME_MAGIC, "volume", 1)?;
+        let dims = (r.usize()?, r.usize()?, r.usize()?);
+        let (origin, spacing, offset) = (r.f64x3()?, r.f64x3()?, r.f64()?);
+        let values = r.f32s()?;
+        r.finish()?;
+        Self::with_offset(values.into(), offset, dims, origin, spacing)
+    }
+
     /// A residual (an octree min/max, a stored sample) in the volume's units.
     #[inline]
     pub fn value(&self, residual: f32) -> f64 {
@@ -263,6 +296,7 @@ pub fn sphere_field(n: usize, radius: f64) -> Volume {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     #[test]
     fn volume_new_validates() {
@@ -297,8 +331,8 @@ mod tests {
         assert_eq!(v.get(0, 0, 0), -1.0);
         assert_eq!(v.value(v.get(8, 0, 0)), 1e8 + 1.0);
         assert_eq!(v.residual(1e8 + 0.5, "isovalue").unwrap(), 0.5);
-        let shifted = Volume::from_f64(&vals.iter().map(|x| x - 1e8).collect::<Vec<_>>(), (n, n, n), [0.0; 3], [1.0; 3])
-            .unwrap();
+        let shifted =
+            Volume::from_f64(&vals.iter().map(|x| x - 1e8).collect::<Vec<_>>(), (n, n, n), [0.0; 3], [1.0; 3]).unwrap();
         let a = super::tetra::extract(&v, v.residual(1e8, "w").unwrap(), [0; 3], [8; 3]);
         let b = super::tetra::extract(&shifted, shifted.residual(0.0, "w").unwrap(), [0; 3], [8; 3]);
         assert!(a.triangle_count() > 0);
@@ -318,6 +352,21 @@ mod tests {
         bad[6] = 1e300;
         let e = Volume::from_f64(&bad, (n, n, n), [0.0; 3], [1.0; 3]).unwrap_err().to_string();
         assert!(e.starts_with("values[0, 0, "), "{e}");
+    }
+
+    #[test]
+    fn bytes_round_trip() {
+        let vals: Vec<f64> = (0..60).map(|k| 1e8 + k as f64 * 0.25 + if k == 7 { f64::NAN } else { 0.0 }).collect();
+        let v = Volume::from_f64(&vals, (3, 4, 5), [1.0, 2.0, 3.0], [0.5, 1.0, 2.0]).unwrap();
+        let w = Volume::from_bytes(&v.to_bytes()).unwrap();
+        assert_eq!((w.offset, w.origin, w.spacing, (w.nx, w.ny, w.nz)), (v.offset, v.origin, v.spacing, (3, 4, 5)));
+        assert_eq!(
+            w.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            v.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        let b = v.to_bytes();
+        assert!(Volume::from_bytes(&b[..b.len() - 2]).unwrap_err().to_string().starts_with("data"));
+        assert!(Volume::from_bytes(&Scene::new().to_bytes()).unwrap_err().to_string().contains("magic"));
     }
 
     #[test]

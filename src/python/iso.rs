@@ -10,7 +10,7 @@ use crate::iso::{MinMaxOctree, Volume};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 use std::sync::{Arc, OnceLock};
 
 #[pyclass(name = "Volume", module = "geocull._geocull", frozen)]
@@ -59,6 +59,19 @@ impl PyVolume {
         Ok(Self { inner, tree: OnceLock::new() })
     }
 
+    /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, residuals).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let v = &self.inner;
+        let b = run(py, move || Ok(v.to_bytes()))?;
+        Ok(PyBytes::new(py, &b))
+    }
+
+    /// A volume from `to_bytes`' bytes.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        run(py, move || Volume::from_bytes(data).map(|inner| Self { inner, tree: OnceLock::new() }))
+    }
+
     /// (nz, ny, nx)
     #[getter]
     fn shape(&self) -> (usize, usize, usize) {
@@ -100,8 +113,14 @@ impl PyVolume {
         d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
         // In the volume's units (residual + offset); +inf / -inf for nodes without data.
         let v = &self.inner;
-        d.set_item("min", Array1::from_vec(nodes.iter().map(|n| v.value(n.min)).collect::<Vec<f64>>()).into_pyarray(py))?;
-        d.set_item("max", Array1::from_vec(nodes.iter().map(|n| v.value(n.max)).collect::<Vec<f64>>()).into_pyarray(py))?;
+        d.set_item(
+            "min",
+            Array1::from_vec(nodes.iter().map(|n| v.value(n.min)).collect::<Vec<f64>>()).into_pyarray(py),
+        )?;
+        d.set_item(
+            "max",
+            Array1::from_vec(nodes.iter().map(|n| v.value(n.max)).collect::<Vec<f64>>()).into_pyarray(py),
+        )?;
         Ok(d)
     }
 }

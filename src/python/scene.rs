@@ -6,7 +6,7 @@ use crate::scene::{AddOptions, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 use std::sync::Mutex;
 
 /// Largest tile count accepted (the core checks it against the grid too).
@@ -23,6 +23,23 @@ impl PyScene {
     #[new]
     fn new() -> Self {
         Self { inner: Mutex::new(Scene::new()) }
+    }
+
+    /// A copy: the same objects under a new identity (`Scene::clone`).
+    fn copy(&self, py: Python<'_>) -> PyResult<Self> {
+        with_lock(py, &self.inner, |s| Ok(Self { inner: Mutex::new(s.clone()) }))
+    }
+
+    /// The scene as bytes (`Scene::to_bytes`, a versioned little-endian layout).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let b = with_lock(py, &self.inner, |s| Ok(s.to_bytes()))?;
+        Ok(PyBytes::new(py, &b))
+    }
+
+    /// A scene from `to_bytes`' bytes.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        run(py, move || Scene::from_bytes(data).map(|s| Self { inner: Mutex::new(s) }))
     }
 
     #[allow(clippy::too_many_arguments)]

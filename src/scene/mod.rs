@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 mod heightfield;
 mod mesh;
+pub(crate) mod serial;
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
@@ -75,6 +76,33 @@ pub struct Scene {
     origin: Option<DVec3>,
     objects: Vec<Object>,
     next_id: u32,
+}
+
+/// A copy with the same objects (ids, tiles, state) under a fresh identity: renderers key their
+/// uploaded geometry by [`Scene::geometry_key`], so a copy is never mistaken for the original
+/// (whose later edits would otherwise look like the copy's).
+impl Clone for Scene {
+    fn clone(&self) -> Self {
+        Self {
+            uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
+            geometry_version: 0,
+            origin: self.origin,
+            objects: self.objects.clone(),
+            next_id: self.next_id,
+        }
+    }
+}
+
+/// A summary (the geometry is too large to print).
+impl std::fmt::Debug for Scene {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scene")
+            .field("uid", &self.uid)
+            .field("objects", &self.objects.len())
+            .field("tiles", &self.n_tiles())
+            .field("triangles", &self.n_triangles())
+            .finish()
+    }
 }
 
 impl Default for Scene {
