@@ -23,6 +23,8 @@ __all__ = [
     "Volume",
     "render_isosurface",
     "clear_isosurface_cache",
+    "set_isosurface_cache_budget",
+    "isosurface_cache_budget",
     "__version__",
 ]
 
@@ -222,3 +224,5 @@ def render_isosurface(
     return_map: bool,
 ) -> IsoOutput: ...
 def clear_isosurface_cache(renderer: Renderer) -> None: ...
+def set_isosurface_cache_budget(renderer: Renderer, bytes: int) -> None: ...
+def isosurface_cache_budget(renderer: Renderer) -> int: ...

@@ -99,6 +99,16 @@ class Renderer:
         """Bytes of scene geometry held on the GPU."""
         return self._r.gpu_bytes
 
+    @property
+    def iso_cache_budget(self) -> int:
+        """Memory budget of the isosurface caches, bytes (default 256 MiB; settable, >= 0): beyond
+        it the least recently used patches are dropped (see :func:`geocull.iso.set_cache_budget`)."""
+        return _geocull.isosurface_cache_budget(self._r)
+
+    @iso_cache_budget.setter
+    def iso_cache_budget(self, value: int) -> None:
+        _geocull.set_isosurface_cache_budget(self._r, cv.integer(value, "bytes"))
+
     def render(
         self,
         scene: Scene,
@@ -176,7 +186,8 @@ class Renderer:
         culling="none") and whether it was extracted and drawn. ``stats``: :class:`IsoStats`
         (surface_triangles, nodes_tested (all levels), nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
-        (= extract + draw), total_ms, patches_cached/extracted, ...).
+        (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, ...). Patches are kept
+        within :attr:`iso_cache_budget` bytes.
 
         Same as :func:`geocull.iso.render_isosurface` with this renderer as its first argument.
         """

@@ -11,6 +11,7 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, OnceLock};
 
 #[pyclass(name = "Volume", module = "geocull._geocull", frozen)]
@@ -164,6 +165,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("surface_ms", s.surface_ms)?;
     st.set_item("total_ms", s.total_ms)?;
     st.set_item("readback_ms", s.readback_ms)?;
+    st.set_item("cache_bytes", s.cache_bytes)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
@@ -190,6 +192,7 @@ fn render_isosurface<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let tree = volume.tree(py)?;
     let r = &renderer.inner;
+    let budget = renderer.iso_cache_budget.load(Ordering::Relaxed);
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
         let culling = IsoCulling::parse(&culling)?;
@@ -202,6 +205,7 @@ fn render_isosurface<'py>(
             color: [color.0 as f32, color.1 as f32, color.2 as f32],
             use_cache: cache,
             return_map,
+            cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
         };
         lock(r).render_isosurface(v, &tree, isovalue, c, &opts)
     })?;
@@ -216,9 +220,26 @@ fn clear_isosurface_cache(py: Python<'_>, renderer: PyRef<'_, PyRenderer>) -> Py
     })
 }
 
+/// Sets the memory budget (bytes) of the renderer's isosurface caches; it applies from the next
+/// isosurface frame, which drops least recently used patches beyond it.
+#[pyfunction]
+fn set_isosurface_cache_budget(renderer: PyRef<'_, PyRenderer>, bytes: i64) -> PyResult<()> {
+    let b = int_in(bytes, "bytes", 0, i64::MAX)?;
+    renderer.iso_cache_budget.store(b as u64, Ordering::Relaxed);
+    Ok(())
+}
+
+/// The memory budget (bytes) of the renderer's isosurface caches.
+#[pyfunction]
+fn isosurface_cache_budget(renderer: PyRef<'_, PyRenderer>) -> u64 {
+    renderer.iso_cache_budget.load(Ordering::Relaxed)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyVolume>()?;
     m.add_function(wrap_pyfunction!(render_isosurface, m)?)?;
     m.add_function(wrap_pyfunction!(clear_isosurface_cache, m)?)?;
+    m.add_function(wrap_pyfunction!(set_isosurface_cache_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(isosurface_cache_budget, m)?)?;
     Ok(())
 }

@@ -10,12 +10,15 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::sync::atomic::AtomicU64;
 use std::sync::Mutex;
 
 #[pyclass(name = "Renderer", module = "geocull._geocull", frozen)]
 pub struct PyRenderer {
     /// Locked by every method (see `super::with_lock`), before any scene it draws.
     pub(crate) inner: Mutex<Renderer>,
+    /// Memory budget of the isosurface caches, bytes (`IsoOptions::cache_budget` of every frame).
+    pub(crate) iso_cache_budget: AtomicU64,
 }
 
 /// Names of the culling strategies `Renderer.render` accepts, from the core's registry.
@@ -64,7 +67,10 @@ impl PyRenderer {
         run(py, move || {
             let max = u32::MAX as i64;
             let (w, h) = (int_in(width, "width", 1, max)? as u32, int_in(height, "height", 1, max)? as u32);
-            Renderer::new(w, h, &backend).map(|r| Self { inner: Mutex::new(r) })
+            Renderer::new(w, h, &backend).map(|r| Self {
+                inner: Mutex::new(r),
+                iso_cache_budget: AtomicU64::new(crate::iso::tetra::DEFAULT_CACHE_BUDGET as u64),
+            })
         })
     }
     #[getter]
