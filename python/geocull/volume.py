@@ -129,7 +129,9 @@ class Volume:
         return (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2
 
     def max_depth(self) -> int:
-        """Depth of the octree's single-cell leaves (root = 0). Builds the octree on first use."""
+        """Depth of the octree's single-cell leaves (root = 0). Builds the octree on first use: it
+        stores min/max down to bricks of 8³ cells (depth max_depth() - 3, about 0.02 bytes per
+        sample) and computes the three finer depths from the samples when asked."""
         return self._v.max_depth()
 
     def nodes(self, depth: int) -> OctreeNodes:
