@@ -77,6 +77,13 @@ pub const MIN_FOV_Y: f64 = 1e-6;
 /// Range of vertical exaggeration accepted.
 pub const MIN_Z_SCALE: f64 = 1e-6;
 pub const MAX_Z_SCALE: f64 = 1e6;
+/// Smallest orthographic view height accepted, world units: below it the f32 projection's scale
+/// (2 / height) and the f32 positions cannot resolve the view (1e-300 overflowed to an empty image).
+pub const MIN_ORTHO_HEIGHT: f64 = 1e-6;
+/// Largest near, far and orthographic height accepted, world units (exaggerated): beyond any
+/// distance in a scene (coordinates within +-1e12, exaggeration at most 1e6) and far inside f32,
+/// whose projection terms overflow or underflow to an empty image near 1e38.
+pub const MAX_DISTANCE: f64 = 1e20;
 /// Largest coordinate magnitude accepted anywhere (scene and camera), world units: far beyond any
 /// geographic coordinate, and small enough that origin-relative f32 positions stay finite.
 pub const MAX_COORD: f64 = 1e12;
@@ -140,9 +147,15 @@ impl Camera {
             ensure(n.is_finite() && n > 0.0, "near", || format!("near is {n}; expected a finite number > 0"))?;
             // Reverse-Z depth is near / distance in f32: a smaller near underflows to "nothing drawn".
             ensure(n >= MIN_NEAR, "near", || format!("near is {}; expected at least {}", num(n), num(MIN_NEAR)))?;
+            ensure(n <= MAX_DISTANCE, "near", || {
+                format!("near is {}; expected at most {} (world units)", num(n), num(MAX_DISTANCE))
+            })?;
         }
         if let Some(f) = far {
             ensure(f.is_finite() && f > 0.0, "far", || format!("far is {f}; expected a finite number > 0"))?;
+            ensure(f <= MAX_DISTANCE, "far", || {
+                format!("far is {}; expected at most {} (world units)", num(f), num(MAX_DISTANCE))
+            })?;
             if let Some(n) = near {
                 ensure(f > n, "far", || format!("far ({f}) must be greater than near ({n})"))?;
             }
@@ -150,6 +163,15 @@ impl Camera {
         if let Some(h) = ortho_height {
             ensure(h.is_finite() && h > 0.0, "ortho_height", || {
                 format!("ortho_height is {h}; expected a finite number > 0")
+            })?;
+            ensure((MIN_ORTHO_HEIGHT..=MAX_DISTANCE).contains(&h), "ortho_height", || {
+                format!(
+                    "ortho_height is {}; expected a view height in [{}, {}] (world units): other heights \
+                     can only give an empty image",
+                    num(h),
+                    num(MIN_ORTHO_HEIGHT),
+                    num(MAX_DISTANCE)
+                )
             })?;
         }
         Ok(Self { eye, target, up, fov_y, near, far, projection, ortho_height, z_scale })
@@ -349,5 +371,32 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().starts_with("fov_y"));
+    }
+
+    #[test]
+    fn degenerate_view_sizes_are_errors() {
+        let look = |near, far, h| {
+            Camera::look_at(
+                [0.0, 0.0, 10.0],
+                [0.0; 3],
+                [0.0, 1.0, 0.0],
+                45.0,
+                near,
+                far,
+                Projection::Orthographic,
+                h,
+                1.0,
+            )
+        };
+        for (near, far, h, arg) in [
+            (None, None, Some(1e-300), "ortho_height"),
+            (None, None, Some(1e300), "ortho_height"),
+            (Some(1e300), None, None, "near"),
+            (None, Some(1e300), None, "far"),
+        ] {
+            let e = look(near, far, h).unwrap_err().to_string();
+            assert!(e.starts_with(arg), "{e}");
+        }
+        assert!(look(None, None, Some(MIN_ORTHO_HEIGHT)).is_ok() && look(None, None, Some(MAX_DISTANCE)).is_ok());
     }
 }

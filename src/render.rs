@@ -447,13 +447,14 @@ impl Renderer {
         }
     }
 
-    /// Renders the isosurface `vol = w` seen by `camera`; `tree` must be the octree of `vol`.
-    /// See `crate::iso::render` for what `culling = Implicit` does.
+    /// Renders the isosurface `vol = w` (in the volume's units: converted to the volume's f32
+    /// residuals about its f64 offset by `crate::iso`) seen by `camera`; `tree` must be the octree
+    /// of `vol`. See `crate::iso::render` for what `culling = Implicit` does.
     pub fn render_isosurface(
         &mut self,
         vol: &Volume,
         tree: &MinMaxOctree,
-        w: f32,
+        w: f64,
         camera: &Camera,
         opts: &IsoOptions,
     ) -> Result<IsoOutput> {

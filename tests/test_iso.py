@@ -195,3 +195,58 @@ def test_renderresult_fields(renderer):
     for k in ("surface_triangles", "nodes_tested", "nodes_visible", "occluder_ms", "cull_ms", "surface_ms", "total_ms"):
         assert k in res.stats
     assert "RenderResult" in repr(res)
+
+
+def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
+    # A sphere-like field of 0 +- 1, and the same field plus 1e8: float32 alone holds every sample
+    # of the second as 1e8, so without the value offset its isosurface at 1e8 is empty.
+    z, y, x, h = grid(24)
+    base = np.sqrt(x * x + y * y + z * z) - 0.6  # float64, in [-0.6, 1.1]
+    cam, _ = cam_around(40)
+    small = gc.Volume(base, origin=(-1, -1, -1), spacing=(h, h, h))
+    big = gc.Volume(base + 1e8, origin=(-1, -1, -1), spacing=(h, h, h))
+    assert abs(big.offset - 1e8) < 1.0 and big.nodes(0)["max"][0] == pytest.approx(1e8 + base.max(), abs=1e-6)
+    for culling in ("none", "implicit"):
+        a = renderer.render_isosurface(small, 0.0, cam, culling=culling)
+        b = renderer.render_isosurface(big, 1e8, cam, culling=culling)
+        assert a.stats["surface_triangles"] > 0
+        assert b.stats["surface_triangles"] == a.stats["surface_triangles"]
+        np.testing.assert_array_equal(a.image, b.image)
+    # integers too: 1e8 and 1e8 + 1 differ
+    ints = (base > 0).astype(np.int64) + 10**8
+    res = renderer.render_isosurface(gc.Volume(ints), 1e8 + 0.5, cam)
+    assert res.stats["surface_triangles"] > 0
+    with pytest.raises(gc.InputError, match="^isovalue"):
+        renderer.render_isosurface(big, 1e300, cam)
+
+
+def test_patch_cache_is_bounded_by_its_budget():
+    r = gc.Renderer(48, 48)
+    v = sphere_volume(40, 0.6)
+    cam, _ = cam_around(30)
+    assert gc.iso.cache_budget(r) == r.iso_cache_budget == 256 * 2**20
+    a = r.render_isosurface(v, 0.0, cam)
+    one = a.stats["cache_bytes"]
+    assert one > 0
+    budget = int(2.5 * one)
+    gc.iso.set_cache_budget(r, budget)
+    sizes = []
+    for w in np.linspace(-0.3, 0.3, 12):
+        res = r.render_isosurface(v, float(w), cam)
+        sizes.append(res.stats["cache_bytes"])
+        assert res.stats["cache_bytes"] <= budget
+        # evictions never change what is drawn
+        np.testing.assert_array_equal(res.image, r.render_isosurface(v, float(w), cam, cache=False).image)
+    assert max(sizes) > one  # it does keep more than one isovalue's patches
+    # the most recently used isovalue is still cached; a raised budget keeps everything again
+    assert r.render_isosurface(v, 0.3, cam).stats["patches_extracted"] == 0
+    r.iso_cache_budget = 2**40
+    for w in (0.05, 0.1, 0.05):
+        last = r.render_isosurface(v, w, cam)
+    assert last.stats["patches_extracted"] == 0
+    gc.iso.set_cache_budget(r, 0)  # nothing is kept
+    assert r.render_isosurface(v, 0.0, cam).stats["cache_bytes"] == 0
+    with pytest.raises(gc.InputError, match="^bytes"):
+        gc.iso.set_cache_budget(r, -1)
+    with pytest.raises(gc.InputError, match="^bytes"):
+        gc.iso.set_cache_budget(r, 1.5)

@@ -117,3 +117,18 @@ def test_bad_lod_arguments(renderer_small):
         r.render(s, cam, lod="fast")  # type: ignore[arg-type]
     with pytest.raises(gc.InputError, match="^max_pixel_error"):
         r.render(s, cam, lod="screen_error", max_pixel_error=0)
+
+
+def test_levels_survive_pickling_and_copies(renderer_small):
+    import copy
+    import pickle
+
+    s = wavy()
+    r = renderer_small(96, 72)
+    cam = gc.Camera.look_at((-200.0, -300.0, 400.0), (320.0, 320.0, 0.0))
+    ref = r.render(s, cam, lod="screen_error", max_pixel_error=2.0)
+    for other in (pickle.loads(pickle.dumps(s)), copy.deepcopy(s)):
+        np.testing.assert_array_equal(other.tile_table()["level_error"], s.tile_table()["level_error"])
+        res = r.render(other, cam, lod="screen_error", max_pixel_error=2.0)
+        np.testing.assert_array_equal(res.image, ref.image)
+        np.testing.assert_array_equal(res.tile_level, ref.tile_level)

@@ -94,6 +94,17 @@ def test_empty_scene_and_bad_camera():
         gpv.reference_image(sc, dict(eye=(0, 0, 0.0), target=(0, 0, 0.0)), 8, 6)
 
 
+@pytest.mark.parametrize("kw,arg", [(dict(near=10.0, far=1.0), "far"), (dict(near=5.0, far=5.0), "far"),
+                                    (dict(near=-1.0), "near"), (dict(far=float("nan")), "far")])
+def test_bad_clipping_range_is_an_error(kw, arg):
+    sc = _square_scene()
+    cam = dict(eye=tuple(ORIGIN + [0.0, 0.0, 100.0]), target=tuple(ORIGIN), up=(0.0, 1.0, 0.0))
+    with pytest.raises(ValueError, match=f"^{arg}"):
+        gpv.reference_image(sc, cam, 8, 6, **kw)
+    with pytest.raises(ValueError, match=f"^{arg}"):
+        gpv.timed_render(sc, cam, 8, 6, n=1, **kw)
+
+
 def test_stacked_scene_reference_and_timed_render():
     spec = data.stacked_test_scene(n=24)
     ms = spec.mesh_scene()

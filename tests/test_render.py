@@ -154,3 +154,27 @@ def test_submodules_are_reachable_as_attributes():
     # PyVista (VTK) is not imported until gc.pyvista is used.
     if "pyvista" not in sys.modules:
         assert "vtk" not in sys.modules
+
+
+def test_scene_wholly_nearer_than_the_near_plane_warns(r64):
+    # A 1e-8 m wide plate 5e-7 m below the eye: nearer than the near-plane floor (1e-6), so no
+    # pixel can be drawn. That is a warning, not a silent black frame.
+    s = flat(size=1e-8, n=3, tiles=(1, 1))
+    cam = gc.Camera.look_at((0, 0, 5e-7), (0, 0, 0), up=(0, 1, 0), fov_y=90.0)
+    assert issubclass(gc.GeocullWarning, UserWarning)
+    with pytest.warns(gc.GeocullWarning, match="near"):
+        res = r64.render(s, cam)
+    assert not res.coverage.any()
+    # the same with a near plane given beyond the scene
+    with pytest.warns(gc.GeocullWarning, match="near"):
+        r64.render(flat(), gc.Camera.look_at((0, 0, 100.0), (0, 0, 0), up=(0, 1, 0), near=200.0))
+    # an empty frame for other reasons (looking away, hidden objects) does not warn
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r64.render(flat(), gc.Camera.look_at((0, 0, 100.0), (0, 0, 200.0), up=(0, 1, 0)))
+        hidden = flat()
+        hidden.set_visible(0, False)
+        r64.render(hidden, top_down())
+        r64.render(flat(), top_down())

@@ -181,3 +181,27 @@ def test_bench_views_by_name_without_pyvista(tmp_path):
                                                 "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)",
                                                 "three_pass(cons,lod=2)", "oracle"}
     assert np.isclose(d["summary"]["per_method"]["none"]["ratio_to_none"], 1.0)
+
+
+def test_sweep_materialises_generators_once(spec):
+    scene = spec.build(tiles=(4, 4), coarse_factor=25)
+    cam = gc.Camera.look_at(**standard_views(spec)[0][1])
+    kw = dict(width=32, height=32, repeats=1)
+    rows = report.sweep(scene, (c for c in [cam]), thresholds=(t for t in [0, 10]),
+                        prepass_scales=(s for s in [1.0]), methods=(m for m in ["none", "three_pass"]), **kw)
+    tp = [(r["pixel_threshold"], r["prepass_scale"]) for r in rows if r["method"] == "three_pass"]
+    assert tp == [(0, 1.0), (10, 1.0)]
+    with pytest.raises(gc.InputError, match="thresholds"):
+        report.sweep(scene, [cam], thresholds=(t for t in []), **kw)
+
+
+def test_sweep_unknown_method_is_an_error_listing_the_valid_ones(spec):
+    scene = spec.build(tiles=(4, 4), coarse_factor=25)
+    cam = gc.Camera.look_at(**standard_views(spec)[0][1])
+    with pytest.raises(gc.InputError, match=r"^methods:.*'three_pas'.*three_pass") as e:
+        report.sweep(scene, [cam], methods=("none", "three_pas"), width=32, height=32, repeats=1)
+    for m in gc.CULLING_MODES:
+        assert m in str(e.value)
+    # frustum is a culling mode, so the sweep runs it like horizon
+    rows = report.sweep(scene, [cam], methods=["frustum"], width=32, height=32, repeats=1)
+    assert [r["method"] for r in rows] == ["none", "oracle", "frustum"]

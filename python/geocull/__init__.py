@@ -17,7 +17,7 @@ import importlib as _importlib
 from types import ModuleType as _ModuleType
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 
-from ._errors import DeviceError, GeocullError, InputError
+from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
 from .camera import Camera
 from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, LodMode, Renderer
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
@@ -43,6 +43,7 @@ __all__ = [
     "GeocullError",
     "InputError",
     "DeviceError",
+    "GeocullWarning",
     "CULLING_MODES",
     "ISO_CULLING_MODES",
     "CullingMode",

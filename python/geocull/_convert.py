@@ -20,6 +20,9 @@ __all__ = [
     "INT_KINDS",
     "checked_array",
     "float_array",
+    "unmasked",
+    "heights",
+    "vertices",
     "int_array",
     "vec",
     "vec2",
@@ -54,6 +57,53 @@ def float_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndar
     """C-contiguous float64 copy (or view) of a real-valued array checked as by :func:`checked_array`."""
     a = checked_array(x, arg, ndim, last)
     return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def unmasked(x: Any, arg: str) -> tuple[Any, np.ndarray | None]:
+    """``(data, mask)`` of ``x``: for a ``numpy.ma.MaskedArray`` its data and its boolean mask
+    (None when nothing is masked), else ``(x, None)``. ``np.asarray`` would silently drop the mask."""
+    if not isinstance(x, np.ma.MaskedArray):
+        return x, None
+    mask = np.ma.getmaskarray(x)
+    return np.ma.getdata(x), (mask if mask.any() else None)
+
+
+def heights(z: Any, null_value: float | None, arg: str = "z") -> np.ndarray:
+    """C-contiguous float64 (ny, nx) heights with the no-data samples as NaN: the masked samples of a
+    ``numpy.ma.MaskedArray``, and the samples equal to ``null_value`` compared in ``z``'s own dtype
+    (float32 cannot hold -999.1, so a float32 ``z`` holds ``float32(-999.1)``, which an f64
+    comparison with -999.1 would never match). For an integer ``z`` only an integral
+    ``null_value`` can match (it is not rounded onto an integer). The value checks stay in Rust."""
+    data, mask = unmasked(z, arg)
+    a = checked_array(data, arg, 2)
+    null = np.zeros(a.shape, bool) if mask is None else mask.copy()
+    if null_value is not None and not np.isnan(null_value):
+        if a.dtype.kind == "f":
+            with np.errstate(over="ignore"):
+                nv = np.asarray(null_value, dtype=a.dtype)
+            if np.isfinite(nv):  # a null_value beyond the dtype's range matches nothing
+                null |= a == nv
+        elif float(null_value).is_integer():
+            info = np.iinfo(a.dtype)
+            if info.min <= null_value <= info.max:
+                null |= a == np.asarray(int(null_value), dtype=a.dtype)
+    out = np.ascontiguousarray(a, dtype=np.float64)
+    if null.any():
+        if out is a or np.shares_memory(out, a):
+            out = out.copy()
+        out[null] = np.nan
+    return out
+
+
+def vertices(v: Any, arg: str = "vertices") -> np.ndarray:
+    """C-contiguous float64 (n, 3) vertices; a masked vertex has no position, so a
+    ``numpy.ma.MaskedArray`` with a masked element is an InputError naming the first one."""
+    data, mask = unmasked(v, arg)
+    a = float_array(data, arg, 2, 3)
+    if mask is not None:
+        i, j = (int(k) for k in np.argwhere(mask)[0])
+        raise InputError(f"{arg}[{i}, {j}] is masked; a mesh vertex needs a position (fill or drop it)")
+    return a
 
 
 def int_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:

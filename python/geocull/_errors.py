@@ -13,3 +13,8 @@ class InputError(GeocullError, ValueError):
 class DeviceError(GeocullError, RuntimeError):
     """No usable graphics adapter, or the driver rejected the work. On a machine without a GPU,
     install Mesa's lavapipe: ``apt-get install libvulkan1 mesa-vulkan-drivers``."""
+
+
+class GeocullWarning(UserWarning):
+    """Something valid but almost certainly not what was meant, e.g. a frame that cannot show
+    anything because the whole scene lies nearer than the near plane."""

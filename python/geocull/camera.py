@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -15,7 +16,8 @@ __all__ = ["Camera"]
 
 class Camera:
     """A look-at camera in world coordinates (metres, f64). Build it with :meth:`look_at`; its
-    attributes (eye, target, up, fov_y, near, far, projection, ortho_height, z_scale) are read-only."""
+    attributes (eye, target, up, fov_y, near, far, projection, ortho_height, z_scale) are read-only.
+    Cameras are immutable (copies are the camera itself) and pickle as their attributes."""
 
     def __init__(self, inner: _geocull.Camera) -> None:
         self._c = inner
@@ -98,6 +100,20 @@ class Camera:
         """(4, 4) float64 world (exaggerated) -> view matrix, row-major, acting on column vectors
         (x, y, z, 1); the camera looks down -z, y up."""
         return self._c.view_matrix()
+
+    def _fields(self) -> tuple:
+        c = self._c
+        return (c.eye, c.target, c.up, c.fov_y, c.near, c.far, c.projection, c.ortho_height, c.z_scale)
+
+    def __reduce__(self) -> tuple[Any, tuple]:
+        # Pickled as its fields, which are exactly look_at's arguments (checked again on loading).
+        return (Camera.look_at, self._fields())
+
+    def __copy__(self) -> Camera:
+        return self  # immutable
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Camera:
+        return self
 
     def __repr__(self) -> str:
         return f"<geocull.Camera {self.projection} eye={self.eye} target={self.target} fov_y={self.fov_y}>"

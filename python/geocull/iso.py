@@ -20,6 +20,9 @@ max depth 8 like the paper's, a 128³ one max depth 7 (the paper's depth d is ou
 Surfaces are marching *tetrahedra* (6 per cell, crack free), about twice the triangles of classic
 marching cubes.
 
+Caches: a renderer keeps the patches it extracted (per volume, isovalue and node) within a memory
+budget, 256 MiB by default (:func:`set_cache_budget`); ``stats["cache_bytes"]`` is what it holds.
+
 The implementation is :meth:`geocull.Renderer.render_isosurface`; this module is its functional
 form plus the cache control and the mode names.
 """
@@ -35,7 +38,8 @@ from .renderer import ISO_CULLING_MODES, IsoCullingMode, Renderer
 from .results import IsoResult
 from .volume import Volume
 
-__all__ = ["Volume", "render_isosurface", "clear_cache", "ISO_CULLING_MODES", "IsoCullingMode"]
+__all__ = ["Volume", "render_isosurface", "clear_cache", "set_cache_budget", "cache_budget", "ISO_CULLING_MODES",
+           "IsoCullingMode"]
 
 
 def render_isosurface(
@@ -67,3 +71,18 @@ def render_isosurface(
 def clear_cache(renderer: Renderer) -> None:
     """Drop the renderer's cached isosurface patches and occluders."""
     _geocull.clear_isosurface_cache(renderer._r)
+
+
+def set_cache_budget(renderer: Renderer, bytes: int) -> None:
+    """Set the memory budget of ``renderer``'s isosurface caches, in bytes (>= 0; default
+    256 MiB): extracted patches (three quarters of it) and straddling-node lists (a quarter). From
+    the next isosurface frame on, the least recently used entries beyond it are dropped, so
+    ``stats["cache_bytes"]`` stays within it. Same as ``renderer.iso_cache_budget = bytes``."""
+    cv.expect_instance(renderer, Renderer, "renderer")
+    _geocull.set_isosurface_cache_budget(renderer._r, cv.integer(bytes, "bytes"))
+
+
+def cache_budget(renderer: Renderer) -> int:
+    """The memory budget of ``renderer``'s isosurface caches, in bytes."""
+    cv.expect_instance(renderer, Renderer, "renderer")
+    return _geocull.isosurface_cache_budget(renderer._r)

@@ -285,6 +285,16 @@ class _Setup:
         # along the view axis widened by 1 % of its span).
         n_ = near if near is not None else cam["near"]
         f_ = far if far is not None else cam["far"]
+        given_near, given_far = n_ is not None, f_ is not None
+        # A clipping range that can only give an empty image is an error, not a blank frame.
+        ortho = cam["projection"] == "orthographic"
+        for dist, arg in ((n_, "near"), (f_, "far")):
+            ok = isinstance(dist, (int, float, np.integer, np.floating)) and math.isfinite(dist)
+            if dist is not None and not (ok and (dist > 0 or (arg == "near" and ortho and dist == 0))):
+                want = "a finite distance >= 0" if arg == "near" and ortho else "a finite distance > 0"
+                raise _input_error(f"{arg}: {dist!r}; expected {want}")
+        if given_near and given_far and not f_ > n_:
+            raise _input_error(f"far ({f_}) must be greater than near ({n_})")
         if n_ is None or f_ is None:
             rlo, rhi = to_render(lo), to_render(hi)
             corners = np.array(
@@ -299,6 +309,9 @@ class _Setup:
                 floor = 0.0 if cam["projection"] == "orthographic" else max(f_ * min_near_ratio, 1e-6)
                 n_ = max(dmin - 0.01 * span, floor)
         n_, f_ = float(n_), float(f_)
+        if given_near and not given_far and not f_ > n_:
+            raise _input_error(f"near: {n_} is beyond the scene (its far end is at {f_:g} along the view axis); "
+                               "nothing would be drawn")
         if cam["projection"] == "perspective":
             # VTK's depth buffer is 24-bit fixed point: keep far/near bounded.
             n_ = max(n_, f_ * min_near_ratio)

@@ -3,12 +3,15 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Literal, get_args
 
+import numpy as np
+
 from . import _convert as cv
 from . import _geocull
-from ._errors import InputError
+from ._errors import GeocullWarning, InputError
 from .camera import Camera
 from .results import IsoResult, RenderResult, RenderStats
 from .scene import Scene
@@ -31,6 +34,38 @@ ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
 
 #: Level-of-detail choice of :meth:`Renderer.render` (``lod=``).
 LodMode = Literal["full", "screen_error"]
+
+
+def _warn_if_nearer_than_near(lo: np.ndarray, hi: np.ndarray, camera: Camera, near: float) -> None:
+    """GeocullWarning when boxes (k, 3) ``lo``..``hi`` (world, metres) lie in front of the eye but
+    wholly nearer than the frame's ``near`` plane (render units): nothing can be drawn.
+
+    Why here and from the result: the frame already says whether anything was drawn (no tile has a
+    pixel), so the wrapper only looks at the boxes in that rare case and the frame pipeline in the
+    core stays as it is; the boxes are the scene's tile table, the same boxes the core frames near
+    and far from. A box counts as "in the view direction" when its far end is in front of the eye.
+    """
+    if lo.size == 0:
+        return
+    zs = np.array([1.0, 1.0, camera.z_scale])
+    eye, tgt = np.asarray(camera.eye) * zs, np.asarray(camera.target) * zs
+    fwd = (tgt - eye) / np.linalg.norm(tgt - eye)
+    ok = np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1)
+    lo, hi = lo[ok] * zs, hi[ok] * zs
+    if lo.size == 0:
+        return
+    # The farthest corner of each box along the view axis; "in front" beyond rounding (a scene
+    # level with the eye plane is behind it for this purpose, not nearer than the near plane).
+    far_end = np.where(fwd >= 0, hi, lo) @ fwd - eye @ fwd
+    tol = 8 * np.finfo(np.float64).eps * max(float(np.abs(eye).max()), float(np.abs(lo).max()), float(np.abs(hi).max()))
+    if far_end.max() > tol and far_end.max() < near:
+        warnings.warn(
+            f"nothing drawn: the scene lies wholly nearer than the near plane (near = {near:g} along the view axis, "
+            f"the scene's far end at {far_end.max():g}; the automatic near plane never goes below 1e-6). "
+            "Move the eye back or pass a smaller near.",
+            GeocullWarning,
+            stacklevel=3,
+        )
 
 
 class Renderer:
@@ -66,6 +101,16 @@ class Renderer:
     def gpu_bytes(self) -> int:
         """Bytes of scene geometry held on the GPU."""
         return self._r.gpu_bytes
+
+    @property
+    def iso_cache_budget(self) -> int:
+        """Memory budget of the isosurface caches, bytes (default 256 MiB; settable, >= 0): beyond
+        it the least recently used patches are dropped (see :func:`geocull.iso.set_cache_budget`)."""
+        return _geocull.isosurface_cache_budget(self._r)
+
+    @iso_cache_budget.setter
+    def iso_cache_budget(self, value: int) -> None:
+        _geocull.set_isosurface_cache_budget(self._r, cv.integer(value, "bytes"))
 
     def render(
         self,
@@ -107,6 +152,9 @@ class Renderer:
         ``triangles_level0`` .. ``triangles_level5``, ``lod_max_error_px``, ``lod_max_error_m``.
         max_pixel_error: > 0, pixels (lod="screen_error").
 
+        Warns (:class:`geocull.GeocullWarning`) when nothing is drawn because the whole scene lies
+        nearer than the near plane.
+
         Accuracy: "none", "oracle", "horizon" and "frustum" give the unculled image, and so does
         "three_pass" with conservative=True and pixel_threshold=0 (for any camera and proxies).
         With conservative=False "three_pass" is exact only with pixel_threshold=0, coarse_factor=1
@@ -124,7 +172,12 @@ class Renderer:
                            cv.number(prepass_scale, "prepass_scale"), bool(conservative), bool(predict_errors),
                            lod if isinstance(lod, str) else cv.fail_type(lod, "lod", "a string"),
                            cv.number(max_pixel_error, "max_pixel_error"))
-        return RenderResult(d, culling)
+        res: RenderResult[RenderStats] = RenderResult(d, culling)
+        if len(res.tile_pixels) and not res.tile_pixels.any():  # nothing drawn: say so if near clipped all
+            t = scene.tile_table()
+            shown = np.isin(t["object"], [i for i in scene.object_ids() if scene.object_info(i)["visible"]])
+            _warn_if_nearer_than_near(t["bbox_min"][shown], t["bbox_max"][shown], camera, res.near)
+        return res
 
     def render_isosurface(
         self,
@@ -159,7 +212,8 @@ class Renderer:
         culling="none") and whether it was extracted and drawn. ``stats``: :class:`IsoStats`
         (surface_triangles, nodes_tested (all levels), nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
-        (= extract + draw), total_ms, patches_cached/extracted, ...).
+        (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, ...). Patches are kept
+        within :attr:`iso_cache_budget` bytes.
 
         Same as :func:`geocull.iso.render_isosurface` with this renderer as its first argument.
         """
@@ -173,7 +227,10 @@ class Renderer:
         c = cv.vec3(color, "color")
         d = _geocull.render_isosurface(self._r, volume._v, w, camera._c, culling, od, cd, c,
                                        bool(cache), bool(return_map))
-        return IsoResult(d, culling)
+        res = IsoResult(d, culling)
+        lo, hi = volume.bounds  # one box: cheap enough to test every frame
+        _warn_if_nearer_than_near(np.array([lo]), np.array([hi]), camera, res.near)
+        return res
 
     def __repr__(self) -> str:
         return f"<geocull.Renderer {self.width}x{self.height} on {self.adapter_info}>"

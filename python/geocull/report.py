@@ -123,6 +123,24 @@ def _rel(a: float, b: float) -> float | None:
 # --------------------------------------------------------------------------- sweep
 
 
+def _single_point_methods() -> tuple[str, ...]:
+    """Culling modes that are one point of a sweep (no parameters): every mode of the core but
+    the references (none, oracle, always run) and three_pass (a grid of points)."""
+    import geocull as gc
+
+    return tuple(m for m in gc.CULLING_MODES if m not in ("none", "oracle", "three_pass"))
+
+
+def _values(x, arg: str) -> list:
+    """``x`` (any iterable, generators included) as a list, read exactly once; a str is one value."""
+    if isinstance(x, (str, bytes)):
+        return [x]
+    try:
+        return list(x)
+    except TypeError:
+        raise InputError(f"{arg}: expected a sequence of values, got {type(x).__name__}") from None
+
+
 def _sweep_scene(
     scene, cams, renderer, thresholds, prepass_scales, repeats, methods, base: dict[str, Any], say
 ) -> list[dict[str, Any]]:
@@ -131,8 +149,9 @@ def _sweep_scene(
     # configurations: key -> render kwargs
     configs: list[tuple[tuple, dict[str, Any]]] = [(("none",), dict(culling="none"))]
     configs.append((("oracle",), dict(culling="oracle")))
-    if "horizon" in methods:
-        configs.append((("horizon",), dict(culling="horizon")))
+    for m in _single_point_methods():  # horizon, frustum, ... in the core's order
+        if m in methods:
+            configs.append(((m,), dict(culling=m)))
     # "three_pass" is the paper's approximate mode; "three_pass_cons" the conservative one.
     for name, conservative in (("three_pass", False), ("three_pass_cons", True)):
         if name in methods:
@@ -208,14 +227,14 @@ def _sweep_scene(
 def sweep(
     scene_or_spec,
     cameras=None,
-    thresholds: Sequence[float] = DEFAULT_THRESHOLDS,
-    coarse_factors: Sequence[float] | None = None,
-    tiles: Sequence[int | tuple[int, int]] | None = None,
-    prepass_scales: Sequence[float] = DEFAULT_PREPASS_SCALES,
+    thresholds: Iterable[float] = DEFAULT_THRESHOLDS,
+    coarse_factors: Iterable[float] | None = None,
+    tiles: Iterable[int | tuple[int, int]] | None = None,
+    prepass_scales: Iterable[float] = DEFAULT_PREPASS_SCALES,
     width: int = 640,
     height: int = 512,
     repeats: int = 3,
-    methods: Sequence[str] = ("none", "oracle", "three_pass"),
+    methods: Iterable[str] = ("none", "oracle", "three_pass"),
     fault_tiles: int | None = None,
     fault_coarse_factor: float = 10,
     renderer=None,
@@ -233,12 +252,14 @@ def sweep(
     coarse_factors (default for a spec: 25, 100, 400) × tiles (int n = n × n tiles per horizon, or
         (tx, ty); default for a spec: 10 × 10): one scene build each (faults: ``fault_tiles``,
         ``fault_coarse_factor``).
-    methods: ``none`` and ``oracle`` always run (they are the references); ``"three_pass"`` is the
-        paper's approximate mode (``conservative=False``; its rows also carry the error predictor's
-        ``tiles_at_risk``, ``predicted_max_missing_pixels`` and ``missed_not_at_risk``, the missed
-        tiles the predictor called safe, from an extra untimed render); add ``"three_pass_cons"``
-        for the conservative mode and ``"horizon"`` for CPU horizon culling; leave out
-        ``"three_pass"`` to time only the references.
+    methods: names from :data:`geocull.CULLING_MODES` or ``"three_pass_cons"`` (others are an
+        InputError); ``none`` and ``oracle`` always run (they are the references); ``"three_pass"``
+        is the paper's approximate mode (``conservative=False``; its rows also carry the error
+        predictor's ``tiles_at_risk``, ``predicted_max_missing_pixels`` and ``missed_not_at_risk``,
+        the missed tiles the predictor called safe, from an extra untimed render);
+        ``"three_pass_cons"`` is the conservative mode; add ``"horizon"`` or ``"frustum"`` for the
+        CPU cullers; leave out ``"three_pass"`` to time only the references. Every sequence
+        argument may be any iterable (a generator too); each is read once.
     repeats: timed rounds after the warm-up round (times are the minimum; ``median_ms`` too).
     renderer: a ``geocull.Renderer`` to reuse (its size wins over width/height).
 
@@ -254,7 +275,19 @@ def sweep(
 
     say = _progress_fn(progress)
     repeats = max(1, int(repeats))
-    methods = tuple(methods)
+    # Every iterable argument is read once, here: a generator consumed by a check would otherwise
+    # leave nothing for the loops (and silently drop their runs).
+    methods = tuple(_values(methods, "methods"))
+    valid = (*gc.CULLING_MODES, "three_pass_cons")
+    unknown = [m for m in methods if m not in valid]
+    if unknown:
+        raise InputError(f"methods: unknown method(s) {', '.join(map(repr, unknown))}; valid: {', '.join(valid)}")
+    thresholds = _values(thresholds, "thresholds")
+    prepass_scales = _values(prepass_scales, "prepass_scales")
+    if coarse_factors is not None:
+        coarse_factors = _values(coarse_factors, "coarse_factors")
+    if tiles is not None:
+        tiles = _values(tiles, "tiles")
     is_spec = isinstance(scene_or_spec, SceneSpec)
     if is_spec:
         spec = scene_or_spec
@@ -272,7 +305,7 @@ def sweep(
             raise InputError(
                 f"scene_or_spec: expected a SceneSpec or geocull.Scene, got {type(scene_or_spec).__name__}"
             )
-    if not list(thresholds) or not list(prepass_scales):
+    if not thresholds or not prepass_scales:
         raise InputError("thresholds, prepass_scales: need at least one value each")
 
     if renderer is None:

@@ -79,6 +79,7 @@ class IsoStats(TypedDict):
     surface_ms: float  # ms, extract_ms + draw_ms
     total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back excluded
     readback_ms: float  # ms, wall time to copy image and depth back
+    cache_bytes: int  # bytes the renderer's isosurface caches hold after the frame (<= its iso_cache_budget)
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

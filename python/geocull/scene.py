@@ -35,6 +35,40 @@ class Scene:
     def __init__(self) -> None:
         self._s = _geocull.Scene()
 
+    @classmethod
+    def _wrap(cls, inner: _geocull.Scene) -> Scene:
+        s = cls.__new__(cls)
+        s._s = inner
+        return s
+
+    def copy(self) -> Scene:
+        """An independent copy: the same objects (ids, names, tiles, colours, visibility, offsets)
+        in a new scene; editing either leaves the other as it is. ``copy.copy`` and
+        ``copy.deepcopy`` do the same."""
+        return Scene._wrap(self._s.copy())
+
+    def __copy__(self) -> Scene:
+        return self.copy()
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Scene:
+        return self.copy()
+
+    def to_bytes(self) -> bytes:
+        """The scene as bytes (a versioned little-endian layout of its objects and their tiles, as
+        stored), for files and other processes; :meth:`from_bytes` reads them. Pickling uses it."""
+        return self._s.to_bytes()
+
+    @staticmethod
+    def from_bytes(data: bytes) -> Scene:
+        """A scene from :meth:`to_bytes`' bytes: it renders exactly the same images (InputError
+        naming ``data`` if they are damaged or not a geocull scene)."""
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise InputError(f"data: expected bytes, got {type(data).__name__}")
+        return Scene._wrap(_geocull.Scene.from_bytes(bytes(data)))
+
+    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+        return (Scene.from_bytes, (self.to_bytes(),))
+
     def add_heightfield(
         self,
         z: Any,
@@ -48,20 +82,22 @@ class Scene:
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
-        z: (ny, nx) array of heights (metres); x runs along columns, y along rows. NaN, or samples
-            equal to ``null_value`` (e.g. -999.25), are holes: triangles touching them are dropped.
+        z: (ny, nx) array of heights (metres); x runs along columns, y along rows. NaN, masked samples
+            of a ``numpy.ma.MaskedArray`` (e.g. xtgeo's ``surf.values``), and samples equal to
+            ``null_value`` (e.g. -999.25, compared in z's own dtype, so float32 data matches
+            ``float32(null_value)``) are holes: triangles touching them are dropped.
         origin: (x0, y0) world position of ``z[0, 0]`` (metres).  spacing: (dx, dy) > 0 sample
             spacing (metres), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy).
         tiles: (tx, ty) tiles along x and y (each at least one cell wide); tiles share border samples.
         coarse_factor: >= 1; the coarse proxy of each tile has about 1/coarse_factor of its triangles.
         name: an optional label.  color: (r, g, b) in [0, 1].  Returns the object id.
         """
-        za = cv.float_array(z, "z", 2)
+        nv = None if null_value is None else cv.number(null_value, "null_value")
+        za = cv.heights(z, nv)
         o = cv.vec2(origin, "origin")
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
-        nv = None if null_value is None else cv.number(null_value, "null_value")
         return self._s.add_heightfield(
             za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv
         )
@@ -78,12 +114,13 @@ class Scene:
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
-        vertices: (n, 3) world coordinates (metres, finite).  faces: (m, 3) integer indices in [0, n),
+        vertices: (n, 3) world coordinates (metres, finite; a masked element of a
+        ``numpy.ma.MaskedArray`` is an InputError).  faces: (m, 3) integer indices in [0, n),
         one row per triangle.  kind: a label ("fault", "mesh", ...).  tiles: None = one tile, k = about
         k spatially coherent clusters.  coarse_factor, name, color: as for :meth:`add_heightfield`.
         Returns the object id.
         """
-        v = cv.float_array(vertices, "vertices", 2, 3)
+        v = cv.vertices(vertices)
         f = cv.int_array(faces, "faces", 2, 3)
         if f.dtype.kind == "u" and f.size and f.max() > np.iinfo(np.int64).max:
             raise InputError("faces: index too large")

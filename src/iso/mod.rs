@@ -16,6 +16,9 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::error::{ensure, input_err, Result};
+use crate::scene::serial::{Reader, Writer};
+
+const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
 pub mod octree;
 mod passes;
@@ -26,9 +29,10 @@ pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
 pub use tetra::{extract, extract_nodes, PatchCache, SurfacePatch};
 
 /// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
-/// address from being reused) and its geometry.
+/// address from being reused), its value offset and its geometry.
 pub(crate) struct VolumeId {
     values: std::sync::Weak<[f32]>,
+    offset: u64,
     dims: [usize; 3],
     origin: [f64; 3],
     spacing: [f64; 3],
@@ -36,10 +40,17 @@ pub(crate) struct VolumeId {
 
 impl VolumeId {
     pub(crate) fn of(v: &Volume) -> Self {
-        Self { values: Arc::downgrade(&v.values), dims: [v.nx, v.ny, v.nz], origin: v.origin, spacing: v.spacing }
+        Self {
+            values: Arc::downgrade(&v.values),
+            offset: v.offset.to_bits(),
+            dims: [v.nx, v.ny, v.nz],
+            origin: v.origin,
+            spacing: v.spacing,
+        }
     }
     pub(crate) fn matches(&self, v: &Volume) -> bool {
         std::ptr::eq(self.values.as_ptr() as *const f32, Arc::as_ptr(&v.values) as *const f32)
+            && self.offset == v.offset.to_bits()
             && self.dims == [v.nx, v.ny, v.nz]
             && self.origin == v.origin
             && self.spacing == v.spacing
@@ -51,9 +62,20 @@ impl VolumeId {
 /// `values` is indexed `values[(k*ny + j)*nx + i]`, where `k` is the z index,
 /// `j` the y index and `i` the x index. Sample `(i,j,k)` sits at world
 /// position `origin + (i,j,k) * spacing`. NaN samples mean "no data".
+///
+/// **Value offset.** The samples are stored as f32 *residuals* about an f64 `offset`: sample
+/// value = `offset + values[..]`. For f64 input ([`Volume::from_f64`]) the offset is the midrange
+/// of the finite samples, so values such as 1e8 ± 1 keep their differences (f32 alone cannot tell
+/// 1e8 from 1e8 + 1); f32 input is stored as is (offset 0). Everything inside the iso module (the
+/// octree's min/max, the extraction, the cache keys) works on residuals; isovalues enter through
+/// [`Volume::residual`] and values leave through [`Volume::value`], so every value a user sees is
+/// in the volume's own units.
 #[derive(Clone, Debug)]
 pub struct Volume {
+    /// Residuals `value - offset` (NaN = no data).
     pub values: Arc<[f32]>,
+    /// The f64 value every residual is relative to.
+    pub offset: f64,
     pub nx: usize,
     pub ny: usize,
     pub nz: usize,
@@ -89,7 +111,105 @@ impl Volume {
                 format!("component {i} is {d}; expected a finite number > 0")
             })?;
         }
-        Ok(Volume { values, nx, ny, nz, origin, spacing })
+        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing })
+    }
+
+    /// A volume of f32 residuals about `offset` (checked as by [`Volume::new`]; `offset` finite).
+    pub fn with_offset(
+        values: Arc<[f32]>,
+        offset: f64,
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+    ) -> Result<Self> {
+        ensure(offset.is_finite(), "offset", || format!("offset is {offset}; expected a finite number"))?;
+        Ok(Volume { offset, ..Volume::new(values, dims, origin, spacing)? })
+    }
+
+    /// A volume of f64 samples, stored as f32 residuals about the midrange of the finite samples
+    /// (0 when there are none). Errors name `values[k, j, i]` when a sample is infinite or its
+    /// residual exceeds the f32 range (a value range wider than about 6.8e38).
+    pub fn from_f64(values: &[f64], dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3]) -> Result<Self> {
+        let (lo, hi) = values
+            .par_iter()
+            .filter(|v| v.is_finite())
+            .fold(|| (f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)))
+            .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)));
+        let offset = if lo <= hi { lo * 0.5 + hi * 0.5 } else { 0.0 };
+        let residuals: Vec<f32> = values.par_iter().map(|&v| (v - offset) as f32).collect();
+        let (nx, ny) = (dims.0, dims.1);
+        if let Some(k) = residuals.par_iter().position_first(|r| r.is_infinite()) {
+            let (i, j, kk) = (k % nx.max(1), (k / nx.max(1)) % ny.max(1), k / (nx * ny).max(1));
+            let v = values[k];
+            return Err(input_err(
+                "values",
+                format!(
+                    "values[{kk}, {j}, {i}] is {}; {}",
+                    crate::error::num(v),
+                    if v.is_infinite() {
+                        "use NaN for no data".to_string()
+                    } else {
+                        "the volume's value range does not fit float32 even about its midrange".to_string()
+                    }
+                ),
+            ));
+        }
+        Self::with_offset(residuals.into(), offset, dims, origin, spacing)
+    }
+
+    /// The residual (f32, relative to [`Volume::offset`]) of a value in the volume's units, as the
+    /// octree and the extraction use it. Errors name `arg` when the value is not finite or its
+    /// residual is beyond the f32 range.
+    pub fn residual(&self, value: f64, arg: &str) -> Result<f32> {
+        let r = (value - self.offset) as f32;
+        ensure(value.is_finite() && r.is_finite(), arg, || {
+            if value.is_finite() {
+                format!(
+                    "{arg} is {}; it must lie within the float32 range of the volume's values, offset {}",
+                    crate::error::num(value),
+                    crate::error::num(self.offset)
+                )
+            } else {
+                format!("{arg} is {value}; expected a finite number")
+            }
+        })?;
+        Ok(r)
+    }
+
+    /// The volume as bytes: magic `b"GCVOLUM\0"`, version u32 (1), then little-endian
+    /// nx, ny, nz (u64), origin, spacing (f64 x 3), offset (f64) and the residuals (u64 count,
+    /// f32 each); [`Volume::from_bytes`] reads them back.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer(Vec::with_capacity(96 + 4 * self.values.len()));
+        w.bytes(VOLUME_MAGIC);
+        w.u32(1);
+        for n in [self.nx, self.ny, self.nz] {
+            w.u64(n as u64);
+        }
+        for v in self.origin.iter().chain(&self.spacing) {
+            w.f64(*v);
+        }
+        w.f64(self.offset);
+        w.f32s(&self.values);
+        w.0
+    }
+
+    /// A volume from [`Volume::to_bytes`]'s bytes (checked as by [`Volume::with_offset`]; a
+    /// damaged or foreign buffer is an InputError naming `data`).
+    pub fn from_bytes(data: &[u8]) -> Result<Self> {
+        let mut r = Reader::new(data, "data");
+        r.header(VOLUME_MAGIC, "volume", 1)?;
+        let dims = (r.usize()?, r.usize()?, r.usize()?);
+        let (origin, spacing, offset) = (r.f64x3()?, r.f64x3()?, r.f64()?);
+        let values = r.f32s()?;
+        r.finish()?;
+        Self::with_offset(values.into(), offset, dims, origin, spacing)
+    }
+
+    /// A residual (an octree min/max, a stored sample) in the volume's units.
+    #[inline]
+    pub fn value(&self, residual: f32) -> f64 {
+        residual as f64 + self.offset
     }
 
     /// Linear index of sample `(i,j,k)`.
@@ -176,6 +296,7 @@ pub fn sphere_field(n: usize, radius: f64) -> Volume {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     #[test]
     fn volume_new_validates() {
@@ -198,6 +319,54 @@ mod tests {
         let (lo, hi) = v.bounds();
         assert_eq!(lo, [1.0, 2.0, 3.0]);
         assert_eq!(hi, [1.5, 4.0, 9.0]);
+    }
+
+    #[test]
+    fn f64_values_keep_their_precision_about_the_offset() {
+        // 1e8 +- 1: as plain f32 every sample would be 1e8 and no isosurface at 1e8 would exist.
+        let n = 9;
+        let vals: Vec<f64> = (0..n * n * n).map(|k| 1e8 + ((k % n) as f64 - 4.0) / 4.0).collect();
+        let v = Volume::from_f64(&vals, (n, n, n), [0.0; 3], [1.0; 3]).unwrap();
+        assert_eq!(v.offset, 1e8);
+        assert_eq!(v.get(0, 0, 0), -1.0);
+        assert_eq!(v.value(v.get(8, 0, 0)), 1e8 + 1.0);
+        assert_eq!(v.residual(1e8 + 0.5, "isovalue").unwrap(), 0.5);
+        let shifted =
+            Volume::from_f64(&vals.iter().map(|x| x - 1e8).collect::<Vec<_>>(), (n, n, n), [0.0; 3], [1.0; 3]).unwrap();
+        let a = super::tetra::extract(&v, v.residual(1e8, "w").unwrap(), [0; 3], [8; 3]);
+        let b = super::tetra::extract(&shifted, shifted.residual(0.0, "w").unwrap(), [0; 3], [8; 3]);
+        assert!(a.triangle_count() > 0);
+        assert_eq!(a, b);
+        let t = MinMaxOctree::build(&v);
+        assert_eq!((v.value(t.root().min), v.value(t.root().max)), (1e8 - 1.0, 1e8 + 1.0));
+        // errors name the argument
+        assert!(v.residual(f64::NAN, "isovalue").unwrap_err().to_string().starts_with("isovalue"));
+        assert!(v.residual(1e300, "isovalue").unwrap_err().to_string().starts_with("isovalue"));
+        let mut bad = vals.clone();
+        bad[5] = f64::INFINITY;
+        let e = Volume::from_f64(&bad, (n, n, n), [0.0; 3], [1.0; 3]).unwrap_err().to_string();
+        assert!(e.starts_with("values[0, 0, 5]"), "{e}");
+        bad[5] = -3e38;
+        bad[6] = 3e38; // each fits f32, their range about the midrange (0) too
+        assert!(Volume::from_f64(&bad, (n, n, n), [0.0; 3], [1.0; 3]).is_ok());
+        bad[6] = 1e300;
+        let e = Volume::from_f64(&bad, (n, n, n), [0.0; 3], [1.0; 3]).unwrap_err().to_string();
+        assert!(e.starts_with("values[0, 0, "), "{e}");
+    }
+
+    #[test]
+    fn bytes_round_trip() {
+        let vals: Vec<f64> = (0..60).map(|k| 1e8 + k as f64 * 0.25 + if k == 7 { f64::NAN } else { 0.0 }).collect();
+        let v = Volume::from_f64(&vals, (3, 4, 5), [1.0, 2.0, 3.0], [0.5, 1.0, 2.0]).unwrap();
+        let w = Volume::from_bytes(&v.to_bytes()).unwrap();
+        assert_eq!((w.offset, w.origin, w.spacing, (w.nx, w.ny, w.nz)), (v.offset, v.origin, v.spacing, (3, 4, 5)));
+        assert_eq!(
+            w.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            v.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        let b = v.to_bytes();
+        assert!(Volume::from_bytes(&b[..b.len() - 2]).unwrap_err().to_string().starts_with("data"));
+        assert!(Volume::from_bytes(&Scene::new().to_bytes()).unwrap_err().to_string().contains("magic"));
     }
 
     #[test]

@@ -4,14 +4,26 @@
 //! `D = ceil(log2(max cells per axis))`, depth 0 is the root covering the
 //! padded cube of `2^D` cells per side and a node at depth `d` covers a block of
 //! `2^(D-d)` cells per side (depth `D` = single cells). Only nodes that
-//! intersect the real volume are stored; their cell ranges are clamped to it.
+//! intersect the real volume exist; their cell ranges are clamped to it.
+//!
+//! **Compact storage.** Min/max are stored for depths `0..=B` only, where `B = D - 3`
+//! ([`BRICK_LEVELS`]): the finest stored nodes are bricks of 8³ cells, so the pyramid has
+//! about (n/8)³ · 8/7 entries of 8 bytes (about 0.02 bytes per sample; single-cell leaves cost
+//! 9 bytes per sample, twice a float32 volume). The nodes of the three finer depths (4³, 2³ and
+//! single cells, at most 125 samples each) are answered by scanning the volume's samples, which
+//! the tree shares (`Arc`). The public numbering is unchanged: depth `D` = single cells.
 //!
 //! NaN samples carry no surface: they are skipped in min/max, and a node whose
 //! samples are all NaN gets `min = +inf, max = -inf` ([`Class::Empty`]).
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
 use super::Volume;
+
+/// Depths below the finest stored level, answered by scanning samples: bricks of 2^3 = 8 cells.
+pub const BRICK_LEVELS: u32 = 3;
 
 /// Position of an isovalue relative to a node's value range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -105,14 +117,29 @@ impl Level {
 }
 
 /// Min/max octree over cells; see the module docs.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct MinMaxOctree {
     depth: u32,
     cells: [u32; 3],
     origin: [f64; 3],
     spacing: [f64; 3],
-    /// `levels[d]` holds depth `d`.
+    /// `levels[d]` holds depth `d`, for `d <= depth - BRICK_LEVELS` (at least the root).
     levels: Vec<Level>,
+    /// The volume's samples (shared), for the depths finer than the stored ones.
+    values: Arc<[f32]>,
+    /// Samples per axis.
+    samples: [usize; 3],
+}
+
+impl std::fmt::Debug for MinMaxOctree {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MinMaxOctree")
+            .field("depth", &self.depth)
+            .field("cells", &self.cells)
+            .field("stored_depths", &self.levels.len())
+            .field("heap_bytes", &self.heap_bytes())
+            .finish()
+    }
 }
 
 #[inline]
@@ -134,50 +161,71 @@ fn nan_max(a: f32, b: f32) -> f32 {
     }
 }
 
+/// Min/max of the non-NaN samples `lo..=hi` (per axis, sample indices) of a volume with `samples`
+/// samples per axis; `(+inf, -inf)` when all are NaN.
+fn scan(v: &[f32], samples: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> (f32, f32) {
+    let (nx, ny) = (samples[0], samples[1]);
+    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+    for k in lo[2]..=hi[2] {
+        for j in lo[1]..=hi[1] {
+            let row = (k * ny + j) * nx;
+            for &x in &v[row + lo[0]..=row + hi[0]] {
+                mn = nan_min(mn, x);
+                mx = nan_max(mx, x);
+            }
+        }
+    }
+    (mn, mx)
+}
+
 impl MinMaxOctree {
-    /// Builds the octree in parallel (rayon). Leaves are single cells.
+    /// Builds the octree in parallel (rayon): the finest stored level (bricks of 8³ cells) by
+    /// scanning the samples, the coarser ones by 2×2×2 reduction.
     pub fn build(vol: &Volume) -> Self {
         let cells = [(vol.nx - 1) as u32, (vol.ny - 1) as u32, (vol.nz - 1) as u32];
         let m = *cells.iter().max().unwrap();
         let depth = if m <= 1 { 0 } else { 32 - (m - 1).leading_zeros() };
+        let finest = depth.saturating_sub(BRICK_LEVELS);
+        let samples = [vol.nx, vol.ny, vol.nz];
 
-        // Leaf level: min/max over the 8 corners of each cell.
-        let leaf = {
-            let dims = cells;
-            let (cx, cy, cz) = (dims[0] as usize, dims[1] as usize, dims[2] as usize);
-            let n = cx * cy * cz;
+        // Finest stored level: min/max over the samples of each brick of s³ cells.
+        let bricks = {
+            let s = 1usize << (depth - finest);
+            let dims = [0, 1, 2].map(|a| (cells[a] as usize).div_ceil(s).max(1) as u32);
+            let (bx, by) = (dims[0] as usize, dims[1] as usize);
+            let n = bx * by * dims[2] as usize;
             let mut min = vec![f32::INFINITY; n];
             let mut max = vec![f32::NEG_INFINITY; n];
-            let (nx, ny) = (vol.nx, vol.ny);
             let v = &vol.values[..];
-            min.par_chunks_mut(cx * cy).zip(max.par_chunks_mut(cx * cy)).enumerate().for_each(|(k, (mn, mx))| {
-                // Per row, fold the 4 sample rows (j,k),(j+1,k),(j,k+1),(j+1,k+1)
-                // into per-sample column min/max, then pair neighbours.
-                let mut colmin = vec![f32::INFINITY; nx];
-                let mut colmax = vec![f32::NEG_INFINITY; nx];
-                for j in 0..cy {
-                    colmin.fill(f32::INFINITY);
-                    colmax.fill(f32::NEG_INFINITY);
-                    for (dj, dk) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let base = ((k + dk) * ny + j + dj) * nx;
-                        let row = &v[base..base + nx];
-                        for i in 0..nx {
-                            colmin[i] = nan_min(colmin[i], row[i]);
-                            colmax[i] = nan_max(colmax[i], row[i]);
+            let (nx, ny) = (vol.nx, vol.ny);
+            // Cells b*s .. (b+1)*s of axis a (clamped), i.e. samples b*s ..= that end.
+            let span = |b: usize, a: usize| (b * s, ((b + 1) * s).min(cells[a] as usize));
+            min.par_chunks_mut(bx * by).zip(max.par_chunks_mut(bx * by)).enumerate().for_each(|(bz, (mn, mx))| {
+                let (z0, z1) = span(bz, 2);
+                for byi in 0..by {
+                    let (y0, y1) = span(byi, 1);
+                    let (mn, mx) = (&mut mn[byi * bx..(byi + 1) * bx], &mut mx[byi * bx..(byi + 1) * bx]);
+                    for k in z0..=z1 {
+                        for j in y0..=y1 {
+                            let row = &v[(k * ny + j) * nx..(k * ny + j + 1) * nx];
+                            for bxi in 0..bx {
+                                let (x0, x1) = span(bxi, 0);
+                                let (mut lo, mut hi) = (mn[bxi], mx[bxi]);
+                                for &x in &row[x0..=x1] {
+                                    lo = nan_min(lo, x);
+                                    hi = nan_max(hi, x);
+                                }
+                                (mn[bxi], mx[bxi]) = (lo, hi);
+                            }
                         }
-                    }
-                    let o = j * cx;
-                    for i in 0..cx {
-                        mn[o + i] = colmin[i].min(colmin[i + 1]);
-                        mx[o + i] = colmax[i].max(colmax[i + 1]);
                     }
                 }
             });
             Level { dims, min, max }
         };
 
-        let mut levels = vec![leaf];
-        for d in (0..depth).rev() {
+        let mut levels = vec![bricks];
+        for d in (0..finest).rev() {
             let child = levels.last().unwrap();
             let s = 1u64 << (depth - d);
             let dims = [0, 1, 2].map(|a| (cells[a] as u64).div_ceil(s).max(1) as u32);
@@ -210,7 +258,25 @@ impl MinMaxOctree {
         }
         levels.reverse();
 
-        MinMaxOctree { depth, cells, origin: vol.origin, spacing: vol.spacing, levels }
+        MinMaxOctree {
+            depth,
+            cells,
+            origin: vol.origin,
+            spacing: vol.spacing,
+            levels,
+            values: vol.values.clone(),
+            samples,
+        }
+    }
+
+    /// Host bytes of the stored min/max pyramid (the shared samples not counted).
+    pub fn heap_bytes(&self) -> usize {
+        self.levels.iter().map(|l| (l.min.capacity() + l.max.capacity()) * 4).sum()
+    }
+
+    /// The finest depth whose min/max are stored (finer ones are scanned from the samples).
+    pub fn stored_depth(&self) -> u32 {
+        self.levels.len() as u32 - 1
     }
 
     /// `D`: the depth of the single-cell leaves (root is depth 0).
@@ -225,7 +291,10 @@ impl MinMaxOctree {
 
     /// Nodes per axis at `depth` (only those intersecting the volume).
     pub fn dims_at_depth(&self, depth: u32) -> Option<[u32; 3]> {
-        self.levels.get(depth as usize).map(|l| l.dims)
+        (depth <= self.depth).then(|| {
+            let s = 1u64 << (self.depth - depth);
+            [0, 1, 2].map(|a| (self.cells[a] as u64).div_ceil(s).max(1) as u32)
+        })
     }
 
     /// The root node (depth 0).
@@ -234,31 +303,26 @@ impl MinMaxOctree {
     }
 
     fn make(&self, depth: u32, ix: u32, iy: u32, iz: u32) -> NodeInfo {
-        let l = &self.levels[depth as usize];
-        let i = l.idx(ix, iy, iz);
         let s = 1u64 << (self.depth - depth);
         let c = [ix, iy, iz];
         let cell_lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as u32);
         let cell_hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as u32);
+        let (min, max) = match self.levels.get(depth as usize) {
+            Some(l) => {
+                let i = l.idx(ix, iy, iz);
+                (l.min[i], l.max[i])
+            }
+            // Finer than the stored bricks: at most 5³ samples (cells lo..hi span samples lo..=hi).
+            None => scan(&self.values, self.samples, cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
+        };
         let pos = |p: [u32; 3]| [0, 1, 2].map(|a| self.origin[a] + p[a] as f64 * self.spacing[a]);
-        NodeInfo {
-            depth,
-            ix,
-            iy,
-            iz,
-            min: l.min[i],
-            max: l.max[i],
-            cell_lo,
-            cell_hi,
-            bbox_min: pos(cell_lo),
-            bbox_max: pos(cell_hi),
-        }
+        NodeInfo { depth, ix, iy, iz, min, max, cell_lo, cell_hi, bbox_min: pos(cell_lo), bbox_max: pos(cell_hi) }
     }
 
     /// The node at `depth` with index `(ix,iy,iz)`, if it intersects the volume.
     pub fn node(&self, depth: u32, (ix, iy, iz): (u32, u32, u32)) -> Option<NodeInfo> {
-        let l = self.levels.get(depth as usize)?;
-        if ix < l.dims[0] && iy < l.dims[1] && iz < l.dims[2] {
+        let dims = self.dims_at_depth(depth)?;
+        if ix < dims[0] && iy < dims[1] && iz < dims[2] {
             Some(self.make(depth, ix, iy, iz))
         } else {
             None
@@ -268,18 +332,13 @@ impl MinMaxOctree {
     /// All nodes at `depth` that intersect the volume (x fastest, then y, z).
     /// Empty when `depth > max_depth()`.
     pub fn nodes_at_depth(&self, depth: u32) -> Vec<NodeInfo> {
-        let Some(l) = self.levels.get(depth as usize) else {
+        let Some(dims) = self.dims_at_depth(depth) else {
             return Vec::new();
         };
-        let mut out = Vec::with_capacity(l.min.len());
-        for z in 0..l.dims[2] {
-            for y in 0..l.dims[1] {
-                for x in 0..l.dims[0] {
-                    out.push(self.make(depth, x, y, z));
-                }
-            }
-        }
-        out
+        (0..dims[2])
+            .into_par_iter()
+            .flat_map_iter(|z| (0..dims[1]).flat_map(move |y| (0..dims[0]).map(move |x| self.make(depth, x, y, z))))
+            .collect()
     }
 
     /// Children of `n` (up to 8, only those intersecting the volume);
@@ -289,13 +348,13 @@ impl MinMaxOctree {
             return Vec::new();
         }
         let d = n.depth + 1;
-        let l = &self.levels[d as usize];
+        let dims = self.dims_at_depth(d).expect("d <= depth");
         let mut out = Vec::with_capacity(8);
         for dz in 0..2 {
             for dy in 0..2 {
                 for dx in 0..2 {
                     let (x, y, z) = (2 * n.ix + dx, 2 * n.iy + dy, 2 * n.iz + dz);
-                    if x < l.dims[0] && y < l.dims[1] && z < l.dims[2] {
+                    if x < dims[0] && y < dims[1] && z < dims[2] {
                         out.push(self.make(d, x, y, z));
                     }
                 }
@@ -327,7 +386,6 @@ impl MinMaxOctree {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::Arc;
 
     use crate::TestRng as Lcg;
 
@@ -410,6 +468,21 @@ mod tests {
             assert_eq!(root.bbox_max, vol.bounds().1);
             assert!(tree.node(tree.max_depth() + 1, (0, 0, 0)).is_none());
             assert!(tree.nodes_at_depth(tree.max_depth() + 1).is_empty());
+        }
+    }
+
+    #[test]
+    fn pyramid_is_compact_and_finer_depths_match_the_samples() {
+        let vol = super::super::pesco_synthetic(129);
+        let t = MinMaxOctree::build(&vol);
+        assert_eq!((t.max_depth(), t.stored_depth()), (7, 4));
+        // 16³ bricks and their ancestors, 2 floats each: about 0.02 bytes per sample
+        let per_sample = t.heap_bytes() as f64 / vol.values.len() as f64;
+        assert!(per_sample < 0.025, "{per_sample}");
+        for d in t.stored_depth() + 1..=t.max_depth() {
+            for n in t.nodes_at_depth(d).iter().step_by(97) {
+                assert_eq!((n.min, n.max), brute(&vol, n.cell_lo, n.cell_hi), "{n:?}");
+            }
         }
     }
 

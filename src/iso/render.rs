@@ -55,7 +55,7 @@ use wgpu::util::DeviceExt;
 
 use super::octree::{Class, MinMaxOctree, NodeInfo};
 use super::passes::{draw_map, draw_surface, test_nodes, BoxInstance, Globals, IsoPasses, Occluders, Space, Targets};
-use super::tetra::{PatchCache, SurfacePatch};
+use super::tetra::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
 use crate::error::{ensure, input_err, Result};
@@ -100,6 +100,9 @@ pub struct IsoOptions {
     pub use_cache: bool,
     /// Also read back the occlusion map (as linear depth).
     pub return_map: bool,
+    /// Memory budget of the renderer's isosurface caches in bytes (patches, and at most a quarter
+    /// of it for the straddling-node lists); least recently used entries are dropped beyond it.
+    pub cache_budget: usize,
 }
 
 impl Default for IsoOptions {
@@ -111,6 +114,7 @@ impl Default for IsoOptions {
             color: [0.85, 0.72, 0.45],
             use_cache: true,
             return_map: false,
+            cache_budget: DEFAULT_CACHE_BUDGET,
         }
     }
 }
@@ -150,6 +154,9 @@ pub struct IsoStats {
     /// Whole frame, from the call to the GPU finishing the image (no read-back).
     pub total_ms: f64,
     pub readback_ms: f64,
+    /// Bytes held by the renderer's isosurface caches after the frame (patches and straddling-node
+    /// lists), at most `IsoOptions::cache_budget`.
+    pub cache_bytes: u64,
 }
 
 /// One rendered isosurface frame as host arrays.
@@ -211,17 +218,28 @@ impl IsoRenderer {
         }
     }
 
-    fn straddling(&mut self, tree: &MinMaxOctree, w: f32, depth: u32) -> Arc<Vec<NodeInfo>> {
+    /// The straddling nodes of `(w, depth)`, cached most recently used last: at most 32 lists
+    /// and `budget` bytes (the oldest go first; the caller keeps its own reference).
+    fn straddling(&mut self, tree: &MinMaxOctree, w: f32, depth: u32, budget: usize) -> Arc<Vec<NodeInfo>> {
         let key = (norm_bits(w), depth);
-        if let Some((_, v)) = self.straddling.iter().find(|(k, _)| *k == key) {
-            return v.clone();
-        }
-        let v = Arc::new(tree.straddling_at_depth(w, depth));
-        if self.straddling.len() > 32 {
-            self.straddling.clear();
-        }
+        let v = match self.straddling.iter().position(|(k, _)| *k == key) {
+            Some(i) => self.straddling.remove(i).1,
+            None => Arc::new(tree.straddling_at_depth(w, depth)),
+        };
         self.straddling.push((key, v.clone()));
+        while !self.straddling.is_empty() && (self.straddling.len() > 32 || self.straddling_bytes() > budget) {
+            self.straddling.remove(0);
+        }
         v
+    }
+
+    fn straddling_bytes(&self) -> usize {
+        self.straddling.iter().map(|(_, v)| v.capacity() * std::mem::size_of::<NodeInfo>()).sum()
+    }
+
+    /// Bytes held by the caches whose size grows with use: patches and straddling-node lists.
+    pub fn cache_bytes(&self) -> usize {
+        self.patches.bytes() + self.straddling_bytes()
     }
 
     /// Drops the cached patches, occluders and node lists (the pipelines stay).
@@ -290,8 +308,8 @@ fn reaches_near_plane(fc: &FrameCamera, b: &BoxInstance) -> bool {
 }
 
 impl IsoRenderer {
-    /// Renders the isosurface `vol = w` seen by `camera` into `width` × `height` targets of its
-    /// own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
+    /// Renders the isosurface `vol = isovalue` (in the volume's units, f64) seen by `camera` into
+    /// `width` × `height` targets of its own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
     /// does.
     #[allow(clippy::too_many_arguments)]
     pub fn render(
@@ -301,11 +319,12 @@ impl IsoRenderer {
         height: u32,
         vol: &Volume,
         tree: &MinMaxOctree,
-        w: f32,
+        isovalue: f64,
         camera: &Camera,
         opts: &IsoOptions,
     ) -> Result<IsoOutput> {
-        ensure(w.is_finite(), "isovalue", || format!("isovalue is {w}; expected a finite number"))?;
+        // In the volume's units; from here on everything is a residual about `vol.offset`.
+        let w = vol.residual(isovalue, "isovalue")?;
         ensure(opts.color.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)), "color", || {
             format!("color is {:?}; expected (r, g, b) in [0, 1]", opts.color)
         })?;
@@ -342,7 +361,10 @@ impl IsoRenderer {
         let iso: &mut IsoRenderer = self;
         iso.bind_volume(vol);
         Targets::ensure(&mut iso.targets, d, width, height);
-        let candidates = iso.straddling(tree, w, cull_depth);
+        // A quarter of the budget for node lists, the rest for patches.
+        let (list_budget, patch_budget) = (opts.cache_budget / 4, opts.cache_budget - opts.cache_budget / 4);
+        iso.patches.set_budget(patch_budget);
+        let candidates = iso.straddling(tree, w, cull_depth, list_budget);
         let implicit = opts.culling == IsoCulling::Implicit;
         let t_occ = Instant::now();
         if implicit {
@@ -517,6 +539,7 @@ impl IsoRenderer {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }
         stats.readback_ms = t_rb.elapsed().as_secs_f64() * 1e3;
+        stats.cache_bytes = self.cache_bytes() as u64;
         Ok(IsoOutput {
             width,
             height,

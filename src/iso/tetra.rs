@@ -484,17 +484,46 @@ pub fn patch_key(w: f32, node: &NodeInfo) -> PatchKey {
     (w.to_bits(), node.depth, node.ix, node.iy, node.iz)
 }
 
+/// Default memory budget of a [`PatchCache`]: 256 MiB.
+pub const DEFAULT_CACHE_BUDGET: usize = 256 << 20;
+
+/// Host bytes a cached patch holds: its arrays (by capacity), the patch and its map entry.
+pub fn patch_bytes(p: &SurfacePatch) -> usize {
+    std::mem::size_of::<SurfacePatch>()
+        + std::mem::size_of::<(PatchKey, Entry)>()
+        + p.positions.capacity() * std::mem::size_of::<[f64; 3]>()
+        + p.normals.capacity() * std::mem::size_of::<[f32; 3]>()
+        + p.triangles.capacity() * std::mem::size_of::<[u32; 3]>()
+}
+
+struct Entry {
+    patch: Arc<SurfacePatch>,
+    bytes: usize,
+    /// The frame (`PatchCache::tick`) that last used it.
+    used: u64,
+}
+
 /// Extracted patches keyed by `(isovalue bits, depth, ix, iy, iz)`, so later
-/// frames reuse earlier extractions. The cache remembers which volume it was
-/// filled from (the `values` allocation plus geometry) and clears itself when
-/// asked about a different one. Nodes must come from a [`MinMaxOctree`] of
-/// that volume.
+/// frames reuse earlier extractions, within a memory budget: when the patches
+/// held exceed it, the least recently used are dropped (LRU by bytes, see
+/// [`patch_bytes`]) down to 7/8 of the budget, so eviction is rare. The
+/// cache remembers which volume it was filled from (the `values` allocation
+/// plus geometry) and clears itself when asked about a different one. Nodes
+/// must come from a [`MinMaxOctree`] of that volume.
 ///
 /// [`MinMaxOctree`]: super::octree::MinMaxOctree
-#[derive(Default)]
 pub struct PatchCache {
-    map: HashMap<PatchKey, Arc<SurfacePatch>>,
+    map: HashMap<PatchKey, Entry>,
     source: Option<super::VolumeId>,
+    bytes: usize,
+    budget: usize,
+    tick: u64,
+}
+
+impl Default for PatchCache {
+    fn default() -> Self {
+        Self::with_budget(DEFAULT_CACHE_BUDGET)
+    }
 }
 
 impl PatchCache {
@@ -502,17 +531,26 @@ impl PatchCache {
         Self::default()
     }
 
+    /// An empty cache holding at most `budget` bytes of patches.
+    pub fn with_budget(budget: usize) -> Self {
+        Self { map: HashMap::new(), source: None, bytes: 0, budget, tick: 0 }
+    }
+
     fn bind(&mut self, vol: &Volume) {
         if !self.source.as_ref().is_some_and(|s| s.matches(vol)) {
             self.map.clear();
+            self.bytes = 0;
             self.source = Some(super::VolumeId::of(vol));
         }
     }
 
     /// One patch per node, in order: cached ones are shared, missing ones are
-    /// extracted in parallel and inserted.
+    /// extracted in parallel and inserted; then the budget is enforced (the
+    /// returned patches stay valid whatever is evicted).
     pub fn get_or_extract_many(&mut self, vol: &Volume, w: f32, nodes: &[NodeInfo]) -> Vec<Arc<SurfacePatch>> {
         self.bind(vol);
+        self.tick += 1;
+        let tick = self.tick;
         let mut seen = HashSet::new();
         let missing: Vec<&NodeInfo> = nodes
             .iter()
@@ -521,21 +559,77 @@ impl PatchCache {
                 !self.map.contains_key(&k) && seen.insert(k)
             })
             .collect();
-        let fresh: Vec<(PatchKey, Arc<SurfacePatch>)> =
-            missing.par_iter().map(|n| (patch_key(w, n), Arc::new(extract(vol, w, n.cell_lo, n.cell_hi)))).collect();
-        self.map.extend(fresh);
-        nodes.iter().map(|n| self.map[&patch_key(w, n)].clone()).collect()
+        let fresh: Vec<(PatchKey, Arc<SurfacePatch>)> = missing
+            .par_iter()
+            .map(|n| {
+                let mut p = extract(vol, w, n.cell_lo, n.cell_hi);
+                // Kept for later frames: no growth slack (up to half of a Vec's capacity).
+                p.positions.shrink_to_fit();
+                p.normals.shrink_to_fit();
+                p.triangles.shrink_to_fit();
+                (patch_key(w, n), Arc::new(p))
+            })
+            .collect();
+        for (k, patch) in fresh {
+            let bytes = patch_bytes(&patch);
+            self.bytes += bytes;
+            self.map.insert(k, Entry { patch, bytes, used: tick });
+        }
+        let out = nodes
+            .iter()
+            .map(|n| {
+                let e = self.map.get_mut(&patch_key(w, n)).expect("inserted above");
+                e.used = tick;
+                e.patch.clone()
+            })
+            .collect();
+        self.evict();
+        out
+    }
+
+    /// Drops least recently used patches while the cache holds more than its budget (down to 7/8
+    /// of it).
+    fn evict(&mut self) {
+        if self.bytes <= self.budget {
+            return;
+        }
+        let target = self.budget - self.budget / 8;
+        let mut order: Vec<(u64, PatchKey, usize)> = self.map.iter().map(|(k, e)| (e.used, *k, e.bytes)).collect();
+        order.sort_unstable();
+        for (_, k, b) in order {
+            if self.bytes <= target {
+                break;
+            }
+            self.map.remove(&k);
+            self.bytes -= b;
+        }
+    }
+
+    /// Sets the budget (bytes) and evicts down to it.
+    pub fn set_budget(&mut self, budget: usize) {
+        self.budget = budget;
+        self.evict();
+    }
+
+    pub fn budget(&self) -> usize {
+        self.budget
+    }
+
+    /// Bytes of patches held (see [`patch_bytes`]); at most the budget after every call.
+    pub fn bytes(&self) -> usize {
+        self.bytes
     }
 
     /// The cached patch for `(w, node)`, if any.
     pub fn get(&self, w: f32, node: &NodeInfo) -> Option<Arc<SurfacePatch>> {
-        self.map.get(&patch_key(w, node)).cloned()
+        self.map.get(&patch_key(w, node)).map(|e| e.patch.clone())
     }
 
     /// Drops every patch not extracted at isovalue `w`.
     pub fn retain_isovalue(&mut self, w: f32) {
         let bits = if w == 0.0 { 0.0f32 } else { w }.to_bits();
         self.map.retain(|k, _| k.0 == bits);
+        self.bytes = self.map.values().map(|e| e.bytes).sum();
     }
 
     pub fn len(&self) -> usize {
@@ -548,6 +642,7 @@ impl PatchCache {
 
     pub fn clear(&mut self) {
         self.map.clear();
+        self.bytes = 0;
         self.source = None;
     }
 }

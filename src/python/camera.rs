@@ -6,7 +6,7 @@ use numpy::ndarray::Array2;
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 
-#[pyclass(name = "Camera", module = "geocull._geocull", from_py_object)]
+#[pyclass(name = "Camera", module = "geocull._geocull", from_py_object, frozen)]
 #[derive(Clone)]
 pub struct PyCamera {
     pub(crate) inner: Camera,

@@ -3,17 +3,18 @@
 
 use super::camera::PyCamera;
 use super::renderer::PyRenderer;
-use super::{contiguous, run};
+use super::{contiguous, lock, run};
 use crate::error::{input_err, int_in};
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
 use crate::iso::{MinMaxOctree, Volume};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, OnceLock};
 
-#[pyclass(name = "Volume", module = "geocull._geocull")]
+#[pyclass(name = "Volume", module = "geocull._geocull", frozen)]
 pub struct PyVolume {
     pub(crate) inner: Volume,
     tree: OnceLock<Arc<MinMaxOctree>>,
@@ -33,7 +34,7 @@ impl PyVolume {
 #[pymethods]
 impl PyVolume {
     /// values: (nz, ny, nx) C-contiguous float32 or float64 array (copied once into the core's
-    /// float32 buffer, with the GIL released).
+    /// float32 buffer, with the GIL released: float64 as residuals about `offset`).
     #[new]
     fn new(
         py: Python<'_>,
@@ -41,28 +42,35 @@ impl PyVolume {
         origin: (f64, f64, f64),
         spacing: (f64, f64, f64),
     ) -> PyResult<Self> {
-        let (data, shape): (Arc<[f32]>, [usize; 3]) = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
+        let (o, sp) = ([origin.0, origin.1, origin.2], [spacing.0, spacing.1, spacing.2]);
+        let inner = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
             let s = a.shape();
-            let shape = [s[0], s[1], s[2]];
+            let dims = (s[2], s[1], s[0]);
             let sl = contiguous(&a, "values")?;
-            (run(py, move || Ok(Arc::<[f32]>::from(sl)))?, shape)
+            run(py, move || Volume::new(Arc::<[f32]>::from(sl), dims, o, sp))?
         } else if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f64>>() {
+            // f64 samples: f32 residuals about the midrange (see `Volume::from_f64`).
             let s = a.shape();
-            let shape = [s[0], s[1], s[2]];
+            let dims = (s[2], s[1], s[0]);
             let sl = contiguous(&a, "values")?;
-            (run(py, move || Ok(sl.iter().map(|&v| v as f32).collect::<Arc<[f32]>>()))?, shape)
+            run(py, move || Volume::from_f64(sl, dims, o, sp))?
         } else {
             return Err(input_err("values", "expected a 3-D float32 or float64 array").into());
         };
-        let inner = run(py, move || {
-            Volume::new(
-                data,
-                (shape[2], shape[1], shape[0]),
-                [origin.0, origin.1, origin.2],
-                [spacing.0, spacing.1, spacing.2],
-            )
-        })?;
         Ok(Self { inner, tree: OnceLock::new() })
+    }
+
+    /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, residuals).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let v = &self.inner;
+        let b = run(py, move || Ok(v.to_bytes()))?;
+        Ok(PyBytes::new(py, &b))
+    }
+
+    /// A volume from `to_bytes`' bytes.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        run(py, move || Volume::from_bytes(data).map(|inner| Self { inner, tree: OnceLock::new() }))
     }
 
     /// (nz, ny, nx)
@@ -80,13 +88,18 @@ impl PyVolume {
         let s = self.inner.spacing;
         (s[0], s[1], s[2])
     }
+    /// The f64 value the stored float32 residuals are relative to.
+    #[getter]
+    fn offset(&self) -> f64 {
+        self.inner.offset
+    }
     /// Depth of the single-cell leaves of the octree (root = 0); builds the octree if needed.
     fn max_depth(&self, py: Python<'_>) -> PyResult<u32> {
         Ok(self.tree(py)?.max_depth())
     }
 
     /// Octree nodes at `depth`: dict of index (n,3) [ix,iy,iz], bbox_min/bbox_max (n,3) world,
-    /// min/max (n,) float32.
+    /// min/max (n,) float64 in the volume's units.
     fn nodes<'py>(&self, py: Python<'py>, depth: i64) -> PyResult<Bound<'py, PyDict>> {
         let t = self.tree(py)?;
         let depth = int_in(depth, "depth", 0, t.max_depth() as i64)? as u32;
@@ -99,8 +112,16 @@ impl PyVolume {
         d.set_item("index", Array2::from_shape_vec((n, 3), idx).unwrap().into_pyarray(py))?;
         d.set_item("bbox_min", Array2::from_shape_vec((n, 3), lo).unwrap().into_pyarray(py))?;
         d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
-        d.set_item("min", Array1::from_vec(nodes.iter().map(|n| n.min).collect::<Vec<f32>>()).into_pyarray(py))?;
-        d.set_item("max", Array1::from_vec(nodes.iter().map(|n| n.max).collect::<Vec<f32>>()).into_pyarray(py))?;
+        // In the volume's units (residual + offset); +inf / -inf for nodes without data.
+        let v = &self.inner;
+        d.set_item(
+            "min",
+            Array1::from_vec(nodes.iter().map(|n| v.value(n.min)).collect::<Vec<f64>>()).into_pyarray(py),
+        )?;
+        d.set_item(
+            "max",
+            Array1::from_vec(nodes.iter().map(|n| v.value(n.max)).collect::<Vec<f64>>()).into_pyarray(py),
+        )?;
         Ok(d)
     }
 }
@@ -144,6 +165,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("surface_ms", s.surface_ms)?;
     st.set_item("total_ms", s.total_ms)?;
     st.set_item("readback_ms", s.readback_ms)?;
+    st.set_item("cache_bytes", s.cache_bytes)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
@@ -157,7 +179,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
 #[pyo3(signature = (renderer, volume, isovalue, camera, culling, occluder_depth, cull_depth, color, cache, return_map))]
 fn render_isosurface<'py>(
     py: Python<'py>,
-    mut renderer: PyRefMut<'py, PyRenderer>,
+    renderer: PyRef<'py, PyRenderer>,
     volume: PyRef<'py, PyVolume>,
     isovalue: f64,
     camera: PyRef<'py, PyCamera>,
@@ -169,12 +191,10 @@ fn render_isosurface<'py>(
     return_map: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let tree = volume.tree(py)?;
-    let r = &mut renderer.inner;
+    let r = &renderer.inner;
+    let budget = renderer.iso_cache_budget.load(Ordering::Relaxed);
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run(py, move || {
-        crate::error::ensure(isovalue.is_finite() && isovalue.abs() <= f32::MAX as f64, "isovalue", || {
-            format!("isovalue is {isovalue}; expected a finite number within the float32 range")
-        })?;
         let culling = IsoCulling::parse(&culling)?;
         let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
         let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
@@ -185,20 +205,41 @@ fn render_isosurface<'py>(
             color: [color.0 as f32, color.1 as f32, color.2 as f32],
             use_cache: cache,
             return_map,
+            cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
         };
-        r.render_isosurface(v, &tree, isovalue as f32, c, &opts)
+        lock(r).render_isosurface(v, &tree, isovalue, c, &opts)
     })?;
     iso_dict(py, out)
 }
 
 #[pyfunction]
-fn clear_isosurface_cache(mut renderer: PyRefMut<'_, PyRenderer>) {
-    renderer.inner.clear_isosurface_cache();
+fn clear_isosurface_cache(py: Python<'_>, renderer: PyRef<'_, PyRenderer>) -> PyResult<()> {
+    super::with_lock(py, &renderer.inner, |r| {
+        r.clear_isosurface_cache();
+        Ok(())
+    })
+}
+
+/// Sets the memory budget (bytes) of the renderer's isosurface caches; it applies from the next
+/// isosurface frame, which drops least recently used patches beyond it.
+#[pyfunction]
+fn set_isosurface_cache_budget(renderer: PyRef<'_, PyRenderer>, bytes: i64) -> PyResult<()> {
+    let b = int_in(bytes, "bytes", 0, i64::MAX)?;
+    renderer.iso_cache_budget.store(b as u64, Ordering::Relaxed);
+    Ok(())
+}
+
+/// The memory budget (bytes) of the renderer's isosurface caches.
+#[pyfunction]
+fn isosurface_cache_budget(renderer: PyRef<'_, PyRenderer>) -> u64 {
+    renderer.iso_cache_budget.load(Ordering::Relaxed)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyVolume>()?;
     m.add_function(wrap_pyfunction!(render_isosurface, m)?)?;
     m.add_function(wrap_pyfunction!(clear_isosurface_cache, m)?)?;
+    m.add_function(wrap_pyfunction!(set_isosurface_cache_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(isosurface_cache_budget, m)?)?;
     Ok(())
 }

@@ -3,6 +3,10 @@
 //! (`From<Error> for PyErr`) and no panic ever crossing into Python. All value checking lives in
 //! the core; the Python package (python/geocull) only coerces types and shapes before calling in.
 //!
+//! Threads: every class holding mutable core state (Scene, Renderer) keeps it in a `Mutex` and is
+//! a `frozen` pyclass (methods take `&self`); [`with_lock`] takes the lock with the GIL released.
+//! Lock order: a renderer before a scene, never the other way.
+//!
 //! One file per Python class: `scene.rs` (Scene), `camera.rs` (Camera), `renderer.rs` (Renderer
 //! and the frame dict), `iso.rs` (Volume, render_isosurface).
 
@@ -10,6 +14,7 @@ use crate::error::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 mod camera;
 mod iso;
@@ -49,6 +54,23 @@ pub(crate) fn run<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> 
             Err(raise(py, "GeocullError", format!("internal error in geocull (please report): {what}")))
         }
     }
+}
+
+/// Runs `f` on the value behind `m` without the GIL: the lock is taken with the GIL released, so a
+/// second Python thread using the same object waits here (and lets the first one finish, which may
+/// need the GIL to return) instead of failing with PyO3's "Already borrowed". A lock poisoned by a
+/// panic (reported as GeocullError) is taken over: every core method leaves its object whole on error.
+pub(crate) fn with_lock<T: Send, R: Send>(
+    py: Python<'_>,
+    m: &Mutex<T>,
+    f: impl FnOnce(&mut T) -> crate::Result<R> + Send,
+) -> PyResult<R> {
+    run(py, move || f(&mut lock(m)))
+}
+
+/// Locks `m` (call it without the GIL, i.e. inside [`run`]), recovering a poisoned lock.
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// A C-contiguous numpy array's data, or an InputError naming `arg`.

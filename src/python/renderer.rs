@@ -1,8 +1,8 @@
 //! `geocull._geocull.Renderer`: frames as dicts of numpy arrays and stats.
 
 use super::camera::PyCamera;
-use super::run;
 use super::scene::PyScene;
+use super::{lock, run, with_lock};
 use crate::cull::{self, CullOptions, Stat};
 use crate::error::int_in;
 use crate::render::{Lod, RenderOptions, RenderOutput, Renderer};
@@ -10,10 +10,15 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::sync::atomic::AtomicU64;
+use std::sync::Mutex;
 
-#[pyclass(name = "Renderer", module = "geocull._geocull")]
+#[pyclass(name = "Renderer", module = "geocull._geocull", frozen)]
 pub struct PyRenderer {
-    pub(crate) inner: Renderer,
+    /// Locked by every method (see `super::with_lock`), before any scene it draws.
+    pub(crate) inner: Mutex<Renderer>,
+    /// Memory budget of the isosurface caches, bytes (`IsoOptions::cache_budget` of every frame).
+    pub(crate) iso_cache_budget: AtomicU64,
 }
 
 /// Names of the culling strategies `Renderer.render` accepts, from the core's registry.
@@ -66,34 +71,37 @@ impl PyRenderer {
         run(py, move || {
             let max = u32::MAX as i64;
             let (w, h) = (int_in(width, "width", 1, max)? as u32, int_in(height, "height", 1, max)? as u32);
-            Renderer::new(w, h, &backend).map(|inner| Self { inner })
+            Renderer::new(w, h, &backend).map(|r| Self {
+                inner: Mutex::new(r),
+                iso_cache_budget: AtomicU64::new(crate::iso::tetra::DEFAULT_CACHE_BUDGET as u64),
+            })
         })
     }
     #[getter]
-    fn width(&self) -> u32 {
-        self.inner.width()
+    fn width(&self, py: Python<'_>) -> PyResult<u32> {
+        with_lock(py, &self.inner, |r| Ok(r.width()))
     }
     #[getter]
-    fn height(&self) -> u32 {
-        self.inner.height()
+    fn height(&self, py: Python<'_>) -> PyResult<u32> {
+        with_lock(py, &self.inner, |r| Ok(r.height()))
     }
     #[getter]
-    fn adapter_info(&self) -> String {
-        self.inner.adapter_info()
+    fn adapter_info(&self, py: Python<'_>) -> PyResult<String> {
+        with_lock(py, &self.inner, |r| Ok(r.adapter_info()))
     }
     #[getter]
-    fn max_texture_size(&self) -> u32 {
-        self.inner.max_texture_size()
+    fn max_texture_size(&self, py: Python<'_>) -> PyResult<u32> {
+        with_lock(py, &self.inner, |r| Ok(r.max_texture_size()))
     }
     #[getter]
-    fn gpu_bytes(&self) -> u64 {
-        self.inner.gpu_bytes()
+    fn gpu_bytes(&self, py: Python<'_>) -> PyResult<u64> {
+        with_lock(py, &self.inner, |r| Ok(r.gpu_bytes()))
     }
 
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error))]
     fn render<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         scene: PyRef<'py, PyScene>,
         camera: PyRef<'py, PyCamera>,
@@ -105,12 +113,12 @@ impl PyRenderer {
         lod: String,
         max_pixel_error: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let r = &mut self.inner;
-        let (s, c) = (&scene.inner, &camera.inner);
+        let (r, s, c) = (&self.inner, &scene.inner, &camera.inner);
         let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
+        // Renderer first, then the scene (the lock order of every binding).
         let out = run(py, move || {
             let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)? };
-            r.render(s, c, &opts)
+            lock(r).render(&lock(s), c, &opts)
         })?;
         output_dict(py, out)
     }

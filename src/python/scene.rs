@@ -1,32 +1,51 @@
 //! `geocull._geocull.Scene`: objects in, tile table and geometry out.
 
-use super::run;
+use super::{run, with_lock};
 use crate::error::{int_in, object_id};
 use crate::scene::{AddOptions, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
+use std::sync::Mutex;
 
 /// Largest tile count accepted (the core checks it against the grid too).
 const MAX_INT: i64 = i32::MAX as i64;
 
-#[pyclass(name = "Scene", module = "geocull._geocull")]
+#[pyclass(name = "Scene", module = "geocull._geocull", frozen)]
 pub struct PyScene {
-    pub(crate) inner: Scene,
+    /// Locked by every method (see `super::with_lock`); renderers lock it after themselves.
+    pub(crate) inner: Mutex<Scene>,
 }
 
 #[pymethods]
 impl PyScene {
     #[new]
     fn new() -> Self {
-        Self { inner: Scene::new() }
+        Self { inner: Mutex::new(Scene::new()) }
+    }
+
+    /// A copy: the same objects under a new identity (`Scene::clone`).
+    fn copy(&self, py: Python<'_>) -> PyResult<Self> {
+        with_lock(py, &self.inner, |s| Ok(Self { inner: Mutex::new(s.clone()) }))
+    }
+
+    /// The scene as bytes (`Scene::to_bytes`, a versioned little-endian layout).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let b = with_lock(py, &self.inner, |s| Ok(s.to_bytes()))?;
+        Ok(PyBytes::new(py, &b))
+    }
+
+    /// A scene from `to_bytes`' bytes.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        run(py, move || Scene::from_bytes(data).map(|s| Self { inner: Mutex::new(s) }))
     }
 
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (z, origin, spacing, tiles, coarse_factor, name, color, null_value))]
     fn add_heightfield(
-        &mut self,
+        &self,
         py: Python<'_>,
         z: PyReadonlyArray2<'_, f64>,
         origin: (f64, f64),
@@ -40,9 +59,8 @@ impl PyScene {
         let shape = z.shape();
         let (ny, nx) = (shape[0], shape[1]);
         let data = super::contiguous(&z, "z")?;
-        let scene = &mut self.inner;
         let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        run(py, move || {
+        with_lock(py, &self.inner, move |scene| {
             let tiles = (int_in(tiles.0, "tiles[0]", 1, MAX_INT)?, int_in(tiles.1, "tiles[1]", 1, MAX_INT)?);
             scene.add_heightfield(data, ny, nx, [origin.0, origin.1], [spacing.0, spacing.1], tiles, null_value, opts)
         })
@@ -51,7 +69,7 @@ impl PyScene {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (vertices, faces, kind, tiles, coarse_factor, name, color))]
     fn add_mesh(
-        &mut self,
+        &self,
         py: Python<'_>,
         vertices: PyReadonlyArray2<'_, f64>,
         faces: PyReadonlyArray2<'_, i64>,
@@ -63,123 +81,152 @@ impl PyScene {
     ) -> PyResult<u32> {
         let v: &[[f64; 3]] = bytemuck::cast_slice(super::contiguous(&vertices, "vertices")?);
         let f: &[[i64; 3]] = bytemuck::cast_slice(super::contiguous(&faces, "faces")?);
-        let scene = &mut self.inner;
         let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        run(py, move || {
+        with_lock(py, &self.inner, move |scene| {
             let tiles = tiles.map(|t| int_in(t, "tiles", 1, MAX_INT)).transpose()?;
             scene.add_mesh(v, f, &kind, tiles, opts)
         })
     }
 
-    fn remove(&mut self, py: Python<'_>, id: i64) -> PyResult<()> {
-        let s = &mut self.inner;
-        run(py, move || s.remove(object_id(id)?))
+    fn remove(&self, py: Python<'_>, id: i64) -> PyResult<()> {
+        with_lock(py, &self.inner, move |s| s.remove(object_id(id)?))
     }
-    fn set_visible(&mut self, py: Python<'_>, id: i64, visible: bool) -> PyResult<()> {
-        let s = &mut self.inner;
-        run(py, move || s.set_visible(object_id(id)?, visible))
+    fn set_visible(&self, py: Python<'_>, id: i64, visible: bool) -> PyResult<()> {
+        with_lock(py, &self.inner, move |s| s.set_visible(object_id(id)?, visible))
     }
-    fn translate(&mut self, py: Python<'_>, id: i64, offset: (f64, f64, f64)) -> PyResult<()> {
-        let s = &mut self.inner;
-        run(py, move || s.translate(object_id(id)?, [offset.0, offset.1, offset.2]))
+    fn translate(&self, py: Python<'_>, id: i64, offset: (f64, f64, f64)) -> PyResult<()> {
+        with_lock(py, &self.inner, move |s| s.translate(object_id(id)?, [offset.0, offset.1, offset.2]))
     }
-    fn set_color(&mut self, py: Python<'_>, id: i64, color: (f64, f64, f64)) -> PyResult<()> {
-        let s = &mut self.inner;
-        run(py, move || s.set_color(object_id(id)?, [color.0, color.1, color.2]))
+    fn set_color(&self, py: Python<'_>, id: i64, color: (f64, f64, f64)) -> PyResult<()> {
+        with_lock(py, &self.inner, move |s| s.set_color(object_id(id)?, [color.0, color.1, color.2]))
     }
 
     #[getter]
-    fn n_tiles(&self) -> usize {
-        self.inner.n_tiles()
+    fn n_tiles(&self, py: Python<'_>) -> PyResult<usize> {
+        with_lock(py, &self.inner, |s| Ok(s.n_tiles()))
     }
     #[getter]
-    fn n_triangles(&self) -> usize {
-        self.inner.n_triangles()
+    fn n_triangles(&self, py: Python<'_>) -> PyResult<usize> {
+        with_lock(py, &self.inner, |s| Ok(s.n_triangles()))
     }
     #[getter]
-    fn origin(&self) -> (f64, f64, f64) {
-        let o = self.inner.origin();
-        (o.x, o.y, o.z)
+    fn origin(&self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
+        with_lock(py, &self.inner, |s| Ok(s.origin().into()))
     }
     #[getter]
-    fn host_bytes(&self) -> usize {
-        self.inner.host_bytes()
+    fn host_bytes(&self, py: Python<'_>) -> PyResult<usize> {
+        with_lock(py, &self.inner, |s| Ok(s.host_bytes()))
     }
 
-    fn object_ids(&self) -> Vec<u32> {
-        self.inner.objects().iter().map(|o| o.id).collect()
+    fn object_ids(&self, py: Python<'_>) -> PyResult<Vec<u32>> {
+        with_lock(py, &self.inner, |s| Ok(s.objects().iter().map(|o| o.id).collect()))
     }
 
     fn object_info<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Bound<'py, PyDict>> {
-        let o = object_id(id).and_then(|id| self.inner.object(id))?;
+        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize);
+        let (id, name, kind, color, visible, offset, n_tiles, n_tris): Info = with_lock(py, &self.inner, move |s| {
+            let o = s.object(object_id(id)?)?;
+            Ok((
+                o.id,
+                o.name.clone(),
+                o.kind_name().to_string(),
+                o.color,
+                o.visible,
+                o.offset,
+                o.tiles.len(),
+                o.fine_triangles(),
+            ))
+        })?;
         let d = PyDict::new(py);
-        d.set_item("id", o.id)?;
-        d.set_item("name", &o.name)?;
-        d.set_item("kind", o.kind_name())?;
-        d.set_item("color", (o.color[0] as f64, o.color[1] as f64, o.color[2] as f64))?;
-        d.set_item("visible", o.visible)?;
-        d.set_item("offset", (o.offset.x, o.offset.y, o.offset.z))?;
-        d.set_item("n_tiles", o.tiles.len())?;
-        d.set_item("n_triangles", o.fine_triangles())?;
+        d.set_item("id", id)?;
+        d.set_item("name", name)?;
+        d.set_item("kind", kind)?;
+        d.set_item("color", (color[0] as f64, color[1] as f64, color[2] as f64))?;
+        d.set_item("visible", visible)?;
+        d.set_item("offset", (offset.x, offset.y, offset.z))?;
+        d.set_item("n_tiles", n_tiles)?;
+        d.set_item("n_triangles", n_tris)?;
         Ok(d)
     }
 
     /// Columns of the tile table as numpy arrays (the Python layer makes a structured array).
     fn tile_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let mut object = Vec::new();
-        let (mut ix, mut iy, mut fine, mut coarse) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let mut proxy_error = Vec::new();
-        // LOD levels 0..=MAX_LEVELS: triangles and error (NaN error where a tile has fewer levels).
-        const NL: usize = 1 + crate::lod::levels::MAX_LEVELS;
-        let (mut level_tris, mut level_err) = (Vec::new(), Vec::new());
-        let (mut lo, mut hi) = (Vec::new(), Vec::new());
-        let origin = self.inner.origin();
-        for o in self.inner.objects() {
-            for t in &o.tiles {
-                object.push(o.id);
-                ix.push(t.ix);
-                iy.push(t.iy);
-                fine.push(t.fine_triangles() as u32);
-                coarse.push(t.coarse_triangles() as u32);
-                proxy_error.push(t.proxy_error as f64);
-                for l in 0..NL {
-                    let lv = if l == 0 {
-                        Some((t.fine_triangles(), 0.0))
-                    } else {
-                        t.levels.get(l - 1).map(|v| (v.indices.len() / 3, v.error))
-                    };
-                    level_tris.push(lv.map_or(0, |v| v.0 as u32));
-                    level_err.push(lv.map_or(f64::NAN, |v| v.1 as f64));
-                }
-                for a in 0..3 {
-                    let off = origin[a] + o.offset[a];
-                    lo.push(if t.is_empty() { f64::NAN } else { t.bbox_min[a] as f64 + off });
-                    hi.push(if t.is_empty() { f64::NAN } else { t.bbox_max[a] as f64 + off });
-                }
-            }
-        }
-        let n = object.len();
+        let t = with_lock(py, &self.inner, |s| Ok(TileColumns::of(s)))?;
+        let n = t.object.len();
         let d = PyDict::new(py);
-        d.set_item("object", object.into_pyarray(py))?;
-        d.set_item("ix", ix.into_pyarray(py))?;
-        d.set_item("iy", iy.into_pyarray(py))?;
-        d.set_item("tris_fine", fine.into_pyarray(py))?;
-        d.set_item("tris_coarse", coarse.into_pyarray(py))?;
-        d.set_item("proxy_error", proxy_error.into_pyarray(py))?;
-        d.set_item("level_triangles", Array2::from_shape_vec((n, NL), level_tris).unwrap().into_pyarray(py))?;
-        d.set_item("level_error", Array2::from_shape_vec((n, NL), level_err).unwrap().into_pyarray(py))?;
-        d.set_item("bbox_min", Array2::from_shape_vec((n, 3), lo).unwrap().into_pyarray(py))?;
-        d.set_item("bbox_max", Array2::from_shape_vec((n, 3), hi).unwrap().into_pyarray(py))?;
+        d.set_item("object", t.object.into_pyarray(py))?;
+        d.set_item("ix", t.ix.into_pyarray(py))?;
+        d.set_item("iy", t.iy.into_pyarray(py))?;
+        d.set_item("tris_fine", t.fine.into_pyarray(py))?;
+        d.set_item("tris_coarse", t.coarse.into_pyarray(py))?;
+        d.set_item("proxy_error", t.proxy_error.into_pyarray(py))?;
+        d.set_item("level_triangles", Array2::from_shape_vec((n, NL), t.level_tris).unwrap().into_pyarray(py))?;
+        d.set_item("level_error", Array2::from_shape_vec((n, NL), t.level_err).unwrap().into_pyarray(py))?;
+        d.set_item("bbox_min", Array2::from_shape_vec((n, 3), t.lo).unwrap().into_pyarray(py))?;
+        d.set_item("bbox_max", Array2::from_shape_vec((n, 3), t.hi).unwrap().into_pyarray(py))?;
         Ok(d)
     }
 
     /// Fine triangles of an object in world coordinates: (vertices (n, 3) float64, faces (m, 3) int64).
     fn geometry<'py>(&self, py: Python<'py>, id: i64) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let s = &self.inner;
-        let (v, f) = run(py, move || s.geometry(object_id(id)?))?;
+        let (v, f) = with_lock(py, &self.inner, move |s| s.geometry(object_id(id)?))?;
         let (nv, nf) = (v.len(), f.len());
-        let v = Array2::from_shape_vec((nv, 3), v.into_iter().flatten().collect()).unwrap();
-        let f = Array2::from_shape_vec((nf, 3), f.into_iter().flatten().map(|k| k as i64).collect()).unwrap();
+        let (v, f) = run(py, move || {
+            let v = Array2::from_shape_vec((nv, 3), v.into_iter().flatten().collect()).unwrap();
+            let f = Array2::from_shape_vec((nf, 3), f.into_iter().flatten().map(|k| k as i64).collect()).unwrap();
+            Ok((v, f))
+        })?;
         Ok((v.into_pyarray(py).into_any(), f.into_pyarray(py).into_any()))
+    }
+}
+
+/// The tile table's columns, gathered under the scene's lock.
+/// LOD levels per tile in the tile table: 0..=MAX_LEVELS (level 0 = fine).
+const NL: usize = 1 + crate::lod::levels::MAX_LEVELS;
+
+#[derive(Default)]
+struct TileColumns {
+    object: Vec<u32>,
+    ix: Vec<u32>,
+    iy: Vec<u32>,
+    fine: Vec<u32>,
+    coarse: Vec<u32>,
+    proxy_error: Vec<f64>,
+    /// (n, NL) row-major: triangles and error (NaN where a tile has fewer levels) per level.
+    level_tris: Vec<u32>,
+    level_err: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl TileColumns {
+    fn of(s: &Scene) -> Self {
+        let mut t = TileColumns::default();
+        let origin = s.origin();
+        for o in s.objects() {
+            for tile in &o.tiles {
+                t.object.push(o.id);
+                t.ix.push(tile.ix);
+                t.iy.push(tile.iy);
+                t.fine.push(tile.fine_triangles() as u32);
+                t.coarse.push(tile.coarse_triangles() as u32);
+                t.proxy_error.push(tile.proxy_error as f64);
+                for l in 0..NL {
+                    let lv = if l == 0 {
+                        Some((tile.fine_triangles(), 0.0))
+                    } else {
+                        tile.levels.get(l - 1).map(|v| (v.indices.len() / 3, v.error))
+                    };
+                    t.level_tris.push(lv.map_or(0, |v| v.0 as u32));
+                    t.level_err.push(lv.map_or(f64::NAN, |v| v.1 as f64));
+                }
+                for a in 0..3 {
+                    let off = origin[a] + o.offset[a];
+                    t.lo.push(if tile.is_empty() { f64::NAN } else { tile.bbox_min[a] as f64 + off });
+                    t.hi.push(if tile.is_empty() { f64::NAN } else { tile.bbox_max[a] as f64 + off });
+                }
+            }
+        }
+        t
     }
 }

@@ -69,7 +69,13 @@ impl Scene {
                 format!("z[{}, {}] is {v}; use NaN or null_value for holes", k / nx, k % nx)
             })?;
             ensure(v.is_nan() || v.abs() <= MAX_COORD, "z", || {
-                format!("z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}", k / nx, k % nx, num(v))
+                format!(
+                    "z[{}, {}] is {}; coordinates must be within +-{MAX_COORD:e}{}",
+                    k / nx,
+                    k % nx,
+                    num(v),
+                    undefined_hint(v)
+                )
             })?;
             if v.is_finite() {
                 zmin = zmin.min(v);
@@ -88,6 +94,25 @@ impl Scene {
         let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
         let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, tiles: (tx, ty) };
         Ok(self.push(opts.name, kind, color, tile_meshes))
+    }
+}
+
+/// Magnitude from which a height is taken for a no-data marker rather than a height: xtgeo's
+/// `UNDEF` is 1e33 (`10e32`, masked in `surf.values`, written out by `surf.get_values1d()` and
+/// friends) and Irap binary maps mark undefined nodes with 1e30.
+const UNDEFINED_MIN: f64 = 1e30;
+
+/// A hint for the out-of-range message of a height that looks like an undefined-value marker.
+fn undefined_hint(v: f64) -> String {
+    if v.abs() >= UNDEFINED_MIN {
+        format!(
+            " ({} looks like an undefined-value marker: 1e33 is xtgeo's UNDEF and 1e30 that of Irap binary \
+             maps; pass surf.values (a masked array) or null_value={})",
+            num(v),
+            num(v)
+        )
+    } else {
+        String::new()
     }
 }
 

@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 mod heightfield;
 mod mesh;
+pub(crate) mod serial;
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
@@ -75,6 +76,33 @@ pub struct Scene {
     origin: Option<DVec3>,
     objects: Vec<Object>,
     next_id: u32,
+}
+
+/// A copy with the same objects (ids, tiles, state) under a fresh identity: renderers key their
+/// uploaded geometry by [`Scene::geometry_key`], so a copy is never mistaken for the original
+/// (whose later edits would otherwise look like the copy's).
+impl Clone for Scene {
+    fn clone(&self) -> Self {
+        Self {
+            uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
+            geometry_version: 0,
+            origin: self.origin,
+            objects: self.objects.clone(),
+            next_id: self.next_id,
+        }
+    }
+}
+
+/// A summary (the geometry is too large to print).
+impl std::fmt::Debug for Scene {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scene")
+            .field("uid", &self.uid)
+            .field("objects", &self.objects.len())
+            .field("tiles", &self.n_tiles())
+            .field("triangles", &self.n_triangles())
+            .finish()
+    }
 }
 
 impl Default for Scene {
@@ -307,5 +335,21 @@ mod tests {
         z[4] = -999.25;
         s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(-999.25), opts()).unwrap();
         assert_eq!(s.n_triangles(), 8 - 6);
+    }
+
+    #[test]
+    fn undefined_marker_is_named() {
+        let mut s = Scene::new();
+        for undef in [1e30, -1e30, 1e33] {
+            let mut z = vec![0.0; 9];
+            z[5] = undef;
+            let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+            assert!(e.starts_with("z[1, 2]") && e.contains("xtgeo") && e.contains("null_value="), "{e}");
+            s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(undef), opts()).unwrap();
+        }
+        let mut z = vec![0.0; 9];
+        z[5] = 1e20;
+        let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+        assert!(!e.contains("xtgeo"), "{e}");
     }
 }

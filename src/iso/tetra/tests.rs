@@ -281,6 +281,39 @@ fn cache_reuses_patches() {
 }
 
 #[test]
+fn cache_is_lru_within_its_budget() {
+    let vol = pesco_synthetic(33);
+    let tree = MinMaxOctree::build(&vol);
+    let level = |w: f32| tree.straddling_at_depth(w, 3);
+    let mut probe = PatchCache::new();
+    probe.get_or_extract_many(&vol, 0.0, &level(0.0));
+    let one = probe.bytes();
+    assert!(one > 0);
+    assert_eq!(one, level(0.0).iter().map(|n| patch_bytes(&probe.get(0.0, n).unwrap())).sum::<usize>());
+    // room for about two isovalues' patches
+    let mut cache = PatchCache::with_budget(one * 2 + one / 2);
+    for w in [0.0, 0.3, 0.0, 0.6, -0.4, 0.2] {
+        cache.get_or_extract_many(&vol, w, &level(w));
+        assert!(cache.bytes() <= cache.budget(), "{} > {}", cache.bytes(), cache.budget());
+        let held: usize = [0.0f32, 0.3, 0.6, -0.4, 0.2]
+            .iter()
+            .flat_map(|&v| level(v).into_iter().map(move |n| (v, n)))
+            .filter_map(|(v, n)| cache.get(v, &n))
+            .map(|p| patch_bytes(&p))
+            .sum();
+        assert_eq!(cache.bytes(), held);
+    }
+    // the last isovalue is whole; the oldest (0.3, then 0.0) went first
+    assert!(level(0.2).iter().all(|n| cache.get(0.2, n).is_some()));
+    assert!(level(0.3).iter().all(|n| cache.get(0.3, n).is_none()));
+    cache.set_budget(0);
+    assert!(cache.is_empty() && cache.bytes() == 0);
+    // a patch handed out survives its eviction
+    let kept = cache.get_or_extract_many(&vol, 0.0, &level(0.0));
+    assert!(cache.is_empty() && kept.iter().any(|p| !p.is_empty()));
+}
+
+#[test]
 fn timing_pesco() {
     for n in [128usize, 256] {
         let t0 = Instant::now();

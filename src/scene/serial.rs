@@ -1,0 +1,358 @@
+//! A scene as bytes and back (for pickling, copies across processes): a small versioned
+//! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
+//! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
+//!
+//! Layout, version 1 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! arrays = u64 element count + elements):
+//!
+//! ```text
+//! magic b"GCSCENE\0", version u32
+//! has_origin u8, origin f64 x 3, next_id u32, n_objects u32
+//! per object: id u32, name str, kind u8 (0 = height field, 1 = mesh),
+//!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64, tx u64, ty u64 | mesh: label str
+//!   color f32 x 3, visible u8, offset f64 x 3, n_tiles u32
+//!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
+//!             positions [f32 x 3], fine [u32], coarse [u32], proxy_error f32,
+//!             levels: n u32, then per level error f32, indices [u32]
+//! ```
+//!
+//! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
+//! reports a damaged or foreign buffer as an InputError naming `data`.
+
+use super::{Object, ObjectKind, Scene, NEXT_SCENE_UID};
+use crate::error::{input_err, Error, Result};
+use crate::lod::TileMesh;
+use glam::DVec3;
+use std::sync::atomic::Ordering;
+
+const MAGIC: &[u8; 8] = b"GCSCENE\0";
+const VERSION: u32 = 1;
+
+/// Little-endian writer.
+#[derive(Default)]
+pub(crate) struct Writer(pub(crate) Vec<u8>);
+
+impl Writer {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
+        self.0.extend_from_slice(b);
+    }
+    pub(crate) fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    pub(crate) fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn f32(&mut self, v: f32) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn f64(&mut self, v: f64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn str(&mut self, s: &str) {
+        self.u32(s.len() as u32);
+        self.bytes(s.as_bytes());
+    }
+    pub(crate) fn f32s(&mut self, v: &[f32]) {
+        self.u64(v.len() as u64);
+        self.0.reserve(v.len() * 4);
+        for x in v {
+            self.f32(*x);
+        }
+    }
+    pub(crate) fn u32s(&mut self, v: &[u32]) {
+        self.u64(v.len() as u64);
+        self.0.reserve(v.len() * 4);
+        for x in v {
+            self.u32(*x);
+        }
+    }
+}
+
+/// Little-endian reader over a buffer; every error names `arg`.
+pub(crate) struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+    arg: &'static str,
+}
+
+impl<'a> Reader<'a> {
+    pub(crate) fn new(buf: &'a [u8], arg: &'static str) -> Self {
+        Self { buf, pos: 0, arg }
+    }
+    pub(crate) fn err(&self, what: impl std::fmt::Display) -> Error {
+        input_err(self.arg, format!("{} at byte {}: {what}", self.arg, self.pos))
+    }
+    pub(crate) fn take(&mut self, n: usize) -> Result<&'a [u8]> {
+        if self.buf.len() - self.pos < n {
+            return Err(self.err(format!("truncated ({} bytes, {n} more needed)", self.buf.len())));
+        }
+        let s = &self.buf[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+    fn arr<const N: usize>(&mut self) -> Result<[u8; N]> {
+        Ok(self.take(N)?.try_into().expect("length checked"))
+    }
+    pub(crate) fn u8(&mut self) -> Result<u8> {
+        Ok(self.take(1)?[0])
+    }
+    pub(crate) fn u32(&mut self) -> Result<u32> {
+        Ok(u32::from_le_bytes(self.arr()?))
+    }
+    pub(crate) fn u64(&mut self) -> Result<u64> {
+        Ok(u64::from_le_bytes(self.arr()?))
+    }
+    pub(crate) fn usize(&mut self) -> Result<usize> {
+        let v = self.u64()?;
+        usize::try_from(v).map_err(|_| self.err(format!("count {v} is too large")))
+    }
+    pub(crate) fn f32(&mut self) -> Result<f32> {
+        Ok(f32::from_le_bytes(self.arr()?))
+    }
+    pub(crate) fn f64(&mut self) -> Result<f64> {
+        Ok(f64::from_le_bytes(self.arr()?))
+    }
+    pub(crate) fn str(&mut self) -> Result<String> {
+        let n = self.u32()? as usize;
+        let b = self.take(n)?;
+        String::from_utf8(b.to_vec()).map_err(|_| self.err("a name is not UTF-8"))
+    }
+    /// A count of `elem`-byte elements that the rest of the buffer can hold.
+    fn count(&mut self, elem: usize) -> Result<usize> {
+        let n = self.usize()?;
+        if n.checked_mul(elem).is_none_or(|b| b > self.buf.len() - self.pos) {
+            return Err(self.err(format!("an array of {n} elements does not fit the buffer")));
+        }
+        Ok(n)
+    }
+    pub(crate) fn f32s(&mut self) -> Result<Vec<f32>> {
+        let n = self.count(4)?;
+        Ok(self.take(4 * n)?.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect())
+    }
+    pub(crate) fn u32s(&mut self) -> Result<Vec<u32>> {
+        let n = self.count(4)?;
+        Ok(self.take(4 * n)?.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect())
+    }
+    pub(crate) fn f64x3(&mut self) -> Result<[f64; 3]> {
+        Ok([self.f64()?, self.f64()?, self.f64()?])
+    }
+    pub(crate) fn f32x3(&mut self) -> Result<[f32; 3]> {
+        Ok([self.f32()?, self.f32()?, self.f32()?])
+    }
+    /// The magic and a version this build reads.
+    pub(crate) fn header(&mut self, magic: &[u8; 8], what: &str, newest: u32) -> Result<u32> {
+        if self.take(8).ok() != Some(&magic[..]) {
+            self.pos = 0;
+            return Err(self.err(format!("not a geocull {what} (wrong magic bytes)")));
+        }
+        let v = self.u32()?;
+        if v == 0 || v > newest {
+            return Err(self.err(format!("{what} format version {v}; this geocull reads versions 1..={newest}")));
+        }
+        Ok(v)
+    }
+    pub(crate) fn finish(&self) -> Result<()> {
+        if self.pos != self.buf.len() {
+            return Err(self.err(format!("{} unexpected trailing bytes", self.buf.len() - self.pos)));
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// The scene as bytes (see the module docs for the layout); [`Scene::from_bytes`] reads them.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer::default();
+        w.bytes(MAGIC);
+        w.u32(VERSION);
+        w.u8(self.origin.is_some() as u8);
+        for a in self.origin().to_array() {
+            w.f64(a);
+        }
+        w.u32(self.next_id);
+        w.u32(self.objects.len() as u32);
+        for o in &self.objects {
+            w.u32(o.id);
+            w.str(&o.name);
+            match &o.kind {
+                ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, tiles } => {
+                    w.u8(0);
+                    for v in [*nx, *ny] {
+                        w.u64(v as u64);
+                    }
+                    for v in [*x0, *y0, *dx, *dy] {
+                        w.f64(v);
+                    }
+                    for v in [tiles.0, tiles.1] {
+                        w.u64(v as u64);
+                    }
+                }
+                ObjectKind::Mesh { kind } => {
+                    w.u8(1);
+                    w.str(kind);
+                }
+            }
+            for c in o.color {
+                w.f32(c);
+            }
+            w.u8(o.visible as u8);
+            for a in o.offset.to_array() {
+                w.f64(a);
+            }
+            w.u32(o.tiles.len() as u32);
+            for t in &o.tiles {
+                w.u32(t.ix);
+                w.u32(t.iy);
+                for v in t.bbox_min.iter().chain(&t.bbox_max) {
+                    w.f32(*v);
+                }
+                w.f32s(bytemuck::cast_slice(&t.positions));
+                w.u32s(&t.fine);
+                w.u32s(&t.coarse);
+                w.f32(t.proxy_error);
+                w.u32(t.levels.len() as u32);
+                for l in &t.levels {
+                    w.f32(l.error);
+                    w.u32s(&l.indices);
+                }
+            }
+        }
+        w.0
+    }
+
+    /// A scene read from [`Scene::to_bytes`]'s bytes: the same objects, ids and tiles (so it
+    /// renders the same image), under a new identity (renderers upload it afresh).
+    pub fn from_bytes(data: &[u8]) -> Result<Scene> {
+        let mut r = Reader::new(data, "data");
+        r.header(MAGIC, "scene", VERSION)?;
+        let has_origin = r.u8()? != 0;
+        let origin = DVec3::from_array(r.f64x3()?);
+        if !origin.is_finite() {
+            return Err(r.err("the origin is not finite"));
+        }
+        let next_id = r.u32()?;
+        let n = r.u32()? as usize;
+        let mut objects: Vec<Object> = Vec::with_capacity(n.min(1 << 16));
+        for _ in 0..n {
+            let id = r.u32()?;
+            if id >= next_id || objects.iter().any(|o| o.id == id) {
+                return Err(r.err(format!("object id {id} is repeated or not below next id {next_id}")));
+            }
+            let name = r.str()?;
+            let kind = match r.u8()? {
+                0 => {
+                    let (nx, ny) = (r.usize()?, r.usize()?);
+                    let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+                    let tiles = (r.usize()?, r.usize()?);
+                    ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, tiles }
+                }
+                1 => ObjectKind::Mesh { kind: r.str()? },
+                k => return Err(r.err(format!("unknown object kind {k}"))),
+            };
+            let color = r.f32x3()?;
+            let visible = r.u8()? != 0;
+            let offset = DVec3::from_array(r.f64x3()?);
+            if !offset.is_finite() {
+                return Err(r.err(format!("object {id}: its offset is not finite")));
+            }
+            let nt = r.u32()? as usize;
+            let mut tiles = Vec::with_capacity(nt.min(1 << 16));
+            for _ in 0..nt {
+                let (ix, iy) = (r.u32()?, r.u32()?);
+                let (bbox_min, bbox_max) = (r.f32x3()?, r.f32x3()?);
+                let flat = r.f32s()?;
+                if flat.len() % 3 != 0 || flat.iter().any(|v| !v.is_finite()) {
+                    return Err(r.err(format!("object {id}: tile positions are not finite xyz triples")));
+                }
+                let positions: Vec<[f32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                let (fine, coarse) = (r.u32s()?, r.u32s()?);
+                let proxy_error = r.f32()?;
+                let nl = r.u32()? as usize;
+                let mut levels = Vec::with_capacity(nl.min(64));
+                for _ in 0..nl {
+                    let error = r.f32()?;
+                    levels.push(crate::lod::levels::Level { error, indices: r.u32s()? });
+                }
+                for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
+                    if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
+                        return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
+                    }
+                }
+                tiles.push(TileMesh { ix, iy, positions, fine, coarse, bbox_min, bbox_max, proxy_error, levels });
+            }
+            objects.push(Object { id, name, kind, color, visible, offset, tiles });
+        }
+        r.finish()?;
+        Ok(Scene {
+            uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
+            geometry_version: 0,
+            origin: has_origin.then_some(origin),
+            objects,
+            next_id,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::AddOptions;
+
+    fn scene() -> Scene {
+        let mut s = Scene::new();
+        let opts = |name: &str| AddOptions { coarse_factor: 4.0, name: Some(name.into()), color: None };
+        let z: Vec<f64> =
+            (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
+        s.add_heightfield(&z, 9, 9, [451_000.0, 6_780_000.0], [25.0, 25.0], (3, 2), None, opts("top")).unwrap();
+        let v = [[451_000.0, 6_780_000.0, -5.0], [451_100.0, 6_780_000.0, -5.0], [451_000.0, 6_780_100.0, 5.0]];
+        s.add_mesh(&v, &[[0, 1, 2]], "fault", None, opts("f")).unwrap();
+        s.translate(1, [1.0, 2.0, 3.0]).unwrap();
+        s.set_visible(0, false).unwrap();
+        s.remove(0).unwrap();
+        s.add_heightfield(&z, 9, 9, [451_000.0, 6_780_000.0], [25.0, 25.0], (1, 1), Some(0.0), opts("base")).unwrap();
+        s
+    }
+
+    #[test]
+    fn round_trip_is_exact_under_a_new_identity() {
+        let s = scene();
+        let b = s.to_bytes();
+        let t = Scene::from_bytes(&b).unwrap();
+        assert_eq!(t.to_bytes(), b);
+        assert_ne!(t.geometry_key().0, s.geometry_key().0);
+        assert_eq!(t.origin(), s.origin());
+        for o in s.objects() {
+            assert_eq!(t.geometry(o.id).unwrap(), s.geometry(o.id).unwrap());
+            let bits = |g: Option<Vec<f32>>| g.map(|g| g.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+            assert_eq!(bits(t.object(o.id).unwrap().height_grid()), bits(o.height_grid()));
+        }
+        // ids continue where the original's would
+        let (mut s2, mut t2) = (s.clone(), t);
+        let z = vec![0.0; 4];
+        let o = AddOptions { coarse_factor: 1.0, name: None, color: None };
+        let a = s2.add_heightfield(&z, 2, 2, [0.0; 2], [1.0; 2], (1, 1), None, o.clone()).unwrap();
+        assert_eq!(t2.add_heightfield(&z, 2, 2, [0.0; 2], [1.0; 2], (1, 1), None, o).unwrap(), a);
+        assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
+        // the empty scene too
+        let e = Scene::from_bytes(&Scene::new().to_bytes()).unwrap();
+        assert!(e.objects().is_empty() && e.origin() == DVec3::ZERO);
+    }
+
+    #[test]
+    fn damaged_bytes_are_input_errors() {
+        let b = scene().to_bytes();
+        for bad in [&b[..b.len() - 1], &b[..10], &b"not a scene"[..], &[]] {
+            let e = Scene::from_bytes(bad).unwrap_err().to_string();
+            assert!(e.starts_with("data"), "{e}");
+        }
+        let mut v = b.clone();
+        v[8] = 9; // version 9
+        assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 9"));
+        let mut extra = b.clone();
+        extra.push(0);
+        assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
+    }
+}
