@@ -28,6 +28,7 @@ import time
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._errors import GeocullError
 
@@ -119,13 +120,22 @@ def _field_str(pd, key):
     return None
 
 
-def from_polydata(scene, polydata, **add_mesh_kwargs) -> int:
+def from_polydata(
+    scene: Any,
+    polydata: Any,
+    kind: str | None = None,
+    tiles: int | None = None,
+    coarse_factor: float = 1.0,
+    name: str | None = None,
+    color: ArrayLike | None = None,
+) -> int:
     """Add a PyVista/VTK surface to ``scene`` with ``scene.add_mesh`` and return the new object id.
 
     Non-PolyData datasets are reduced to their outer surface; polygons and strips are triangulated
     (lines and vertex cells are dropped). ``name``, ``color`` and ``kind`` default to the
-    ``field_data`` entries written by :func:`to_polydata` when present; other keyword arguments
-    (``tiles``, ``coarse_factor``, ...) go to ``add_mesh`` unchanged.
+    ``field_data`` entries written by :func:`to_polydata` when present (kind else "mesh");
+    ``tiles`` and ``coarse_factor`` go to ``add_mesh`` unchanged. (``geocull.Scene.add_mesh`` also
+    takes a PolyData directly.)
     """
     pv = _pv()
     pd = polydata if isinstance(polydata, pv.DataSet) else pv.wrap(polydata)
@@ -144,17 +154,15 @@ def from_polydata(scene, polydata, **add_mesh_kwargs) -> int:
     faces = faces.reshape(-1, 4)
     if not np.all(faces[:, 0] == 3):
         raise _input_error("polydata: triangulation left non-triangle cells")
-    kwargs = dict(add_mesh_kwargs)
-    name = _field_str(pd, "name")
-    if name is not None:
-        kwargs.setdefault("name", name)
-    kind = _field_str(pd, "kind")
-    if kind is not None:
-        kwargs.setdefault("kind", kind)
-    if "color" in pd.field_data.keys():
-        kwargs.setdefault("color", _rgb01(pd.field_data["color"]))
+    if name is None:
+        name = _field_str(pd, "name")
+    if kind is None:
+        kind = _field_str(pd, "kind") or "mesh"
+    if color is None and "color" in pd.field_data.keys():
+        color = _rgb01(pd.field_data["color"])
     verts = np.ascontiguousarray(np.asarray(pd.points, dtype=np.float64))
-    return scene.add_mesh(verts, np.ascontiguousarray(faces[:, 1:]), **kwargs)
+    return int(scene.add_mesh(verts, np.ascontiguousarray(faces[:, 1:]), kind=kind, tiles=tiles,
+                              coarse_factor=coarse_factor, name=name, color=color))
 
 
 def scene_to_multiblock(scene):
