@@ -240,7 +240,10 @@ def mesh_arrays(x: Any, arg: str = "vertices") -> MeshArrays | None:
     if isinstance(x, np.ndarray | list | tuple):
         return None
     if not hasattr(x, "faces") and hasattr(x, "extract_surface") and hasattr(x, "points"):
-        x = x.extract_surface()  # a PyVista dataset other than PolyData (e.g. an UnstructuredGrid)
+        try:  # a PyVista dataset other than PolyData (e.g. an UnstructuredGrid)
+            x = x.extract_surface(algorithm="dataset_surface")
+        except TypeError:  # PyVista < 0.47 has no `algorithm`
+            x = x.extract_surface()
     if hasattr(x, "points") and hasattr(x, "faces") and hasattr(x, "triangulate"):
         n_lines, n_verts = int(getattr(x, "n_lines", 0) or 0), int(getattr(x, "n_verts", 0) or 0)
         if n_lines or n_verts:
