@@ -52,6 +52,7 @@ lint: setup
 	cargo clippy --release --all-targets --features python -- -D warnings
 	$(VENV)/bin/ruff check python tests examples scripts
 	PYTHONPATH=python $(PY) -m mypy python/geocull
+	PYTHONPATH=python $(PY) -m mypy --strict examples
 	PYTHONPATH=python $(PY) -m mypy.stubtest geocull._geocull
 	$(PY) scripts/check_layers.py
 

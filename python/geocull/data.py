@@ -25,12 +25,15 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ._errors import InputError
+
+if TYPE_CHECKING:
+    from .scene import Scene
 
 __all__ = [
     "SceneSpec",
@@ -126,7 +129,7 @@ class SceneSpec:
         coarse_factor: float = 25,
         fault_tiles: int | None = None,
         fault_coarse_factor: float = 10,
-    ):
+    ) -> Scene:
         """Create a :class:`geocull.Scene` holding every horizon and fault of this spec.
 
         Horizons go in with ``add_heightfield(tiles=tiles, coarse_factor=coarse_factor)``, faults with
