@@ -159,3 +159,21 @@ def test_yflip_and_rotation_arguments():
     with pytest.raises(gc.InputError, match=r"^rotation: '30' is not a real number"):
         s.add_heightfield(z, rotation="30")  # type: ignore[arg-type]
     assert len(s.object_ids()) == 2
+
+
+@pytest.mark.parametrize("deg,yflip", [(0.0, False), (30.0, True), (90.0, False), (-200.0, True)])
+def test_heightfield_mesh_is_the_same_surface(deg, yflip):
+    """gc.data.heightfield_mesh(rotation=, yflip=, drop_holes=True) gives exactly the numpy-rotated
+    mesh above (finite vertices only, so add_mesh takes it) and the height field's triangles."""
+    z = surface(n=31, seed=3)
+    v, f = gc.data.heightfield_mesh(z, ORIGIN, SPACING, rotation=deg, yflip=yflip, drop_holes=True)
+    rv, rf = rotated_mesh(z, ORIGIN, SPACING, deg, yflip)
+    np.testing.assert_array_equal(v, rv)
+    np.testing.assert_array_equal(f, rf)
+    s = gc.Scene()
+    a = s.add_heightfield(z, ORIGIN, SPACING, rotation=deg, yflip=yflip)
+    b = s.add_mesh(v, f)
+    tri = lambda oid: np.sort(np.sort(s.geometry(oid)[0][s.geometry(oid)[1]], axis=1).reshape(len(f), -1), axis=0)  # noqa: E731
+    np.testing.assert_allclose(tri(a), tri(b), atol=1e-6)
+    with pytest.raises(gc.InputError, match=r"^vertices\[\d+, 2\] is NaN"):
+        s.add_mesh(*gc.data.heightfield_mesh(z, ORIGIN, SPACING))  # the NaN samples kept without drop_holes

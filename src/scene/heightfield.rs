@@ -44,6 +44,7 @@ impl Scene {
     /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows of the grid's
     /// frame (`frame`). NaN samples (and samples equal to `null_value`) are holes; triangles touching
     /// a hole are dropped.
+    #[allow(clippy::too_many_arguments)]
     pub fn add_heightfield(
         &mut self,
         z: &[f64],
