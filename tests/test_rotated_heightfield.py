@@ -1,9 +1,9 @@
 """Height fields on rotated grids (issue 16): ``add_heightfield(..., rotation=, yflip=)``.
 
 What is checked:
-- a rotated (30°, -110°) and yflipped field with a hole renders with the same coverage and depth,
-  pixel for pixel, as the same surface given to ``add_mesh`` with its vertices rotated by numpy,
-  from a top-down and a low oblique view;
+- a rotated (30°, -110°, 90°, 180°) and yflipped field with a hole renders, in every culling mode,
+  with the same coverage and depth, pixel for pixel, as the same surface given to ``add_mesh`` with
+  its vertices rotated by numpy (rendered unculled), from a top-down and a low oblique view;
 - every culling mode gives the unculled image of the rotated field (three_pass in its exact
   setting: coarse_factor 1, pixel_threshold 0), and horizon culling still culls on a rotated ridge;
 - 90° and 180° put the samples exactly where a quarter / half turn does (no 6e-17 residue);
@@ -80,10 +80,12 @@ def test_rotated_field_renders_like_the_rotated_mesh(renderer, deg, yflip):
     b.add_mesh(*rotated_mesh(z, ORIGIN, SPACING, deg, yflip))
     assert a.n_triangles == b.n_triangles
     for cam in views(z, ORIGIN, SPACING, deg, yflip):
-        ra, rb = renderer.render(a, cam), renderer.render(b, cam)
-        assert ra.coverage.sum() > 0.1 * W * H
-        np.testing.assert_array_equal(ra.coverage, rb.coverage)
-        np.testing.assert_allclose(ra.depth[ra.coverage], rb.depth[rb.coverage], rtol=1e-5)
+        rb = renderer.render(b, cam)
+        for mode in gc.CULLING_MODES:  # the mesh unculled against the height field in every mode
+            ra = renderer.render(a, cam, culling=mode, pixel_threshold=0)
+            assert ra.coverage.sum() > 0.1 * W * H
+            np.testing.assert_array_equal(ra.coverage, rb.coverage, err_msg=mode)
+            np.testing.assert_allclose(ra.depth[ra.coverage], rb.depth[rb.coverage], rtol=1e-5, err_msg=mode)
 
 
 @pytest.mark.parametrize("deg,yflip", [(30.0, False), (-110.0, True), (90.0, False), (180.0, True)])
