@@ -179,3 +179,18 @@ def test_heightfield_mesh_is_the_same_surface(deg, yflip):
     np.testing.assert_allclose(tri(a), tri(b), atol=1e-6)
     with pytest.raises(gc.InputError, match=r"^vertices\[\d+, 2\] is NaN"):
         s.add_mesh(*gc.data.heightfield_mesh(z, ORIGIN, SPACING))  # the NaN samples kept without drop_holes
+
+
+def test_pickled_rotated_fields_keep_their_frame(renderer):
+    """A pickled scene keeps a field's rotation and yflip (horizon culling rebuilds its grid in that
+    frame): the copy renders the same image with horizon culling."""
+    import pickle
+
+    z = surface(seed=4)
+    s = gc.Scene()
+    s.add_heightfield(z, ORIGIN, SPACING, tiles=(4, 4), rotation=-63.0, yflip=True)
+    t = pickle.loads(pickle.dumps(s))
+    for cam in views(z, ORIGIN, SPACING, -63.0, True):
+        a, b = renderer.render(s, cam, culling="horizon"), renderer.render(t, cam, culling="horizon")
+        np.testing.assert_array_equal(a.image, b.image)
+        np.testing.assert_array_equal(a.tile_drawn, b.tile_drawn)

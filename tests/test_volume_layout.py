@@ -180,3 +180,13 @@ def test_xarray_dataarrays_by_dim_name():
     # order= given: read as a plain array
     plain = gc.Volume(xr.DataArray(values, dims=("a", "b", "c")), origin, spacing, order="xyz", z_positive="down")
     np.testing.assert_array_equal(gc.extract_isosurface(plain, 0.0)[0], ref[0])
+
+
+def test_pickled_volumes_keep_rotation_and_layout():
+    import pickle
+
+    values, origin, spacing, _ = dome_depth_cube(n=17)
+    vol = gc.Volume(values, origin, spacing, order="xyz", z_positive="down", rotation=21.0)
+    back = pickle.loads(pickle.dumps(vol))
+    assert (back.rotation, back.origin, back.spacing, back.shape) == (21.0, vol.origin, vol.spacing, vol.shape)
+    np.testing.assert_array_equal(gc.extract_isosurface(back, 0.0)[0], gc.extract_isosurface(vol, 0.0)[0])
