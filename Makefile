@@ -52,6 +52,7 @@ lint: setup
 	cargo clippy --release --all-targets --features python -- -D warnings
 	$(VENV)/bin/ruff check python tests examples scripts
 	PYTHONPATH=python $(PY) -m mypy python/geocull
+	PYTHONPATH=python $(PY) -m mypy --strict examples
 	PYTHONPATH=python $(PY) -m mypy.stubtest geocull._geocull
 	$(PY) scripts/check_layers.py
 
@@ -66,6 +67,7 @@ examples-quick: setup
 	$(PY) examples/seeds_study.py --quick --out out/examples/seeds
 	$(PY) examples/iso_table.py --quick --out out/examples/iso_table
 	$(PY) examples/horizon_dem.py --width 320 --height 240 --spots 1 --repeat 1 --out out/examples/horizon
+	$(PY) examples/geodata_scene.py --quick --out out/examples/geodata
 
 clean:
 	rm -rf $(VENV) target demo.png out

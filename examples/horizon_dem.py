@@ -33,61 +33,48 @@ import argparse
 import math
 import statistics
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 import geocull as gc
+from geocull.compare import image_error
+from geocull.data import jacksboro_dem
 
-try:  # shared helpers (python/geocull/data.py, compare.py); local fall-backs otherwise
-    from geocull.data import jacksboro_dem
-except ImportError:  # pragma: no cover
-    jacksboro_dem = None
-try:
-    from geocull.compare import image_error
-except ImportError:  # pragma: no cover
-    image_error = None
-
-METHODS = [
-    ("none", dict(culling="none")),
-    ("horizon", dict(culling="horizon")),
-    ("three_pass approx t=0", dict(culling="three_pass", pixel_threshold=0, conservative=False)),
-    ("three_pass approx t=10", dict(culling="three_pass", pixel_threshold=10, conservative=False)),
-    ("three_pass cons t=0", dict(culling="three_pass", pixel_threshold=0)),
-    ("three_pass cons t=10", dict(culling="three_pass", pixel_threshold=10)),
-    ("oracle", dict(culling="oracle")),
+# (row label, culling mode, pixel threshold, conservative)
+METHODS: list[tuple[str, gc.CullingMode, float, bool]] = [
+    ("none", "none", 10, True),
+    ("horizon", "horizon", 10, True),
+    ("three_pass approx t=0", "three_pass", 0, False),
+    ("three_pass approx t=10", "three_pass", 10, False),
+    ("three_pass cons t=0", "three_pass", 0, True),
+    ("three_pass cons t=10", "three_pass", 10, True),
+    ("oracle", "oracle", 10, True),
 ]
 
-
-def load_dem():
-    if jacksboro_dem is not None:
-        return jacksboro_dem()
-    from matplotlib import cbook  # same conversion as geocull.data.jacksboro_dem
-
-    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
-    lat0 = 0.5 * (float(d["ymin"]) + float(d["ymax"]))
-    m = 6_371_008.8 * math.pi / 180.0
-    z = np.asarray(d["elevation"], dtype=np.float64)[::-1]
-    return np.ascontiguousarray(z), (0.0, 0.0), (float(d["dx"]) * m * math.cos(math.radians(lat0)), float(d["dy"]) * m)
+Pair = tuple[float, float]
 
 
 def differing_fraction(a: np.ndarray, b: np.ndarray) -> float:
-    if image_error is not None:
-        return float(image_error(a, b)["differing_pixel_fraction"])
-    return float((a != b).any(-1).mean())
+    return float(image_error(a, b)["differing_pixel_fraction"])
 
 
-def sample(z, origin, spacing, x, y):
+def sample(z: np.ndarray, origin: Pair, spacing: Pair, x: float, y: float) -> float:
     """Bilinear height at world (x, y)."""
     fx = np.clip((x - origin[0]) / spacing[0], 0, z.shape[1] - 1.001)
     fy = np.clip((y - origin[1]) / spacing[1], 0, z.shape[0] - 1.001)
     i, j = int(fx), int(fy)
     u, v = fx - i, fy - j
-    return ((1 - u) * (1 - v) * z[j, i] + u * (1 - v) * z[j, i + 1]
-            + (1 - u) * v * z[j + 1, i] + u * v * z[j + 1, i + 1])
+    return float((1 - u) * (1 - v) * z[j, i] + u * (1 - v) * z[j, i + 1]
+                 + (1 - u) * v * z[j + 1, i] + u * v * z[j + 1, i + 1])
 
 
-def valley_views(z, origin, spacing, n_spots=3, height=30.0, pitch=-2.0, reach=6000.0):
+View = tuple[str, tuple[float, float, float], float, gc.Camera]
+
+
+def valley_views(z: np.ndarray, origin: Pair, spacing: Pair, n_spots: int = 3, height: float = 30.0,
+                 pitch: float = -2.0, reach: float = 6000.0) -> list[View]:
     """Low views looking along valleys: eyes `height` m above low points of the central part of
     the DEM; for each, the azimuth along which the terrain stays lowest over `reach` metres (along
     the valley), the opposite one (back up the valley) and one across it."""
@@ -96,10 +83,10 @@ def valley_views(z, origin, spacing, n_spots=3, height=30.0, pitch=-2.0, reach=6
     j0, j1, i0, i1 = ny // 5, 4 * ny // 5, nx // 5, 4 * nx // 5
     inner = z[j0:j1, i0:i1]
     low = np.argwhere(inner <= np.quantile(inner, 0.05))
-    views = []
+    views: list[tuple[str, tuple[float, float, float], float]] = []
     picked: list[tuple[float, float]] = []
     for k in rng.permutation(len(low)):
-        j, i = low[k] + (j0, i0)
+        j, i = (int(v) for v in low[k] + (j0, i0))
         x, y = origin[0] + i * spacing[0], origin[1] + j * spacing[1]
         if any(math.hypot(x - px, y - py) < 6000.0 for px, py in picked):
             continue
@@ -116,21 +103,22 @@ def valley_views(z, origin, spacing, n_spots=3, height=30.0, pitch=-2.0, reach=6
             views.append((f"s{len(picked)}_{name}", (x, y, ez), az % 360.0))
         if len(picked) == n_spots:
             break
-    out = []
+    out: list[View] = []
     for name, eye, az in views:
         a, p = math.radians(az), math.radians(pitch)
         d = np.array([math.cos(p) * math.cos(a), math.cos(p) * math.sin(a), math.sin(p)])
         target = np.asarray(eye) + 1000.0 * d
-        out.append((name, eye, az, gc.Camera.look_at(eye, tuple(target), fov_y=50.0)))
+        out.append((name, eye, az, gc.Camera.look_at(eye, target, fov_y=50.0)))
     return out
 
 
-def cull_ms(stats) -> float:
+def cull_ms(stats: gc.RenderStats) -> float:
     """Culling time: CPU horizon (cull_ms), or the GPU prepass + pixel count (three_pass)."""
     return float(stats.get("cull_ms", 0.0) or stats.get("prepass_ms", 0.0) + stats.get("count_ms", 0.0))
 
 
-def tile_map(tiles, visible, drawn, eye_xy, origin, spacing, scale=12):
+def tile_map(tiles: tuple[int, int], visible: np.ndarray, drawn: np.ndarray, eye_xy: Pair, origin: Pair,
+             spacing: Pair, scale: int = 12) -> np.ndarray:
     """Top view of the tiles (north up): green = visible (oracle) and drawn, yellow = drawn by
     horizon but not visible, grey = culled, red = visible but culled (a bug), white dot = eye."""
     tx, ty = tiles
@@ -149,10 +137,10 @@ def tile_map(tiles, visible, drawn, eye_xy, origin, spacing, scale=12):
     return _dot(img, ex, ey, nxs, nys)
 
 
-_GRID: dict = {}
+_GRID: dict[str, tuple[int, int]] = {}
 
 
-def _dot(img, ex, ey, nxs, nys):
+def _dot(img: np.ndarray, ex: float, ey: float, nxs: int, nys: int) -> np.ndarray:
     n = _GRID.get("n")
     if n is None:
         return img
@@ -169,15 +157,15 @@ def png(path: Path, image: np.ndarray) -> None:
     h, w = image.shape[:2]
     raw = b"".join(b"\x00" + image[r].tobytes() for r in range(h))
 
-    def chunk(tag, data):
+    def chunk(tag: bytes, data: bytes) -> bytes:
         return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
                      + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
 
 
-def main(argv=None) -> str:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def main(argv: Sequence[str] | None = None) -> str:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--out", default="examples/out/horizon")
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=480)
@@ -189,7 +177,7 @@ def main(argv=None) -> str:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
-    z, origin, spacing = load_dem()
+    z, origin, spacing = jacksboro_dem()
     ny, nx = z.shape
     _GRID["n"] = (ny, nx)
     tiles = (max(1, round((nx - 1) / args.tile)), max(1, round((ny - 1) / args.tile)))
@@ -211,26 +199,30 @@ def main(argv=None) -> str:
         "| differing pixels vs none | missed tiles |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    summary: dict[str, list[float]] = {m: [] for m, _ in METHODS}
+    summary: dict[str, list[float]] = {m: [] for m, _, _, _ in METHODS}
     for name, eye, az, cam in views:
-        res = {}
-        for m, kw in METHODS:
-            r.render(scene, cam, **kw)  # warm-up (uploads, pipeline caches)
-            runs = [r.render(scene, cam, **kw) for _ in range(args.repeat)]
+        res: dict[str, gc.RenderResult[gc.RenderStats]] = {}
+        median_total: dict[str, float] = {}
+        median_cull: dict[str, float] = {}
+        for m, culling, threshold, conservative in METHODS:
+            # warm-up (uploads, pipeline caches), then the timed renders
+            r.render(scene, cam, culling=culling, pixel_threshold=threshold, conservative=conservative)
+            runs = [r.render(scene, cam, culling=culling, pixel_threshold=threshold, conservative=conservative)
+                    for _ in range(args.repeat)]
             res[m] = runs[-1]
-            res[m].median_total = statistics.median(x.stats["total_ms"] for x in runs)
-            res[m].median_cull = statistics.median(cull_ms(x.stats) for x in runs)
+            median_total[m] = statistics.median(x.stats["total_ms"] for x in runs)
+            median_cull[m] = statistics.median(cull_ms(x.stats) for x in runs)
         ref, oracle = res["none"], res["oracle"]
         visible = oracle.tile_pixels > 0
-        for m, _ in METHODS:
+        for m, _, _, _ in METHODS:
             x = res[m]
-            ratio = x.median_total / ref.median_total
+            ratio = median_total[m] / median_total["none"]
             summary[m].append(ratio)
             diff = differing_fraction(x.image, ref.image)
             missed = int((visible & ~x.tile_drawn).sum())
             lines.append(
                 f"| {name} (az {az:.0f}) | {m} | {int(x.tile_drawn.sum())}/{x.tile_drawn.size} | "
-                f"{x.stats['triangles_drawn']} | {x.median_cull:.2f} | {x.median_total:.1f} | {ratio:.2f} | "
+                f"{x.stats['triangles_drawn']} | {median_cull[m]:.2f} | {median_total[m]:.1f} | {ratio:.2f} | "
                 f"{diff:.2e} | {missed} |")
         hz = res["horizon"]
         png(out / f"{name}_none.png", ref.image)

@@ -22,6 +22,8 @@ import json
 import math
 import os
 import time
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -34,8 +36,8 @@ PAPER_CULL = (3, 4, 5, 6, 7)
 PAPER_BEST = "paper (256^3, MC): best build 7 / cull 6: 2.02M -> 0.44M faces, 7.01 s -> 2.45 s"
 
 
-def views(n_views: int, dist: float = 24.0, elev: float = 25.0):
-    out = []
+def views(n_views: int, dist: float = 24.0, elev: float = 25.0) -> list[gc.Camera]:
+    out: list[gc.Camera] = []
     for k in range(n_views):
         a = 2 * math.pi * k / n_views + 0.3
         e = math.radians(elev if k % 2 == 0 else -elev)
@@ -67,12 +69,13 @@ def main() -> None:
           f"{args.size}x{args.size}, {len(cams)} views; {r.adapter_info}")
     print(f"volume + octree: {build_ms:.0f} ms")
 
-    def avg(rows, key):
+    def avg(rows: Sequence[Mapping[str, Any]], key: str) -> float:
         return float(np.mean([x[key] for x in rows]))
 
     # Unculled reference per view (cold: no patch cache).
     ref_cd = max(0, md - 2)
-    refs, ref_rows = [], []
+    refs: list[np.ndarray] = []
+    ref_rows: list[gc.IsoStats] = []
     for cam in cams:
         clear_cache(r)
         res = r.render_isosurface(vol, 0.0, cam, culling="none", cull_depth=ref_cd, cache=False)
@@ -87,7 +90,7 @@ def main() -> None:
     culls = [c for c in PAPER_CULL if 0 <= c - shift <= md]
     if args.quick:
         builds, culls = builds[-2:], culls[-2:]
-    rows = []
+    rows: list[dict[str, Any]] = []
     hdr = (f"{'build':>5} {'cull':>4} | {'triangles':>10} {'ratio':>6} | {'tested':>7} {'visible':>7} {'cand.':>7} | "
            f"{'occl ms':>8} {'cull ms':>8} {'surf ms':>8} {'total ms':>8} {'speed-up':>8} | {'img err':>8}")
     print(hdr)
@@ -99,12 +102,13 @@ def main() -> None:
         r.render_isosurface(vol, 0.0, cams[0], occluder_depth=b - shift, cull_depth=min(md, b - shift), cache=False)
         occ_build_ms = (time.perf_counter() - t) * 1e3
         for c in culls:
-            stats, errs = [], []
+            stats: list[gc.IsoStats] = []
+            errs: list[float] = []
             for cam, ref in zip(cams, refs, strict=True):
                 res = r.render_isosurface(vol, 0.0, cam, occluder_depth=b - shift, cull_depth=c - shift, cache=False)
                 stats.append(res.stats)
                 errs.append(float(np.any(res.image != ref, axis=-1).mean()))
-            row = {"paper_build": b, "paper_cull": c, "build_depth": b - shift, "cull_depth": c - shift,
+            row: dict[str, Any] = {"paper_build": b, "paper_cull": c, "build_depth": b - shift, "cull_depth": c - shift,
                    "occluder_first_frame_ms": occ_build_ms}
             for k in ("surface_triangles", "nodes_tested", "nodes_visible", "nodes_straddling", "occluder_ms",
                       "cull_ms", "extract_ms", "draw_ms", "surface_ms", "total_ms", "occluder_boxes_below",

@@ -23,6 +23,8 @@ import argparse
 import os
 import sys
 import time
+from collections.abc import Sequence
+from typing import Any
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
@@ -42,27 +44,31 @@ def say(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def pick(summary, **kw):
+Row = dict[str, Any]
+
+
+def pick(summary: Sequence[Row], **kw: Any) -> list[Row]:
     """The summary rows matching every keyword (three_pass unless method is given)."""
     kw.setdefault("method", "three_pass")
     return [r for r in summary if all(r.get(k) == v for k, v in kw.items())]
 
 
-def one(summary, **kw):
+def one(summary: Sequence[Row], **kw: Any) -> Row:
     rs = pick(summary, **kw)
     if len(rs) != 1:
         raise LookupError(f"{kw}: {len(rs)} rows")
     return rs[0]
 
 
-def pct(x) -> str:
+def pct(x: float | None) -> str:
     return "–" if x is None else f"{100 * x:.3f} %"
 
 
-def findings(s_tiles, s_thr, s_coarse, quick: bool) -> tuple[str, list[dict]]:
+def findings(s_tiles: Sequence[Row], s_thr: Sequence[Row], s_coarse: Sequence[Row],
+             quick: bool) -> tuple[str, list[Row]]:
     """Judge the seeds' findings against the summaries; returns markdown and a list of verdicts."""
     out: list[str] = []
-    verdicts: list[dict] = []
+    verdicts: list[Row] = []
 
     # 1. tiles: 10x10 fastest
     rows = sorted(pick(s_tiles), key=lambda r: int(str(r["tiles"]).split("x")[0]))
@@ -154,8 +160,8 @@ def findings(s_tiles, s_thr, s_coarse, quick: bool) -> tuple[str, list[dict]]:
     return "\n".join(out), verdicts
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     p.add_argument("--quick", action="store_true", help="smoke test: small scene, small image, 2 views, 1 repeat")
     p.add_argument("--out", default=os.path.join("examples", "out", "seeds"))
     p.add_argument("--size", type=int, help="samples per horizon side (default 418 = full Gullfaks-like; quick 100)")
@@ -186,19 +192,19 @@ def main(argv=None) -> int:
     say(f"seeds study: {size}x{size} samples, {w}x{h}, views {', '.join(n for n, _ in views)}, {repeats} repeat(s); "
         f"adapter {renderer.adapter_info}")
 
-    common = dict(renderer=renderer, repeats=repeats, progress=say)
-    sweeps = {}
+    sweeps: dict[str, list[Row]] = {}
     say("sweep 1/3: tiles")
     sweeps["tiles"] = report.sweep(spec, views, thresholds=[10], coarse_factors=[25], tiles=TILES, prepass_scales=[1.0],
-                                   **common)
+                                   renderer=renderer, repeats=repeats, progress=say)
     say("sweep 2/3: threshold x prepass scale")
     sweeps["threshold_prepass"] = report.sweep(spec, views, thresholds=THRESHOLDS, coarse_factors=[25], tiles=[10],
-                                               prepass_scales=PREPASS, **common)
+                                               prepass_scales=PREPASS, renderer=renderer, repeats=repeats,
+                                               progress=say)
     say("sweep 3/3: coarse factor")
     sweeps["coarse"] = report.sweep(spec, views, thresholds=[0, 10], coarse_factors=COARSE, tiles=[10],
-                                    prepass_scales=[1.0], **common)
+                                    prepass_scales=[1.0], renderer=renderer, repeats=repeats, progress=say)
 
-    summaries = {}
+    summaries: dict[str, list[Row]] = {}
     for name, rows in sweeps.items():
         summ = report.summarize(rows)
         summaries[name] = summ

@@ -167,6 +167,8 @@ HF_GOOD = {
     "coarse_factor": st.sampled_from([1.0, 2.0, 7.5]),
     "color": maybe(st.tuples(unit, unit, unit)),
     "null_value": maybe(st.just(-999.25)),
+    "rotation": st.one_of(st.sampled_from([0.0, 30.0, 90.0, 180.0, -270.0]), st.floats(-720, 720)),
+    "yflip": st.booleans(),
 }
 HF_BAD = {
     "z": arrays(shape=(3, 4)),
@@ -177,6 +179,8 @@ HF_BAD = {
     "color": vec(3),
     "null_value": numbers,
     "name": st.one_of(small_ints, st.text(max_size=3)),
+    "rotation": numbers,
+    "yflip": st.one_of(st.sampled_from([1, -1, 0, None, "yes"]), st.booleans()),
 }
 MESH_GOOD = {
     "tiles": maybe(st.integers(1, 4)),
@@ -257,15 +261,19 @@ def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):
 
 @FUZZ
 @given(z=grid_z(), tiles=st.tuples(st.integers(1, 4), st.integers(1, 4)), cf=st.sampled_from([1.0, 2.0, 7.5]),
-       elev=st.floats(5, 90), az=st.floats(0, 360))
-def test_fuzz_valid_heightfields_render_the_same_in_every_mode(renderer, z, tiles, cf, elev, az):
-    """Valid height fields (holes, nulls, tiny grids) seen from random directions: every mode gives
-    the unculled image when nothing may be culled (threshold 0, coarse proxies only for three_pass)."""
+       elev=st.floats(5, 90), az=st.floats(0, 360),
+       rotation=st.one_of(st.just(0.0), st.sampled_from([90.0, 180.0]), st.floats(-360, 360)), yflip=st.booleans())
+def test_fuzz_valid_heightfields_render_the_same_in_every_mode(renderer, z, tiles, cf, elev, az, rotation, yflip):
+    """Valid height fields (holes, nulls, tiny grids, rotated and yflipped grids) seen from random
+    directions: every mode gives the unculled image when nothing may be culled (threshold 0, coarse
+    proxies only for three_pass)."""
     scene = gc.Scene()
-    if call(scene.add_heightfield, z, tiles=tiles, coarse_factor=1.0, null_value=-999.25) is None:
+    if call(scene.add_heightfield, z, tiles=tiles, coarse_factor=1.0, null_value=-999.25, rotation=rotation,
+            yflip=yflip) is None:
         return
     ny, nx = np.shape(z)  # z may be a list (the add succeeded, so it is 2-D)
-    c = np.array([nx / 2, ny / 2, 0.0])
+    t, sy = np.radians(rotation), (-1.0 if yflip else 1.0)
+    c = np.array([nx / 2 * np.cos(t) - sy * ny / 2 * np.sin(t), nx / 2 * np.sin(t) + sy * ny / 2 * np.cos(t), 0.0])
     e, a = np.radians(elev), np.radians(az)
     eye = c + 30 * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
     cam = gc.Camera.look_at(eye, c, fov_y=50)

@@ -8,9 +8,10 @@
 >>> res.image, res.depth, res.tile_pixels, res.stats
 
 Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`,
-:mod:`~geocull.results`, :mod:`~geocull.volume` (re-exported here), and, imported on first use,
-:mod:`~geocull.iso`, :mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`,
-:mod:`~geocull.report`, :mod:`~geocull.bench`.
+:mod:`~geocull.results`, :mod:`~geocull.volume`, :mod:`~geocull.iso` (re-exported here), and,
+imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in and out),
+:mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.report`,
+:mod:`~geocull.bench`.
 """
 
 import importlib as _importlib
@@ -18,16 +19,18 @@ from types import ModuleType as _ModuleType
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
-from .camera import Camera
+from .camera import Camera, Projection
+from .iso import extract_isosurface
 from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, LodMode, Renderer
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
 from .scene import Scene
-from .volume import Volume
+from .volume import Volume, VolumeOrder, ZPositive
 
 if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getattr__ imports them on first use
     from . import bench as bench
     from . import compare as compare
     from . import data as data
+    from . import io as io
     from . import iso as iso
     from . import pyvista as pyvista
     from . import report as report
@@ -40,6 +43,10 @@ __all__ = [
     "RenderResult",
     "IsoResult",
     "Volume",
+    "VolumeOrder",
+    "ZPositive",
+    "Projection",
+    "extract_isosurface",
     "GeocullError",
     "InputError",
     "DeviceError",
@@ -53,12 +60,13 @@ __all__ = [
     "IsoStats",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso")
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io")
 
 
 def __getattr__(name: str) -> _ModuleType:
-    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.iso``: imported
-    on first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched)."""
+    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.io``: imported on
+    first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched; ``gc.io`` imports
+    xtgeo, segyio, trimesh only inside the functions that need them)."""
     if name in _SUBMODULES:
         return _importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'geocull' has no attribute {name!r}")

@@ -9,11 +9,13 @@ Rust core, which raises the same InputError naming the argument.
 from __future__ import annotations
 
 import numbers
-from typing import Any
+import warnings
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeAlias, runtime_checkable
 
 import numpy as np
 
-from ._errors import InputError
+from ._errors import GeocullWarning, InputError
 
 __all__ = [
     "FLOAT_KINDS",
@@ -32,6 +34,12 @@ __all__ = [
     "expect_instance",
     "color",
     "name",
+    "boolean",
+    "TrimeshLike",
+    "PolyDataLike",
+    "MeshLike",
+    "MeshArrays",
+    "mesh_arrays",
 ]
 
 FLOAT_KINDS = "fiu"  # numpy dtype kinds accepted as real numbers: float, signed int, unsigned int
@@ -169,3 +177,101 @@ def name(n: Any) -> str | None:
     if n is not None and not isinstance(n, str):
         raise InputError(f"name: {n!r} is not a string")
     return n
+
+
+def boolean(x: Any, arg: str, hint: str = "") -> bool:
+    """Python bool of a ``bool`` or ``numpy.bool_`` (an int such as xtgeo's 1 / -1 flags is refused:
+    ``bool(-1)`` and ``bool(1)`` are both True)."""
+    if not isinstance(x, bool | np.bool_):
+        more = f" ({hint})" if hint else ""
+        raise InputError(f"{arg}: {x!r} is not a bool{more}")
+    return bool(x)
+
+
+@runtime_checkable
+class TrimeshLike(Protocol):
+    """What :meth:`geocull.Scene.add_mesh` reads of a ``trimesh.Trimesh``: (n, 3) ``vertices`` and
+    (m, 3) ``faces``."""
+
+    @property
+    def vertices(self) -> Any: ...
+    @property
+    def faces(self) -> Any: ...
+
+
+@runtime_checkable
+class PolyDataLike(Protocol):
+    """What :meth:`geocull.Scene.add_mesh` reads of a ``pyvista.PolyData``: ``points``, the flat
+    ``faces`` cell array and ``triangulate()``."""
+
+    @property
+    def points(self) -> Any: ...
+    @property
+    def faces(self) -> Any: ...
+    def triangulate(self) -> Any: ...
+
+
+#: A mesh object :meth:`geocull.Scene.add_mesh` takes in place of (vertices, faces).
+MeshLike: TypeAlias = TrimeshLike | PolyDataLike
+
+
+@dataclass
+class MeshArrays:
+    """Vertices (n, 3), faces (m, 3) and the name / colour a mesh object carries (None if none)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    name: str | None = None
+    color: tuple[float, float, float] | None = None
+
+
+def _field(pd: Any, key: str) -> Any:
+    fd = getattr(pd, "field_data", None)
+    try:
+        return np.asarray(fd[key]).ravel() if fd is not None and key in fd.keys() else None
+    except Exception:  # field data that cannot be read is no metadata
+        return None
+
+
+def mesh_arrays(x: Any, arg: str = "vertices") -> MeshArrays | None:
+    """The triangles of a mesh object, or None when ``x`` is not one (an array, a list, ...).
+
+    Recognised by duck typing, so trimesh and PyVista are never imported here:
+    * a PyVista dataset (``points``, ``faces``, ``triangulate``; others with ``extract_surface`` are
+      reduced to their surface first): polygons and strips triangulated; line and vertex cells
+      ignored with a GeocullWarning; name / color from ``field_data`` when present;
+    * a ``trimesh.Trimesh`` (``vertices`` and ``faces`` attributes).
+    """
+    if isinstance(x, np.ndarray | list | tuple):
+        return None
+    if not hasattr(x, "faces") and hasattr(x, "extract_surface") and hasattr(x, "points"):
+        try:  # a PyVista dataset other than PolyData (e.g. an UnstructuredGrid)
+            x = x.extract_surface(algorithm="dataset_surface")
+        except TypeError:  # PyVista < 0.47 has no `algorithm`
+            x = x.extract_surface()
+    if hasattr(x, "points") and hasattr(x, "faces") and hasattr(x, "triangulate"):
+        n_lines, n_verts = int(getattr(x, "n_lines", 0) or 0), int(getattr(x, "n_verts", 0) or 0)
+        if n_lines or n_verts:
+            warnings.warn(
+                f"{arg}: the {type(x).__name__}'s {n_lines} line and {n_verts} vertex cells are ignored "
+                "(add_mesh takes surfaces; polygons and strips are triangulated)",
+                GeocullWarning,
+                stacklevel=3,
+            )
+        if not getattr(x, "is_all_triangles", False):
+            x = x.triangulate()
+        cells = np.asarray(x.faces, dtype=np.int64)
+        if cells.size % 4 or (cells.size and not np.all(cells.reshape(-1, 4)[:, 0] == 3)):
+            raise InputError(f"{arg}: the {type(x).__name__} still has non-triangle cells after triangulate()")
+        faces = cells.reshape(-1, 4)[:, 1:]
+        name = _field(x, "name")
+        col = _field(x, "color")
+        return MeshArrays(
+            np.asarray(x.points),
+            faces,
+            None if name is None or name.size == 0 else str(name[0]),
+            None if col is None or col.size != 3 else (float(col[0]), float(col[1]), float(col[2])),
+        )
+    if hasattr(x, "vertices") and hasattr(x, "faces"):
+        return MeshArrays(np.asarray(x.vertices), np.asarray(x.faces))
+    return None

@@ -25,6 +25,7 @@ __all__ = [
     "clear_isosurface_cache",
     "set_isosurface_cache_budget",
     "isosurface_cache_budget",
+    "extract_isosurface",
     "__version__",
 ]
 
@@ -114,6 +115,8 @@ class Scene:
         name: str | None,
         color: tuple[float, float, float] | None,
         null_value: float | None,
+        rotation: float,
+        yflip: bool,
     ) -> int: ...
     def add_mesh(
         self,
@@ -135,6 +138,8 @@ class Scene:
     def n_triangles(self) -> int: ...
     @property
     def origin(self) -> tuple[float, float, float]: ...
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]] | None: ...
     @property
     def host_bytes(self) -> int: ...
     def object_ids(self) -> list[int]: ...
@@ -209,10 +214,17 @@ def culling_modes() -> list[str]: ...
 class Volume:
     def __new__(
         cls,
-        values: npt.NDArray[np.float32] | npt.NDArray[np.float64],  # (nz, ny, nx), C-contiguous
+        values: npt.NDArray[np.float32] | npt.NDArray[np.float64],  # 3-D, any strides, native byte order
         origin: tuple[float, float, float],
         spacing: tuple[float, float, float],
+        order: str,  # "zyx" | "xyz"
+        z_positive: str,  # "up" | "down"
+        rotation: float,
     ) -> Self: ...
+    @property
+    def rotation(self) -> float: ...
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
     @property
     def shape(self) -> tuple[int, int, int]: ...
     @property
@@ -242,3 +254,6 @@ def render_isosurface(
 def clear_isosurface_cache(renderer: Renderer) -> None: ...
 def set_isosurface_cache_budget(renderer: Renderer, bytes: int) -> None: ...
 def isosurface_cache_budget(renderer: Renderer) -> int: ...
+def extract_isosurface(
+    volume: Volume, isovalue: float
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...

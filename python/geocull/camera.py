@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from typing import Any, Literal, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
 from ._errors import InputError
 
-__all__ = ["Camera"]
+__all__ = ["Camera", "Projection"]
+
+#: The projections of :meth:`Camera.look_at`.
+Projection = Literal["perspective", "orthographic"]
 
 
 class Camera:
@@ -24,13 +27,13 @@ class Camera:
 
     @staticmethod
     def look_at(
-        eye: Sequence[float],
-        target: Sequence[float],
-        up: Sequence[float] = (0.0, 0.0, 1.0),
+        eye: ArrayLike,
+        target: ArrayLike,
+        up: ArrayLike = (0.0, 0.0, 1.0),
         fov_y: float = 45.0,
         near: float | None = None,
         far: float | None = None,
-        projection: str = "perspective",
+        projection: Projection = "perspective",
         ortho_height: float | None = None,
         z_scale: float = 1.0,
     ) -> Camera:
@@ -82,9 +85,9 @@ class Camera:
         return self._c.far
 
     @property
-    def projection(self) -> str:
+    def projection(self) -> Projection:
         """"perspective" or "orthographic"."""
-        return self._c.projection
+        return cast(Projection, self._c.projection)
 
     @property
     def ortho_height(self) -> float | None:

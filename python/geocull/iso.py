@@ -24,12 +24,14 @@ Caches: a renderer keeps the patches it extracted (per volume, isovalue and node
 budget, 256 MiB by default (:func:`set_cache_budget`); ``stats["cache_bytes"]`` is what it holds.
 
 The implementation is :meth:`geocull.Renderer.render_isosurface`; this module is its functional
-form plus the cache control and the mode names.
+form plus the cache control and the mode names, and :func:`extract_isosurface` (re-exported as
+``geocull.extract_isosurface``) gives the surface as a mesh.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
@@ -38,8 +40,8 @@ from .renderer import ISO_CULLING_MODES, IsoCullingMode, Renderer
 from .results import IsoResult
 from .volume import Volume
 
-__all__ = ["Volume", "render_isosurface", "clear_cache", "set_cache_budget", "cache_budget", "ISO_CULLING_MODES",
-           "IsoCullingMode"]
+__all__ = ["Volume", "render_isosurface", "extract_isosurface", "clear_cache", "set_cache_budget", "cache_budget",
+           "ISO_CULLING_MODES", "IsoCullingMode"]
 
 
 def render_isosurface(
@@ -50,7 +52,7 @@ def render_isosurface(
     culling: IsoCullingMode = "implicit",
     occluder_depth: int | None = None,
     cull_depth: int | None = None,
-    color: Sequence[float] = (0.85, 0.72, 0.45),
+    color: ArrayLike = (0.85, 0.72, 0.45),
     cache: bool = True,
     return_map: bool = False,
 ) -> IsoResult:
@@ -66,6 +68,23 @@ def render_isosurface(
     cv.expect_instance(renderer, Renderer, "renderer")
     return renderer.render_isosurface(volume, isovalue, camera, culling, occluder_depth=occluder_depth,
                                       cull_depth=cull_depth, color=color, cache=cache, return_map=return_map)
+
+
+def extract_isosurface(volume: Volume, isovalue: float) -> tuple[np.ndarray, np.ndarray]:
+    """The isosurface ``volume == isovalue`` as a mesh: ``(vertices (n, 3) float64 world coordinates
+    (metres, z up, the volume's rotation applied), faces (m, 3) int64)``.
+
+    These are the triangles :meth:`geocull.Renderer.render_isosurface` draws with culling="none"
+    (marching tetrahedra over every octree node that straddles the isovalue, run in the core with
+    the GIL released), welded: vertices shared by neighbouring patches appear once (they are bit
+    identical). Zero-area triangles (a sample exactly at the isovalue) are kept, as the renderer
+    keeps them. Triangles wind counter-clockwise seen from the side of increasing values.
+    ``scene.add_mesh(*gc.extract_isosurface(vol, w), kind="isosurface")`` puts it into a scene; the
+    arrays go to PyVista (``pyvista.PolyData.from_regular_faces``) or trimesh as they are.
+    isovalue: a finite number in the values' units.
+    """
+    cv.expect_instance(volume, Volume, "volume")
+    return _geocull.extract_isosurface(volume._v, cv.number(isovalue, "isovalue"))
 
 
 def clear_cache(renderer: Renderer) -> None:

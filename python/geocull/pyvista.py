@@ -25,16 +25,25 @@ from __future__ import annotations
 import math
 import os
 import time
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._errors import GeocullError
+
+if TYPE_CHECKING:
+    import pyvista
+
+    from .camera import Camera
 
 # VTK reads this when it creates a render window: EGL renders off-screen (llvmpipe without a GPU).
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 __all__ = [
+    "SceneLike",
+    "CameraLike",
     "to_polydata",
     "from_polydata",
     "scene_to_multiblock",
@@ -44,7 +53,20 @@ __all__ = [
 ]
 
 
-def _pv():
+class SceneLike(Protocol):
+    """What these functions read of a scene: a ``geocull.Scene`` or a stand-in such as
+    :class:`geocull.data.MeshScene`."""
+
+    def geometry(self, id: int, /) -> tuple[np.ndarray, np.ndarray]: ...
+    def object_ids(self) -> list[int]: ...
+    def object_info(self, id: int, /) -> Mapping[str, Any]: ...
+
+
+#: A ``geocull.Camera``, or a mapping of ``Camera.look_at`` arguments (eye, target, ...).
+CameraLike: TypeAlias = "Camera | Mapping[str, Any]"
+
+
+def _pv() -> Any:
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     import pyvista
 
@@ -88,7 +110,7 @@ def _geometry(scene, oid) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def to_polydata(scene, object_id: int):
+def to_polydata(scene: SceneLike, object_id: int) -> pyvista.PolyData:
     """The fine geometry of one scene object as a ``pyvista.PolyData`` (world coordinates).
 
     ``field_data`` holds ``name``, ``kind``, ``color`` (RGB floats in [0, 1]) and ``object_id``.
@@ -119,13 +141,22 @@ def _field_str(pd, key):
     return None
 
 
-def from_polydata(scene, polydata, **add_mesh_kwargs) -> int:
+def from_polydata(
+    scene: Any,
+    polydata: Any,
+    kind: str | None = None,
+    tiles: int | None = None,
+    coarse_factor: float = 1.0,
+    name: str | None = None,
+    color: ArrayLike | None = None,
+) -> int:
     """Add a PyVista/VTK surface to ``scene`` with ``scene.add_mesh`` and return the new object id.
 
     Non-PolyData datasets are reduced to their outer surface; polygons and strips are triangulated
     (lines and vertex cells are dropped). ``name``, ``color`` and ``kind`` default to the
-    ``field_data`` entries written by :func:`to_polydata` when present; other keyword arguments
-    (``tiles``, ``coarse_factor``, ...) go to ``add_mesh`` unchanged.
+    ``field_data`` entries written by :func:`to_polydata` when present (kind else "mesh");
+    ``tiles`` and ``coarse_factor`` go to ``add_mesh`` unchanged. (``geocull.Scene.add_mesh`` also
+    takes a PolyData directly.)
     """
     pv = _pv()
     pd = polydata if isinstance(polydata, pv.DataSet) else pv.wrap(polydata)
@@ -144,20 +175,18 @@ def from_polydata(scene, polydata, **add_mesh_kwargs) -> int:
     faces = faces.reshape(-1, 4)
     if not np.all(faces[:, 0] == 3):
         raise _input_error("polydata: triangulation left non-triangle cells")
-    kwargs = dict(add_mesh_kwargs)
-    name = _field_str(pd, "name")
-    if name is not None:
-        kwargs.setdefault("name", name)
-    kind = _field_str(pd, "kind")
-    if kind is not None:
-        kwargs.setdefault("kind", kind)
-    if "color" in pd.field_data.keys():
-        kwargs.setdefault("color", _rgb01(pd.field_data["color"]))
+    if name is None:
+        name = _field_str(pd, "name")
+    if kind is None:
+        kind = _field_str(pd, "kind") or "mesh"
+    if color is None and "color" in pd.field_data.keys():
+        color = _rgb01(pd.field_data["color"])
     verts = np.ascontiguousarray(np.asarray(pd.points, dtype=np.float64))
-    return scene.add_mesh(verts, np.ascontiguousarray(faces[:, 1:]), **kwargs)
+    return int(scene.add_mesh(verts, np.ascontiguousarray(faces[:, 1:]), kind=kind, tiles=tiles,
+                              coarse_factor=coarse_factor, name=name, color=color))
 
 
-def scene_to_multiblock(scene):
+def scene_to_multiblock(scene: SceneLike) -> pyvista.MultiBlock:
     """All scene objects as a ``pyvista.MultiBlock``, one block per object named after it
     (``name`` or ``name#id`` when names repeat)."""
     pv = _pv()
@@ -176,7 +205,7 @@ def scene_to_multiblock(scene):
 # --------------------------------------------------------------------------- camera
 
 
-def camera_params(camera) -> dict[str, Any]:
+def camera_params(camera: CameraLike | Any) -> dict[str, Any]:
     """Normalise a ``geocull.Camera`` (or a dict of ``Camera.look_at`` arguments, or any object
     with those attributes) to a dict with every field: eye, target, up, fov_y, near, far,
     projection, ortho_height, z_scale."""
@@ -388,15 +417,15 @@ class _Setup:
 
 
 def reference_image(
-    scene,
-    camera,
+    scene: SceneLike,
+    camera: CameraLike,
     width: int,
     height: int,
     msaa: bool = False,
     lighting: bool = True,
     near: float | None = None,
     far: float | None = None,
-    background=(0.0, 0.0, 0.0),
+    background: ArrayLike = (0.0, 0.0, 0.0),
     repeats: int = 1,
     min_near_ratio: float = 1e-4,
 ) -> dict[str, Any]:
@@ -430,8 +459,8 @@ def reference_image(
 
 
 def timed_render(
-    scene,
-    camera,
+    scene: SceneLike,
+    camera: CameraLike,
     width: int,
     height: int,
     n: int = 5,

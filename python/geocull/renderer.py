@@ -4,10 +4,10 @@
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
 from typing import Literal, get_args
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
@@ -188,7 +188,7 @@ class Renderer:
         *,
         occluder_depth: int | None = None,
         cull_depth: int | None = None,
-        color: Sequence[float] = (0.85, 0.72, 0.45),
+        color: ArrayLike = (0.85, 0.72, 0.45),
         cache: bool = True,
         return_map: bool = False,
     ) -> IsoResult:

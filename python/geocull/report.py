@@ -29,12 +29,25 @@ import math
 import statistics
 import sys
 import time
-from collections.abc import Callable, Iterable, Sequence
-from typing import Any
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 
 from ._errors import InputError
+
+if TYPE_CHECKING:
+    from .camera import Camera
+    from .data import SceneSpec
+    from .renderer import CullingMode, Renderer
+    from .scene import Scene
+
+    #: What ``sweep`` takes as cameras (see there).
+    Cameras = (
+        Iterable[Camera | Mapping[str, Any] | tuple[str, Camera | Mapping[str, Any]]]
+        | Mapping[str, Camera | Mapping[str, Any]]
+        | None
+    )
 
 __all__ = ["sweep", "summarize", "plot", "to_markdown", "to_frame", "timed_rounds", "write_json", "jsonable"]
 
@@ -224,9 +237,10 @@ def _sweep_scene(
     return rows
 
 
+@overload
 def sweep(
-    scene_or_spec,
-    cameras=None,
+    scene_or_spec: SceneSpec | Scene,
+    cameras: Cameras = None,
     thresholds: Iterable[float] = DEFAULT_THRESHOLDS,
     coarse_factors: Iterable[float] | None = None,
     tiles: Iterable[int | tuple[int, int]] | None = None,
@@ -234,13 +248,49 @@ def sweep(
     width: int = 640,
     height: int = 512,
     repeats: int = 3,
-    methods: Iterable[str] = ("none", "oracle", "three_pass"),
+    methods: Iterable[CullingMode] = ("none", "oracle", "three_pass"),
     fault_tiles: int | None = None,
     fault_coarse_factor: float = 10,
-    renderer=None,
+    renderer: Renderer | None = None,
+    progress: bool | Callable[[str], None] = False,
+    as_frame: Literal[False] = False,
+) -> list[dict[str, Any]]: ...
+@overload
+def sweep(
+    scene_or_spec: SceneSpec | Scene,
+    cameras: Cameras = None,
+    thresholds: Iterable[float] = DEFAULT_THRESHOLDS,
+    coarse_factors: Iterable[float] | None = None,
+    tiles: Iterable[int | tuple[int, int]] | None = None,
+    prepass_scales: Iterable[float] = DEFAULT_PREPASS_SCALES,
+    width: int = 640,
+    height: int = 512,
+    repeats: int = 3,
+    methods: Iterable[CullingMode] = ("none", "oracle", "three_pass"),
+    fault_tiles: int | None = None,
+    fault_coarse_factor: float = 10,
+    renderer: Renderer | None = None,
+    progress: bool | Callable[[str], None] = False,
+    *,
+    as_frame: Literal[True],
+) -> Any: ...
+def sweep(
+    scene_or_spec: SceneSpec | Scene,
+    cameras: Cameras = None,
+    thresholds: Iterable[float] = DEFAULT_THRESHOLDS,
+    coarse_factors: Iterable[float] | None = None,
+    tiles: Iterable[int | tuple[int, int]] | None = None,
+    prepass_scales: Iterable[float] = DEFAULT_PREPASS_SCALES,
+    width: int = 640,
+    height: int = 512,
+    repeats: int = 3,
+    methods: Iterable[CullingMode] = ("none", "oracle", "three_pass"),
+    fault_tiles: int | None = None,
+    fault_coarse_factor: float = 10,
+    renderer: Renderer | None = None,
     progress: bool | Callable[[str], None] = False,
     as_frame: bool = False,
-):
+) -> list[dict[str, Any]] | Any:
     """Sweep the culling parameters of a scene and measure speed against error, side by side.
 
     scene_or_spec: a :class:`geocull.data.SceneSpec` (rebuilt for every tile count × coarse factor)
@@ -289,14 +339,14 @@ def sweep(
     if tiles is not None:
         tiles = _values(tiles, "tiles")
     is_spec = isinstance(scene_or_spec, SceneSpec)
-    if is_spec:
+    spec: SceneSpec | None = None
+    if isinstance(scene_or_spec, SceneSpec):
         spec = scene_or_spec
         cfs = list(coarse_factors) if coarse_factors is not None else list(DEFAULT_COARSE_FACTORS)
         tls = [_tiles_tuple(t) for t in tiles] if tiles is not None else list(DEFAULT_TILES)
         if not cfs or not tls:
             raise InputError("coarse_factors, tiles: need at least one value each")
     else:
-        spec = None
         if coarse_factors is not None or tiles is not None:
             raise InputError(
                 "coarse_factors, tiles: sweeping them rebuilds the scene; pass a geocull.data.SceneSpec, not a Scene"
@@ -319,7 +369,7 @@ def sweep(
             scene_or_spec, cams, renderer, thresholds, prepass_scales, repeats, methods,
             dict(tiles=None, coarse_factor=None, build_s=None), say,
         )
-    else:
+    elif spec is not None:
         for tl, cf in itertools.product(tls, cfs):
             say(f"sweep: building scene tiles={tl[0]}x{tl[1]} coarse_factor={cf}")
             t0 = time.perf_counter()
@@ -440,7 +490,7 @@ def to_markdown(table: Sequence[dict[str, Any]], columns: Sequence[str] | None =
     return "\n".join(lines) + "\n"
 
 
-def to_frame(table: Sequence[dict[str, Any]]):
+def to_frame(table: Sequence[dict[str, Any]]) -> Any:
     """The table as a pandas DataFrame (ImportError with a hint if pandas is missing)."""
     try:
         import pandas as pd

@@ -6,13 +6,15 @@ values in Rust, and raises :class:`geocull.InputError` naming the argument on ba
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
+from ._convert import MeshLike
 from ._errors import InputError
 
 if TYPE_CHECKING:
@@ -71,14 +73,16 @@ class Scene:
 
     def add_heightfield(
         self,
-        z: Any,
-        origin: Sequence[float] = (0.0, 0.0),
-        spacing: Sequence[float] = (1.0, 1.0),
-        tiles: Sequence[int] = (1, 1),
+        z: ArrayLike,
+        origin: ArrayLike = (0.0, 0.0),
+        spacing: ArrayLike = (1.0, 1.0),
+        tiles: ArrayLike = (1, 1),
         coarse_factor: float = 1.0,
         name: str | None = None,
-        color: Sequence[float] | None = None,
+        color: ArrayLike | None = None,
         null_value: float | None = None,
+        rotation: float = 0.0,
+        yflip: bool = False,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
@@ -87,10 +91,17 @@ class Scene:
             ``null_value`` (e.g. -999.25, compared in z's own dtype, so float32 data matches
             ``float32(null_value)``) are holes: triangles touching them are dropped.
         origin: (x0, y0) world position of ``z[0, 0]`` (metres).  spacing: (dx, dy) > 0 sample
-            spacing (metres), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy).
+            spacing (metres), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy) when not rotated.
         tiles: (tx, ty) tiles along x and y (each at least one cell wide); tiles share border samples.
         coarse_factor: >= 1; the coarse proxy of each tile has about 1/coarse_factor of its triangles.
-        name: an optional label.  color: (r, g, b) in [0, 1].  Returns the object id.
+        name: an optional label.  color: (r, g, b) in [0, 1].
+        rotation: degrees counter-clockwise (seen from above) about ``origin`` (xtgeo's convention):
+            ``z[j, i]`` sits at ``origin + R(rotation) @ (i*dx, j*dy)``.  yflip: True for xtgeo's
+            ``yflip=-1``: rows run towards -y in the grid's frame (``(i*dx, -j*dy)`` before the
+            rotation); a bool, so xtgeo's 1 / -1 must be translated (``yflip=surf.yflip == -1``, or use
+            :func:`geocull.io.from_xtgeo_surface`). Every culling mode works on rotated grids as on
+            axis-aligned ones (horizon culling included).
+        Returns the object id.
         """
         nv = None if null_value is None else cv.number(null_value, "null_value")
         za = cv.heights(z, nv)
@@ -99,18 +110,19 @@ class Scene:
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
         return self._s.add_heightfield(
-            za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv
+            za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
+            cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
         )
 
     def add_mesh(
         self,
-        vertices: Any,
-        faces: Any,
+        vertices: ArrayLike | MeshLike,
+        faces: ArrayLike | None = None,
         kind: str = "mesh",
         tiles: int | None = None,
         coarse_factor: float = 1.0,
         name: str | None = None,
-        color: Sequence[float] | None = None,
+        color: ArrayLike | None = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -118,8 +130,24 @@ class Scene:
         ``numpy.ma.MaskedArray`` is an InputError).  faces: (m, 3) integer indices in [0, n),
         one row per triangle.  kind: a label ("fault", "mesh", ...).  tiles: None = one tile, k = about
         k spatially coherent clusters.  coarse_factor, name, color: as for :meth:`add_heightfield`.
+
+        Instead of (vertices, faces), ``vertices`` may be a mesh object, with ``faces`` omitted: a
+        ``trimesh.Trimesh`` (its vertices and faces), or a ``pyvista.PolyData`` (any PyVista dataset is
+        reduced to its surface): polygons and triangle strips are triangulated, line and vertex cells
+        are ignored with a :class:`geocull.GeocullWarning`; ``name`` and ``color`` default to the
+        ``field_data`` written by :func:`geocull.io.to_pyvista`. Recognised by their attributes, so
+        neither package is imported unless such an object is passed.
         Returns the object id.
         """
+        mesh = cv.mesh_arrays(vertices)
+        if mesh is not None:
+            if faces is not None:
+                raise InputError(f"faces: must be omitted when vertices is a {type(vertices).__name__}")
+            vertices, faces = mesh.vertices, mesh.faces
+            name = mesh.name if name is None else name
+            color = mesh.color if color is None else color
+        elif faces is None:
+            raise InputError("faces: required with a vertex array (or pass a trimesh.Trimesh / pyvista.PolyData)")
         v = cv.vertices(vertices)
         f = cv.int_array(faces, "faces", 2, 3)
         if f.dtype.kind == "u" and f.size and f.max() > np.iinfo(np.int64).max:
@@ -140,11 +168,11 @@ class Scene:
         """Show or hide object ``id`` (no re-upload)."""
         self._s.set_visible(cv.integer(id, "id"), bool(visible))
 
-    def translate(self, id: int, offset: Sequence[float]) -> None:
+    def translate(self, id: int, offset: ArrayLike) -> None:
         """Move object ``id`` by offset = (dx, dy, dz) metres, added to earlier offsets (no re-upload)."""
         self._s.translate(cv.integer(id, "id"), cv.vec3(offset, "offset"))
 
-    def set_color(self, id: int, color: Sequence[float]) -> None:
+    def set_color(self, id: int, color: ArrayLike) -> None:
         """Set the colour of object ``id``: (r, g, b) in [0, 1] (no re-upload)."""
         self._s.set_color(cv.integer(id, "id"), cv.vec3(color, "color"))
 
@@ -162,6 +190,15 @@ class Scene:
     def origin(self) -> tuple[float, float, float]:
         """The f64 origin (x, y, z) in metres that positions are stored relative to (set by the first object)."""
         return self._s.origin
+
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]] | None:
+        """``((xmin, ymin, zmin), (xmax, ymax, zmax))`` world coordinates (metres) of every object's
+        triangles, visible and hidden alike, offsets (:meth:`translate`) applied, no vertical
+        exaggeration; ``None`` when the scene has no triangle (no object yet, or only height fields made
+        wholly of holes). Computed in the core from the tiles' boxes (exact to float32 precision of the
+        positions relative to :attr:`origin`)."""
+        return self._s.bounds
 
     @property
     def host_bytes(self) -> int:

@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+import os
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
@@ -15,21 +16,36 @@ from ._errors import InputError
 if TYPE_CHECKING:
     from ._geocull import OctreeNodes
 
-__all__ = ["Volume"]
+__all__ = ["Volume", "VolumeOrder", "ZPositive", "X_DIMS", "Y_DIMS", "Z_DIMS", "DOWN_DIMS"]
+
+#: Index order of a volume's values: "zyx" = ``values[k, j, i]`` (numpy's (nz, ny, nx)); "xyz" =
+#: ``values[i, j, k]`` (segyio's (inline, crossline, sample), xtgeo's ``Cube.values``).
+VolumeOrder = Literal["zyx", "xyz"]
+#: Direction of the z (sample) axis: "up", or "down" for depth / time (the sample index grows downwards).
+ZPositive = Literal["up", "down"]
+
+#: xarray dimension names (compared in lower case) read as the x, y and z axes of a volume.
+X_DIMS = frozenset({"x", "easting", "inline", "iline", "il", "inlines"})
+Y_DIMS = frozenset({"y", "northing", "crossline", "xline", "xl", "crosslines"})
+Z_DIMS = frozenset({"z", "depth", "time", "twt", "sample", "samples", "tvd", "tvdss"})
+#: z dimension names whose axis grows downwards (z_positive="down" unless given).
+DOWN_DIMS = frozenset({"depth", "time", "twt", "sample", "samples", "tvd", "tvdss"})
+#: Dimension names whose coordinates are line numbers, not metres (origin and spacing must be given).
+_LINE_DIMS = frozenset({"inline", "iline", "il", "inlines", "crossline", "xline", "xl", "crosslines"})
 
 
 def _values(values: Any) -> np.ndarray:
-    """A C-contiguous float32/float64 (nz, ny, nx) view of ``values`` (numpy, np.memmap, xarray,
-    anything with ``__array__``), copied only when the layout or dtype demands it."""
-    if hasattr(values, "variable") and hasattr(values, "dims") and hasattr(values, "data"):
-        values = values.data  # xarray.DataArray: its backing array (numpy, or dask -> computed below)
+    """A float32/float64 3-D view of ``values`` (numpy, np.memmap, anything with ``__array__``) in
+    its own index order and strides: transposes and flips are left to the core, which reads the
+    samples once into its buffer. Copied here only when the dtype demands it (other real dtypes,
+    non-native byte order) or a mask must become NaN."""
     values, mask = cv.unmasked(values, "values")
     try:
         a = np.asarray(values)
     except Exception as e:
         raise InputError(f"values: cannot be read as an array ({e})") from None
     if a.ndim != 3:
-        raise InputError(f"values: shape {a.shape} is not 3-D (nz, ny, nx)")
+        raise InputError(f"values: shape {a.shape} is not 3-D")
     if a.dtype.kind not in "fiu" or a.dtype.kind == "c":
         raise InputError(f"values: dtype {a.dtype} is not supported; expected real numbers")
     if min(a.shape) < 2:
@@ -40,32 +56,155 @@ def _values(values: Any) -> np.ndarray:
     if a.dtype == np.float32 or a.dtype == np.float64:
         if not a.dtype.isnative:
             a = a.astype(a.dtype.newbyteorder("="))
-        return np.ascontiguousarray(a)
+        return a
     # float16 fits float32 exactly; integers go through float64, whose residuals keep them
     # (int32 / int64 samples of 1e8 and 1e8 + 1 differ in float64 but not in float32).
-    return np.ascontiguousarray(a, dtype=np.float32 if a.dtype.kind == "f" else np.float64)
+    return a.astype(np.float32 if a.dtype.kind == "f" else np.float64)
+
+
+def _is_dataarray(x: Any) -> bool:
+    return all(hasattr(x, k) for k in ("dims", "coords", "transpose", "isel", "variable"))
+
+
+def _regular(c: np.ndarray, dim: str) -> tuple[float, float]:
+    """(first value, step) of a regular 1-D coordinate, else InputError."""
+    d = np.diff(c.astype(np.float64))
+    if not (np.all(np.isfinite(d)) and np.allclose(d, d[0], rtol=1e-6, atol=0.0)) or d[0] == 0:
+        raise InputError(f"values: the coordinate of dim {dim!r} is not regularly spaced; pass origin and spacing")
+    return float(c[0]), float(d[0])
+
+
+def _from_dataarray(
+    da: Any, origin: ArrayLike | None, spacing: ArrayLike | None, z_positive: ZPositive | None
+) -> tuple[Any, tuple[float, float, float] | None, tuple[float, float, float] | None, ZPositive]:
+    """A DataArray as (its samples as a (z, y, x) view, origin, spacing, z_positive), axes found by
+    dim name (X_DIMS, Y_DIMS, Z_DIMS); origin and spacing from regular coordinates where not given
+    (axes whose coordinate decreases are reversed, as views)."""
+    axes: dict[str, str] = {}
+    for d in da.dims:
+        low = str(d).lower()
+        for ax, names in (("x", X_DIMS), ("y", Y_DIMS), ("z", Z_DIMS)):
+            if low in names:
+                if ax in axes:
+                    raise InputError(f"values: dims {axes[ax]!r} and {d!r} are both read as the {ax} axis")
+                axes[ax] = d
+    if len(axes) != 3 or len(da.dims) != 3:
+        raise InputError(
+            f"values: a DataArray's dims {tuple(da.dims)} must name an x, a y and a z axis "
+            f"(x: {sorted(X_DIMS)}, y: {sorted(Y_DIMS)}, z: {sorted(Z_DIMS)}), or pass order="
+        )
+    zdim = axes["z"]
+    zp: ZPositive = z_positive if z_positive is not None else ("down" if str(zdim).lower() in DOWN_DIMS else "up")
+    da = da.transpose(axes["z"], axes["y"], axes["x"])
+    o = [0.0, 0.0, 0.0]
+    sp = [1.0, 1.0, 1.0]
+    for k, dim in enumerate((axes["x"], axes["y"], axes["z"])):
+        if dim not in da.coords or (origin is not None and spacing is not None):
+            continue
+        if str(dim).lower() in _LINE_DIMS:
+            raise InputError(
+                f"spacing: the DataArray's {dim!r} coordinate holds line numbers, not metres; pass origin and spacing "
+                "(Volume.from_segy reads them from the trace headers)"
+            )
+        first, step = _regular(np.asarray(da.coords[dim].values), str(dim))
+        if step < 0:  # a decreasing coordinate: reverse the axis (a view) so that the spacing is > 0
+            da = da.isel({dim: slice(None, None, -1)})
+            first, step = float(np.asarray(da.coords[dim].values)[0]), -step
+        o[k], sp[k] = first, step
+    return (
+        da.data,
+        None if origin is not None else (o[0], o[1], o[2]),
+        None if spacing is not None else (sp[0], sp[1], sp[2]),
+        zp,
+    )
 
 
 class Volume:
-    """A scalar field on a regular grid: ``values[k, j, i]`` sits at
-    ``origin + (i*dx, j*dy, k*dz)``; x varies fastest. NaN samples, and the masked samples of a
-    ``numpy.ma.MaskedArray``, are "no data" (outside the domain: no surface in cells touching them).
+    """A scalar field on a regular grid (a seismic cube, a property model), rendered as isosurfaces
+    (:meth:`geocull.Renderer.render_isosurface`, :func:`geocull.extract_isosurface`). NaN samples, and
+    the masked samples of a ``numpy.ma.MaskedArray``, are "no data" (no surface in cells touching them).
 
-    values: (nz, ny, nx) array, float32 or float64 (other real dtypes are converted); numpy
-    arrays, memory maps and numpy-backed xarray DataArrays are read in place and copied exactly once,
-    into the core's float32 buffer (the octree and the surface extraction read that buffer).
-    float64 (and integer) values are stored as float32 *residuals* about :attr:`offset`, the
-    midrange of the finite samples, so values such as 1e8 ± 1 keep their differences; float32
-    values are stored as they are (offset 0). Isovalues and the octree's min/max are in the
-    values' own units either way.
-    origin: (x0, y0, z0) world position of ``values[0, 0, 0]`` (metres).  spacing: (dx, dy, dz) > 0
-    sample spacing (metres).
+    values: a 3-D array, float32 or float64 (other real dtypes are converted); numpy arrays, memory
+        maps and numpy-backed xarray DataArrays are read in place (transposes and flips too) and
+        copied exactly once, into the core's float32 buffer. float64 (and integer) values are stored
+        as float32 *residuals* about :attr:`offset`, the midrange of the finite samples, so values
+        such as 1e8 ± 1 keep their differences; float32 values are stored as they are (offset 0).
+        Isovalues and the octree's min/max are in the values' own units either way.
+    order: how ``values`` is indexed. "zyx" (default): ``values[k, j, i]``, numpy's (nz, ny, nx).
+        "xyz": ``values[i, j, k]``: the first index is x, the second y, the last z. segyio's
+        (inline, crossline, sample) cubes (``segyio.tools.cube``) and xtgeo's ``Cube.values``
+        (ncol, nrow, nlay) go in as they are with order="xyz": inline -> x, crossline -> y,
+        sample -> z (for a rotated survey, x and y are the grid's own axes; see ``rotation``).
+    origin: (x0, y0, z0) position of ``values``' first sample (index [0, 0, 0]), metres.
+        spacing: (dx, dy, dz) > 0 sample spacing. Sample (i, j, k) lies at
+        ``(x0, y0) + R(rotation) @ (i*dx, j*dy)`` horizontally and at z0 + k*dz
+        (z_positive="up") or at **z = -(z0 + k*dz)** (z_positive="down") vertically.
+    z_positive: "up" (default), or "down" for depth / time cubes: the sample axis grows downwards
+        and z0, dz are on that axis (z0 is the shallowest sample's depth or time, dz > 0), so the
+        volume renders the right way up in geocull's z-up world, where a depth d is z = -d (the
+        convention of :mod:`geocull.io`, whose xtgeo surfaces come in as z = -depth too).
+    rotation: degrees counter-clockwise (seen from above) about the vertical through the origin, as
+        xtgeo's and a rotated survey's; the octree and its node boxes stay in the grid's own frame
+        (:meth:`nodes`), the renderer and :func:`geocull.extract_isosurface` turn them into the world.
+
+    xarray: a DataArray's axes are found by dim name (lower case: x ``X_DIMS`` = x, easting, inline,
+    iline, il; y ``Y_DIMS`` = y, northing, crossline, xline, xl; z ``Z_DIMS`` = z, depth, time, twt,
+    sample, samples, tvd, tvdss) in any order; z_positive defaults to "down" for the depth / time /
+    sample names. origin and spacing, where not given, come from the dims' coordinates when those
+    are regular (a decreasing coordinate reverses that axis); inline / crossline coordinates are
+    line numbers, not metres, so such arrays need origin and spacing (or :meth:`from_segy`). With
+    ``order=`` given, the DataArray is read as a plain array in that order.
+
+    The stored grid (:attr:`shape`, :attr:`origin`, :attr:`spacing`) is (nz, ny, nx) with z
+    upwards: for z_positive="down" its origin is the deepest sample.
     """
 
-    def __init__(self, values: Any, origin: Sequence[float] = (0.0, 0.0, 0.0),
-                 spacing: Sequence[float] = (1.0, 1.0, 1.0)) -> None:
+    def __init__(
+        self,
+        values: ArrayLike,
+        origin: ArrayLike | None = None,
+        spacing: ArrayLike | None = None,
+        order: VolumeOrder | None = None,
+        z_positive: ZPositive | None = None,
+        rotation: float = 0.0,
+    ) -> None:
+        o3 = None if origin is None else cv.vec3(origin, "origin")
+        s3 = None if spacing is None else cv.vec3(spacing, "spacing")
+        zp: str | None = z_positive
+        if order is None and _is_dataarray(values):
+            values, o3_, s3_, zp = _from_dataarray(values, o3, s3, z_positive)
+            o3, s3 = o3 if o3 is not None else o3_, s3 if s3 is not None else s3_
+            order = "zyx"
+        for arg, v in (("order", order), ("z_positive", zp)):
+            if v is not None and not isinstance(v, str):
+                raise InputError(f"{arg}: {v!r} is not a string")
         a = _values(values)
-        self._v = _geocull.Volume(a, cv.vec3(origin, "origin"), cv.vec3(spacing, "spacing"))
+        self._v = _geocull.Volume(
+            a, o3 if o3 is not None else (0.0, 0.0, 0.0), s3 if s3 is not None else (1.0, 1.0, 1.0),
+            order or "zyx", zp or "up", cv.number(rotation, "rotation"),
+        )
+
+    @classmethod
+    def from_segy(
+        cls,
+        source: str | os.PathLike[str] | Any,
+        iline: int = 189,
+        xline: int = 193,
+        z_positive: ZPositive = "down",
+    ) -> Volume:
+        """A post-stack 3-D SEG-Y cube (needs segyio): ``source`` is a path or an open
+        ``segyio.SegyFile``; iline / xline: the trace header bytes of the inline and crossline numbers
+        (segyio's defaults 189 / 193). See :func:`geocull.io.from_segy` for what is read: inline ->
+        x, crossline -> y, sample -> z (``f.samples``, in the file's units: ms for time, m or ft for
+        depth; z_positive="down"), origin and spacing from the CDP_X / CDP_Y headers (with their
+        scalar), rotation from the inline direction. Rotated surveys are supported when their inline
+        and crossline axes are perpendicular (either handedness); skewed, irregular, unstructured and
+        pre-stack files are InputErrors. The samples are read once (``segyio.tools.cube``) and copied
+        once into the volume."""
+        from . import io
+
+        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive)
+        return cls(kw["values"], kw["origin"], kw["spacing"], kw["order"], kw["z_positive"], kw["rotation"])
 
     @classmethod
     def _wrap(cls, inner: _geocull.Volume) -> Volume:
@@ -74,8 +213,8 @@ class Volume:
         return v
 
     def to_bytes(self) -> bytes:
-        """The volume as bytes (shape, origin, spacing, :attr:`offset` and the float32 residuals,
-        versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it."""
+        """The volume as bytes (shape, origin, spacing, :attr:`offset`, :attr:`rotation` and the float32
+        residuals, versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it."""
         return self._v.to_bytes()
 
     @staticmethod
@@ -96,18 +235,24 @@ class Volume:
 
     @property
     def shape(self) -> tuple[int, int, int]:
-        """(nz, ny, nx)"""
+        """(nz, ny, nx) of the stored grid (z upwards)."""
         return self._v.shape
 
     @property
     def origin(self) -> tuple[float, float, float]:
-        """(x0, y0, z0) world position of ``values[0, 0, 0]`` (metres)."""
+        """(x0, y0, z0) world position (z up) of the stored grid's sample (0, 0, 0), metres: the
+        given origin, except z for z_positive="down" (then the deepest sample, -(z0 + (nz-1)*dz))."""
         return self._v.origin
 
     @property
     def spacing(self) -> tuple[float, float, float]:
         """(dx, dy, dz) sample spacing (metres)."""
         return self._v.spacing
+
+    @property
+    def rotation(self) -> float:
+        """Degrees counter-clockwise about the vertical through :attr:`origin`."""
+        return self._v.rotation
 
     @property
     def offset(self) -> float:
@@ -117,10 +262,9 @@ class Volume:
 
     @property
     def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """((xmin, ymin, zmin), (xmax, ymax, zmax)) in world units (metres)."""
-        nz, ny, nx = self.shape
-        o, s = self.origin, self.spacing
-        return o, (o[0] + (nx - 1) * s[0], o[1] + (ny - 1) * s[1], o[2] + (nz - 1) * s[2])
+        """((xmin, ymin, zmin), (xmax, ymax, zmax)) in world units (metres, z up), rotation applied
+        (the box around the turned grid)."""
+        return self._v.bounds
 
     @property
     def center(self) -> tuple[float, float, float]:
@@ -136,9 +280,11 @@ class Volume:
 
     def nodes(self, depth: int) -> OctreeNodes:
         """Octree nodes at ``depth`` (0..max_depth()): dict of index (n, 3) uint32 [ix, iy, iz] (in units
-        of the node's size), bbox_min / bbox_max (n, 3) float64 world (metres), min / max (n,) float64
+        of the node's size), bbox_min / bbox_max (n, 3) float64 in the grid's frame (world metres for
+        an unrotated volume; before the rotation about the origin otherwise), min / max (n,) float64
         value range in the values' units (+inf / -inf for nodes whose samples are all NaN)."""
         return self._v.nodes(cv.integer(depth, "depth"))
 
     def __repr__(self) -> str:
-        return f"<geocull.Volume shape={self.shape} origin={self.origin} spacing={self.spacing}>"
+        rot = f" rotation={self.rotation:g}" if self.rotation else ""
+        return f"<geocull.Volume shape={self.shape} origin={self.origin} spacing={self.spacing}{rot}>"

@@ -5,10 +5,19 @@
 //! isosurface `f = w`; the renderer tests those blocks against a GPU occlusion
 //! map and asks this module to triangulate only the visible ones.
 //!
-//! * [`Volume`]: a regular scalar grid (x fastest, then y, then z).
+//! * [`Volume`]: a regular scalar grid (x fastest, then y, then z), optionally rotated about
+//!   the vertical through its origin; [`layout`]: how a user's array (zyx or xyz order, z
+//!   positive up or down) maps onto it.
 //! * [`octree::MinMaxOctree`]: per-node min/max over cells, built with rayon.
 //! * [`tetra`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
 //!   cells, plus a patch cache keyed by isovalue and node.
+//! * [`mesh`]: the whole isosurface as one welded world-space mesh (the renderer's triangles).
+//!
+//! **Rotation.** Everything inside this module (octree boxes, occluders, patches) lives in the
+//! volume's own *grid frame*: sample `(i,j,k)` at `origin + (i,j,k) * spacing`. A rotated volume
+//! (`rotation` degrees counter-clockwise about the vertical through `origin`, as a rotated survey)
+//! is turned only where it meets the world: the renderer folds the rotation into its
+//! view-projection matrix (`render.rs`) and [`mesh`] turns the vertices it returns.
 //!
 
 use std::sync::Arc;
@@ -20,6 +29,8 @@ use crate::scene::serial::{Reader, Writer};
 
 const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
+pub mod layout;
+pub mod mesh;
 pub mod octree;
 mod passes;
 pub mod render;
@@ -81,6 +92,8 @@ pub struct Volume {
     pub nz: usize,
     pub origin: [f64; 3],
     pub spacing: [f64; 3],
+    /// Degrees counter-clockwise (seen from +z) about the vertical through `origin`; 0 = axis-aligned.
+    pub rotation: f64,
 }
 
 impl Volume {
@@ -111,7 +124,51 @@ impl Volume {
                 format!("component {i} is {d}; expected a finite number > 0")
             })?;
         }
-        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing })
+        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing, rotation: 0.0 })
+    }
+
+    /// The same volume rotated by `rotation` degrees counter-clockwise about the vertical through
+    /// its origin (a rotated survey). Errors name `rotation` when it is not finite.
+    pub fn with_rotation(self, rotation: f64) -> Result<Self> {
+        ensure(rotation.is_finite(), "rotation", || {
+            format!("rotation is {rotation}; expected a finite angle in degrees (counter-clockwise)")
+        })?;
+        Ok(Volume { rotation, ..self })
+    }
+
+    /// (cos, sin) of the rotation, exact at multiples of 90°.
+    pub fn cos_sin(&self) -> (f64, f64) {
+        crate::lod::cos_sin_deg(self.rotation)
+    }
+
+    /// World position of a grid-frame point (rotation about the origin's vertical applied).
+    #[inline]
+    pub fn to_world(&self, p: [f64; 3]) -> [f64; 3] {
+        let (c, s) = self.cos_sin();
+        if (c, s) == (1.0, 0.0) {
+            return p;
+        }
+        let (u, v) = (p[0] - self.origin[0], p[1] - self.origin[1]);
+        [self.origin[0] + (c * u - s * v), self.origin[1] + (s * u + c * v), p[2]]
+    }
+
+    /// World-space bounding box `(min, max)` of the samples: [`Volume::bounds`] for an
+    /// axis-aligned volume, else the box around the rotated grid's corners.
+    pub fn world_bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let (lo, hi) = self.bounds();
+        let mut a = [f64::INFINITY; 3];
+        let mut b = [f64::NEG_INFINITY; 3];
+        for c in 0..4 {
+            let p =
+                self.to_world([if c & 1 == 0 { lo[0] } else { hi[0] }, if c & 2 == 0 { lo[1] } else { hi[1] }, lo[2]]);
+            for ax in 0..2 {
+                a[ax] = a[ax].min(p[ax]);
+                b[ax] = b[ax].max(p[ax]);
+            }
+        }
+        a[2] = lo[2];
+        b[2] = hi[2];
+        (a, b)
     }
 
     /// A volume of f32 residuals about `offset` (checked as by [`Volume::new`]; `offset` finite).
@@ -130,17 +187,59 @@ impl Volume {
     /// (0 when there are none). Errors name `values[k, j, i]` when a sample is infinite or its
     /// residual exceeds the f32 range (a value range wider than about 6.8e38).
     pub fn from_f64(values: &[f64], dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3]) -> Result<Self> {
-        let (lo, hi) = values
-            .par_iter()
-            .filter(|v| v.is_finite())
-            .fold(|| (f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)))
+        let (nx, ny, nz) = dims;
+        let n = nx.saturating_mul(ny).saturating_mul(nz);
+        ensure(values.len() == n, "values", || {
+            format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len())
+        })?;
+        let slice = nx * ny;
+        Self::from_f64_slices(dims, origin, spacing, |k, out| out.copy_from_slice(&values[k * slice..(k + 1) * slice]))
+    }
+
+    /// [`Volume::from_f64`] for samples that are not one contiguous slice (a strided, transposed or
+    /// flipped array): `read(k, out)` writes z slice `k` (`ny * nx` samples, x fastest) into `out`.
+    /// Slices are read in parallel, twice (the midrange, then the residuals) and never gathered
+    /// into an f64 copy of the whole volume.
+    pub fn from_f64_slices(
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+        read: impl Fn(usize, &mut [f64]) + Sync,
+    ) -> Result<Self> {
+        let (nx, ny, nz) = dims;
+        let slice = nx
+            .checked_mul(ny)
+            .filter(|s| s.checked_mul(nz).is_some())
+            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        let range = |(a, b): (f64, f64), v: &f64| if v.is_finite() { (a.min(*v), b.max(*v)) } else { (a, b) };
+        let (lo, hi) = (0..nz)
+            .into_par_iter()
+            .map_init(
+                || vec![0.0f64; slice],
+                |buf, k| {
+                    read(k, buf);
+                    buf.iter().fold((f64::INFINITY, f64::NEG_INFINITY), range)
+                },
+            )
             .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)));
         let offset = if lo <= hi { lo * 0.5 + hi * 0.5 } else { 0.0 };
-        let residuals: Vec<f32> = values.par_iter().map(|&v| (v - offset) as f32).collect();
-        let (nx, ny) = (dims.0, dims.1);
+        let mut residuals = vec![0.0f32; slice * nz];
+        if slice > 0 {
+            residuals.par_chunks_mut(slice).enumerate().for_each_init(
+                || vec![0.0f64; slice],
+                |buf, (k, out)| {
+                    read(k, buf);
+                    for (r, &v) in out.iter_mut().zip(buf.iter()) {
+                        *r = (v - offset) as f32;
+                    }
+                },
+            );
+        }
         if let Some(k) = residuals.par_iter().position_first(|r| r.is_infinite()) {
-            let (i, j, kk) = (k % nx.max(1), (k / nx.max(1)) % ny.max(1), k / (nx * ny).max(1));
-            let v = values[k];
+            let (i, j, kk) = (k % nx.max(1), (k / nx.max(1)) % ny.max(1), k / slice.max(1));
+            let mut buf = vec![0.0f64; slice];
+            read(kk, &mut buf);
+            let v = buf[k % slice.max(1)];
             return Err(input_err(
                 "values",
                 format!(
@@ -155,6 +254,27 @@ impl Volume {
             ));
         }
         Self::with_offset(residuals.into(), offset, dims, origin, spacing)
+    }
+
+    /// [`Volume::new`] for f32 samples that are not one contiguous slice: `read(k, out)` writes z
+    /// slice `k` (`ny * nx` samples, x fastest) into the volume's own buffer (in parallel): the one
+    /// copy of the samples.
+    pub fn from_f32_slices(
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+        read: impl Fn(usize, &mut [f32]) + Sync,
+    ) -> Result<Self> {
+        let (nx, ny, nz) = dims;
+        let slice = nx
+            .checked_mul(ny)
+            .filter(|s| s.checked_mul(nz).is_some())
+            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        let mut v = vec![0.0f32; slice * nz];
+        if slice > 0 {
+            v.par_chunks_mut(slice).enumerate().for_each(|(k, out)| read(k, out));
+        }
+        Self::new(v.into(), dims, origin, spacing)
     }
 
     /// The residual (f32, relative to [`Volume::offset`]) of a value in the volume's units, as the
@@ -176,13 +296,14 @@ impl Volume {
         Ok(r)
     }
 
-    /// The volume as bytes: magic `b"GCVOLUM\0"`, version u32 (1), then little-endian
-    /// nx, ny, nz (u64), origin, spacing (f64 x 3), offset (f64) and the residuals (u64 count,
-    /// f32 each); [`Volume::from_bytes`] reads them back.
+    /// The volume as bytes: magic `b"GCVOLUM\0"`, version u32 (2), then little-endian
+    /// nx, ny, nz (u64), origin, spacing (f64 x 3), offset (f64), rotation (f64, degrees; absent
+    /// in version 1, read as 0) and the residuals (u64 count, f32 each); [`Volume::from_bytes`]
+    /// reads them back.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut w = Writer(Vec::with_capacity(96 + 4 * self.values.len()));
+        let mut w = Writer(Vec::with_capacity(104 + 4 * self.values.len()));
         w.bytes(VOLUME_MAGIC);
-        w.u32(1);
+        w.u32(2);
         for n in [self.nx, self.ny, self.nz] {
             w.u64(n as u64);
         }
@@ -190,6 +311,7 @@ impl Volume {
             w.f64(*v);
         }
         w.f64(self.offset);
+        w.f64(self.rotation);
         w.f32s(&self.values);
         w.0
     }
@@ -198,12 +320,15 @@ impl Volume {
     /// damaged or foreign buffer is an InputError naming `data`).
     pub fn from_bytes(data: &[u8]) -> Result<Self> {
         let mut r = Reader::new(data, "data");
-        r.header(VOLUME_MAGIC, "volume", 1)?;
+        let version = r.header(VOLUME_MAGIC, "volume", 2)?;
         let dims = (r.usize()?, r.usize()?, r.usize()?);
         let (origin, spacing, offset) = (r.f64x3()?, r.f64x3()?, r.f64()?);
+        let rotation = if version >= 2 { r.f64()? } else { 0.0 };
         let values = r.f32s()?;
         r.finish()?;
-        Self::with_offset(values.into(), offset, dims, origin, spacing)
+        Self::with_offset(values.into(), offset, dims, origin, spacing)?
+            .with_rotation(rotation)
+            .map_err(|e| input_err("data", format!("data: {e}")))
     }
 
     /// A residual (an octree min/max, a stored sample) in the volume's units.
@@ -358,8 +483,15 @@ mod tests {
     fn bytes_round_trip() {
         let vals: Vec<f64> = (0..60).map(|k| 1e8 + k as f64 * 0.25 + if k == 7 { f64::NAN } else { 0.0 }).collect();
         let v = Volume::from_f64(&vals, (3, 4, 5), [1.0, 2.0, 3.0], [0.5, 1.0, 2.0]).unwrap();
+        let v = v.with_rotation(-37.5).unwrap();
         let w = Volume::from_bytes(&v.to_bytes()).unwrap();
         assert_eq!((w.offset, w.origin, w.spacing, (w.nx, w.ny, w.nz)), (v.offset, v.origin, v.spacing, (3, 4, 5)));
+        assert_eq!(w.rotation, -37.5);
+        // version 1 (no rotation) reads as unrotated: magic 8, version 4, dims 24, origin/spacing 48, offset 8
+        let b2 = v.to_bytes();
+        let mut b1 = [&b2[..92], &b2[100..]].concat();
+        b1[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert_eq!(Volume::from_bytes(&b1).unwrap().rotation, 0.0);
         assert_eq!(
             w.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
             v.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>()

@@ -49,7 +49,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{DVec3, Mat4};
+use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
@@ -292,16 +292,16 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
     (below, above)
 }
 
-/// True when some part of the box is not in front of the near plane (so the test pass could miss
-/// it): such nodes are treated as visible.
-fn reaches_near_plane(fc: &FrameCamera, b: &BoxInstance) -> bool {
+/// True when some part of the box (grid frame, turned into render space by `model`) is not in
+/// front of the near plane (so the test pass could miss it): such nodes are treated as visible.
+fn reaches_near_plane(fc: &FrameCamera, model: &DMat4, b: &BoxInstance) -> bool {
     let mut dmin = f64::INFINITY;
     for i in 0..8 {
-        let c = DVec3::new(
+        let c = model.transform_point3(DVec3::new(
             if i & 1 == 0 { b.lo[0] } else { b.hi[0] } as f64,
             if i & 2 == 0 { b.lo[1] } else { b.hi[1] } as f64,
             if i & 4 == 0 { b.lo[2] } else { b.hi[2] } as f64,
-        );
+        ));
         dmin = dmin.min((c - fc.eye).dot(fc.forward));
     }
     dmin <= fc.near * 1.001 + 1e-9
@@ -343,12 +343,32 @@ impl IsoRenderer {
 
         let t0 = Instant::now();
         let (lo, hi) = vol.bounds();
+        // Boxes and patches live in the volume's grid frame, relative to its centre (`space`). A
+        // rotated volume's render space is that turned about z (`model`; z exaggeration commutes
+        // with it): the frame is centred on the world position of the centre, bounded by the turned
+        // box, and the rotation is folded into the matrix every pass draws with.
         let space = Space { origin: (DVec3::from_array(lo) + DVec3::from_array(hi)) * 0.5, z_scale: camera.z_scale };
-        let rb = (space.point(lo).min(space.point(hi)), space.point(lo).max(space.point(hi)));
-        let fc = camera.frame(space.origin, Some(rb), width as f64 / height as f64);
-        let light = fc.light_dir();
+        let (c, s) = vol.cos_sin();
+        let model = DMat4::from_cols(DVec4::new(c, s, 0.0, 0.0), DVec4::new(-s, c, 0.0, 0.0), DVec4::Z, DVec4::W);
+        let (plo, phi) = (space.point(lo).min(space.point(hi)), space.point(lo).max(space.point(hi)));
+        let mut rb = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for k in 0..8 {
+            let p = DVec3::new(
+                if k & 1 == 0 { plo.x } else { phi.x },
+                if k & 2 == 0 { plo.y } else { phi.y },
+                if k & 4 == 0 { plo.z } else { phi.z },
+            );
+            let q = model.transform_point3(p);
+            rb = (rb.0.min(q), rb.1.max(q));
+        }
+        let centre = DVec3::from_array(vol.to_world(space.origin.to_array()));
+        let fc = camera.frame(centre, Some(rb), width as f64 / height as f64);
+        let rotated = (c, s) != (1.0, 0.0);
+        let view_proj = if rotated { fc.view_proj * model } else { fc.view_proj };
+        // Normals are in the grid frame too: light them with the light turned back.
+        let light = if rotated { model.transpose().transform_vector3(fc.light_dir()) } else { fc.light_dir() };
         let globals = Globals {
-            view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+            view_proj: Mat4::from_cols_array(&view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
             light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0],
             color: [opts.color[0], opts.color[1], opts.color[2], 1.0],
         };
@@ -438,7 +458,7 @@ impl IsoRenderer {
             let vis_final: Vec<NodeInfo> = loop {
                 let boxes: Vec<BoxInstance> =
                     level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
-                let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, b)).collect();
+                let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, &model, b)).collect();
                 let counts = test_nodes(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, &boxes)?;
                 stats.nodes_tested += level.len() as u32;
                 let vis: Vec<NodeInfo> = level

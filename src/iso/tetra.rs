@@ -37,7 +37,8 @@ use rayon::prelude::*;
 use super::octree::NodeInfo;
 use super::Volume;
 
-/// Triangles of one box of cells. Positions are world coordinates.
+/// Triangles of one box of cells. Positions are grid-frame coordinates (world coordinates of an
+/// unrotated volume; see `Volume::to_world`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SurfacePatch {
     pub positions: Vec<[f64; 3]>,
@@ -371,7 +372,7 @@ fn split_lengths<'a, T>(mut v: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> 
 }
 
 /// Extracts the isosurface `w` in the cell box `[cell_lo, cell_hi)` (clamped to
-/// the volume). Positions are world coordinates; vertices are shared between
+/// the volume). Positions are grid-frame coordinates; vertices are shared between
 /// the triangles of the box. Large boxes are processed in parallel z-chunks
 /// and welded; the result does not depend on the thread count.
 pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> SurfacePatch {

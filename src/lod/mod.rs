@@ -9,7 +9,9 @@
 //! Height fields: a (ny, nx) grid, x along columns, y along rows, two triangles per cell (diagonal
 //! from sample (i, j) to (i+1, j+1)); a triangle touching a NaN sample is dropped. Tile boundaries
 //! along x are `round(t * (nx-1) / tx)` for t = 0..=tx (likewise y), and neighbouring tiles share
-//! their border samples so the fine level has no cracks.
+//! their border samples so the fine level has no cracks. A grid may be rotated about its origin
+//! and its rows may run towards -y ([`GridSpec::pos`]); tiles, tile order and triangles are those
+//! of the grid's own (i, j) frame either way, only the vertex positions are turned.
 
 pub mod levels;
 pub mod simplify;
@@ -84,7 +86,30 @@ pub fn tile_bounds(n_samples: usize, n_tiles: usize) -> Vec<usize> {
     (0..=n_tiles).map(|t| (2 * t * (n_samples - 1) + n_tiles) / (2 * n_tiles)).collect()
 }
 
+/// Cosine and sine of an angle in degrees, exact (0, +-1) at multiples of 90° so that grids
+/// rotated by a quarter turn keep exact, axis-aligned positions (`90f64.to_radians().cos()` is
+/// 6e-17, not 0). `deg` must be finite.
+pub fn cos_sin_deg(deg: f64) -> (f64, f64) {
+    let r = deg.rem_euclid(360.0);
+    if r == 0.0 {
+        (1.0, 0.0)
+    } else if r == 90.0 {
+        (0.0, 1.0)
+    } else if r == 180.0 {
+        (-1.0, 0.0)
+    } else if r == 270.0 {
+        (0.0, -1.0)
+    } else {
+        let (s, c) = deg.to_radians().sin_cos();
+        (c, s)
+    }
+}
+
 /// A height field grid in world coordinates. `z` is row-major (ny, nx); NaN = hole.
+///
+/// Sample (i, j) lies at `(x0, y0) + R(rotation) (i dx, j dy')` with `dy' = -dy` when `yflip`
+/// (xtgeo's yflip = -1: rows run towards -y in the grid's frame) and R the counter-clockwise
+/// rotation by `rotation` degrees about the origin (xtgeo's convention), see [`GridSpec::pos`].
 pub struct GridSpec<'a> {
     pub z: &'a [f64],
     pub nx: usize,
@@ -93,6 +118,25 @@ pub struct GridSpec<'a> {
     pub y0: f64,
     pub dx: f64,
     pub dy: f64,
+    /// (cos, sin) of the rotation ([`cos_sin_deg`]); (1, 0) for an axis-aligned grid.
+    pub rot: (f64, f64),
+    pub yflip: bool,
+}
+
+impl GridSpec<'_> {
+    /// World (x, y) of sample (i, j), in f64. For rot = (1, 0) and no yflip this is exactly
+    /// `(x0 + i dx, y0 + j dy)`.
+    #[inline]
+    pub fn pos(&self, i: usize, j: usize) -> (f64, f64) {
+        let u = i as f64 * self.dx;
+        let v = j as f64 * if self.yflip { -self.dy } else { self.dy };
+        let (c, s) = self.rot;
+        if (c, s) == (1.0, 0.0) {
+            (self.x0 + u, self.y0 + v)
+        } else {
+            (self.x0 + (c * u - s * v), self.y0 + (s * u + c * v))
+        }
+    }
 }
 
 /// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in
@@ -117,11 +161,9 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
                 if *slot == u32::MAX {
                     *slot = tile.positions.len() as u32;
                     let (i, j) = (i0 + li, j0 + lj);
-                    tile.positions.push([
-                        (g.x0 + i as f64 * g.dx - origin.x) as f32,
-                        (g.y0 + j as f64 * g.dy - origin.y) as f32,
-                        (at(i, j) - origin.z) as f32,
-                    ]);
+                    // World position in f64 (rotation included), then origin-relative f32.
+                    let (x, y) = g.pos(i, j);
+                    tile.positions.push([(x - origin.x) as f32, (y - origin.y) as f32, (at(i, j) - origin.z) as f32]);
                 }
                 *slot
             };
@@ -252,13 +294,13 @@ mod tests {
     fn grid_triangles_and_holes() {
         let (nx, ny) = (5, 4);
         let mut z = vec![0.0; nx * ny];
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0);
         let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
         assert_eq!(total, 2 * (nx - 1) * (ny - 1));
         // One NaN sample in the interior removes the 6 triangles touching it.
         z[nx + 2] = f64::NAN;
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0);
         assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
         assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
@@ -268,7 +310,7 @@ mod tests {
     fn lattice_proxy_reaches_the_factor_and_neighbours_share_border_samples() {
         let (nx, ny) = (81, 81);
         let z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + ((k / nx) as f64 * 0.2).cos()).collect();
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
         for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
             let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf);
             let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
@@ -297,7 +339,7 @@ mod tests {
     #[test]
     fn all_nan_tile_is_empty() {
         let z = vec![f64::NAN; 9];
-        let g = GridSpec { z: &z, nx: 3, ny: 3, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0 };
+        let g = GridSpec { z: &z, nx: 3, ny: 3, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0);
         assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
     }

@@ -3,12 +3,14 @@
 
 use super::camera::PyCamera;
 use super::renderer::PyRenderer;
-use super::{contiguous, lock, run};
+use super::{lock, run};
 use crate::error::{input_err, int_in};
+use crate::iso::layout::{self, AxisOrder, ZPositive};
+use crate::iso::mesh::isosurface_mesh;
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
 use crate::iso::{MinMaxOctree, Volume};
-use numpy::ndarray::{Array1, Array2, Array3};
-use numpy::{IntoPyArray, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::ndarray::{Array1, Array2, Array3, ArrayView3, Axis};
+use numpy::{IntoPyArray, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::sync::atomic::Ordering;
@@ -33,34 +35,54 @@ impl PyVolume {
 
 #[pymethods]
 impl PyVolume {
-    /// values: (nz, ny, nx) C-contiguous float32 or float64 array (copied once into the core's
-    /// float32 buffer, with the GIL released: float64 as residuals about `offset`).
+    /// values: a 3-D float32 or float64 array of any strides, indexed as `order` says ("zyx":
+    /// [k, j, i]; "xyz": [i, j, k]), its z axis growing upwards or downwards (`z_positive`, see
+    /// `crate::iso::layout`). The transpose and the flip are views; the samples are copied once,
+    /// with the GIL released, into the core's float32 buffer (float64 as residuals about `offset`).
     #[new]
+    #[pyo3(signature = (values, origin, spacing, order, z_positive, rotation))]
     fn new(
         py: Python<'_>,
         values: &Bound<'_, PyAny>,
         origin: (f64, f64, f64),
         spacing: (f64, f64, f64),
+        order: &str,
+        z_positive: &str,
+        rotation: f64,
     ) -> PyResult<Self> {
         let (o, sp) = ([origin.0, origin.1, origin.2], [spacing.0, spacing.1, spacing.2]);
+        let order = AxisOrder::parse(order)?;
+        let z = ZPositive::parse(z_positive)?;
+        layout::check_grid(o, sp, z)?;
         let inner = if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f32>>() {
-            let s = a.shape();
-            let dims = (s[2], s[1], s[0]);
-            let sl = contiguous(&a, "values")?;
-            run(py, move || Volume::new(Arc::<[f32]>::from(sl), dims, o, sp))?
+            let view = stored_view(a.as_array(), order, z);
+            let (nz, ny, nx) = view.dim();
+            let so = layout::stored_origin(o, sp, nz, z);
+            match view.as_slice() {
+                Some(sl) => run(py, move || Volume::new(Arc::<[f32]>::from(sl), (nx, ny, nz), so, sp))?,
+                None => {
+                    run(py, move || Volume::from_f32_slices((nx, ny, nz), so, sp, |k, out| copy_slice(&view, k, out)))?
+                }
+            }
         } else if let Ok(a) = values.extract::<PyReadonlyArray3<'_, f64>>() {
             // f64 samples: f32 residuals about the midrange (see `Volume::from_f64`).
-            let s = a.shape();
-            let dims = (s[2], s[1], s[0]);
-            let sl = contiguous(&a, "values")?;
-            run(py, move || Volume::from_f64(sl, dims, o, sp))?
+            let view = stored_view(a.as_array(), order, z);
+            let (nz, ny, nx) = view.dim();
+            let so = layout::stored_origin(o, sp, nz, z);
+            match view.as_slice() {
+                Some(sl) => run(py, move || Volume::from_f64(sl, (nx, ny, nz), so, sp))?,
+                None => {
+                    run(py, move || Volume::from_f64_slices((nx, ny, nz), so, sp, |k, out| copy_slice(&view, k, out)))?
+                }
+            }
         } else {
             return Err(input_err("values", "expected a 3-D float32 or float64 array").into());
         };
+        let inner = inner.with_rotation(rotation)?;
         Ok(Self { inner, tree: OnceLock::new() })
     }
 
-    /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, residuals).
+    /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, rotation, residuals).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let v = &self.inner;
         let b = run(py, move || Ok(v.to_bytes()))?;
@@ -73,6 +95,18 @@ impl PyVolume {
         run(py, move || Volume::from_bytes(data).map(|inner| Self { inner, tree: OnceLock::new() }))
     }
 
+    /// Degrees counter-clockwise about the vertical through `origin`.
+    #[getter]
+    fn rotation(&self) -> f64 {
+        self.inner.rotation
+    }
+    /// World ((xmin, ymin, zmin), (xmax, ymax, zmax)) of the samples, rotation applied.
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn bounds(&self) -> ((f64, f64, f64), (f64, f64, f64)) {
+        let (a, b) = self.inner.world_bounds();
+        ((a[0], a[1], a[2]), (b[0], b[1], b[2]))
+    }
     /// (nz, ny, nx)
     #[getter]
     fn shape(&self) -> (usize, usize, usize) {
@@ -235,8 +269,49 @@ fn isosurface_cache_budget(renderer: PyRef<'_, PyRenderer>) -> u64 {
     renderer.iso_cache_budget.load(Ordering::Relaxed)
 }
 
+/// The whole isosurface `volume == isovalue` as one welded mesh: (vertices (n, 3) float64 world,
+/// faces (m, 3) int64), the triangles `render_isosurface(culling="none")` draws.
+#[pyfunction]
+fn extract_isosurface<'py>(
+    py: Python<'py>,
+    volume: PyRef<'py, PyVolume>,
+    isovalue: f64,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let tree = volume.tree(py)?;
+    let v = &volume.inner;
+    let (verts, faces) = run(py, move || {
+        let m = isosurface_mesh(v, &tree, isovalue)?;
+        let (nv, nf) = (m.vertices.len(), m.faces.len());
+        let verts = Array2::from_shape_vec((nv, 3), m.vertices.into_iter().flatten().collect()).unwrap();
+        let faces = Array2::from_shape_vec((nf, 3), m.faces.into_iter().flatten().map(|k| k as i64).collect()).unwrap();
+        Ok((verts, faces))
+    })?;
+    Ok((verts.into_pyarray(py).into_any(), faces.into_pyarray(py).into_any()))
+}
+
+/// `a` (the user's array) as the stored (z, y, x) view, z upwards: transposed for "xyz", the z
+/// axis reversed for z_positive = "down". No sample is copied.
+fn stored_view<T>(a: ArrayView3<'_, T>, order: AxisOrder, z: ZPositive) -> ArrayView3<'_, T> {
+    let mut v = match order {
+        AxisOrder::Zyx => a,
+        AxisOrder::Xyz => a.reversed_axes(),
+    };
+    if z == ZPositive::Down {
+        v.invert_axis(Axis(0));
+    }
+    v
+}
+
+/// Copies z slice `k` of a stored view into `out` (x fastest).
+fn copy_slice<T: Copy>(view: &ArrayView3<'_, T>, k: usize, out: &mut [T]) {
+    for (d, s) in out.iter_mut().zip(view.index_axis(Axis(0), k).iter()) {
+        *d = *s;
+    }
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyVolume>()?;
+    m.add_function(wrap_pyfunction!(extract_isosurface, m)?)?;
     m.add_function(wrap_pyfunction!(render_isosurface, m)?)?;
     m.add_function(wrap_pyfunction!(clear_isosurface_cache, m)?)?;
     m.add_function(wrap_pyfunction!(set_isosurface_cache_budget, m)?)?;

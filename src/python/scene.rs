@@ -2,7 +2,7 @@
 
 use super::{run, with_lock};
 use crate::error::{int_in, object_id};
-use crate::scene::{AddOptions, Scene};
+use crate::scene::{AddOptions, GridFrame, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -43,7 +43,7 @@ impl PyScene {
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (z, origin, spacing, tiles, coarse_factor, name, color, null_value))]
+    #[pyo3(signature = (z, origin, spacing, tiles, coarse_factor, name, color, null_value, rotation, yflip))]
     fn add_heightfield(
         &self,
         py: Python<'_>,
@@ -55,6 +55,8 @@ impl PyScene {
         name: Option<String>,
         color: Option<(f64, f64, f64)>,
         null_value: Option<f64>,
+        rotation: f64,
+        yflip: bool,
     ) -> PyResult<u32> {
         let shape = z.shape();
         let (ny, nx) = (shape[0], shape[1]);
@@ -62,7 +64,8 @@ impl PyScene {
         let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
         with_lock(py, &self.inner, move |scene| {
             let tiles = (int_in(tiles.0, "tiles[0]", 1, MAX_INT)?, int_in(tiles.1, "tiles[1]", 1, MAX_INT)?);
-            scene.add_heightfield(data, ny, nx, [origin.0, origin.1], [spacing.0, spacing.1], tiles, null_value, opts)
+            let frame = GridFrame::new([origin.0, origin.1], [spacing.0, spacing.1]).rotated(rotation, yflip);
+            scene.add_heightfield(data, ny, nx, frame, tiles, null_value, opts)
         })
     }
 
@@ -112,6 +115,13 @@ impl PyScene {
     #[getter]
     fn origin(&self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
         with_lock(py, &self.inner, |s| Ok(s.origin().into()))
+    }
+    /// World ((xmin, ymin, zmin), (xmax, ymax, zmax)) of every object, visible or hidden; None
+    /// when the scene holds no triangle.
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn bounds(&self, py: Python<'_>) -> PyResult<Option<((f64, f64, f64), (f64, f64, f64))>> {
+        with_lock(py, &self.inner, |s| Ok(s.bounds().map(|(a, b)| (a.into(), b.into()))))
     }
     #[getter]
     fn host_bytes(&self, py: Python<'_>) -> PyResult<usize> {

@@ -4,7 +4,7 @@ use super::*;
 use crate::camera::Projection;
 use crate::cull::Stat;
 use crate::gpu::BACKGROUND;
-use crate::scene::AddOptions;
+use crate::scene::{AddOptions, GridFrame};
 
 fn opts(cf: f64) -> AddOptions {
     AddOptions { coarse_factor: cf, name: None, color: Some([0.5, 0.5, 0.5]) }
@@ -13,7 +13,8 @@ fn opts(cf: f64) -> AddOptions {
 fn plane(s: &mut Scene, z: f64, n: usize, size: f64, tiles: usize, cf: f64) -> u32 {
     let zz = vec![z; n * n];
     let d = size / (n - 1) as f64;
-    s.add_heightfield(&zz, n, n, [-size / 2.0, -size / 2.0], [d, d], (tiles, tiles), None, opts(cf)).unwrap()
+    s.add_heightfield(&zz, n, n, GridFrame::new([-size / 2.0, -size / 2.0], [d, d]), (tiles, tiles), None, opts(cf))
+        .unwrap()
 }
 
 fn top_down(h: f64) -> Camera {

@@ -1,27 +1,61 @@
 //! Height fields (horizons, terrain): a (ny, nx) grid of heights cut into tiles of the grid, with
 //! lattice or QEM coarse proxies (`crate::lod::tile_heightfield`).
+//!
+//! Rotated grids (xtgeo's `rotation`, `yflip`): the GPU vertices are world positions, rotated in
+//! f64 before they are stored origin-relative in f32 (`lod::GridSpec::pos`), so every strategy that
+//! works on tiles and their boxes (three_pass, oracle, frustum) sees an ordinary mesh. Tiles, tile
+//! order and the triangulation stay those of the grid's own (i, j) frame, and the object keeps that
+//! frame ([`ObjectKind::Heightfield`]): a strategy that needs the grid (horizon culling's axis-aligned
+//! quadtree) works in the grid's frame and folds the rotation into its view-projection matrix, as it
+//! already did with the object's translation (see `cull::horizon::strategy`).
 
 use super::{check_coarse_factor, check_color, AddOptions, Object, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
-use crate::lod::{self, GridSpec};
+use crate::lod::{self, cos_sin_deg, GridSpec};
 use glam::DVec3;
 
+/// Where a height field's grid lies: sample (i, j) at `origin + R(rotation) (i dx, ±j dy)` (world
+/// units), rows towards -y in the grid's frame when `yflip`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridFrame {
+    /// World (x, y) of sample (0, 0), the centre of rotation.
+    pub origin: [f64; 2],
+    /// (dx, dy) > 0: the distance between columns and between rows.
+    pub spacing: [f64; 2],
+    /// Degrees counter-clockwise (seen from +z) about `origin`, xtgeo's convention.
+    pub rotation: f64,
+    /// xtgeo's yflip = -1: row j lies at -j dy along the grid's y axis (a left-handed grid).
+    pub yflip: bool,
+}
+
+impl GridFrame {
+    /// An axis-aligned grid: sample (i, j) at `(x0 + i dx, y0 + j dy)`.
+    pub fn new(origin: [f64; 2], spacing: [f64; 2]) -> Self {
+        Self { origin, spacing, rotation: 0.0, yflip: false }
+    }
+    /// The same grid rotated by `rotation` degrees and with rows flipped when `yflip`.
+    pub fn rotated(self, rotation: f64, yflip: bool) -> Self {
+        Self { rotation, yflip, ..self }
+    }
+}
+
 impl Scene {
-    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows. NaN samples
-    /// (and samples equal to `null_value`) are holes; triangles touching a hole are dropped.
+    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows of the grid's
+    /// frame (`frame`). NaN samples (and samples equal to `null_value`) are holes; triangles touching
+    /// a hole are dropped.
     #[allow(clippy::too_many_arguments)]
     pub fn add_heightfield(
         &mut self,
         z: &[f64],
         ny: usize,
         nx: usize,
-        origin: [f64; 2],
-        spacing: [f64; 2],
+        frame: GridFrame,
         tiles: (usize, usize),
         null_value: Option<f64>,
         opts: AddOptions,
     ) -> Result<u32> {
+        let GridFrame { origin, spacing, rotation, yflip } = frame;
         ensure(nx >= 2 && ny >= 2, "z", || {
             format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples")
         })?;
@@ -34,19 +68,26 @@ impl Scene {
                 format!("component {i} is {v}; expected a finite number > 0")
             })?;
         }
-        for (i, (o, (d, n))) in origin.iter().zip(spacing.iter().zip([nx, ny])).enumerate() {
-            let end = o + d * (n - 1) as f64;
-            ensure(
-                o.abs() <= MAX_COORD && end.abs() <= MAX_COORD,
-                if o.abs() > MAX_COORD { "origin" } else { "spacing" },
-                || {
-                    format!(
-                        "component {i}: the grid spans {} .. {}; coordinates must be within +-{MAX_COORD:e}",
-                        num(*o),
-                        num(end)
-                    )
-                },
-            )?;
+        ensure(rotation.is_finite(), "rotation", || {
+            format!("rotation is {rotation}; expected a finite angle in degrees (counter-clockwise)")
+        })?;
+        let rot = cos_sin_deg(rotation);
+        let probe = GridSpec { z, nx, ny, x0: origin[0], y0: origin[1], dx: spacing[0], dy: spacing[1], rot, yflip };
+        // The grid's four corners (the extremes of a rotated rectangle), for the range check and bounds.
+        let corners = [probe.pos(0, 0), probe.pos(nx - 1, 0), probe.pos(0, ny - 1), probe.pos(nx - 1, ny - 1)];
+        for (i, o) in origin.iter().enumerate() {
+            ensure(o.abs() <= MAX_COORD, "origin", || {
+                format!("component {i} is {}; coordinates must be within +-{MAX_COORD:e}", num(*o))
+            })?;
+        }
+        for (i, (c, ax)) in corners.iter().flat_map(|c| [(c.0, 0), (c.1, 1)]).enumerate() {
+            ensure(c.abs() <= MAX_COORD, "spacing", || {
+                format!(
+                    "component {ax}: the grid reaches {} at corner {}; coordinates must be within +-{MAX_COORD:e}",
+                    num(c),
+                    i / 2
+                )
+            })?;
         }
         let (tx, ty) = tiles;
         ensure(tx >= 1 && tx < nx, "tiles", || {
@@ -85,14 +126,26 @@ impl Scene {
         }
         let (x0, y0) = (origin[0], origin[1]);
         let (dx, dy) = (spacing[0], spacing[1]);
-        let (x1, y1) = (x0 + dx * (nx - 1) as f64, y0 + dy * (ny - 1) as f64);
         if zmin > zmax {
             (zmin, zmax) = (0.0, 0.0);
         }
-        let o = self.set_origin_from(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
-        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy };
+        let (lo, hi) = corners.iter().fold(
+            (DVec3::new(f64::INFINITY, f64::INFINITY, zmin), DVec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, zmax)),
+            |(lo, hi), c| (lo.min(DVec3::new(c.0, c.1, zmin)), hi.max(DVec3::new(c.0, c.1, zmax))),
+        );
+        let o = self.set_origin_from(lo, hi);
+        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy, rot, yflip };
         let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
-        let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, tiles: (tx, ty) };
+        let kind = ObjectKind::Heightfield {
+            nx,
+            ny,
+            x0: x0 - o.x,
+            y0: y0 - o.y,
+            dx,
+            dy: if yflip { -dy } else { dy },
+            rotation,
+            tiles: (tx, ty),
+        };
         Ok(self.push(opts.name, kind, color, tile_meshes))
     }
 }
@@ -119,14 +172,19 @@ fn undefined_hint(v: f64) -> String {
 impl Object {
     /// The heights of a height field as a row-major (ny, nx) grid relative to the origin's z
     /// (NaN where no triangle uses the sample), rebuilt from the tiles' vertices: every vertex is
-    /// a grid sample, and its origin-relative x, y give back its integer column and row.
+    /// a grid sample, and its origin-relative x, y, turned back into the grid's frame, give back its
+    /// integer column and row.
     pub fn height_grid(&self) -> Option<Vec<f32>> {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, .. } = self.kind else { return None };
+        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = self.kind else { return None };
+        let (c, s) = cos_sin_deg(rotation);
         let mut z = vec![f32::NAN; nx * ny];
         for t in &self.tiles {
             for p in &t.positions {
-                let i = ((p[0] as f64 - x0) / dx).round();
-                let j = ((p[1] as f64 - y0) / dy).round();
+                // Back into the grid's frame (the inverse rotation), then to (column, row).
+                let (qx, qy) = (p[0] as f64 - x0, p[1] as f64 - y0);
+                let (u, v) = if (c, s) == (1.0, 0.0) { (qx, qy) } else { (c * qx + s * qy, c * qy - s * qx) };
+                let i = (u / dx).round();
+                let j = (v / dy).round();
                 if (0.0..nx as f64).contains(&i) && (0.0..ny as f64).contains(&j) {
                     z[j as usize * nx + i as usize] = p[2];
                 }

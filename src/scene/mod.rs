@@ -14,13 +14,18 @@ mod heightfield;
 mod mesh;
 pub(crate) mod serial;
 
+pub use heightfield::GridFrame;
+
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
 #[derive(Clone, Debug)]
 pub enum ObjectKind {
-    /// A height field: its grid layout (x0, y0 relative to the scene origin). The heights live only
-    /// in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler needs it.
-    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, tiles: (usize, usize) },
+    /// A height field: its grid layout in the grid's own frame. Sample (i, j) lies at
+    /// `(x0, y0) + R(rotation) (i dx, j dy)` (x0, y0 relative to the scene origin; `dy < 0` for a
+    /// yflipped grid; R counter-clockwise by `rotation` degrees, see `lod::cos_sin_deg`). The heights
+    /// live only in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler
+    /// needs it.
+    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, rotation: f64, tiles: (usize, usize) },
     /// A triangle mesh; `kind` is the user's label ("fault", "mesh", ...).
     Mesh { kind: String },
 }
@@ -198,6 +203,18 @@ impl Scene {
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
+    /// World bounds `(min, max)` of every object's geometry, visible and hidden, offsets applied (no
+    /// exaggeration); None when the scene has no triangle (no object, or only empty ones, e.g. height
+    /// fields wholly made of holes). Taken from the tiles' boxes of the stored f32 origin-relative
+    /// positions, so exact to f32 precision of the coordinates relative to [`Scene::origin`].
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let o = self.origin();
+        self.objects
+            .iter()
+            .filter_map(|ob| ob.local_bounds().map(|(a, b)| (a + ob.offset + o, b + ob.offset + o)))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
     pub(super) fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
         *self.origin.get_or_insert_with(|| {
             // Round to a metre so the origin is a tidy number in reports.
@@ -305,9 +322,11 @@ mod tests {
     fn utm_origin_keeps_precision() {
         let mut s = Scene::new();
         let z = vec![-2500.0; 4];
-        s.add_heightfield(&z, 2, 2, [450_000.0, 6_780_000.0], [10.0, 10.0], (1, 1), None, opts()).unwrap();
+        s.add_heightfield(&z, 2, 2, GridFrame::new([450_000.0, 6_780_000.0], [10.0, 10.0]), (1, 1), None, opts())
+            .unwrap();
         let z2 = vec![-2500.5; 4];
-        s.add_heightfield(&z2, 2, 2, [450_000.0, 6_780_000.0], [10.0, 10.0], (1, 1), None, opts()).unwrap();
+        s.add_heightfield(&z2, 2, 2, GridFrame::new([450_000.0, 6_780_000.0], [10.0, 10.0]), (1, 1), None, opts())
+            .unwrap();
         let (a, _) = s.geometry(0).unwrap();
         let (b, _) = s.geometry(1).unwrap();
         assert_eq!(a[0][0], 450_000.0);
@@ -318,9 +337,9 @@ mod tests {
     fn errors_name_arguments() {
         let mut s = Scene::new();
         let z = vec![0.0; 4];
-        let e = s.add_heightfield(&z, 2, 2, [0.0, 0.0], [0.0, 1.0], (1, 1), None, opts()).unwrap_err();
+        let e = s.add_heightfield(&z, 2, 2, GridFrame::new([0.0, 0.0], [0.0, 1.0]), (1, 1), None, opts()).unwrap_err();
         assert!(e.to_string().starts_with("spacing"), "{e}");
-        let e = s.add_heightfield(&z, 2, 2, [0.0, 0.0], [1.0, 1.0], (2, 1), None, opts()).unwrap_err();
+        let e = s.add_heightfield(&z, 2, 2, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (2, 1), None, opts()).unwrap_err();
         assert!(e.to_string().starts_with("tiles"), "{e}");
         let e = s.add_mesh(&[[0.0; 3]], &[[0, 0, 1]], "mesh", None, opts()).unwrap_err();
         assert!(e.to_string().starts_with("faces[0, 2]"), "{e}");
@@ -329,11 +348,56 @@ mod tests {
     }
 
     #[test]
+    fn bounds_cover_hidden_objects_and_offsets() {
+        let mut s = Scene::new();
+        assert!(s.bounds().is_none());
+        let z = vec![1.0, 2.0, 3.0, 4.0];
+        let a = s.add_heightfield(&z, 2, 2, GridFrame::new([10.0, 20.0], [1.0, 2.0]), (1, 1), None, opts()).unwrap();
+        assert_eq!(s.bounds(), Some((DVec3::new(10.0, 20.0, 1.0), DVec3::new(11.0, 22.0, 4.0))));
+        s.set_visible(a, false).unwrap();
+        s.translate(a, [0.0, 0.0, -1.0]).unwrap();
+        assert_eq!(s.bounds(), Some((DVec3::new(10.0, 20.0, 0.0), DVec3::new(11.0, 22.0, 3.0))));
+        let holes = vec![f64::NAN; 4];
+        s.add_heightfield(&holes, 2, 2, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (1, 1), None, opts()).unwrap();
+        assert_eq!(s.bounds().unwrap().0.x, 10.0);
+    }
+
+    #[test]
+    fn rotated_grids_turn_about_their_origin() {
+        let mut s = Scene::new();
+        let z = vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+        // 3 columns, 2 rows; 90° turns the x axis onto +y and the y axis onto -x.
+        let f = GridFrame::new([100.0, 200.0], [10.0, 5.0]).rotated(90.0, false);
+        let id = s.add_heightfield(&z, 2, 3, f, (1, 1), None, opts()).unwrap();
+        let (v, _) = s.geometry(id).unwrap();
+        let at = |x: f64, y: f64| v.iter().find(|p| p[0] == x && p[1] == y).map(|p| p[2]);
+        assert_eq!(at(100.0, 200.0), Some(0.0));
+        assert_eq!(at(100.0, 220.0), Some(2.0)); // column 2
+        assert_eq!(at(95.0, 200.0), Some(3.0)); // row 1
+                                                // yflip: row 1 at -dy in the grid frame, i.e. +x after the quarter turn.
+        let id = s.add_heightfield(&z, 2, 3, f.rotated(90.0, true), (1, 1), None, opts()).unwrap();
+        let (v, _) = s.geometry(id).unwrap();
+        assert!(v.iter().any(|p| p[0] == 105.0 && p[1] == 200.0 && p[2] == 3.0));
+        // 180°: both axes reversed; the grid rebuilt from the vertices is the input.
+        let id = s.add_heightfield(&z, 2, 3, f.rotated(180.0, false), (1, 1), None, opts()).unwrap();
+        let (v, _) = s.geometry(id).unwrap();
+        assert!(v.iter().any(|p| p[0] == 80.0 && p[1] == 195.0 && p[2] == 5.0));
+        for (deg, flip) in [(30.0, false), (-123.4, true), (180.0, false)] {
+            let id = s.add_heightfield(&z, 2, 3, f.rotated(deg, flip), (1, 1), None, opts()).unwrap();
+            let g = s.object(id).unwrap().height_grid().unwrap();
+            let o = s.origin().z as f32;
+            assert_eq!(g.iter().map(|h| h + o).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0], "{deg}");
+        }
+        let e = s.add_heightfield(&z, 2, 3, f.rotated(f64::NAN, false), (1, 1), None, opts()).unwrap_err();
+        assert!(e.to_string().starts_with("rotation"), "{e}");
+    }
+
+    #[test]
     fn null_value_makes_holes() {
         let mut s = Scene::new();
         let mut z = vec![0.0; 9];
         z[4] = -999.25;
-        s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(-999.25), opts()).unwrap();
+        s.add_heightfield(&z, 3, 3, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (1, 1), Some(-999.25), opts()).unwrap();
         assert_eq!(s.n_triangles(), 8 - 6);
     }
 
@@ -343,13 +407,19 @@ mod tests {
         for undef in [1e30, -1e30, 1e33] {
             let mut z = vec![0.0; 9];
             z[5] = undef;
-            let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+            let e = s
+                .add_heightfield(&z, 3, 3, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (1, 1), None, opts())
+                .unwrap_err()
+                .to_string();
             assert!(e.starts_with("z[1, 2]") && e.contains("xtgeo") && e.contains("null_value="), "{e}");
-            s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), Some(undef), opts()).unwrap();
+            s.add_heightfield(&z, 3, 3, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (1, 1), Some(undef), opts()).unwrap();
         }
         let mut z = vec![0.0; 9];
         z[5] = 1e20;
-        let e = s.add_heightfield(&z, 3, 3, [0.0, 0.0], [1.0, 1.0], (1, 1), None, opts()).unwrap_err().to_string();
+        let e = s
+            .add_heightfield(&z, 3, 3, GridFrame::new([0.0, 0.0], [1.0, 1.0]), (1, 1), None, opts())
+            .unwrap_err()
+            .to_string();
         assert!(!e.contains("xtgeo"), "{e}");
     }
 }

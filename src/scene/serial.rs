@@ -2,14 +2,15 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 1 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 2 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
 //! magic b"GCSCENE\0", version u32
 //! has_origin u8, origin f64 x 3, next_id u32, n_objects u32
 //! per object: id u32, name str, kind u8 (0 = height field, 1 = mesh),
-//!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64, tx u64, ty u64 | mesh: label str
+//!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64 (< 0: yflip), rotation f64
+//!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str
 //!   color f32 x 3, visible u8, offset f64 x 3, n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], fine [u32], coarse [u32], proxy_error f32,
@@ -26,7 +27,7 @@ use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -178,12 +179,12 @@ impl Scene {
             w.u32(o.id);
             w.str(&o.name);
             match &o.kind {
-                ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, tiles } => {
+                ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles } => {
                     w.u8(0);
                     for v in [*nx, *ny] {
                         w.u64(v as u64);
                     }
-                    for v in [*x0, *y0, *dx, *dy] {
+                    for v in [*x0, *y0, *dx, *dy, *rotation] {
                         w.f64(v);
                     }
                     for v in [tiles.0, tiles.1] {
@@ -227,7 +228,7 @@ impl Scene {
     /// renders the same image), under a new identity (renderers upload it afresh).
     pub fn from_bytes(data: &[u8]) -> Result<Scene> {
         let mut r = Reader::new(data, "data");
-        r.header(MAGIC, "scene", VERSION)?;
+        let version = r.header(MAGIC, "scene", VERSION)?;
         let has_origin = r.u8()? != 0;
         let origin = DVec3::from_array(r.f64x3()?);
         if !origin.is_finite() {
@@ -246,8 +247,12 @@ impl Scene {
                 0 => {
                     let (nx, ny) = (r.usize()?, r.usize()?);
                     let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+                    let rotation = if version >= 2 { r.f64()? } else { 0.0 };
+                    if !rotation.is_finite() {
+                        return Err(r.err(format!("object {id}: its rotation is not finite")));
+                    }
                     let tiles = (r.usize()?, r.usize()?);
-                    ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, tiles }
+                    ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
                 }
                 1 => ObjectKind::Mesh { kind: r.str()? },
                 k => return Err(r.err(format!("unknown object kind {k}"))),
@@ -299,20 +304,33 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::AddOptions;
+    use crate::scene::{AddOptions, GridFrame};
 
     fn scene() -> Scene {
         let mut s = Scene::new();
         let opts = |name: &str| AddOptions { coarse_factor: 4.0, name: Some(name.into()), color: None };
         let z: Vec<f64> =
             (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
-        s.add_heightfield(&z, 9, 9, [451_000.0, 6_780_000.0], [25.0, 25.0], (3, 2), None, opts("top")).unwrap();
+        s.add_heightfield(&z, 9, 9, GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]), (3, 2), None, opts("top"))
+            .unwrap();
         let v = [[451_000.0, 6_780_000.0, -5.0], [451_100.0, 6_780_000.0, -5.0], [451_000.0, 6_780_100.0, 5.0]];
         s.add_mesh(&v, &[[0, 1, 2]], "fault", None, opts("f")).unwrap();
         s.translate(1, [1.0, 2.0, 3.0]).unwrap();
         s.set_visible(0, false).unwrap();
         s.remove(0).unwrap();
-        s.add_heightfield(&z, 9, 9, [451_000.0, 6_780_000.0], [25.0, 25.0], (1, 1), Some(0.0), opts("base")).unwrap();
+        s.add_heightfield(
+            &z,
+            9,
+            9,
+            GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]),
+            (1, 1),
+            Some(0.0),
+            opts("base"),
+        )
+        .unwrap();
+        // a rotated, yflipped grid keeps its frame (horizon culling rebuilds the grid from it)
+        let turned = GridFrame::new([451_000.0, 6_780_000.0], [25.0, 30.0]).rotated(33.0, true);
+        s.add_heightfield(&z, 9, 9, turned, (2, 2), None, opts("turned")).unwrap();
         s
     }
 
@@ -325,6 +343,7 @@ mod tests {
         assert_ne!(t.geometry_key().0, s.geometry_key().0);
         assert_eq!(t.origin(), s.origin());
         for o in s.objects() {
+            assert_eq!(format!("{:?}", t.object(o.id).unwrap().kind), format!("{:?}", o.kind));
             assert_eq!(t.geometry(o.id).unwrap(), s.geometry(o.id).unwrap());
             let bits = |g: Option<Vec<f32>>| g.map(|g| g.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
             assert_eq!(bits(t.object(o.id).unwrap().height_grid()), bits(o.height_grid()));
@@ -333,12 +352,28 @@ mod tests {
         let (mut s2, mut t2) = (s.clone(), t);
         let z = vec![0.0; 4];
         let o = AddOptions { coarse_factor: 1.0, name: None, color: None };
-        let a = s2.add_heightfield(&z, 2, 2, [0.0; 2], [1.0; 2], (1, 1), None, o.clone()).unwrap();
-        assert_eq!(t2.add_heightfield(&z, 2, 2, [0.0; 2], [1.0; 2], (1, 1), None, o).unwrap(), a);
+        let a = s2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o.clone()).unwrap();
+        assert_eq!(t2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o).unwrap(), a);
         assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
         // the empty scene too
         let e = Scene::from_bytes(&Scene::new().to_bytes()).unwrap();
         assert!(e.objects().is_empty() && e.origin() == DVec3::ZERO);
+    }
+
+    #[test]
+    fn version_1_height_fields_read_as_unrotated() {
+        let mut s = Scene::new();
+        let o = AddOptions { coarse_factor: 1.0, name: Some("a".into()), color: None };
+        s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o)
+            .unwrap();
+        let v2 = s.to_bytes();
+        // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
+        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32)
+        let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
+        let mut v1 = [&v2[..at], &v2[at + 8..]].concat();
+        v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+        let t = Scene::from_bytes(&v1).unwrap();
+        assert_eq!(t.to_bytes(), v2);
     }
 
     #[test]

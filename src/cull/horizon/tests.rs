@@ -469,3 +469,90 @@ fn straight_down_and_below_terrain() {
     let r = empty.cull(vp, eye, 8, 8);
     assert!(!r.culling_applied && r.tile_visible.len() == 4);
 }
+
+/// Rotated and yflipped grids (`cull_in_frame`): the tree is built in the grid's own frame
+/// (dy < 0 for yflip), the reference rasterizes the triangles turned into render space by `frame`,
+/// and no visible tile may be culled. Low views around the turned terrain, perspective and
+/// reverse-Z orthographic, as the renderer draws.
+#[test]
+fn property_rotated_and_flipped_grids() {
+    let mut rng = Lcg(0x5eed_0016);
+    let (w, h) = (128, 96);
+    // [unflipped, flipped]
+    let (mut culled, mut nonempty) = ([0; 2], [0; 2]);
+    let ncases: usize = std::env::var("HORIZON_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(120);
+    for case in 0..ncases {
+        let mut t = random_terrain(&mut rng);
+        if case % 2 == 1 {
+            t.dy = -t.dy; // yflip: rows towards -y in the grid's frame
+        }
+        let deg = [30.0, 90.0, 180.0, -75.0, rng.range(-180.0, 180.0)][case % 5];
+        let (c, s) = crate::lod::cos_sin_deg(deg);
+        let pivot = DVec3::new(t.x0, t.y0, 0.0);
+        let rot = DMat4::from_cols(
+            glam::DVec4::new(c, s, 0.0, 0.0),
+            glam::DVec4::new(-s, c, 0.0, 0.0),
+            glam::DVec4::Z,
+            glam::DVec4::W,
+        );
+        let frame = DMat4::from_translation(pivot) * rot * DMat4::from_translation(-pivot);
+        let (ex, ey) = t.extent();
+        let ext = ex.max(ey);
+        let centre = frame.transform_point3(DVec3::new(t.x0 + 0.5 * ex, t.y0 + 0.5 * t.dy.signum() * ey, 0.0));
+        let eye = DVec3::new(
+            centre.x + rng.range(-0.8, 0.8) * ext,
+            centre.y + rng.range(-0.8, 0.8) * ext,
+            t.zmax() + rng.range(0.01, 0.25) * ext,
+        );
+        let az = if rng.f() < 0.5 {
+            rng.range(0.0, 360.0)
+        } else {
+            let d = centre - eye;
+            d.y.atan2(d.x).to_degrees() + rng.range(-40.0, 40.0)
+        };
+        let f = dir(az, rng.range(-30.0, 5.0));
+        let view = look_at_mat4(eye, eye + f, DVec3::Z);
+        let ortho = case % 4 == 0;
+        let proj = if ortho {
+            let sc = rng.range(0.1, 0.5) * ext;
+            let (l, r) = (-sc * w as f64 / h as f64, sc * w as f64 / h as f64);
+            dx_proj::orthographic(l, r, -sc, sc, 4.0 * ext, 0.0)
+        } else {
+            dx_proj::perspective_infinite_reverse(60f64.to_radians(), w as f64 / h as f64, 0.002 * ext)
+        };
+        let vp = proj * view;
+        let tree = HorizonTree::build(&t.grid());
+        let res = tree.cull_in_frame(vp, frame, eye, w as u32, h as u32);
+        let n = t.tiles.0 * t.tiles.1;
+        let tris: Vec<(usize, [DVec3; 3])> =
+            t.triangles().into_iter().map(|(id, tri)| (id, tri.map(|p| frame.transform_point3(p)))).collect();
+        let rf = reference::rasterize(&tris, n, vp, w, h, Depth { gl: false, reverse: true });
+        let violations: Vec<usize> = (0..n).filter(|&i| rf.visible[i] && !res.tile_visible[i]).collect();
+        assert!(res.culling_applied, "case {case}");
+        assert!(violations.is_empty(), "case {case} ({deg}°, dy {}): visible tiles culled {violations:?}", t.dy);
+        for i in 0..n {
+            if tree.tile_nonempty[i] {
+                nonempty[case % 2] += 1;
+                culled[case % 2] += usize::from(!res.tile_visible[i]);
+            }
+        }
+    }
+    println!("rotated/flipped: culled {culled:?} of {nonempty:?} (unflipped, flipped)");
+    for k in 0..2 {
+        assert!(culled[k] > nonempty[k] / 10, "culling should still cull: {culled:?}/{nonempty:?}");
+    }
+}
+
+/// The identity frame is exactly the plain cull.
+#[test]
+fn identity_frame_is_plain_cull() {
+    let mut rng = Lcg(99);
+    let t = random_terrain(&mut rng);
+    let (ex, ey) = t.extent();
+    let eye = DVec3::new(t.x0 - 0.2 * ex, t.y0 + 0.5 * ey, t.zmax() + 0.1 * ex);
+    let vp = camera(eye, dir(0.0, -10.0), DVec3::Z, ex.max(ey), 128, 96);
+    let tree = HorizonTree::build(&t.grid());
+    let a = tree.cull(vp, eye, 128, 96);
+    let b = tree.cull_in_frame(vp, DMat4::IDENTITY, eye, 128, 96);
+    assert_eq!((a.tile_visible, a.horizon, a.nodes_visited), (b.tile_visible, b.horizon, b.nodes_visited));
+}

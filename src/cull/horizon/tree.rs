@@ -212,6 +212,16 @@ impl HorizonTree {
     /// orthographic work, with standard or reverse-Z depth. `eye` (render space) is only used
     /// to orient orthographic views (see the module doc).
     pub fn cull(&self, view_proj: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
+        self.cull_in_frame(view_proj, DMat4::IDENTITY, eye, width, height)
+    }
+
+    /// [`HorizonTree::cull`] for a tree built in another frame than render space: `frame` maps the
+    /// tree's coordinates (its grid's frame) to render space, and must be a rotation about the z
+    /// axis plus a translation (det +1, z unchanged), so that "up" and the winding of the covered
+    /// sets are those of render space. The tree then culls with `view_proj * frame`, and the bound
+    /// on the GPU's f32 round-off is taken for the render-space positions the GPU actually
+    /// transforms (see `View::new`). `eye` is in render space, as for `cull`.
+    pub fn cull_in_frame(&self, view_proj: DMat4, frame: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
         let (w, h) = (width as usize, height as usize);
         let fallback = || HorizonResult {
             tile_visible: if self.valid {
@@ -224,10 +234,10 @@ impl HorizonTree {
             horizon: vec![f32::NEG_INFINITY; w],
             culling_applied: false,
         };
-        if !self.valid || w == 0 || h == 0 || !view_proj.is_finite() {
+        if !self.valid || w == 0 || h == 0 || !view_proj.is_finite() || !frame.is_finite() {
             return fallback();
         }
-        let Some(view) = View::new(view_proj, eye, w, h, self.scale) else {
+        let Some(view) = View::new(view_proj, frame, eye, w, h, self.scale) else {
             return fallback();
         };
         let mut res = HorizonResult {

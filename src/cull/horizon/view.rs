@@ -31,7 +31,20 @@ pub(super) struct View {
 }
 
 impl View {
-    pub(super) fn new(m: DMat4, eye: DVec3, w: usize, h: usize, scale: f64) -> Option<View> {
+    /// `vp` maps render space to clip space, `frame` the tree's coordinates to render space (the
+    /// identity, or a rotation about z plus a translation); `eye` is in render space.
+    pub(super) fn new(vp: DMat4, frame: DMat4, eye: DVec3, w: usize, h: usize, scale: f64) -> Option<View> {
+        let m = vp * frame;
+        let eye = frame.inverse().transform_point3(eye);
+        // The GPU computes `vp * p_render` with p_render = frame * p rounded to f32, so the round-off
+        // bound needs sum_j |vp_rj| |p_render_j| + |vp_rw| <= sum_k (|vp_r| |frame|)_k |p_k|: the
+        // rows of |vp| |frame| (elementwise absolute values), which are |rows of m| for the identity.
+        let fa = DMat4::from_cols(frame.x_axis.abs(), frame.y_axis.abs(), frame.z_axis.abs(), frame.w_axis.abs());
+        let abs_row = |r: usize| {
+            let a = vp.row(r).abs();
+            DVec4::new(a.dot(fa.x_axis), a.dot(fa.y_axis), a.dot(fa.z_axis), a.dot(fa.w_axis))
+        };
+        let ra = [abs_row(0), abs_row(1), abs_row(2), abs_row(3)];
         let r0 = m.row(0);
         let r1 = m.row(1);
         let r2 = m.row(2);
@@ -92,7 +105,7 @@ impl View {
             return None;
         }
         let w_margin = (1e-9 * (r3.truncate().length() * scale + r3.w.abs())).max(1e-300);
-        Some(View { m, ra: [r0.abs(), r1.abs(), r2.abs(), r3.abs()], eh, w_margin, wf: w as f64, hf: h as f64, w, h })
+        Some(View { m, ra, eh, w_margin, wf: w as f64, hf: h as f64, w, h })
     }
 
     #[inline]
