@@ -265,13 +265,12 @@ impl Renderer {
             4,
             wgpu::TextureAspect::All,
         );
-        let depth_rb =
-            readback::ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
+        let depth_rb = ctx.read_depth(&mut enc, &mt.depth_tex);
         let args_rb =
             readback::copy_buffer(d, &mut enc, final_args, (n.max(1) * std::mem::size_of::<DrawArgs>()) as u64);
         ctx.queue.submit([enc.finish()]);
         readback::map_all(
-            [&color_rb.buffer, &depth_rb.buffer, &args_rb]
+            [&color_rb.buffer, depth_rb.buffer(), &args_rb]
                 .into_iter()
                 .chain(counted.as_ref().map(|c| &c.0))
                 .chain(ts_rb.as_ref()),
@@ -279,8 +278,7 @@ impl Renderer {
         ctx.wait()?;
         ctx.take_error()?;
         let image = color_rb.read_rows()?;
-        let depth_raw: Vec<f32> = bytemuck::cast_slice(&depth_rb.read_rows()?).to_vec();
-        let depth: Vec<f32> = depth_raw.par_iter().map(|&v| fc.linear_depth(v)).collect();
+        let depth: Vec<f32> = depth_rb.read()?.par_iter().map(|&v| fc.linear_depth(v)).collect();
         let tile_pixels: Vec<u32> = match (visible.pixels, counted) {
             (Pixels::Host(c), _) => c,
             (_, Some((buf, scale))) => {

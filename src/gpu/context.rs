@@ -1,5 +1,7 @@
 //! The wgpu device: headless adapter selection and the features geocull needs.
 
+use super::depth_read::{DepthReadback, DepthReader};
+use super::readback::ReadbackTexture;
 use crate::error::{Error, Result};
 use std::sync::{Arc, Mutex};
 
@@ -17,6 +19,11 @@ pub struct GpuContext {
     pub features: wgpu::Features,
     /// Errors the device reported outside an error scope, taken after each frame.
     errors: Arc<Mutex<Vec<String>>>,
+    /// Whether depth textures can be copied into buffers (downlevel flag
+    /// DEPTH_TEXTURE_AND_BUFFER_COPIES: Vulkan yes, GL no).
+    pub depth_copies: bool,
+    /// Reads depth textures back through a shader where they cannot be copied.
+    depth_reader: DepthReader,
 }
 
 fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
@@ -91,7 +98,10 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap().push(e.to_string());
         }));
-        Ok(Self { device, queue, info, limits, timestamps, features, errors })
+        let depth_copies =
+            adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+        let depth_reader = DepthReader::new(&device);
+        Ok(Self { device, queue, info, limits, timestamps, features, errors, depth_copies, depth_reader })
     }
 
     /// Returns the first device error reported since the last call, as an Error.
@@ -121,6 +131,19 @@ impl GpuContext {
 }
 
 impl GpuContext {
+    /// Records the read-back of a Depth32Float texture (usages `COPY_SRC | TEXTURE_BINDING`): a
+    /// copy where the backend can copy depth into buffers, else through a shader
+    /// (`gpu::depth_read`; GL).
+    pub fn read_depth(&self, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture) -> DepthReadback {
+        let (w, h) = (tex.width(), tex.height());
+        if self.depth_copies {
+            DepthReadback::Copy(ReadbackTexture::new(&self.device, enc, tex, w, h, 4, wgpu::TextureAspect::DepthOnly))
+        } else {
+            let view = tex.create_view(&Default::default());
+            self.depth_reader.record(&self.device, enc, &view, (w, h), self.limits.max_storage_buffer_binding_size)
+        }
+    }
+
     /// Checks an image size against this device's texture limit.
     pub fn check_image_size(&self, width: u32, height: u32) -> Result<()> {
         check_size(width, height, self.limits.max_texture_dimension_2d)

@@ -42,12 +42,13 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
 
 // Pass 3 of the map: keep only fragments strictly farther than the reference depth (the nearest
 // point of the boxes of the other class on this pixel's ray); the depth test (Greater) then keeps
-// the nearest of them.
-@group(1) @binding(0) var ref_depth: texture_depth_2d;
+// the nearest of them. Depth textures are bound as unfilterable float (`texture_2d<f32>`, `.r`):
+// naga's GLSL backend cannot `textureLoad` a `texture_depth_2d`.
+@group(1) @binding(0) var ref_depth: texture_2d<f32>;
 
 @fragment
 fn fs_beyond(v: BoxOut) {
-    let r = textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0);
+    let r = textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
     if (v.clip.z >= r) {
         discard;
     }
@@ -56,12 +57,12 @@ fn fs_beyond(v: BoxOut) {
 // Node test: count the pixels where the node box's front face is nearer than (or as near as) the
 // occlusion map. The comparison is done here, by hand, so no early-depth-test feature is needed
 // and hidden fragments are never counted.
-@group(1) @binding(0) var map_depth: texture_depth_2d;
+@group(1) @binding(0) var map_depth: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
 
 @fragment
 fn fs_test(v: BoxOut) -> @location(0) u32 {
-    let m = textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0);
+    let m = textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
     if (v.clip.z >= m) {
         atomicAdd(&counts[v.id], 1u);
         return v.id + 1u;

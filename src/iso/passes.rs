@@ -102,11 +102,12 @@ impl IsoPasses {
     pub(super) fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
+        // Depth textures read as unfilterable float (see iso.wgsl: GLSL has no depth textureLoad).
         let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: fs,
             ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
                 multisampled: false,
             },
@@ -268,7 +269,8 @@ impl Targets {
             let cs = wgpu::TextureUsages::COPY_SRC;
             let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
             let id = tex("iso_id", ID_FORMAT, ra);
-            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | cs);
+            // Depth and the map are copied back, or read through a shader where they cannot be.
+            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
             let below = tex("iso_below", DEPTH_FORMAT, ra | tb);
             let above = tex("iso_above", DEPTH_FORMAT, ra | tb);
             let map_tex = tex("iso_map", DEPTH_FORMAT, ra | tb | cs);

@@ -496,23 +496,19 @@ impl IsoRenderer {
         let t_rb = Instant::now();
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
         let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
-        let depth_rb =
-            ReadbackTexture::new(d, &mut enc, &tg.depth_tex, width, height, 4, wgpu::TextureAspect::DepthOnly);
-        let map_rb = (opts.return_map && implicit)
-            .then(|| ReadbackTexture::new(d, &mut enc, &tg.map_tex, width, height, 4, wgpu::TextureAspect::DepthOnly));
+        let depth_rb = ctx.read_depth(&mut enc, &tg.depth_tex);
+        let map_rb = (opts.return_map && implicit).then(|| ctx.read_depth(&mut enc, &tg.map_tex));
         ctx.queue.submit([enc.finish()]);
-        for r in [&color_rb, &depth_rb].into_iter().chain(map_rb.as_ref()) {
-            r.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+        for b in [&color_rb.buffer, depth_rb.buffer()].into_iter().chain(map_rb.as_ref().map(|m| m.buffer())) {
+            b.slice(..).map_async(wgpu::MapMode::Read, |_| {});
         }
         ctx.wait()?;
         ctx.take_error()?;
         let image = color_rb.read_rows()?;
-        let lin = |raw: Vec<u8>| -> Vec<f32> {
-            bytemuck::cast_slice::<u8, f32>(&raw).par_iter().map(|&v| fc.linear_depth(v)).collect()
-        };
-        let depth = lin(depth_rb.read_rows()?);
+        let lin = |raw: Vec<f32>| -> Vec<f32> { raw.par_iter().map(|&v| fc.linear_depth(v)).collect() };
+        let depth = lin(depth_rb.read()?);
         if let Some(m) = &map_rb {
-            map_out = Some(lin(m.read_rows()?));
+            map_out = Some(lin(m.read()?));
         } else if opts.return_map {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }
