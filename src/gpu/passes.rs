@@ -178,14 +178,17 @@ impl Passes {
             stencil: wgpu::StencilState::default(),
             bias: wgpu::DepthBiasState::default(),
         };
+        // GL writes frag_depth from `*_gl` entry points, for reverse-Z precision (common.wgsl).
+        let gl = d.adapter_info().backend == wgpu::Backend::Gl;
         let scene_pipeline = |label: &str, file: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>]| {
             let module = shader(d, label, format!("{COMMON_WGSL}\n{file}"));
+            let (vs, fs) = if gl { ("vs_gl", format!("{fs}_gl")) } else { ("vs_main", fs.to_string()) };
             d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&scene_pl),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(vs),
                     compilation_options: Default::default(),
                     buffers: &[Some(vertex_layout.clone())],
                 },
@@ -198,7 +201,7 @@ impl Passes {
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some(fs),
+                    entry_point: Some(&fs),
                     compilation_options: Default::default(),
                     targets,
                 }),

@@ -167,9 +167,14 @@ impl IsoPasses {
             stencil: wgpu::StencilState::default(),
             bias: wgpu::DepthBiasState::default(),
         });
+        // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
+        let gl = d.adapter_info().backend == wgpu::Backend::Gl;
+        let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
+        let (vs_box, fs_near, fs_beyond, fs_test) = (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
+        let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
         let box_vs = wgpu::VertexState {
             module: &shader,
-            entry_point: Some("vs_box"),
+            entry_point: Some(&vs_box),
             compilation_options: Default::default(),
             buffers: &[Some(box_layout())],
         };
@@ -186,7 +191,12 @@ impl IsoPasses {
             primitive: prim(None),
             depth_stencil: depth_write.clone(),
             multisample: Default::default(),
-            fragment: None,
+            fragment: gl.then(|| wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some(&fs_near),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
             multiview_mask: None,
             cache: None,
         });
@@ -199,7 +209,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_beyond"),
+                entry_point: Some(&fs_beyond),
                 compilation_options: Default::default(),
                 targets: &[],
             }),
@@ -215,7 +225,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_test"),
+                entry_point: Some(&fs_test),
                 compilation_options: Default::default(),
                 targets: &[Some(ID_FORMAT.into())],
             }),
@@ -231,7 +241,7 @@ impl IsoPasses {
             layout: Some(&pl_globals),
             vertex: wgpu::VertexState {
                 module: &shader,
-                entry_point: Some("vs_surf"),
+                entry_point: Some(&vs_surf),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: 24,
@@ -244,7 +254,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_surf"),
+                entry_point: Some(&fs_surf),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
                     format: COLOR_FORMAT,

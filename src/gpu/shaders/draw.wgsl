@@ -6,8 +6,7 @@ struct FOut {
     @location(1) id: u32,
 }
 
-@fragment
-fn fs_main(v: VOut) -> FOut {
+fn shade(v: VOut) -> FOut {
     // Flat normal from screen-space derivatives: no per-vertex normals to store.
     let n0 = cross(dpdx(v.world), dpdy(v.world));
     var n = vec3<f32>(0.0, 0.0, 1.0);
@@ -23,4 +22,22 @@ fn fs_main(v: VOut) -> FOut {
     out.color = vec4<f32>(c * shade, 1.0);
     out.id = v.tile + 1u;
     return out;
+}
+
+@fragment
+fn fs_main(v: VOut) -> FOut {
+    return shade(v);
+}
+
+struct FOutGl {
+    @location(0) color: vec4<f32>,
+    @location(1) id: u32,
+    @builtin(frag_depth) depth: f32,
+}
+
+// GL: the same, with frag_depth written (see VOutGl in common.wgsl).
+@fragment
+fn fs_main_gl(v: VOutGl) -> FOutGl {
+    let o = shade(from_gl(v));
+    return FOutGl(o.color, o.id, gl_depth(v));
 }
