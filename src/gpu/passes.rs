@@ -86,7 +86,14 @@ fn compute(
         layout: Some(&pl),
         module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        // Every shader here writes its workgroup memory before reading it (histogram.wgsl: each
+        // lane its own slot, then a barrier), so the zero-initialisation naga adds by default is
+        // dead work; naga writes it out for GLSL, where it made the histogram 11x slower (120 ms
+        // vs 11 ms at 1280 x 1024 on llvmpipe; Vulkan: 11 ms either way).
+        compilation_options: wgpu::PipelineCompilationOptions {
+            zero_initialize_workgroup_memory: false,
+            ..Default::default()
+        },
         cache: None,
     })
 }
