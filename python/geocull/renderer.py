@@ -32,7 +32,12 @@ ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
 
 class Renderer:
     """Off-screen wgpu renderer of width x height pixel images. backend: "auto" (a GPU if present,
-    else Mesa's lavapipe on the CPU), "vulkan", "gl", ... Raises DeviceError if no adapter is found."""
+    else Mesa's lavapipe on the CPU), "vulkan", "gl" (e.g. EGL + llvmpipe where there is no Vulkan),
+    "metal", "dx12"; every backend renders the same image. "auto" honours the environment variable
+    ``GEOCULL_BACKEND`` (one of those names; unset, empty or "auto": geocull chooses), which picks
+    the backend for a whole program or test run, e.g. ``GEOCULL_BACKEND=gl pytest``; an explicit
+    backend wins over it. Raises DeviceError if no adapter is found, InputError for an unknown
+    name (in ``backend`` or in ``GEOCULL_BACKEND``)."""
 
     def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
         if not isinstance(backend, str):

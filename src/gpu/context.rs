@@ -26,6 +26,29 @@ pub struct GpuContext {
     depth_reader: DepthReader,
 }
 
+/// The environment variable that `backend = "auto"` honours: set to `vulkan`, `gl`, `metal` or
+/// `dx12` it chooses that backend for every renderer opened with `"auto"` (e.g. a whole test run on
+/// GL: `GEOCULL_BACKEND=gl pytest`); unset, empty or `auto` it leaves the choice to geocull.
+pub const BACKEND_ENV: &str = "GEOCULL_BACKEND";
+
+/// The backend a renderer opens: `backend`, or for `"auto"` the value of [`BACKEND_ENV`] if set.
+/// Returns the name used in messages and the wgpu backends to enumerate.
+fn resolve_backend(backend: &str) -> Result<(String, wgpu::Backends)> {
+    if backend == "auto" {
+        if let Ok(env) = std::env::var(BACKEND_ENV) {
+            let env = env.trim().to_ascii_lowercase();
+            if !env.is_empty() {
+                let b = parse_backends(&env).map_err(|e| match e {
+                    Error::Input { msg, .. } => crate::error::input_err(BACKEND_ENV, msg),
+                    e => e,
+                })?;
+                return Ok((format!("{env} (from {BACKEND_ENV})"), b));
+            }
+        }
+    }
+    Ok((backend.to_string(), parse_backends(backend)?))
+}
+
 fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
     Ok(match backend {
         "auto" => wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12,
@@ -48,7 +71,7 @@ impl GpuContext {
     /// Opens a device on `backend`, with the features geocull always needs plus those of
     /// `optional` that the adapter has (strategies check for theirs before use).
     pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
-        let backends = parse_backends(backend)?;
+        let (backend, backends) = resolve_backend(backend)?;
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);

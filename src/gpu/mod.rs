@@ -14,7 +14,7 @@ pub mod readback;
 pub mod targets;
 pub mod timing;
 
-pub use context::{GpuContext, INSTALL_HINT};
+pub use context::{GpuContext, BACKEND_ENV, INSTALL_HINT};
 pub use depth_read::DepthReadback;
 pub use geometry::{check_buffer_sizes, SceneGeometry};
 pub use layout::{DrawArgs, Globals, GpuObject};
