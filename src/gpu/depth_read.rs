@@ -125,8 +125,8 @@ impl DepthReader {
                     wgpu::BindGroupEntry { binding: 2, resource: band.as_entire_binding() },
                 ],
             });
-            let mut pass =
-                enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("depth_copy"), timestamp_writes: None });
+            let mut pass = enc
+                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("depth_copy"), timestamp_writes: None });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bg, &[]);
             pass.dispatch_workgroups(width.div_ceil(16), rows.div_ceil(16), 1);

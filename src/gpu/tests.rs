@@ -130,7 +130,12 @@ fn depth_is_read_back_exactly_whole_and_in_bands() {
     let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: None,
         layout: None,
-        vertex: wgpu::VertexState { module: &module, entry_point: Some("vs"), compilation_options: Default::default(), buffers: &[] },
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
         primitive: Default::default(),
         depth_stencil: Some(wgpu::DepthStencilState {
             format: targets::DEPTH_FORMAT,
@@ -176,7 +181,12 @@ fn depth_is_read_back_exactly_whole_and_in_bands() {
         ctx.take_error().unwrap();
         let got = rb.read().unwrap();
         let bad = got.iter().zip(&want).position(|(a, b)| a.to_bits() != b.to_bits());
-        assert!(bad.is_none(), "max_binding {max_binding}: texel {bad:?}: {} != {}", got[bad.unwrap()], want[bad.unwrap()]);
+        assert!(
+            bad.is_none(),
+            "max_binding {max_binding}: texel {bad:?}: {} != {}",
+            got[bad.unwrap()],
+            want[bad.unwrap()]
+        );
     }
     assert_eq!(depth_read::band_rows(37, 150, 4 * 37 * 100), 64);
     assert_eq!(depth_read::band_rows(37, 150, 4 * 37 * 150), 150);
@@ -192,9 +202,8 @@ fn depth_read_cost() {
     let Some((ctx, _)) = device() else { return };
     let d = &ctx.device;
     let (w, h) = (1280u32, 1024u32);
-    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-        | wgpu::TextureUsages::TEXTURE_BINDING
-        | wgpu::TextureUsages::COPY_SRC;
+    let usage =
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
     let tex = targets::texture(d, "depth", w, h, targets::DEPTH_FORMAT, usage);
     let view = tex.create_view(&Default::default());
     let median = |f: &dyn Fn() -> wgpu::Buffer| {

@@ -170,7 +170,8 @@ impl IsoPasses {
         // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
         let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
-        let (vs_box, fs_near, fs_beyond, fs_test) = (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
+        let (vs_box, fs_near, fs_beyond, fs_test) =
+            (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
         let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
         let box_vs = wgpu::VertexState {
             module: &shader,
