@@ -115,6 +115,8 @@ pub struct Renderer {
     strategies: Vec<Box<dyn CullStrategy>>,
     /// Isosurface pipelines and caches, created on first use.
     iso: Option<Box<IsoRenderer>>,
+    /// Bytes each strategy's cache may keep between frames.
+    cache_budget: u64,
 }
 
 impl Renderer {
@@ -131,7 +133,19 @@ impl Renderer {
         let timestamps = ctx.timestamps.then(|| Timestamps::new(&ctx.device));
         let main_targets = Targets::new(&ctx.device, width, height, true);
         ctx.take_error()?;
-        Ok(Self { ctx, width, height, passes, main_targets, geometry: None, timestamps, strategies, iso: None })
+        let cache_budget = cull::DEFAULT_CACHE_BUDGET;
+        Ok(Self {
+            ctx,
+            width,
+            height,
+            passes,
+            main_targets,
+            geometry: None,
+            timestamps,
+            strategies,
+            iso: None,
+            cache_budget,
+        })
     }
 
     pub fn width(&self) -> u32 {
@@ -145,6 +159,15 @@ impl Renderer {
     }
     pub fn max_texture_size(&self) -> u32 {
         self.ctx.limits.max_texture_dimension_2d
+    }
+    /// Bytes each culling strategy may keep cached between frames (horizon: its trees).
+    pub fn cache_budget(&self) -> u64 {
+        self.cache_budget
+    }
+    /// Sets [`cache_budget`](Self::cache_budget); caches over it shrink at once.
+    pub fn set_cache_budget(&mut self, bytes: u64) {
+        self.cache_budget = bytes;
+        self.strategies.iter_mut().for_each(|s| s.set_cache_budget(bytes));
     }
     /// Bytes of scene geometry currently held on the GPU.
     pub fn gpu_bytes(&self) -> u64 {

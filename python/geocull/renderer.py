@@ -69,6 +69,18 @@ class Renderer:
         """Bytes of scene geometry held on the GPU."""
         return self._r.gpu_bytes
 
+    @property
+    def cache_budget(self) -> int:
+        """Bytes each culling strategy may keep cached between frames (default 256 MiB; horizon:
+        its quadtrees, one per height field and z_scale, least recently used dropped first; the
+        frame's ``stats["cache_bytes"]`` is what it holds). Setting it shrinks caches at once; 0
+        caches nothing."""
+        return self._r.cache_budget
+
+    @cache_budget.setter
+    def cache_budget(self, nbytes: int) -> None:
+        self._r.cache_budget = cv.integer(nbytes, "cache_budget")
+
     def render(
         self,
         scene: Scene,

@@ -85,6 +85,15 @@ impl PyRenderer {
     fn gpu_bytes(&self) -> u64 {
         self.inner.gpu_bytes()
     }
+    #[getter]
+    fn cache_budget(&self) -> u64 {
+        self.inner.cache_budget()
+    }
+    #[setter]
+    fn set_cache_budget(&mut self, bytes: i64) -> PyResult<()> {
+        self.inner.set_cache_budget(int_in(bytes, "cache_budget", 0, i64::MAX)? as u64);
+        Ok(())
+    }
 
     #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale))]
     fn render<'py>(

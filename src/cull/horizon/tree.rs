@@ -163,6 +163,18 @@ impl HorizonTree {
         tree
     }
 
+    /// Host memory held by the tree, bytes (what the strategy's cache budgets).
+    pub fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        size_of::<Self>()
+            + self.z.capacity() * size_of::<f32>()
+            + (self.bx.capacity() + self.by.capacity()) * size_of::<usize>()
+            + self.tile_nonempty.capacity()
+            + self.edge_off.capacity() * size_of::<u32>()
+            + self.edges.capacity() * size_of::<[u32; 2]>()
+            + self.nodes.capacity() * size_of::<Node>()
+    }
+
     #[inline]
     pub(super) fn pos(&self, i: usize, j: usize) -> DVec3 {
         DVec3::new(self.x0 + i as f64 * self.dx, self.y0 + j as f64 * self.dy, self.z[j * self.nx + i] as f64)
@@ -212,6 +224,20 @@ impl HorizonTree {
     /// orthographic work, with standard or reverse-Z depth. `eye` (render space) is only used
     /// to orient orthographic views (see the module doc).
     pub fn cull(&self, view_proj: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
+        self.cull_translated(view_proj, DVec3::ZERO, eye, width, height)
+    }
+
+    /// [`cull`](Self::cull) of the tree moved by `offset` (render space) without rebuilding it:
+    /// the tree's coordinates are object-local, the offset goes into the view-projection
+    /// (`view_proj * T(offset)`) and into the bounds on the GPU's f32 round-off.
+    pub fn cull_translated(
+        &self,
+        view_proj: DMat4,
+        offset: DVec3,
+        eye: DVec3,
+        width: u32,
+        height: u32,
+    ) -> HorizonResult {
         let (w, h) = (width as usize, height as usize);
         let fallback = || HorizonResult {
             tile_visible: if self.valid {
@@ -224,10 +250,10 @@ impl HorizonTree {
             horizon: vec![f32::NEG_INFINITY; w],
             culling_applied: false,
         };
-        if !self.valid || w == 0 || h == 0 || !view_proj.is_finite() {
+        if !self.valid || w == 0 || h == 0 || !view_proj.is_finite() || !offset.is_finite() {
             return fallback();
         }
-        let Some(view) = View::new(view_proj, eye, w, h, self.scale) else {
+        let Some(view) = View::new(view_proj, offset, eye, w, h, self.scale) else {
             return fallback();
         };
         let mut res = HorizonResult {

@@ -31,7 +31,19 @@ pub(super) struct View {
 }
 
 impl View {
-    pub(super) fn new(m: DMat4, eye: DVec3, w: usize, h: usize, scale: f64) -> Option<View> {
+    /// The view of a tree built in object-local coordinates: `m` maps render space to clip space,
+    /// `offset` (render space) moves the tree's coordinates into render space, `eye` is in render
+    /// space, `scale` is the tree's own coordinate scale. The GPU draws `p + offset` with an f32
+    /// matrix, so the round-off bound (`ra`) keeps `|m| (|p| + |offset|)`: as large as for a tree
+    /// built at its translated place, however the translation cancels in `m * T(offset)`.
+    pub(super) fn new(m: DMat4, offset: DVec3, eye: DVec3, w: usize, h: usize, scale: f64) -> Option<View> {
+        let ra = [0, 1, 2, 3].map(|i| {
+            let r = m.row(i).abs();
+            r.truncate().extend(r.w + r.truncate().dot(offset.abs()))
+        });
+        let (r3_render, scale) = (m.row(3), scale + offset.length());
+        let m = m * DMat4::from_translation(offset);
+        let eye = eye - offset;
         let r0 = m.row(0);
         let r1 = m.row(1);
         let r2 = m.row(2);
@@ -91,8 +103,8 @@ impl View {
         if !eh.is_finite() {
             return None;
         }
-        let w_margin = (1e-9 * (r3.truncate().length() * scale + r3.w.abs())).max(1e-300);
-        Some(View { m, ra: [r0.abs(), r1.abs(), r2.abs(), r3.abs()], eh, w_margin, wf: w as f64, hf: h as f64, w, h })
+        let w_margin = (1e-9 * (r3_render.truncate().length() * scale + r3_render.w.abs())).max(1e-300);
+        Some(View { m, ra, eh, w_margin, wf: w as f64, hf: h as f64, w, h })
     }
 
     #[inline]
