@@ -14,7 +14,7 @@
 
 use crate::camera::{Camera, FrameCamera};
 use crate::cull::{self, CullOptions, CullStrategy, Draw, FrameInputs, Pixels, Stat, Visible};
-use crate::error::{Error, Result};
+use crate::error::{Error, Interrupt, Result};
 use crate::gpu::{
     passes, readback, DrawArgs, Globals, GpuContext, GpuObject, Passes, SceneGeometry, Targets, Timestamps,
 };
@@ -31,11 +31,14 @@ pub struct RenderOptions {
     /// A registered strategy's name (`crate::cull::names()`).
     pub culling: String,
     pub cull: CullOptions,
+    /// Polled between the stages of the frame and while waiting for the GPU; when it fires,
+    /// `render` returns `Error::Interrupted` and the renderer stays usable (`crate::error::Interrupt`).
+    pub interrupt: Interrupt,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { culling: "none".into(), cull: CullOptions::default() }
+        Self { culling: "none".into(), cull: CullOptions::default(), interrupt: Interrupt::default() }
     }
 }
 
@@ -207,8 +210,11 @@ impl Renderer {
                 self.ctx.adapter_description()
             )));
         }
+        // Work an interrupted frame left on the GPU finishes before this frame's clock starts.
+        self.ctx.wait_interruptible(&opts.interrupt)?;
         let t0 = Instant::now();
         self.upload(scene)?;
+        opts.interrupt.check()?;
         let fc = self.frame_camera(scene, camera);
         if let Some(ts) = self.timestamps.as_mut() {
             ts.begin_frame();
@@ -239,10 +245,11 @@ impl Renderer {
         let tc = Instant::now();
         let visible = strategy.visible_set(&inputs, &mut enc)?;
         let cull_ms = tc.elapsed().as_secs_f64() * 1e3;
+        opts.interrupt.check()?;
         let final_args = draw(&inputs, &mut enc, &visible);
         let ts_rb = timestamps.as_ref().and_then(|t| t.resolve(&ctx.device, &mut enc));
         ctx.queue.submit([enc.finish()]);
-        ctx.wait()?;
+        ctx.wait_interruptible(&opts.interrupt)?;
         let total_ms = (t0.elapsed() - untimed).as_secs_f64() * 1e3;
         ctx.take_error()?;
         let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;

@@ -108,6 +108,10 @@ class Renderer:
         visible. Measured: at most 0.03 % of pixels on the stacked Gullfaks-like scene, but up
         to 9 % for low, near-horizontal views over rough terrain at coarse_factor=25 (0.3 % at 4);
         use culling="horizon" (exact) for such views.
+
+        Ctrl-C (SIGINT) during a frame raises KeyboardInterrupt within a fraction of a second (the
+        core checks between the frame's stages and while it waits for the GPU); the renderer stays
+        usable, and its next frame first lets the GPU finish the abandoned work.
         """
         cv.expect_instance(scene, Scene, "scene")
         cv.expect_instance(camera, Camera, "camera")

@@ -2,7 +2,7 @@
 
 use super::depth_read::{DepthReadback, DepthReader};
 use super::readback::ReadbackTexture;
-use crate::error::{Error, Result};
+use crate::error::{Error, Interrupt, Result};
 use std::sync::{Arc, Mutex};
 
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
@@ -143,6 +143,22 @@ impl GpuContext {
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")))
+    }
+
+    /// [`wait`](Self::wait), polling `interrupt` every `Interrupt::POLL` (a plain wait without a
+    /// hook). On `Err(Interrupted)` the GPU keeps working on what was submitted; a later wait
+    /// (or submission) picks up after it.
+    pub fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
+        if !interrupt.is_set() {
+            return self.wait();
+        }
+        loop {
+            match self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(Interrupt::POLL) }) {
+                Ok(_) => return Ok(()),
+                Err(wgpu::PollError::Timeout) => interrupt.check()?,
+                Err(e) => return Err(Error::Device(format!("waiting for the GPU failed: {e}"))),
+            }
+        }
     }
 
     pub fn adapter_description(&self) -> String {

@@ -58,7 +58,7 @@ use super::passes::{draw_map, draw_surface, test_nodes, BoxInstance, Globals, Is
 use super::tetra::{PatchCache, SurfacePatch};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
-use crate::error::{ensure, input_err, Result};
+use crate::error::{ensure, input_err, Interrupt, Result};
 use crate::gpu::{GpuContext, ReadbackTexture};
 
 /// How the isosurface is culled.
@@ -100,6 +100,9 @@ pub struct IsoOptions {
     pub use_cache: bool,
     /// Also read back the occlusion map (as linear depth).
     pub return_map: bool,
+    /// Polled between the stages of the frame (map, each level of node tests, extraction); when
+    /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
+    pub interrupt: Interrupt,
 }
 
 impl Default for IsoOptions {
@@ -111,6 +114,7 @@ impl Default for IsoOptions {
             color: [0.85, 0.72, 0.45],
             use_cache: true,
             return_map: false,
+            interrupt: Interrupt::default(),
         }
     }
 }
@@ -407,6 +411,7 @@ impl IsoRenderer {
             stats.occluder_boxes_below = occ.n_below;
             stats.occluder_boxes_above = occ.n_above;
             draw_map(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, occ)?;
+            opts.interrupt.check()?;
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let start = cull_depth.saturating_sub(2);
@@ -418,6 +423,7 @@ impl IsoRenderer {
                     level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
                 let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, b)).collect();
                 let counts = test_nodes(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, &boxes)?;
+                opts.interrupt.check()?;
                 stats.nodes_tested += level.len() as u32;
                 let vis: Vec<NodeInfo> = level
                     .iter()
@@ -479,6 +485,7 @@ impl IsoRenderer {
             super::tetra::extract_nodes(vol, w, &visible).into_iter().map(Arc::new).collect()
         };
         stats.extract_ms = t_ex.elapsed().as_secs_f64() * 1e3;
+        opts.interrupt.check()?;
 
         // ---- Draw.
         let t_draw = Instant::now();

@@ -3,7 +3,7 @@
 
 use super::camera::PyCamera;
 use super::renderer::PyRenderer;
-use super::{contiguous, run};
+use super::{contiguous, run, run_interruptible};
 use crate::error::{input_err, int_in};
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
 use crate::iso::{MinMaxOctree, Volume};
@@ -171,7 +171,7 @@ fn render_isosurface<'py>(
     let tree = volume.tree(py)?;
     let r = &mut renderer.inner;
     let (v, c) = (&volume.inner, &camera.inner);
-    let out = run(py, move || {
+    let out = run_interruptible(py, move |interrupt| {
         crate::error::ensure(isovalue.is_finite() && isovalue.abs() <= f32::MAX as f64, "isovalue", || {
             format!("isovalue is {isovalue}; expected a finite number within the float32 range")
         })?;
@@ -185,6 +185,7 @@ fn render_isosurface<'py>(
             color: [color.0 as f32, color.1 as f32, color.2 as f32],
             use_cache: cache,
             return_map,
+            interrupt,
         };
         r.render_isosurface(v, &tree, isovalue as f32, c, &opts)
     })?;

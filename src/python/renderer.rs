@@ -1,8 +1,8 @@
 //! `geocull._geocull.Renderer`: frames as dicts of numpy arrays and stats.
 
 use super::camera::PyCamera;
-use super::run;
 use super::scene::PyScene;
+use super::{run, run_interruptible};
 use crate::cull::{self, CullOptions, Stat};
 use crate::error::int_in;
 use crate::render::{RenderOptions, RenderOutput, Renderer};
@@ -107,8 +107,8 @@ impl PyRenderer {
     ) -> PyResult<Bound<'py, PyDict>> {
         let r = &mut self.inner;
         let (s, c) = (&scene.inner, &camera.inner);
-        let opts = RenderOptions { culling, cull: CullOptions { pixel_threshold, prepass_scale } };
-        let out = run(py, move || r.render(s, c, &opts))?;
+        let cull = CullOptions { pixel_threshold, prepass_scale };
+        let out = run_interruptible(py, move |interrupt| r.render(s, c, &RenderOptions { culling, cull, interrupt }))?;
         output_dict(py, out)
     }
 }

@@ -1,6 +1,6 @@
 //! `geocull._geocull.Scene`: objects in, tile table and geometry out.
 
-use super::run;
+use super::{run, run_interruptible};
 use crate::error::{int_in, object_id};
 use crate::scene::{AddOptions, Scene};
 use numpy::ndarray::Array2;
@@ -41,9 +41,10 @@ impl PyScene {
         let (ny, nx) = (shape[0], shape[1]);
         let data = super::contiguous(&z, "z")?;
         let scene = &mut self.inner;
-        let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        run(py, move || {
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        run_interruptible(py, move |interrupt| {
             let tiles = (int_in(tiles.0, "tiles[0]", 1, MAX_INT)?, int_in(tiles.1, "tiles[1]", 1, MAX_INT)?);
+            let opts = AddOptions { coarse_factor, name, color, interrupt };
             scene.add_heightfield(data, ny, nx, [origin.0, origin.1], [spacing.0, spacing.1], tiles, null_value, opts)
         })
     }
@@ -64,10 +65,10 @@ impl PyScene {
         let v: &[[f64; 3]] = bytemuck::cast_slice(super::contiguous(&vertices, "vertices")?);
         let f: &[[i64; 3]] = bytemuck::cast_slice(super::contiguous(&faces, "faces")?);
         let scene = &mut self.inner;
-        let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        run(py, move || {
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        run_interruptible(py, move |interrupt| {
             let tiles = tiles.map(|t| int_in(t, "tiles", 1, MAX_INT)).transpose()?;
-            scene.add_mesh(v, f, &kind, tiles, opts)
+            scene.add_mesh(v, f, &kind, tiles, AddOptions { coarse_factor, name, color, interrupt })
         })
     }
 

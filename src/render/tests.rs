@@ -6,7 +6,7 @@ use crate::gpu::BACKGROUND;
 use crate::scene::AddOptions;
 
 fn opts(cf: f64) -> AddOptions {
-    AddOptions { coarse_factor: cf, name: None, color: Some([0.5, 0.5, 0.5]) }
+    AddOptions { color: Some([0.5, 0.5, 0.5]), ..AddOptions::new(cf) }
 }
 
 fn plane(s: &mut Scene, z: f64, n: usize, size: f64, tiles: usize, cf: f64) -> u32 {
@@ -75,6 +75,7 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
             &RenderOptions {
                 culling: "three_pass".into(),
                 cull: CullOptions { pixel_threshold: 0.0, prepass_scale: 1.0 },
+                ..Default::default()
             },
         )
         .unwrap();
@@ -89,4 +90,72 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     assert!(tp.tile_drawn[first_lower..].iter().all(|&d| !d));
     assert_eq!(tp.image, none.image);
     assert!(tp.stats.triangles_drawn < none.stats.triangles_drawn);
+}
+
+/// An interrupt that fires on its `n`-th poll (1 = the first), counting polls in `calls`.
+fn nth_poll(n: usize) -> (Interrupt, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let calls = std::sync::Arc::new(AtomicUsize::new(0));
+    let c = calls.clone();
+    (Interrupt::new(move || c.fetch_add(1, Ordering::Relaxed) + 1 >= n), calls)
+}
+
+/// An interrupt stops a frame at a stage boundary with `Error::Interrupted`, for every strategy and
+/// every stage it is polled at; the next frame of the same renderer equals the first one.
+#[test]
+fn interrupted_frames_leave_the_renderer_usable() {
+    let mut s = Scene::new();
+    plane(&mut s, 0.0, 21, 100.0, 4, 1.0);
+    plane(&mut s, -10.0, 21, 60.0, 3, 1.0);
+    let cam = top_down(120.0);
+    let mut r = Renderer::new(48, 40, "auto").unwrap();
+    for name in crate::cull::names() {
+        let want = r.render(&s, &cam, &RenderOptions::culling(name)).unwrap();
+        // Polls without a GPU wait slice: after upload, after the strategy (a fast frame may end
+        // before any wait slice times out, so later polls are not guaranteed to happen).
+        for n in 1..=2 {
+            let (interrupt, calls) = nth_poll(n);
+            let e = r.render(&s, &cam, &RenderOptions { interrupt, ..RenderOptions::culling(name) }).unwrap_err();
+            assert!(matches!(e, Error::Interrupted), "{name}, poll {n}: {e}");
+            assert_eq!(calls.load(std::sync::atomic::Ordering::Relaxed), n, "{name}");
+            let again = r.render(&s, &cam, &RenderOptions::culling(name)).unwrap();
+            assert_eq!(
+                (again.image, again.depth, again.tile_pixels),
+                (want.image.clone(), want.depth.clone(), want.tile_pixels.clone()),
+                "{name}"
+            );
+        }
+        // A hook that never fires changes nothing.
+        let (interrupt, _) = nth_poll(usize::MAX);
+        let same = r.render(&s, &cam, &RenderOptions { interrupt, ..RenderOptions::culling(name) }).unwrap();
+        assert_eq!(same.image, want.image, "{name}");
+    }
+}
+
+/// An interrupted build returns `Error::Interrupted` and leaves the scene as it was (no object,
+/// no origin): the same add afterwards gives the scene a fresh one gets.
+#[test]
+fn interrupted_builds_leave_the_scene_unchanged() {
+    let n = 200;
+    let z: Vec<f64> = (0..n * n).map(|k| ((k % n) as f64 * 0.1).sin() + (k / n) as f64 * 0.01).collect();
+    let add = |s: &mut Scene, interrupt: Interrupt| {
+        s.add_heightfield(&z, n, n, [10.0, 20.0], [1.0, 1.0], (8, 8), None, AddOptions { interrupt, ..opts(4.0) })
+    };
+    let mut s = Scene::new();
+    let e = add(&mut s, Interrupt::new(|| true)).unwrap_err();
+    assert!(matches!(e, Error::Interrupted), "{e}");
+    assert!(s.objects().is_empty() && s.n_tiles() == 0);
+    let mesh = s.add_mesh(
+        &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        &[[0, 1, 2]],
+        "m",
+        None,
+        AddOptions { interrupt: Interrupt::new(|| true), ..opts(1.0) },
+    );
+    assert!(matches!(mesh, Err(Error::Interrupted)) && s.objects().is_empty());
+    let mut fresh = Scene::new();
+    add(&mut s, Interrupt::default()).unwrap();
+    add(&mut fresh, Interrupt::new(|| false)).unwrap();
+    assert_eq!(s.origin(), fresh.origin());
+    assert_eq!(s.objects()[0].tiles[5].positions, fresh.objects()[0].tiles[5].positions);
 }

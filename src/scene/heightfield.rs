@@ -83,11 +83,12 @@ impl Scene {
         if zmin > zmax {
             (zmin, zmax) = (0.0, 0.0);
         }
-        let o = self.set_origin_from(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
+        let o = self.origin_for(DVec3::new(x0, y0, zmin), DVec3::new(x1, y1, zmax));
         let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy };
-        let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
+        // Interruptible between tiles; on Err the scene is unchanged (the origin is set below).
+        let tile_meshes = opts.interrupt.run_parallel(|stop| lod::tile_heightfield(&grid, o, (tx, ty), cf, stop))?;
         let kind = ObjectKind::Heightfield { nx, ny, x0: x0 - o.x, y0: y0 - o.y, dx, dy, tiles: (tx, ty) };
-        Ok(self.push(opts.name, kind, color, tile_meshes))
+        Ok(self.push(o, opts.name, kind, color, tile_meshes))
     }
 }
 
