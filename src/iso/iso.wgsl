@@ -29,7 +29,8 @@ struct BoxOut {
 }
 
 // One instance per box: lo.xyz + id (bit pattern in w), hi.xyz.
-fn box_corner(vi: u32, lo: vec4<f32>, hi: vec4<f32>) -> BoxOut {
+@vertex
+fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
     let c = CUBE[vi];
     let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
     let p = select(lo.xyz, hi.xyz, sel);
@@ -39,24 +40,16 @@ fn box_corner(vi: u32, lo: vec4<f32>, hi: vec4<f32>) -> BoxOut {
     return out;
 }
 
-@vertex
-fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
-    return box_corner(vi, lo, hi);
-}
-
 // Pass 3 of the map: keep only fragments strictly farther than the reference depth (the nearest
 // point of the boxes of the other class on this pixel's ray); the depth test (Greater) then keeps
 // the nearest of them. Depth textures are bound as unfilterable float (`texture_2d<f32>`, `.r`):
 // naga's GLSL backend cannot `textureLoad` a `texture_depth_2d`.
 @group(1) @binding(0) var ref_depth: texture_2d<f32>;
 
-fn beyond(xy: vec2<f32>, z: f32) -> bool {
-    return z < textureLoad(ref_depth, vec2<i32>(floor(xy)), 0).r;
-}
-
 @fragment
 fn fs_beyond(v: BoxOut) {
-    if (!beyond(v.clip.xy, v.clip.z)) {
+    let r = textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
+    if (v.clip.z >= r) {
         discard;
     }
 }
@@ -67,18 +60,14 @@ fn fs_beyond(v: BoxOut) {
 @group(1) @binding(0) var map_depth: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
 
-fn test_node(xy: vec2<f32>, z: f32, id: u32) -> u32 {
-    let m = textureLoad(map_depth, vec2<i32>(floor(xy)), 0).r;
-    if (z >= m) {
-        atomicAdd(&counts[id], 1u);
-        return id + 1u;
-    }
-    return 0u;
-}
-
 @fragment
 fn fs_test(v: BoxOut) -> @location(0) u32 {
-    return test_node(v.clip.xy, v.clip.z, v.id);
+    let m = textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
+    if (v.clip.z >= m) {
+        atomicAdd(&counts[v.id], 1u);
+        return v.id + 1u;
+    }
+    return 0u;
 }
 
 // The isosurface: positions relative to the volume centre (render space), smooth normals.
@@ -87,37 +76,31 @@ struct SurfOut {
     @location(0) normal: vec3<f32>,
 }
 
-fn surf_vertex(pos: vec3<f32>, normal: vec3<f32>) -> SurfOut {
+@vertex
+fn vs_surf(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>) -> SurfOut {
     var out: SurfOut;
     out.clip = g.view_proj * vec4<f32>(pos, 1.0);
     out.normal = normal;
     return out;
 }
 
-@vertex
-fn vs_surf(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>) -> SurfOut {
-    return surf_vertex(pos, normal);
-}
-
-fn shade_surf(normal: vec3<f32>) -> vec4<f32> {
+@fragment
+fn fs_surf(v: SurfOut) -> @location(0) vec4<f32> {
     var n = vec3<f32>(0.0, 0.0, 1.0);
-    if (dot(normal, normal) > 0.0) {
-        n = normalize(normal);
+    if (dot(v.normal, v.normal) > 0.0) {
+        n = normalize(v.normal);
     }
     // Two-sided Lambert with an ambient term.
     let shade = 0.3 + 0.7 * abs(dot(n, g.light_dir.xyz));
     return vec4<f32>(g.color.rgb * shade, 1.0);
 }
 
-@fragment
-fn fs_surf(v: SurfOut) -> @location(0) vec4<f32> {
-    return shade_surf(v.normal);
-}
-
 // ---- The GL variant (`*_gl` entry points, chosen by IsoPasses::new on the GL backend): clip z and
 // w go to the fragment, which uses z / w as its depth (compared by hand and written as frag_depth)
 // instead of GL's own depth, which keeps only ~2^-24 absolute precision of reverse-Z depth (see
-// gpu/shaders/common.wgsl). Other backends keep early depth tests.
+// gpu/shaders/common.wgsl). The bodies repeat those above rather than sharing helpers, so that the
+// other backends' entry points compile exactly as before (a shared shading helper measurably
+// slowed lavapipe's lit pass).
 
 struct BoxOutGl {
     @builtin(position) @invariant clip: vec4<f32>,
@@ -127,8 +110,10 @@ struct BoxOutGl {
 
 @vertex
 fn vs_box_gl(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOutGl {
-    let b = box_corner(vi, lo, hi);
-    return BoxOutGl(b.clip, b.id, b.clip.zw);
+    let c = CUBE[vi];
+    let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
+    let clip = g.view_proj * vec4<f32>(select(lo.xyz, hi.xyz, sel), 1.0);
+    return BoxOutGl(clip, bitcast<u32>(lo.w), clip.zw);
 }
 
 @fragment
@@ -139,7 +124,7 @@ fn fs_near_gl(v: BoxOutGl) -> @builtin(frag_depth) f32 {
 @fragment
 fn fs_beyond_gl(v: BoxOutGl) -> @builtin(frag_depth) f32 {
     let z = v.zw.x / v.zw.y;
-    if (!beyond(v.clip.xy, z)) {
+    if (z >= textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0).r) {
         discard;
     }
     return z;
@@ -147,7 +132,11 @@ fn fs_beyond_gl(v: BoxOutGl) -> @builtin(frag_depth) f32 {
 
 @fragment
 fn fs_test_gl(v: BoxOutGl) -> @location(0) u32 {
-    return test_node(v.clip.xy, v.zw.x / v.zw.y, v.id);
+    if (v.zw.x / v.zw.y >= textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0).r) {
+        atomicAdd(&counts[v.id], 1u);
+        return v.id + 1u;
+    }
+    return 0u;
 }
 
 struct SurfOutGl {
@@ -158,8 +147,8 @@ struct SurfOutGl {
 
 @vertex
 fn vs_surf_gl(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>) -> SurfOutGl {
-    let v = surf_vertex(pos, normal);
-    return SurfOutGl(v.clip, v.normal, v.clip.zw);
+    let clip = g.view_proj * vec4<f32>(pos, 1.0);
+    return SurfOutGl(clip, normal, clip.zw);
 }
 
 struct SurfFragGl {
@@ -169,5 +158,10 @@ struct SurfFragGl {
 
 @fragment
 fn fs_surf_gl(v: SurfOutGl) -> SurfFragGl {
-    return SurfFragGl(shade_surf(v.normal), v.zw.x / v.zw.y);
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    if (dot(v.normal, v.normal) > 0.0) {
+        n = normalize(v.normal);
+    }
+    let shade = 0.3 + 0.7 * abs(dot(n, g.light_dir.xyz));
+    return SurfFragGl(vec4<f32>(g.color.rgb * shade, 1.0), v.zw.x / v.zw.y);
 }
