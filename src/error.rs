@@ -72,9 +72,10 @@ pub fn object_id(v: i64) -> Result<u32> {
 /// everything usable:
 ///
 /// - between the stages of a frame (after upload, after the strategy, after the draw is
-///   recorded) and while waiting for the GPU ([`crate::gpu::GpuContext::wait_interruptible`],
-///   in slices of [`Interrupt::POLL`]; the GPU finishes the abandoned work on its own, and the
-///   next frame waits for it before its clock starts);
+///   recorded) and while waiting for the GPU (`GpuContext::submit_and_wait`, in slices of
+///   [`Interrupt::POLL`]; on GL, whose submit does the work, large frames are submitted from a
+///   worker thread; the GPU finishes abandoned work on its own, and the next frame waits for it
+///   before its clock starts);
 /// - while a parallel build runs ([`Interrupt::run_parallel`]): the calling thread polls while
 ///   rayon's workers build tiles, and a set flag makes the workers skip the tiles not started.
 ///

@@ -25,6 +25,10 @@ use glam::{DVec3, Mat4};
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// Scenes of at least this many fine triangles may take long to draw (~0.1 s on llvmpipe): on GL
+/// their frames are submitted so that Ctrl-C can stop them (`GpuContext::submit_and_wait`).
+const LONG_FRAME_TRIANGLES: u64 = 1 << 20;
+
 /// How to render one frame.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
@@ -211,7 +215,7 @@ impl Renderer {
             )));
         }
         // Work an interrupted frame left on the GPU finishes before this frame's clock starts.
-        self.ctx.wait_interruptible(&opts.interrupt)?;
+        self.ctx.finish_pending(&opts.interrupt)?;
         let t0 = Instant::now();
         self.upload(scene)?;
         opts.interrupt.check()?;
@@ -248,8 +252,7 @@ impl Renderer {
         opts.interrupt.check()?;
         let final_args = draw(&inputs, &mut enc, &visible);
         let ts_rb = timestamps.as_ref().and_then(|t| t.resolve(&ctx.device, &mut enc));
-        ctx.queue.submit([enc.finish()]);
-        ctx.wait_interruptible(&opts.interrupt)?;
+        ctx.submit_and_wait(enc.finish(), &opts.interrupt, geometry.fine_triangles() >= LONG_FRAME_TRIANGLES)?;
         let total_ms = (t0.elapsed() - untimed).as_secs_f64() * 1e3;
         ctx.take_error()?;
         let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;
@@ -326,7 +329,7 @@ impl Renderer {
         let drawn = &drawn[..n];
         let tile_drawn: Vec<bool> = drawn.iter().map(|a| a.instance_count > 0 && a.index_count > 0).collect();
         let mut stats = RenderStats {
-            triangles_fine_total: geom.fine.iter().map(|a| a.index_count as u64 / 3).sum(),
+            triangles_fine_total: geom.fine_triangles(),
             triangles_drawn: drawn.iter().map(|a| a.triangles()).sum(),
             tiles_total: n as u32,
             tiles_drawn: tile_drawn.iter().filter(|&&b| b).count() as u32,

@@ -3,7 +3,7 @@
 use super::depth_read::{DepthReadback, DepthReader};
 use super::readback::ReadbackTexture;
 use crate::error::{Error, Interrupt, Result};
-use std::sync::{Arc, Mutex};
+use std::sync::{mpsc, Arc, Mutex};
 
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
 pub const INSTALL_HINT: &str = "install a Vulkan driver; on Debian/Ubuntu without a GPU: \
@@ -24,6 +24,12 @@ pub struct GpuContext {
     pub depth_copies: bool,
     /// Reads depth textures back through a shader where they cannot be copied.
     depth_reader: DepthReader,
+    /// A submission abandoned by an interrupt, still running on its worker thread (see
+    /// [`GpuContext::submit_and_wait`]): the next one waits for it.
+    pending: Mutex<Option<mpsc::Receiver<Result<()>>>>,
+    /// The GL submission thread, started on first use (see [`GpuContext::submit_and_wait`]).
+    #[allow(clippy::type_complexity)]
+    submitter: Mutex<Option<mpsc::Sender<(wgpu::CommandBuffer, mpsc::Sender<Result<()>>)>>>,
 }
 
 /// The environment variable that `backend = "auto"` honours: set to `vulkan`, `gl`, `metal` or
@@ -124,7 +130,20 @@ impl GpuContext {
         let depth_copies =
             adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
         let depth_reader = DepthReader::new(&device);
-        Ok(Self { device, queue, info, limits, timestamps, features, errors, depth_copies, depth_reader })
+        let pending = Mutex::new(None);
+        Ok(Self {
+            device,
+            queue,
+            info,
+            limits,
+            timestamps,
+            features,
+            errors,
+            depth_copies,
+            depth_reader,
+            pending,
+            submitter: Mutex::new(None),
+        })
     }
 
     /// Returns the first device error reported since the last call, as an Error.
@@ -145,18 +164,89 @@ impl GpuContext {
             .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")))
     }
 
-    /// [`wait`](Self::wait), polling `interrupt` every `Interrupt::POLL` (a plain wait without a
-    /// hook). On `Err(Interrupted)` the GPU keeps working on what was submitted; a later wait
-    /// (or submission) picks up after it.
-    pub fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
+    /// Submits `cb` and waits for the GPU to finish it, polling `interrupt` every
+    /// `Interrupt::POLL` (without a hook: a plain submit and wait).
+    ///
+    /// On GL (llvmpipe) `submit` itself does the frame's vertex work and returns only when it is
+    /// nearly done, so no wait after it could be interrupted: there, when `long` says the work may
+    /// take long (the caller's estimate, e.g. millions of triangles), the submission runs on a
+    /// worker thread (one per context, started on first use) while this thread polls. Not for
+    /// short work: moving the GL context between threads costs 1-7 ms per frame on llvmpipe.
+    /// On `Err(Interrupted)` the GPU (or the worker) finishes the abandoned work on its own, and
+    /// the next [`finish_pending`](Self::finish_pending) (called at the start of every frame)
+    /// waits for it.
+    pub fn submit_and_wait(&self, cb: wgpu::CommandBuffer, interrupt: &Interrupt, long: bool) -> Result<()> {
         if !interrupt.is_set() {
+            self.queue.submit([cb]);
             return self.wait();
         }
+        self.finish_pending(interrupt)?;
+        if self.info.backend != wgpu::Backend::Gl || !long {
+            self.queue.submit([cb]);
+            return self.wait_interruptible(interrupt);
+        }
+        let (tx, rx) = mpsc::channel();
+        let mut worker = self.submitter.lock().unwrap_or_else(|p| p.into_inner());
+        if worker.is_none() {
+            let (jobs, inbox) = mpsc::channel::<(wgpu::CommandBuffer, mpsc::Sender<Result<()>>)>();
+            let (queue, device) = (self.queue.clone(), self.device.clone());
+            std::thread::Builder::new()
+                .name("geocull-submit".into())
+                .spawn(move || {
+                    for (cb, done) in inbox {
+                        queue.submit([cb]);
+                        let r = device
+                            .poll(wgpu::PollType::wait_indefinitely())
+                            .map(|_| ())
+                            .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")));
+                        let _ = done.send(r);
+                    }
+                })
+                .map_err(|e| Error::Device(format!("could not start a thread to submit GPU work: {e}")))?;
+            *worker = Some(jobs);
+        }
+        worker
+            .as_ref()
+            .unwrap()
+            .send((cb, tx))
+            .map_err(|_| Error::Device("the GPU submission thread stopped".into()))?;
+        drop(worker);
+        self.await_worker(rx, interrupt)
+    }
+
+    /// [`wait`](Self::wait), polling `interrupt` every `Interrupt::POLL`.
+    fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
         loop {
             match self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(Interrupt::POLL) }) {
                 Ok(_) => return Ok(()),
                 Err(wgpu::PollError::Timeout) => interrupt.check()?,
                 Err(e) => return Err(Error::Device(format!("waiting for the GPU failed: {e}"))),
+            }
+        }
+    }
+
+    /// Waits (polling `interrupt`) for a submission an interrupt abandoned, if any.
+    pub fn finish_pending(&self, interrupt: &Interrupt) -> Result<()> {
+        let rx = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take();
+        match rx {
+            Some(rx) => self.await_worker(rx, interrupt),
+            None => Ok(()),
+        }
+    }
+
+    fn await_worker(&self, rx: mpsc::Receiver<Result<()>>, interrupt: &Interrupt) -> Result<()> {
+        loop {
+            match rx.recv_timeout(Interrupt::POLL) {
+                Ok(done) => return done,
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    if let Err(e) = interrupt.check() {
+                        *self.pending.lock().unwrap_or_else(|p| p.into_inner()) = Some(rx);
+                        return Err(e);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(Error::Device("the thread submitting GPU work stopped unexpectedly".into()))
+                }
             }
         }
     }

@@ -159,3 +159,38 @@ fn interrupted_builds_leave_the_scene_unchanged() {
     assert_eq!(s.origin(), fresh.origin());
     assert_eq!(s.objects()[0].tiles[5].positions, fresh.objects()[0].tiles[5].positions);
 }
+
+/// An interrupt while the GPU draws a large frame (over `LONG_FRAME_TRIANGLES`, so on GL the
+/// submission runs on the worker thread): the call returns Interrupted (unless the GPU was faster
+/// than the first poll slice), and the next frame waits for the abandoned work and equals the first.
+#[test]
+fn interrupt_during_the_gpu_wait_of_a_large_frame() {
+    let mut s = Scene::new();
+    let n = 1100; // 2.4 M triangles
+    let z: Vec<f64> = (0..n * n).map(|k| ((k % n) as f64 * 0.05).sin() * ((k / n) as f64 * 0.04).cos()).collect();
+    s.add_heightfield(&z, n, n, [0.0, 0.0], [1.0, 1.0], (8, 8), None, opts(4.0)).unwrap();
+    let cam = Camera::look_at(
+        [-50.0, -50.0, 300.0],
+        [550.0, 550.0, 0.0],
+        [0.0, 0.0, 1.0],
+        50.0,
+        None,
+        None,
+        Projection::Perspective,
+        None,
+        1.0,
+    )
+    .unwrap();
+    let mut r = Renderer::new(64, 48, "auto").unwrap();
+    let want = r.render(&s, &cam, &RenderOptions::default()).unwrap();
+    for _ in 0..2 {
+        // Polls 1 and 2 are the stage checks; 3 is the first wait slice.
+        let (interrupt, _) = nth_poll(3);
+        match r.render(&s, &cam, &RenderOptions { interrupt, ..Default::default() }) {
+            Err(Error::Interrupted) | Ok(_) => {}
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let again = r.render(&s, &cam, &RenderOptions::default()).unwrap();
+    assert_eq!((again.image, again.depth), (want.image, want.depth));
+}
