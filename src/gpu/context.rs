@@ -3,6 +3,7 @@
 use super::depth_read::{DepthReadback, DepthReader};
 use super::readback::ReadbackTexture;
 use crate::error::{Error, Interrupt, Result};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
 
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
@@ -27,6 +28,8 @@ pub struct GpuContext {
     /// A submission abandoned by an interrupt, still running on its worker thread (see
     /// [`GpuContext::submit_and_wait`]): the next one waits for it.
     pending: Mutex<Option<mpsc::Receiver<Result<()>>>>,
+    /// A wait was abandoned by an interrupt while the GPU still ran the submission.
+    abandoned: AtomicBool,
     /// The GL submission thread, started on first use (see [`GpuContext::submit_and_wait`]).
     #[allow(clippy::type_complexity)]
     submitter: Mutex<Option<mpsc::Sender<(wgpu::CommandBuffer, mpsc::Sender<Result<()>>)>>>,
@@ -142,6 +145,7 @@ impl GpuContext {
             depth_copies,
             depth_reader,
             pending,
+            abandoned: AtomicBool::new(false),
             submitter: Mutex::new(None),
         })
     }
@@ -218,20 +222,32 @@ impl GpuContext {
     fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
         loop {
             match self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(Interrupt::POLL) }) {
-                Ok(_) => return Ok(()),
-                Err(wgpu::PollError::Timeout) => interrupt.check()?,
+                Ok(_) => {
+                    self.abandoned.store(false, Ordering::Relaxed);
+                    return Ok(());
+                }
+                Err(wgpu::PollError::Timeout) => {
+                    if let Err(e) = interrupt.check() {
+                        self.abandoned.store(true, Ordering::Relaxed);
+                        return Err(e);
+                    }
+                }
                 Err(e) => return Err(Error::Device(format!("waiting for the GPU failed: {e}"))),
             }
         }
     }
 
-    /// Waits (polling `interrupt`) for a submission an interrupt abandoned, if any.
+    /// Waits (polling `interrupt`) for work an interrupt abandoned, if any: a submission still on
+    /// the worker thread, or one the GPU is still running.
     pub fn finish_pending(&self, interrupt: &Interrupt) -> Result<()> {
         let rx = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take();
-        match rx {
-            Some(rx) => self.await_worker(rx, interrupt),
-            None => Ok(()),
+        if let Some(rx) = rx {
+            self.await_worker(rx, interrupt)?;
         }
+        if self.abandoned.load(Ordering::Relaxed) {
+            self.wait_interruptible(interrupt)?;
+        }
+        Ok(())
     }
 
     fn await_worker(&self, rx: mpsc::Receiver<Result<()>>, interrupt: &Interrupt) -> Result<()> {
