@@ -1,7 +1,8 @@
 # geocull: `make demo` renders the demo scene to demo.png; `make test` runs every test.
 # Both do all set-up on a fresh Debian machine (Rust toolchain and Python 3.11 present):
-# the Vulkan software driver (lavapipe) when no Vulkan driver is installed, a .venv with the
-# Python dependencies, and a release build of the extension. Re-running is fast.
+# the Vulkan software driver (lavapipe) when no Vulkan driver is installed, the GL one (EGL +
+# llvmpipe) when missing, a .venv with the Python dependencies, and a release build of the
+# extension. Re-running is fast.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -9,9 +10,9 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan build demo test test-rust test-python lint bench bench-quick examples-quick clean
+.PHONY: setup vulkan gl build demo test test-rust test-python test-gl lint bench bench-quick examples-quick clean
 
-setup: vulkan build
+setup: vulkan gl build
 
 # Mesa's lavapipe renders Vulkan on the CPU; install it only when no Vulkan driver is present.
 vulkan:
@@ -20,6 +21,16 @@ vulkan:
 	else \
 	  echo "vulkan: installing libvulkan1 mesa-vulkan-drivers"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq libvulkan1 mesa-vulkan-drivers >/dev/null; \
+	fi
+
+# Mesa's EGL + llvmpipe render GL on the CPU: machines without Vulkan have only GL, and `make
+# test-gl` renders on it. Installed only when missing.
+gl:
+	@if ldconfig -p | grep -q libEGL.so.1 && ldconfig -p | grep -q libEGL_mesa.so.0 && ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1; then \
+	  echo "gl: EGL + llvmpipe present"; \
+	else \
+	  echo "gl: installing libegl1 libegl-mesa0 libgl1-mesa-dri"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null; \
 	fi
 
 $(VENV)/.deps: requirements-dev.txt
@@ -42,7 +53,13 @@ test-rust: vulkan
 test-python: setup
 	$(PY) -m pytest -q
 
-test: setup test-rust test-python
+# The render tests again on GL (EGL + llvmpipe), chosen for every renderer through the variable
+# that backend="auto" honours: every backend the Renderer accepts must render the same image.
+test-gl: setup
+	GEOCULL_BACKEND=gl $(PY) -m pytest -q tests/test_render.py tests/test_three_pass.py tests/test_hard_cases.py \
+	  tests/test_iso.py tests/test_cull_frustum.py tests/test_horizon.py tests/test_interrupt.py
+
+test: setup test-rust test-python test-gl
 
 # The gates (CI runs them after the tests): formatting, lints, the type stub against the built
 # extension, and the dependency rule of the code (docs/DESIGN.md).

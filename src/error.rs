@@ -1,5 +1,10 @@
 //! The error type of the core. The Python layer maps each variant onto geocull's exception hierarchy
-//! (`InputError` for bad arguments, `DeviceError` for adapter/driver trouble).
+//! (`InputError` for bad arguments, `DeviceError` for adapter/driver trouble, `KeyboardInterrupt`
+//! for [`Error::Interrupted`]), and the cancellation hook [`Interrupt`] that long work polls.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
 
 /// Everything that can go wrong in geocull, as values (the core never panics on bad input).
 #[derive(Debug, thiserror::Error)]
@@ -10,6 +15,10 @@ pub enum Error {
     /// No usable GPU adapter, or the driver rejected the work.
     #[error("{0}")]
     Device(String),
+    /// The caller's [`Interrupt`] asked to stop (Ctrl-C in Python). Nothing was changed: a scene
+    /// gets no new object, a renderer stays usable for the next frame.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
@@ -48,4 +57,123 @@ pub fn int_in(v: i64, arg: &str, lo: i64, hi: i64) -> Result<usize> {
 /// An object id (ids are u32; anything else names no object).
 pub fn object_id(v: i64) -> Result<u32> {
     u32::try_from(v).map_err(|_| input_err("id", format!("no object with id {v} in this scene")))
+}
+
+/// A cancellation hook that long work polls, so that Ctrl-C is honoured within a fraction of a
+/// second rather than at the end of a multi-second frame or build.
+///
+/// Design: the core stays free of Python. A hook is any `Fn() -> bool` (true = stop), carried by
+/// the options of a call (`RenderOptions`, `AddOptions`, `IsoOptions`); the default has none and
+/// costs nothing. The core calls it **only on the thread that called into the core**, because
+/// Python runs signal handlers on its main thread only: the binding's hook is
+/// `Python::attach(|py| py.check_signals())` (src/python/mod.rs), which re-takes the GIL for a
+/// moment and runs the handlers; KeyboardInterrupt (or whatever a handler raised) makes it return
+/// true, and the binding raises that exception. It is polled only where stopping leaves
+/// everything usable:
+///
+/// - between the stages of a frame (after upload, after the strategy, after the draw is
+///   recorded) and while waiting for the GPU (`GpuContext::submit_and_wait`, in slices of
+///   [`Interrupt::POLL`]; on GL, whose submit does the work, large frames are submitted from a
+///   worker thread; the GPU finishes abandoned work on its own, and the next frame waits for it
+///   before its clock starts);
+/// - while a parallel build runs ([`Interrupt::run_parallel`]): the calling thread polls while
+///   rayon's workers build tiles, and a set flag makes the workers skip the tiles not started.
+///
+/// No global state: two renders on two threads each have their own hook.
+#[derive(Clone, Default)]
+pub struct Interrupt(Option<Arc<dyn Fn() -> bool + Send + Sync>>);
+
+impl std::fmt::Debug for Interrupt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() { "Interrupt(hook)" } else { "Interrupt(none)" })
+    }
+}
+
+impl Interrupt {
+    /// How often a waiting thread polls the hook.
+    pub const POLL: Duration = Duration::from_millis(25);
+
+    /// A hook: `stop()` returns true when the work should stop.
+    pub fn new(stop: impl Fn() -> bool + Send + Sync + 'static) -> Self {
+        Self(Some(Arc::new(stop)))
+    }
+
+    /// Whether there is a hook at all (without one, nothing needs polling).
+    pub fn is_set(&self) -> bool {
+        self.0.is_some()
+    }
+
+    /// `Err(Error::Interrupted)` when the hook says stop.
+    pub fn check(&self) -> Result<()> {
+        match &self.0 {
+            Some(stop) if stop() => Err(Error::Interrupted),
+            _ => Ok(()),
+        }
+    }
+
+    /// Runs `job` (which may use rayon) while this thread polls the hook, once before and then
+    /// every [`Self::POLL`]; when it says stop, the flag passed to `job` is set, `job` should
+    /// return soon (skipping work not started) and the result is `Err(Error::Interrupted)`.
+    /// Without a hook, `job` runs on this thread.
+    pub fn run_parallel<T: Send>(&self, job: impl FnOnce(&AtomicBool) -> T + Send) -> Result<T> {
+        let stop = AtomicBool::new(false);
+        if !self.is_set() {
+            return Ok(job(&stop));
+        }
+        self.check()?;
+        let (tx, rx) = mpsc::channel::<()>();
+        let out = std::thread::scope(|s| {
+            let stop = &stop;
+            let worker = s.spawn(move || {
+                let out = job(stop);
+                let _ = tx.send(());
+                out
+            });
+            // Until the job reports (or its thread dies: the channel disconnects).
+            while let Err(mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(Self::POLL) {
+                if !stop.load(Ordering::Relaxed) && self.check().is_err() {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+            worker.join()
+        });
+        match out {
+            Err(panic) => std::panic::resume_unwind(panic),
+            Ok(_) if stop.load(Ordering::Relaxed) => Err(Error::Interrupted),
+            Ok(v) => Ok(v),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicUsize;
+
+    #[test]
+    fn check_and_run_parallel_without_a_hook() {
+        assert!(Interrupt::default().check().is_ok());
+        assert_eq!(Interrupt::default().run_parallel(|_| 5).unwrap(), 5);
+        assert!(matches!(Interrupt::new(|| true).check(), Err(Error::Interrupted)));
+        assert_eq!(Interrupt::new(|| false).run_parallel(|_| 6).unwrap(), 6);
+    }
+
+    /// The hook fires on its second poll, while the job runs: the job sees the flag, the call
+    /// returns Interrupted.
+    #[test]
+    fn run_parallel_sets_the_flag_while_the_job_runs() {
+        let calls = Arc::new(AtomicUsize::new(0));
+        let c = calls.clone();
+        let hook = Interrupt::new(move || c.fetch_add(1, Ordering::Relaxed) >= 1);
+        let t0 = std::time::Instant::now();
+        let r = hook.run_parallel(|stop| {
+            while !stop.load(Ordering::Relaxed) && t0.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            stop.load(Ordering::Relaxed)
+        });
+        assert!(matches!(r, Err(Error::Interrupted)));
+        assert_eq!(calls.load(Ordering::Relaxed), 2);
+        assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
+    }
 }

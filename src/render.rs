@@ -14,7 +14,7 @@
 
 use crate::camera::{Camera, FrameCamera};
 use crate::cull::{self, CullOptions, CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
-use crate::error::{Error, Result};
+use crate::error::{Error, Interrupt, Result};
 use crate::gpu::{
     passes, readback, DrawArgs, Globals, GpuContext, GpuObject, Passes, SceneGeometry, Targets, Timestamps,
 };
@@ -53,6 +53,10 @@ impl Lod {
     }
 }
 
+/// Scenes of at least this many fine triangles may take long to draw (~0.1 s on llvmpipe): on GL
+/// their frames are submitted so that Ctrl-C can stop them (`GpuContext::submit_and_wait`).
+const LONG_FRAME_TRIANGLES: u64 = 1 << 20;
+
 /// How to render one frame.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
@@ -60,11 +64,14 @@ pub struct RenderOptions {
     pub culling: String,
     pub cull: CullOptions,
     pub lod: Lod,
+    /// Polled between the stages of the frame and while waiting for the GPU; when it fires,
+    /// `render` returns `Error::Interrupted` and the renderer stays usable (`crate::error::Interrupt`).
+    pub interrupt: Interrupt,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { culling: "none".into(), cull: CullOptions::default(), lod: Lod::Full }
+        Self { culling: "none".into(), cull: CullOptions::default(), lod: Lod::Full, interrupt: Interrupt::default() }
     }
 }
 
@@ -156,6 +163,8 @@ pub struct Renderer {
     strategies: Vec<Box<dyn CullStrategy>>,
     /// Isosurface pipelines and caches, created on first use.
     iso: Option<Box<IsoRenderer>>,
+    /// Bytes each strategy's cache may keep between frames.
+    cache_budget: u64,
 }
 
 impl Renderer {
@@ -172,7 +181,19 @@ impl Renderer {
         let timestamps = ctx.timestamps.then(|| Timestamps::new(&ctx.device));
         let main_targets = Targets::new(&ctx.device, width, height, true);
         ctx.take_error()?;
-        Ok(Self { ctx, width, height, passes, main_targets, geometry: None, timestamps, strategies, iso: None })
+        let cache_budget = cull::DEFAULT_CACHE_BUDGET;
+        Ok(Self {
+            ctx,
+            width,
+            height,
+            passes,
+            main_targets,
+            geometry: None,
+            timestamps,
+            strategies,
+            iso: None,
+            cache_budget,
+        })
     }
 
     pub fn width(&self) -> u32 {
@@ -186,6 +207,15 @@ impl Renderer {
     }
     pub fn max_texture_size(&self) -> u32 {
         self.ctx.limits.max_texture_dimension_2d
+    }
+    /// Bytes each culling strategy may keep cached between frames (horizon: its trees).
+    pub fn cache_budget(&self) -> u64 {
+        self.cache_budget
+    }
+    /// Sets [`cache_budget`](Self::cache_budget); caches over it shrink at once.
+    pub fn set_cache_budget(&mut self, bytes: u64) {
+        self.cache_budget = bytes;
+        self.strategies.iter_mut().for_each(|s| s.set_cache_budget(bytes));
     }
     /// Bytes of scene geometry currently held on the GPU.
     pub fn gpu_bytes(&self) -> u64 {
@@ -225,8 +255,11 @@ impl Renderer {
                 self.ctx.adapter_description()
             )));
         }
+        // Work an interrupted frame left on the GPU finishes before this frame's clock starts.
+        self.ctx.finish_pending(&opts.interrupt)?;
         let t0 = Instant::now();
         self.upload(scene)?;
+        opts.interrupt.check()?;
         let fc = self.frame_camera(scene, camera);
         if let Some(ts) = self.timestamps.as_mut() {
             ts.begin_frame();
@@ -259,10 +292,10 @@ impl Renderer {
         let tc = Instant::now();
         let visible = strategy.visible_set(&inputs, &mut enc)?;
         let cull_ms = tc.elapsed().as_secs_f64() * 1e3;
+        opts.interrupt.check()?;
         let final_args = draw(&inputs, &mut enc, &visible);
         let ts_rb = timestamps.as_ref().and_then(|t| t.resolve(&ctx.device, &mut enc));
-        ctx.queue.submit([enc.finish()]);
-        ctx.wait()?;
+        ctx.submit_and_wait(enc.finish(), &opts.interrupt, geometry.fine_triangles() >= LONG_FRAME_TRIANGLES)?;
         let total_ms = (t0.elapsed() - untimed).as_secs_f64() * 1e3;
         ctx.take_error()?;
         let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;
@@ -344,8 +377,7 @@ impl Renderer {
             4,
             wgpu::TextureAspect::All,
         );
-        let depth_rb =
-            readback::ReadbackTexture::new(d, &mut enc, &mt.depth_tex, w, h, 4, wgpu::TextureAspect::DepthOnly);
+        let depth_rb = ctx.read_depth(&mut enc, &mt.depth_tex);
         let args_bytes = (n.max(1) * std::mem::size_of::<DrawArgs>()) as u64;
         let args_rb = readback::copy_buffer(d, &mut enc, final_args, args_bytes);
         let pre_rb = visible.predrawn.as_ref().map(|b| readback::copy_buffer(d, &mut enc, b, args_bytes));
@@ -356,7 +388,7 @@ impl Renderer {
             .collect();
         ctx.queue.submit([enc.finish()]);
         readback::map_all(
-            [&color_rb.buffer, &depth_rb.buffer, &args_rb]
+            [&color_rb.buffer, depth_rb.buffer(), &args_rb]
                 .into_iter()
                 .chain(counted.as_ref().map(|c| &c.0))
                 .chain(ts_rb.as_ref())
@@ -366,8 +398,7 @@ impl Renderer {
         ctx.wait()?;
         ctx.take_error()?;
         let image = color_rb.read_rows()?;
-        let depth_raw: Vec<f32> = bytemuck::cast_slice(&depth_rb.read_rows()?).to_vec();
-        let depth: Vec<f32> = depth_raw.par_iter().map(|&v| fc.linear_depth(v)).collect();
+        let depth: Vec<f32> = depth_rb.read()?.par_iter().map(|&v| fc.linear_depth(v)).collect();
         let tile_pixels: Vec<u32> = match (visible.pixels, counted) {
             (Pixels::Host(c), _) => c,
             (_, Some((buf, scale))) => {
@@ -406,7 +437,7 @@ impl Renderer {
             .collect::<Result<Vec<_>>>()?;
         let tile_drawn: Vec<bool> = drawn.iter().map(on).collect();
         let mut stats = RenderStats {
-            triangles_fine_total: geom.fine.iter().map(|a| a.index_count as u64 / 3).sum(),
+            triangles_fine_total: geom.fine_triangles(),
             triangles_drawn: drawn.iter().map(|a| a.triangles()).sum(),
             extra,
             tiles_total: n as u32,

@@ -280,3 +280,55 @@ def test_result_api_and_meshes_unculled(renderer):
         assert not rows_from_bottom[int(h[c]):, c].any() or rows_from_bottom[int(h[c]) - 1, c]
     # other strategies leave no horizon
     assert none.horizon is None
+
+
+# --------------------------------------------------------------------------------------------
+# the tree cache (issue 18): keyed so that translation rebuilds nothing, bounded by bytes
+
+
+def _cache_scene(n=257):
+    y, x = np.mgrid[0:n, 0:n].astype(np.float64)
+    z = 6.0 * np.sin(0.05 * x) * np.cos(0.04 * y) + 0.02 * x
+    return _scene(z, (8, 8))
+
+
+def test_translation_builds_no_tree_and_keeps_the_cache_size():
+    r = gc.Renderer(W, H)
+    s = _cache_scene()
+    cam = _look((-40.0, -40.0, 30.0), 45.0, -12.0)
+    first = r.render(s, cam, culling="horizon")
+    assert first.stats["trees_built"] == 1
+    size = first.stats["cache_bytes"]
+    assert size > 257 * 257 * 4  # the heights alone
+    for k in range(100):
+        s.translate(0, (0.37, -0.21, 0.05 * np.sin(k)))
+        res = r.render(s, cam, culling="horizon")
+        assert res.stats["trees_built"] == 0, k
+        assert res.stats["cache_bytes"] == size, k
+    # Still exact after the moves: the image equals the unculled one and nothing visible is culled.
+    _assert_sound(*_render3(r, s, cam))
+
+
+def test_many_z_scales_stay_within_the_cache_budget():
+    r = gc.Renderer(W, H)
+    assert r.cache_budget == 256 << 20
+    s = _cache_scene()
+    one = r.render(s, _look((-40.0, -40.0, 30.0), 45.0, -12.0), culling="horizon").stats["cache_bytes"]
+    r.cache_budget = 3 * one + one // 2  # room for three trees
+    sizes = []
+    for k, zs in enumerate(np.linspace(1.5, 6.0, 12)):
+        cam = _look((-40.0, -40.0, 30.0 * zs), 45.0, -12.0, z_scale=float(zs))
+        res = r.render(s, cam, culling="horizon")
+        assert res.stats["trees_built"] == 1, k  # a new z_scale: a new tree
+        sizes.append(res.stats["cache_bytes"])
+        if k == 5:  # exact for a z_scale whose tree was built (and possibly evicted) before
+            _assert_sound(*_render3(r, s, cam))
+    assert max(sizes) <= r.cache_budget and sizes[-1] == 3 * one, sizes
+    # The most recent z_scale is still cached; shrinking the budget evicts at once.
+    res = r.render(s, cam, culling="horizon")
+    assert res.stats["trees_built"] == 0
+    r.cache_budget = 0
+    res = r.render(s, cam, culling="horizon")
+    assert res.stats["trees_built"] == 1 and res.stats["cache_bytes"] == 0
+    with pytest.raises(gc.InputError, match="cache_budget"):
+        r.cache_budget = -1

@@ -70,7 +70,12 @@ def _warn_if_nearer_than_near(lo: np.ndarray, hi: np.ndarray, camera: Camera, ne
 
 class Renderer:
     """Off-screen wgpu renderer of width x height pixel images. backend: "auto" (a GPU if present,
-    else Mesa's lavapipe on the CPU), "vulkan", "gl", ... Raises DeviceError if no adapter is found."""
+    else Mesa's lavapipe on the CPU), "vulkan", "gl" (e.g. EGL + llvmpipe where there is no Vulkan),
+    "metal", "dx12"; every backend renders the same image. "auto" honours the environment variable
+    ``GEOCULL_BACKEND`` (one of those names; unset, empty or "auto": geocull chooses), which picks
+    the backend for a whole program or test run, e.g. ``GEOCULL_BACKEND=gl pytest``; an explicit
+    backend wins over it. Raises DeviceError if no adapter is found, InputError for an unknown
+    name (in ``backend`` or in ``GEOCULL_BACKEND``)."""
 
     def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
         if not isinstance(backend, str):
@@ -111,6 +116,18 @@ class Renderer:
     @iso_cache_budget.setter
     def iso_cache_budget(self, value: int) -> None:
         _geocull.set_isosurface_cache_budget(self._r, cv.integer(value, "bytes"))
+
+    @property
+    def cache_budget(self) -> int:
+        """Bytes each culling strategy may keep cached between frames (default 256 MiB; horizon:
+        its quadtrees, one per height field and z_scale, least recently used dropped first; the
+        frame's ``stats["cache_bytes"]`` is what it holds). Setting it shrinks caches at once; 0
+        caches nothing."""
+        return self._r.cache_budget
+
+    @cache_budget.setter
+    def cache_budget(self, nbytes: int) -> None:
+        self._r.cache_budget = cv.integer(nbytes, "cache_budget")
 
     def render(
         self,
@@ -163,6 +180,10 @@ class Renderer:
         prepass can miss tiles a few pixels wide. Measured: at most 0.03 % of pixels on the stacked
         Gullfaks-like scene, but up to 9 % for low, near-horizontal views over rough terrain at
         coarse_factor=25 (0.3 % at 4).
+
+        Ctrl-C (SIGINT) during a frame raises KeyboardInterrupt within a fraction of a second (the
+        core checks between the frame's stages and while it waits for the GPU); the renderer stays
+        usable, and its next frame first lets the GPU finish the abandoned work.
         """
         cv.expect_instance(scene, Scene, "scene")
         cv.expect_instance(camera, Camera, "camera")

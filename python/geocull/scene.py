@@ -32,7 +32,8 @@ class Scene:
     """A sub-surface scene: height fields and triangle meshes, each cut into tiles with a fine and
     a coarse level of detail. Coordinates are world units (metres), x and y horizontal, z up; inputs
     are kept in f64 and stored relative to one scene origin, so UTM-sized coordinates keep full
-    precision."""
+    precision. Building tiles runs in parallel; Ctrl-C during an ``add_*`` call raises
+    KeyboardInterrupt within a fraction of a second and leaves the scene as it was."""
 
     def __init__(self) -> None:
         self._s = _geocull.Scene()

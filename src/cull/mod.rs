@@ -161,8 +161,13 @@ impl Visible {
     }
 }
 
+/// Bytes a strategy's cache may keep between frames unless the renderer says otherwise
+/// ([`CullStrategy::set_cache_budget`]).
+pub const DEFAULT_CACHE_BUDGET: u64 = 256 << 20;
+
 /// A culling strategy. One instance lives in each renderer, so it may cache between frames
-/// (keyed by what it depends on: `Scene::geometry_key`, object offsets, the camera's z_scale).
+/// (keyed by what it depends on, e.g. `Scene::geometry_key` and the camera's z_scale), within a
+/// byte budget ([`DEFAULT_CACHE_BUDGET`], [`CullStrategy::set_cache_budget`]).
 pub trait CullStrategy: Send + Sync {
     /// The `culling=` name.
     fn name(&self) -> &'static str;
@@ -171,6 +176,9 @@ pub trait CullStrategy: Send + Sync {
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::empty()
     }
+    /// Bounds what the strategy caches between frames to `bytes` (evicting at once if needed).
+    /// Strategies without a cache ignore it.
+    fn set_cache_budget(&mut self, _bytes: u64) {}
     /// Work that is not part of the frame time (e.g. the oracle's reference render). May submit.
     fn prepare(&mut self, _frame: &FrameInputs<'_>) -> Result<()> {
         Ok(())

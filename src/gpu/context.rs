@@ -1,7 +1,10 @@
 //! The wgpu device: headless adapter selection and the features geocull needs.
 
-use crate::error::{Error, Result};
-use std::sync::{Arc, Mutex};
+use super::depth_read::{DepthReadback, DepthReader};
+use super::readback::ReadbackTexture;
+use crate::error::{Error, Interrupt, Result};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
 
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
 pub const INSTALL_HINT: &str = "install a Vulkan driver; on Debian/Ubuntu without a GPU: \
@@ -17,6 +20,42 @@ pub struct GpuContext {
     pub features: wgpu::Features,
     /// Errors the device reported outside an error scope, taken after each frame.
     errors: Arc<Mutex<Vec<String>>>,
+    /// Whether depth textures can be copied into buffers (downlevel flag
+    /// DEPTH_TEXTURE_AND_BUFFER_COPIES: Vulkan yes, GL no).
+    pub depth_copies: bool,
+    /// Reads depth textures back through a shader where they cannot be copied.
+    depth_reader: DepthReader,
+    /// A submission abandoned by an interrupt, still running on its worker thread (see
+    /// [`GpuContext::submit_and_wait`]): the next one waits for it.
+    pending: Mutex<Option<mpsc::Receiver<Result<()>>>>,
+    /// A wait was abandoned by an interrupt while the GPU still ran the submission.
+    abandoned: AtomicBool,
+    /// The GL submission thread, started on first use (see [`GpuContext::submit_and_wait`]).
+    #[allow(clippy::type_complexity)]
+    submitter: Mutex<Option<mpsc::Sender<(wgpu::CommandBuffer, mpsc::Sender<Result<()>>)>>>,
+}
+
+/// The environment variable that `backend = "auto"` honours: set to `vulkan`, `gl`, `metal` or
+/// `dx12` it chooses that backend for every renderer opened with `"auto"` (e.g. a whole test run on
+/// GL: `GEOCULL_BACKEND=gl pytest`); unset, empty or `auto` it leaves the choice to geocull.
+pub const BACKEND_ENV: &str = "GEOCULL_BACKEND";
+
+/// The backend a renderer opens: `backend`, or for `"auto"` the value of [`BACKEND_ENV`] if set.
+/// Returns the name used in messages and the wgpu backends to enumerate.
+fn resolve_backend(backend: &str) -> Result<(String, wgpu::Backends)> {
+    if backend == "auto" {
+        if let Ok(env) = std::env::var(BACKEND_ENV) {
+            let env = env.trim().to_ascii_lowercase();
+            if !env.is_empty() {
+                let b = parse_backends(&env).map_err(|e| match e {
+                    Error::Input { msg, .. } => crate::error::input_err(BACKEND_ENV, msg),
+                    e => e,
+                })?;
+                return Ok((format!("{env} (from {BACKEND_ENV})"), b));
+            }
+        }
+    }
+    Ok((backend.to_string(), parse_backends(backend)?))
 }
 
 fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
@@ -41,7 +80,7 @@ impl GpuContext {
     /// Opens a device on `backend`, with the features geocull always needs plus those of
     /// `optional` that the adapter has (strategies check for theirs before use).
     pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
-        let backends = parse_backends(backend)?;
+        let (backend, backends) = resolve_backend(backend)?;
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);
@@ -96,7 +135,24 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap().push(e.to_string());
         }));
-        Ok(Self { device, queue, info, limits, timestamps, features, errors })
+        let depth_copies =
+            adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+        let depth_reader = DepthReader::new(&device);
+        let pending = Mutex::new(None);
+        Ok(Self {
+            device,
+            queue,
+            info,
+            limits,
+            timestamps,
+            features,
+            errors,
+            depth_copies,
+            depth_reader,
+            pending,
+            abandoned: AtomicBool::new(false),
+            submitter: Mutex::new(None),
+        })
     }
 
     /// Returns the first device error reported since the last call, as an Error.
@@ -117,6 +173,105 @@ impl GpuContext {
             .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")))
     }
 
+    /// Submits `cb` and waits for the GPU to finish it, polling `interrupt` every
+    /// `Interrupt::POLL` (without a hook: a plain submit and wait).
+    ///
+    /// On GL (llvmpipe) `submit` itself does the frame's vertex work and returns only when it is
+    /// nearly done, so no wait after it could be interrupted: there, when `long` says the work may
+    /// take long (the caller's estimate, e.g. millions of triangles), the submission runs on a
+    /// worker thread (one per context, started on first use) while this thread polls. Not for
+    /// short work: moving the GL context between threads costs 1-7 ms per frame on llvmpipe.
+    /// On `Err(Interrupted)` the GPU (or the worker) finishes the abandoned work on its own, and
+    /// the next [`finish_pending`](Self::finish_pending) (called at the start of every frame)
+    /// waits for it.
+    pub fn submit_and_wait(&self, cb: wgpu::CommandBuffer, interrupt: &Interrupt, long: bool) -> Result<()> {
+        if !interrupt.is_set() {
+            self.queue.submit([cb]);
+            return self.wait();
+        }
+        self.finish_pending(interrupt)?;
+        if self.info.backend != wgpu::Backend::Gl || !long {
+            self.queue.submit([cb]);
+            return self.wait_interruptible(interrupt);
+        }
+        let (tx, rx) = mpsc::channel();
+        let mut worker = self.submitter.lock().unwrap_or_else(|p| p.into_inner());
+        if worker.is_none() {
+            let (jobs, inbox) = mpsc::channel::<(wgpu::CommandBuffer, mpsc::Sender<Result<()>>)>();
+            let (queue, device) = (self.queue.clone(), self.device.clone());
+            std::thread::Builder::new()
+                .name("geocull-submit".into())
+                .spawn(move || {
+                    for (cb, done) in inbox {
+                        queue.submit([cb]);
+                        let r = device
+                            .poll(wgpu::PollType::wait_indefinitely())
+                            .map(|_| ())
+                            .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")));
+                        let _ = done.send(r);
+                    }
+                })
+                .map_err(|e| Error::Device(format!("could not start a thread to submit GPU work: {e}")))?;
+            *worker = Some(jobs);
+        }
+        worker
+            .as_ref()
+            .unwrap()
+            .send((cb, tx))
+            .map_err(|_| Error::Device("the GPU submission thread stopped".into()))?;
+        drop(worker);
+        self.await_worker(rx, interrupt)
+    }
+
+    /// [`wait`](Self::wait), polling `interrupt` every `Interrupt::POLL`.
+    fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
+        loop {
+            match self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(Interrupt::POLL) }) {
+                Ok(_) => {
+                    self.abandoned.store(false, Ordering::Relaxed);
+                    return Ok(());
+                }
+                Err(wgpu::PollError::Timeout) => {
+                    if let Err(e) = interrupt.check() {
+                        self.abandoned.store(true, Ordering::Relaxed);
+                        return Err(e);
+                    }
+                }
+                Err(e) => return Err(Error::Device(format!("waiting for the GPU failed: {e}"))),
+            }
+        }
+    }
+
+    /// Waits (polling `interrupt`) for work an interrupt abandoned, if any: a submission still on
+    /// the worker thread, or one the GPU is still running.
+    pub fn finish_pending(&self, interrupt: &Interrupt) -> Result<()> {
+        let rx = self.pending.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let Some(rx) = rx {
+            self.await_worker(rx, interrupt)?;
+        }
+        if self.abandoned.load(Ordering::Relaxed) {
+            self.wait_interruptible(interrupt)?;
+        }
+        Ok(())
+    }
+
+    fn await_worker(&self, rx: mpsc::Receiver<Result<()>>, interrupt: &Interrupt) -> Result<()> {
+        loop {
+            match rx.recv_timeout(Interrupt::POLL) {
+                Ok(done) => return done,
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    if let Err(e) = interrupt.check() {
+                        *self.pending.lock().unwrap_or_else(|p| p.into_inner()) = Some(rx);
+                        return Err(e);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(Error::Device("the thread submitting GPU work stopped unexpectedly".into()))
+                }
+            }
+        }
+    }
+
     pub fn adapter_description(&self) -> String {
         format!(
             "{} ({:?}, {:?}, driver {} {})",
@@ -126,6 +281,19 @@ impl GpuContext {
 }
 
 impl GpuContext {
+    /// Records the read-back of a Depth32Float texture (usages `COPY_SRC | TEXTURE_BINDING`): a
+    /// copy where the backend can copy depth into buffers, else through a shader
+    /// (`gpu::depth_read`; GL).
+    pub fn read_depth(&self, enc: &mut wgpu::CommandEncoder, tex: &wgpu::Texture) -> DepthReadback {
+        let (w, h) = (tex.width(), tex.height());
+        if self.depth_copies {
+            DepthReadback::Copy(ReadbackTexture::new(&self.device, enc, tex, w, h, 4, wgpu::TextureAspect::DepthOnly))
+        } else {
+            let view = tex.create_view(&Default::default());
+            self.depth_reader.record(&self.device, enc, &view, (w, h), self.limits.max_storage_buffer_binding_size)
+        }
+    }
+
     /// Checks an image size against this device's texture limit.
     pub fn check_image_size(&self, width: u32, height: u32) -> Result<()> {
         check_size(width, height, self.limits.max_texture_dimension_2d)

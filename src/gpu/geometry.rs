@@ -49,6 +49,11 @@ impl SceneGeometry {
         self.fine.len()
     }
 
+    /// Fine (level 0) triangles over every tile.
+    pub fn fine_triangles(&self) -> u64 {
+        self.fine.iter().map(|a| a.index_count as u64 / 3).sum()
+    }
+
     /// Uploads `scene`'s geometry. Sizes are computed first (the coarse proxies get compact
     /// copies of the vertices they use), so that the geometry is written straight into mapped
     /// GPU buffers without host temporaries.

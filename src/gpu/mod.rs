@@ -1,10 +1,12 @@
 //! GPU mechanics, knowing no culling strategy: the device ([`GpuContext`]), render targets,
 //! the scene's geometry buffers ([`SceneGeometry`]), the passes a frame is built from
 //! ([`Passes`]: prepass, histogram, select, lit draw; one WGSL file each under `shaders/`),
-//! named GPU timestamps and read-back. Which tiles a pass draws is decided in `crate::cull`;
+//! named GPU timestamps and read-back (depth through a shader, [`depth_read`], since GL cannot
+//! copy depth textures into buffers). Which tiles a pass draws is decided in `crate::cull`;
 //! the order of a frame lives in `crate::render`.
 
 mod context;
+pub mod depth_read;
 pub mod geometry;
 pub mod layout;
 pub mod passes;
@@ -12,7 +14,8 @@ pub mod readback;
 pub mod targets;
 pub mod timing;
 
-pub use context::{GpuContext, INSTALL_HINT};
+pub use context::{GpuContext, BACKEND_ENV, INSTALL_HINT};
+pub use depth_read::DepthReadback;
 pub use geometry::{check_buffer_sizes, SceneGeometry};
 pub use layout::{DrawArgs, Globals, GpuObject};
 pub use passes::Passes;

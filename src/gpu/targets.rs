@@ -48,14 +48,9 @@ impl Targets {
         let color_tex =
             with_color.then(|| texture(d, "color", width, height, COLOR_FORMAT, ra | wgpu::TextureUsages::COPY_SRC));
         let id = texture(d, "id", width, height, ID_FORMAT, ra | wgpu::TextureUsages::TEXTURE_BINDING);
-        let depth_tex = texture(
-            d,
-            "depth",
-            width,
-            height,
-            DEPTH_FORMAT,
-            ra | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
+        // Copied for read-back, or read through a shader where it cannot be (`gpu::depth_read`).
+        let depth_usage = ra | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
+        let depth_tex = texture(d, "depth", width, height, DEPTH_FORMAT, depth_usage);
         Self {
             width,
             height,

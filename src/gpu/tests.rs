@@ -101,3 +101,140 @@ fn select_switches_off_draws_at_or_below_the_threshold() {
         assert_eq!(got[i], want, "draw {i}");
     }
 }
+
+/// The depth read through a shader equals the texture bit for bit: a known pattern written with
+/// `frag_depth`, an odd size (partial workgroups), whole and split into bands of rows.
+#[test]
+fn depth_is_read_back_exactly_whole_and_in_bands() {
+    let Some((ctx, _)) = device() else { return };
+    let d = &ctx.device;
+    let (w, h) = (37u32, 150u32);
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let tex = targets::texture(d, "depth", w, h, targets::DEPTH_FORMAT, usage);
+    let view = tex.create_view(&Default::default());
+    // Texel (x, y) gets (x + y * 37) / 8192, exact in f32 and below 1.
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(
+            "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+                 let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+                 return vec4<f32>(p, 0.5, 1.0);
+             }
+             struct F { @builtin(frag_depth) z: f32 }
+             @fragment fn fs(@builtin(position) c: vec4<f32>) -> F {
+                 return F(f32(u32(c.x) + u32(c.y) * 37u) / 8192.0);
+             }"
+            .into(),
+        ),
+    });
+    let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: None,
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: targets::DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let want: Vec<f32> = (0..w * h).map(|k| k as f32 / 8192.0).collect();
+    // max_binding: the whole image in one band, then bands of 64 rows (64 + 64 + 22).
+    for max_binding in [u64::MAX, 4 * w as u64 * 100] {
+        let mut enc = ctx.encoder("test");
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.draw(0..3, 0..1);
+        }
+        let rb = depth_read::DepthReader::new(d).record(d, &mut enc, &view, (w, h), max_binding);
+        ctx.queue.submit([enc.finish()]);
+        readback::map_all([rb.buffer()]);
+        ctx.wait().unwrap();
+        ctx.take_error().unwrap();
+        let got = rb.read().unwrap();
+        let bad = got.iter().zip(&want).position(|(a, b)| a.to_bits() != b.to_bits());
+        assert!(
+            bad.is_none(),
+            "max_binding {max_binding}: texel {bad:?}: {} != {}",
+            got[bad.unwrap()],
+            want[bad.unwrap()]
+        );
+    }
+    assert_eq!(depth_read::band_rows(37, 150, 4 * 37 * 100), 64);
+    assert_eq!(depth_read::band_rows(37, 150, 4 * 37 * 150), 150);
+    assert_eq!(depth_read::band_rows(16384, 16384, 128 << 20), 2048);
+}
+
+/// Cost of reading depth back, shader vs copy (where the adapter can copy depth), 1280 × 1024:
+/// `cargo test --release depth_read_cost -- --ignored --nocapture`. Wall time of record + submit +
+/// wait + map of one depth texture, median of 30.
+#[test]
+#[ignore]
+fn depth_read_cost() {
+    let Some((ctx, _)) = device() else { return };
+    let d = &ctx.device;
+    let (w, h) = (1280u32, 1024u32);
+    let usage =
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+    let tex = targets::texture(d, "depth", w, h, targets::DEPTH_FORMAT, usage);
+    let view = tex.create_view(&Default::default());
+    let median = |f: &dyn Fn() -> wgpu::Buffer| {
+        let mut t: Vec<f64> = (0..30)
+            .map(|_| {
+                let t0 = std::time::Instant::now();
+                let b = f();
+                readback::map_all([&b]);
+                ctx.wait().unwrap();
+                drop(b.slice(..).get_mapped_range());
+                t0.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        t.sort_by(f64::total_cmp);
+        t[15]
+    };
+    let (view, reader) = (&view, depth_read::DepthReader::new(d));
+    let shader = median(&|| {
+        let mut enc = ctx.encoder("t");
+        let rb = reader.record(d, &mut enc, view, (w, h), ctx.limits.max_storage_buffer_binding_size);
+        ctx.queue.submit([enc.finish()]);
+        rb.buffer().clone()
+    });
+    println!("{}: depth read through the shader: {shader:.2} ms", ctx.adapter_description());
+    if ctx.depth_copies {
+        let copy = median(&|| {
+            let mut enc = ctx.encoder("t");
+            let rb = ctx.read_depth(&mut enc, &tex);
+            ctx.queue.submit([enc.finish()]);
+            rb.buffer().clone()
+        });
+        println!("{}: depth copied to a buffer: {copy:.2} ms", ctx.adapter_description());
+    }
+}

@@ -85,11 +85,12 @@ impl IsoPasses {
     pub(super) fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let fs = wgpu::ShaderStages::FRAGMENT;
+        // Depth textures read as unfilterable float (see iso.wgsl: GLSL has no depth textureLoad).
         let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: fs,
             ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
                 multisampled: false,
             },
@@ -149,9 +150,15 @@ impl IsoPasses {
             stencil: wgpu::StencilState::default(),
             bias: wgpu::DepthBiasState::default(),
         });
+        // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
+        let gl = d.adapter_info().backend == wgpu::Backend::Gl;
+        let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
+        let (vs_box, fs_near, fs_beyond, fs_test) =
+            (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
+        let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
         let box_vs = wgpu::VertexState {
             module: &shader,
-            entry_point: Some("vs_box"),
+            entry_point: Some(&vs_box),
             compilation_options: Default::default(),
             buffers: &[Some(box_vertex_layout())],
         };
@@ -168,7 +175,12 @@ impl IsoPasses {
             primitive: prim(None),
             depth_stencil: depth_write.clone(),
             multisample: Default::default(),
-            fragment: None,
+            fragment: gl.then(|| wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some(&fs_near),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
             multiview_mask: None,
             cache: None,
         });
@@ -181,7 +193,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_beyond"),
+                entry_point: Some(&fs_beyond),
                 compilation_options: Default::default(),
                 targets: &[],
             }),
@@ -197,7 +209,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_test"),
+                entry_point: Some(&fs_test),
                 compilation_options: Default::default(),
                 targets: &[Some(ID_FORMAT.into())],
             }),
@@ -213,7 +225,7 @@ impl IsoPasses {
             layout: Some(&pl_globals),
             vertex: wgpu::VertexState {
                 module: &shader,
-                entry_point: Some("vs_surf"),
+                entry_point: Some(&vs_surf),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: 24,
@@ -226,7 +238,7 @@ impl IsoPasses {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
-                entry_point: Some("fs_surf"),
+                entry_point: Some(&fs_surf),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
                     format: COLOR_FORMAT,
@@ -251,7 +263,8 @@ impl Targets {
             let cs = wgpu::TextureUsages::COPY_SRC;
             let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
             let id = tex("iso_id", ID_FORMAT, ra);
-            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | cs);
+            // Depth and the map are copied back, or read through a shader where they cannot be.
+            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
             let below = tex("iso_below", DEPTH_FORMAT, ra | tb);
             let above = tex("iso_above", DEPTH_FORMAT, ra | tb);
             let map_tex = tex("iso_map", DEPTH_FORMAT, ra | tb | cs);

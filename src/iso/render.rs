@@ -58,7 +58,7 @@ use super::passes::{draw_map, draw_surface, test_nodes, BoxInstance, Globals, Is
 use super::tetra::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
-use crate::error::{ensure, input_err, Result};
+use crate::error::{ensure, input_err, Interrupt, Result};
 use crate::gpu::{GpuContext, ReadbackTexture};
 
 /// How the isosurface is culled.
@@ -103,6 +103,9 @@ pub struct IsoOptions {
     /// Memory budget of the renderer's isosurface caches in bytes (patches, and at most a quarter
     /// of it for the straddling-node lists); least recently used entries are dropped beyond it.
     pub cache_budget: usize,
+    /// Polled between the stages of the frame (map, each level of node tests, extraction); when
+    /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
+    pub interrupt: Interrupt,
 }
 
 impl Default for IsoOptions {
@@ -115,6 +118,7 @@ impl Default for IsoOptions {
             use_cache: true,
             return_map: false,
             cache_budget: DEFAULT_CACHE_BUDGET,
+            interrupt: Interrupt::default(),
         }
     }
 }
@@ -449,6 +453,7 @@ impl IsoRenderer {
             stats.occluder_boxes_below = occ.n_below;
             stats.occluder_boxes_above = occ.n_above;
             draw_map(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, occ)?;
+            opts.interrupt.check()?;
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let start = cull_depth.saturating_sub(2);
@@ -460,6 +465,7 @@ impl IsoRenderer {
                     level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
                 let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, &model, b)).collect();
                 let counts = test_nodes(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, &boxes)?;
+                opts.interrupt.check()?;
                 stats.nodes_tested += level.len() as u32;
                 let vis: Vec<NodeInfo> = level
                     .iter()
@@ -521,6 +527,7 @@ impl IsoRenderer {
             super::tetra::extract_nodes(vol, w, &visible).into_iter().map(Arc::new).collect()
         };
         stats.extract_ms = t_ex.elapsed().as_secs_f64() * 1e3;
+        opts.interrupt.check()?;
 
         // ---- Draw.
         let t_draw = Instant::now();
@@ -538,23 +545,19 @@ impl IsoRenderer {
         let t_rb = Instant::now();
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
         let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
-        let depth_rb =
-            ReadbackTexture::new(d, &mut enc, &tg.depth_tex, width, height, 4, wgpu::TextureAspect::DepthOnly);
-        let map_rb = (opts.return_map && implicit)
-            .then(|| ReadbackTexture::new(d, &mut enc, &tg.map_tex, width, height, 4, wgpu::TextureAspect::DepthOnly));
+        let depth_rb = ctx.read_depth(&mut enc, &tg.depth_tex);
+        let map_rb = (opts.return_map && implicit).then(|| ctx.read_depth(&mut enc, &tg.map_tex));
         ctx.queue.submit([enc.finish()]);
-        for r in [&color_rb, &depth_rb].into_iter().chain(map_rb.as_ref()) {
-            r.buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+        for b in [&color_rb.buffer, depth_rb.buffer()].into_iter().chain(map_rb.as_ref().map(|m| m.buffer())) {
+            b.slice(..).map_async(wgpu::MapMode::Read, |_| {});
         }
         ctx.wait()?;
         ctx.take_error()?;
         let image = color_rb.read_rows()?;
-        let lin = |raw: Vec<u8>| -> Vec<f32> {
-            bytemuck::cast_slice::<u8, f32>(&raw).par_iter().map(|&v| fc.linear_depth(v)).collect()
-        };
-        let depth = lin(depth_rb.read_rows()?);
+        let lin = |raw: Vec<f32>| -> Vec<f32> { raw.par_iter().map(|&v| fc.linear_depth(v)).collect() };
+        let depth = lin(depth_rb.read()?);
         if let Some(m) = &map_rb {
-            map_out = Some(lin(m.read_rows()?));
+            map_out = Some(lin(m.read()?));
         } else if opts.return_map {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }

@@ -18,6 +18,7 @@ pub mod simplify;
 
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One tile of one object.
 #[derive(Clone, Debug, Default)]
@@ -140,8 +141,16 @@ impl GridSpec<'_> {
 }
 
 /// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in
-/// row-major order (index `iy * tx + ix`); tiles wholly inside holes are empty.
-pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coarse_factor: f32) -> Vec<TileMesh> {
+/// row-major order (index `iy * tx + ix`); tiles wholly inside holes are empty. Once `stop` is
+/// set, tiles not yet started are left empty (the caller discards the result; see
+/// `crate::error::Interrupt::run_parallel`).
+pub fn tile_heightfield(
+    g: &GridSpec,
+    origin: DVec3,
+    tiles: (usize, usize),
+    coarse_factor: f32,
+    stop: &AtomicBool,
+) -> Vec<TileMesh> {
     let (tx, ty) = tiles;
     let bx = tile_bounds(g.nx, tx);
     let by = tile_bounds(g.ny, ty);
@@ -149,6 +158,9 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
         .into_par_iter()
         .map(|t| {
             let (ix, iy) = (t % tx, t / tx);
+            if stop.load(Ordering::Relaxed) {
+                return TileMesh::default();
+            }
             let (i0, i1, j0, j1) = (bx[ix], bx[ix + 1], by[iy], by[iy + 1]);
             let w = i1 - i0 + 1;
             let h = j1 - j0 + 1;
@@ -234,19 +246,24 @@ pub fn tile_heightfield(g: &GridSpec, origin: DVec3, tiles: (usize, usize), coar
 }
 
 /// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
-/// `vertices` are world coordinates; `faces` index into them (validated by the caller).
+/// `vertices` are world coordinates; `faces` index into them (validated by the caller). Once
+/// `stop` is set, tiles not yet started are left empty (as in [`tile_heightfield`]).
 pub fn tile_mesh(
     vertices: &[[f64; 3]],
     faces: &[[u32; 3]],
     origin: DVec3,
     clusters: usize,
     coarse_factor: f32,
+    stop: &AtomicBool,
 ) -> Vec<TileMesh> {
     let (ids, n) = if clusters <= 1 || faces.len() <= 1 {
         (vec![0u32; faces.len()], 1)
     } else {
         simplify::cluster_triangles(vertices, faces, clusters)
     };
+    if stop.load(Ordering::Relaxed) {
+        return Vec::new();
+    }
     // Faces of each cluster, in input order.
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); n];
     for (f, &c) in ids.iter().enumerate() {
@@ -256,6 +273,9 @@ pub fn tile_mesh(
         .into_par_iter()
         .enumerate()
         .map(|(c, fs)| {
+            if stop.load(Ordering::Relaxed) {
+                return TileMesh::default();
+            }
             let mut map = std::collections::HashMap::<u32, u32>::with_capacity(fs.len());
             let mut tile = TileMesh { ix: c as u32, iy: 0, ..Default::default() };
             for &f in &fs {
@@ -295,13 +315,13 @@ mod tests {
         let (nx, ny) = (5, 4);
         let mut z = vec![0.0; nx * ny];
         let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0);
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &AtomicBool::new(false));
         let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
         assert_eq!(total, 2 * (nx - 1) * (ny - 1));
         // One NaN sample in the interior removes the 6 triangles touching it.
         z[nx + 2] = f64::NAN;
         let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0);
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &AtomicBool::new(false));
         assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
         assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
     }
@@ -312,7 +332,7 @@ mod tests {
         let z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + ((k / nx) as f64 * 0.2).cos()).collect();
         let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
         for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
-            let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf);
+            let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &AtomicBool::new(false));
             let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
             let coarse: usize = tiles.iter().map(|t| t.coarse_triangles()).sum();
             let ratio = fine as f64 / coarse as f64;
@@ -340,7 +360,7 @@ mod tests {
     fn all_nan_tile_is_empty() {
         let z = vec![f64::NAN; 9];
         let g = GridSpec { z: &z, nx: 3, ny: 3, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0);
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &AtomicBool::new(false));
         assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
     }
 }

@@ -3,7 +3,7 @@
 
 use super::camera::PyCamera;
 use super::renderer::PyRenderer;
-use super::{lock, run};
+use super::{lock, run, run_interruptible};
 use crate::error::{input_err, int_in};
 use crate::iso::layout::{self, AxisOrder, ZPositive};
 use crate::iso::mesh::isosurface_mesh;
@@ -228,7 +228,7 @@ fn render_isosurface<'py>(
     let r = &renderer.inner;
     let budget = renderer.iso_cache_budget.load(Ordering::Relaxed);
     let (v, c) = (&volume.inner, &camera.inner);
-    let out = run(py, move || {
+    let out = run_interruptible(py, move |interrupt| {
         let culling = IsoCulling::parse(&culling)?;
         let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
         let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
@@ -240,6 +240,7 @@ fn render_isosurface<'py>(
             use_cache: cache,
             return_map,
             cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
+            interrupt,
         };
         lock(r).render_isosurface(v, &tree, isovalue, c, &opts)
     })?;

@@ -10,11 +10,11 @@
 //! One file per Python class: `scene.rs` (Scene), `camera.rs` (Camera), `renderer.rs` (Renderer
 //! and the frame dict), `iso.rs` (Volume, render_isosurface).
 
-use crate::error::Error;
+use crate::error::{Error, Interrupt};
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 mod camera;
 mod iso;
@@ -37,7 +37,34 @@ impl From<Error> for PyErr {
         Python::attach(|py| match e {
             Error::Input { .. } => raise(py, "InputError", e.to_string()),
             Error::Device(m) => raise(py, "DeviceError", m),
+            Error::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"),
         })
+    }
+}
+
+/// [`run`] with a cancellation hook for `f` (see `crate::error::Interrupt`): Ctrl-C during a long
+/// render or build raises KeyboardInterrupt within about `Interrupt::POLL`, not at the end. The
+/// hook runs Python's signal handlers (`check_signals`, on the calling thread, taking the GIL for a
+/// moment; handlers only run on the main thread); the exception a handler raised is kept and
+/// raised here, so a custom SIGINT handler's exception comes through as it is.
+pub(crate) fn run_interruptible<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce(Interrupt) -> crate::Result<T> + Send,
+) -> PyResult<T> {
+    let raised: Arc<Mutex<Option<PyErr>>> = Arc::default();
+    let slot = raised.clone();
+    let hook = Interrupt::new(move || match Python::attach(|py| py.check_signals()) {
+        Ok(()) => false,
+        Err(e) => {
+            *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+            true
+        }
+    });
+    let out = run(py, move || f(hook));
+    let handler_error = raised.lock().unwrap_or_else(|p| p.into_inner()).take();
+    match (out, handler_error) {
+        (Err(_), Some(handler_error)) => Err(handler_error),
+        (out, _) => out,
     }
 }
 

@@ -2,7 +2,7 @@
 
 use super::camera::PyCamera;
 use super::scene::PyScene;
-use super::{lock, run, with_lock};
+use super::{lock, run, run_interruptible, with_lock};
 use crate::cull::{self, CullOptions, Stat};
 use crate::error::int_in;
 use crate::render::{Lod, RenderOptions, RenderOutput, Renderer};
@@ -97,6 +97,17 @@ impl PyRenderer {
     fn gpu_bytes(&self, py: Python<'_>) -> PyResult<u64> {
         with_lock(py, &self.inner, |r| Ok(r.gpu_bytes()))
     }
+    #[getter]
+    fn cache_budget(&self, py: Python<'_>) -> PyResult<u64> {
+        with_lock(py, &self.inner, |r| Ok(r.cache_budget()))
+    }
+    #[setter]
+    fn set_cache_budget(&self, py: Python<'_>, bytes: i64) -> PyResult<()> {
+        with_lock(py, &self.inner, |r| {
+            r.set_cache_budget(int_in(bytes, "cache_budget", 0, i64::MAX)? as u64);
+            Ok(())
+        })
+    }
 
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error))]
@@ -116,8 +127,8 @@ impl PyRenderer {
         let (r, s, c) = (&self.inner, &scene.inner, &camera.inner);
         let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
         // Renderer first, then the scene (the lock order of every binding).
-        let out = run(py, move || {
-            let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)? };
+        let out = run_interruptible(py, move |interrupt| {
+            let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)?, interrupt };
             lock(r).render(&lock(s), c, &opts)
         })?;
         output_dict(py, out)

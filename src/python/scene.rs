@@ -1,6 +1,6 @@
 //! `geocull._geocull.Scene`: objects in, tile table and geometry out.
 
-use super::{run, with_lock};
+use super::{lock, run, run_interruptible, with_lock};
 use crate::error::{int_in, object_id};
 use crate::scene::{AddOptions, GridFrame, Scene};
 use numpy::ndarray::Array2;
@@ -61,11 +61,13 @@ impl PyScene {
         let shape = z.shape();
         let (ny, nx) = (shape[0], shape[1]);
         let data = super::contiguous(&z, "z")?;
-        let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        with_lock(py, &self.inner, move |scene| {
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
             let tiles = (int_in(tiles.0, "tiles[0]", 1, MAX_INT)?, int_in(tiles.1, "tiles[1]", 1, MAX_INT)?);
             let frame = GridFrame::new([origin.0, origin.1], [spacing.0, spacing.1]).rotated(rotation, yflip);
-            scene.add_heightfield(data, ny, nx, frame, tiles, null_value, opts)
+            let opts = AddOptions { coarse_factor, name, color, interrupt };
+            lock(scene).add_heightfield(data, ny, nx, frame, tiles, null_value, opts)
         })
     }
 
@@ -84,10 +86,12 @@ impl PyScene {
     ) -> PyResult<u32> {
         let v: &[[f64; 3]] = bytemuck::cast_slice(super::contiguous(&vertices, "vertices")?);
         let f: &[[i64; 3]] = bytemuck::cast_slice(super::contiguous(&faces, "faces")?);
-        let opts = AddOptions { coarse_factor, name, color: color.map(|c| [c.0, c.1, c.2]) };
-        with_lock(py, &self.inner, move |scene| {
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let mut scene = lock(scene);
             let tiles = tiles.map(|t| int_in(t, "tiles", 1, MAX_INT)).transpose()?;
-            scene.add_mesh(v, f, &kind, tiles, opts)
+            scene.add_mesh(v, f, &kind, tiles, AddOptions { coarse_factor, name, color, interrupt })
         })
     }
 

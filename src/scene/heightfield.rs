@@ -133,9 +133,10 @@ impl Scene {
             (DVec3::new(f64::INFINITY, f64::INFINITY, zmin), DVec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, zmax)),
             |(lo, hi), c| (lo.min(DVec3::new(c.0, c.1, zmin)), hi.max(DVec3::new(c.0, c.1, zmax))),
         );
-        let o = self.set_origin_from(lo, hi);
+        let o = self.origin_for(lo, hi);
         let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy, rot, yflip };
-        let tile_meshes = lod::tile_heightfield(&grid, o, (tx, ty), cf);
+        // Interruptible between tiles; on Err the scene is unchanged (the origin is set by push).
+        let tile_meshes = opts.interrupt.run_parallel(|stop| lod::tile_heightfield(&grid, o, (tx, ty), cf, stop))?;
         let kind = ObjectKind::Heightfield {
             nx,
             ny,
@@ -146,7 +147,7 @@ impl Scene {
             rotation,
             tiles: (tx, ty),
         };
-        Ok(self.push(opts.name, kind, color, tile_meshes))
+        Ok(self.push(o, opts.name, kind, color, tile_meshes))
     }
 }
 

@@ -54,9 +54,9 @@ impl Scene {
         if lo.x > hi.x {
             (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
         }
-        let o = self.set_origin_from(lo, hi);
+        let o = self.origin_for(lo, hi);
         let k = clusters.unwrap_or(1).min(f32faces.len().max(1));
-        let tiles = lod::tile_mesh(vertices, &f32faces, o, k, cf);
-        Ok(self.push(opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
+        let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, &f32faces, o, k, cf, stop))?;
+        Ok(self.push(o, opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
     }
 }

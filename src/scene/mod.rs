@@ -5,7 +5,7 @@
 //! visibility, colour and translation are per-object state read every frame (no re-upload).
 
 use crate::camera::MAX_COORD;
-use crate::error::{ensure, input_err, num, Result};
+use crate::error::{ensure, input_err, num, Interrupt, Result};
 use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -70,6 +70,16 @@ pub struct AddOptions {
     pub coarse_factor: f64,
     pub name: Option<String>,
     pub color: Option<[f64; 3]>,
+    /// Polled while the tiles are built (between tiles); when it fires the add returns
+    /// `Error::Interrupted` and the scene is unchanged.
+    pub interrupt: Interrupt,
+}
+
+impl AddOptions {
+    /// `coarse_factor` with the default name and colour and no interrupt.
+    pub fn new(coarse_factor: f64) -> Self {
+        Self { coarse_factor, name: None, color: None, interrupt: Interrupt::default() }
+    }
 }
 
 /// An object's triangles in world coordinates: (vertices, faces).
@@ -215,20 +225,23 @@ impl Scene {
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
-    pub(super) fn set_origin_from(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
-        *self.origin.get_or_insert_with(|| {
-            // Round to a metre so the origin is a tidy number in reports.
-            ((lo + hi) * 0.5).round()
-        })
+    /// The scene's origin, or the one the first object with bounds `lo`, `hi` will set (the
+    /// centre, rounded to a metre so that it is a tidy number in reports). Set by `push`, so that
+    /// an interrupted or failed add leaves the scene as it was.
+    pub(super) fn origin_for(&self, lo: DVec3, hi: DVec3) -> DVec3 {
+        self.origin.unwrap_or_else(|| ((lo + hi) * 0.5).round())
     }
 
+    /// Adds an object whose tiles are relative to `origin` (from [`Self::origin_for`]).
     pub(super) fn push(
         &mut self,
+        origin: DVec3,
         name: Option<String>,
         kind: ObjectKind,
         color: [f32; 3],
         tiles: Vec<TileMesh>,
     ) -> u32 {
+        self.origin = Some(origin);
         let id = self.next_id;
         self.next_id += 1;
         let name = name.unwrap_or_else(|| format!("object{id}"));
@@ -315,7 +328,7 @@ mod tests {
     use super::*;
 
     fn opts() -> AddOptions {
-        AddOptions { coarse_factor: 1.0, name: None, color: None }
+        AddOptions::new(1.0)
     }
 
     #[test]

@@ -308,7 +308,12 @@ mod tests {
 
     fn scene() -> Scene {
         let mut s = Scene::new();
-        let opts = |name: &str| AddOptions { coarse_factor: 4.0, name: Some(name.into()), color: None };
+        let opts = |name: &str| AddOptions {
+            coarse_factor: 4.0,
+            name: Some(name.into()),
+            color: None,
+            interrupt: Default::default(),
+        };
         let z: Vec<f64> =
             (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
         s.add_heightfield(&z, 9, 9, GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]), (3, 2), None, opts("top"))
@@ -351,7 +356,7 @@ mod tests {
         // ids continue where the original's would
         let (mut s2, mut t2) = (s.clone(), t);
         let z = vec![0.0; 4];
-        let o = AddOptions { coarse_factor: 1.0, name: None, color: None };
+        let o = AddOptions { coarse_factor: 1.0, name: None, color: None, interrupt: Default::default() };
         let a = s2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o.clone()).unwrap();
         assert_eq!(t2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o).unwrap(), a);
         assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
@@ -363,7 +368,7 @@ mod tests {
     #[test]
     fn version_1_height_fields_read_as_unrotated() {
         let mut s = Scene::new();
-        let o = AddOptions { coarse_factor: 1.0, name: Some("a".into()), color: None };
+        let o = AddOptions { coarse_factor: 1.0, name: Some("a".into()), color: None, interrupt: Default::default() };
         s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o)
             .unwrap();
         let v2 = s.to_bytes();

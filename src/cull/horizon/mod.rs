@@ -120,6 +120,8 @@
 //!   traversal (`cull`, `project_node`, `horizon_culled`, `dead_rows`);
 //! * `occluder.rs`: the covered set of a drawn tile (`boundary_edges`, `add_occluder`, `add_band`,
 //!   `add_edge`);
+//! * `strategy.rs`: the `culling="horizon"` strategy and its tree cache (object-local trees,
+//!   offsets applied at cull time, LRU within a byte budget);
 //! * `tests.rs`: tests against the CPU reference rasterizer `crate::cull::reference`.
 
 mod hull;

@@ -556,3 +556,50 @@ fn identity_frame_is_plain_cull() {
     let b = tree.cull_in_frame(vp, DMat4::IDENTITY, eye, 128, 96);
     assert_eq!((a.tile_visible, a.horizon, a.nodes_visited), (b.tile_visible, b.horizon, b.nodes_visited));
 }
+
+/// A tree built in object-local coordinates and culled with the object's offset in the matrix
+/// (what the strategy caches, so `Scene::translate` rebuilds nothing) is as conservative as the
+/// reference of the translated terrain, and culls as much as a tree built at the translated place.
+#[test]
+fn property_translated_tree_equals_tree_built_in_place() {
+    let mut rng = Lcg(0x7a5c_0118);
+    let (w, h) = (160, 120);
+    let (mut same, mut culled_local, mut culled_moved) = (0, 0, 0);
+    let ncases = 80;
+    for case in 0..ncases {
+        let local = random_terrain(&mut rng);
+        let (ex, ey) = local.extent();
+        let ext = ex.max(ey);
+        // Offsets from small to UTM-sized (f32 round-off on the GPU grows with them).
+        let mag = [0.0, 10.0, 1e3, 4.5e5][case % 4];
+        let off = DVec3::new(rng.range(-1.0, 1.0) * mag, rng.range(-1.0, 1.0) * mag, rng.range(-1.0, 1.0) * mag * 0.01);
+        let moved = Terrain {
+            z: local.z.iter().map(|&v| (v as f64 + off.z) as f32).collect(),
+            x0: local.x0 + off.x,
+            y0: local.y0 + off.y,
+            ..Terrain { z: Vec::new(), ..local }
+        };
+        let local_tree = HorizonTree::build(&local.grid());
+        let (ex0, ey0) = (moved.x0, moved.y0);
+        let eye = DVec3::new(
+            ex0 + rng.range(-0.3, 1.3) * ex,
+            ey0 + rng.range(-0.3, 1.3) * ey,
+            moved.zmax() + rng.range(0.02, 0.30) * ext,
+        );
+        let c = DVec3::new(ex0 + 0.5 * ex, ey0 + 0.5 * ey, moved.zmin()) - eye;
+        let az = c.y.atan2(c.x).to_degrees() + rng.range(-45.0, 45.0);
+        let vp = camera(eye, dir(az, rng.range(-30.0, 5.0)), DVec3::Z, ext, w, h);
+        // Reference and in-place tree of the moved terrain; the local tree culled with the offset.
+        let c_moved = check(&moved, vp, eye, w, h);
+        let res = local_tree.cull_translated(vp, off, eye, w as u32, h as u32);
+        let n = res.tile_visible.len();
+        let bad: Vec<usize> = (0..n).filter(|&i| c_moved.rf.visible[i] && !res.tile_visible[i]).collect();
+        assert!(bad.is_empty(), "case {case} (offset {off}): visible tiles culled: {bad:?}");
+        same += usize::from(res.tile_visible == c_moved.res.tile_visible);
+        culled_local += res.tile_visible.iter().filter(|&&v| !v).count();
+        culled_moved += c_moved.res.tile_visible.iter().filter(|&&v| !v).count();
+    }
+    println!("translated trees: same mask in {same}/{ncases} cases; culled {culled_local} vs {culled_moved} in place");
+    assert!(same * 10 >= ncases * 9, "masks differ in {} cases", ncases - same);
+    assert!(culled_local * 10 >= culled_moved * 9);
+}

@@ -163,6 +163,18 @@ impl HorizonTree {
         tree
     }
 
+    /// Host memory held by the tree, bytes (what the strategy's cache budgets).
+    pub fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        size_of::<Self>()
+            + self.z.capacity() * size_of::<f32>()
+            + (self.bx.capacity() + self.by.capacity()) * size_of::<usize>()
+            + self.tile_nonempty.capacity()
+            + self.edge_off.capacity() * size_of::<u32>()
+            + self.edges.capacity() * size_of::<[u32; 2]>()
+            + self.nodes.capacity() * size_of::<Node>()
+    }
+
     #[inline]
     pub(super) fn pos(&self, i: usize, j: usize) -> DVec3 {
         DVec3::new(self.x0 + i as f64 * self.dx, self.y0 + j as f64 * self.dy, self.z[j * self.nx + i] as f64)
@@ -221,6 +233,19 @@ impl HorizonTree {
     /// sets are those of render space. The tree then culls with `view_proj * frame`, and the bound
     /// on the GPU's f32 round-off is taken for the render-space positions the GPU actually
     /// transforms (see `View::new`). `eye` is in render space, as for `cull`.
+    /// [`HorizonTree::cull`] of the tree moved by `offset` (render space) without rebuilding it:
+    /// `cull_in_frame` with the translation as the frame.
+    pub fn cull_translated(
+        &self,
+        view_proj: DMat4,
+        offset: DVec3,
+        eye: DVec3,
+        width: u32,
+        height: u32,
+    ) -> HorizonResult {
+        self.cull_in_frame(view_proj, DMat4::from_translation(offset), eye, width, height)
+    }
+
     pub fn cull_in_frame(&self, view_proj: DMat4, frame: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
         let (w, h) = (width as usize, height as usize);
         let fallback = || HorizonResult {

@@ -21,13 +21,17 @@ struct DrawArgs {
 }
 
 @group(0) @binding(0) var<uniform> g: Globals;
-@group(1) @binding(0) var depth: texture_depth_2d;
+// The depth image as an unfilterable float texture (GLSL cannot textureLoad depth textures).
+@group(1) @binding(0) var depth: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
 @group(1) @binding(2) var<storage, read> skip: array<DrawArgs>;
 
 struct BoxOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) tile: u32,
+    // Clip z and w: GL's depth range mapping loses reverse-Z precision in `clip.z`, so the GL
+    // entry point compares z / w (common.wgsl does the same for the scene passes).
+    @location(1) zw: vec2<f32>,
 }
 
 // One instance per tile: lo.xyz + tile index (bits in w), hi.xyz (render space).
@@ -38,17 +42,29 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
     out.tile = tile;
     if (skip[tile].instance_count > 0u) {
         out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all 36 vertices equal: nothing rasterised
+        out.zw = vec2<f32>(0.0, 1.0);
         return out;
     }
     out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
+    out.zw = out.clip.zw;
     return out;
 }
 
 // The render pass's one attachment (the id image) has its writes masked off.
 @fragment
 fn fs_box(v: BoxOut) -> @location(0) u32 {
-    let d = textureLoad(depth, vec2<i32>(floor(v.clip.xy)), 0);
+    let d = textureLoad(depth, vec2<i32>(floor(v.clip.xy)), 0).r;
     if (v.clip.z >= d) {
+        atomicAdd(&counts[v.tile], 1u);
+    }
+    return 0u;
+}
+
+// GL: the same test with the fragment's depth as z / w.
+@fragment
+fn fs_box_gl(v: BoxOut) -> @location(0) u32 {
+    let d = textureLoad(depth, vec2<i32>(floor(v.clip.xy)), 0).r;
+    if (v.zw.x / v.zw.y >= d) {
         atomicAdd(&counts[v.tile], 1u);
     }
     return 0u;

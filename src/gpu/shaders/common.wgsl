@@ -39,3 +39,33 @@ fn vs_main(@location(0) pos: vec3<f32>, @builtin(instance_index) tile: u32) -> V
     out.tile = tile;
     return out;
 }
+
+// The GL variant (`*_gl` entry points, chosen by gpu::passes on the GL backend). wgpu's GL backend
+// rewrites clip z to GL's [-1, 1] range (z' = 2z - w) and GL maps it back through the fixed depth
+// range (0.5 z'/w + 0.5): both steps round near -1, keeping only ~2^-24 *absolute* precision of
+// the reverse-Z depth near / distance (distances off by 12 % at 5 m with near 1e-6, layers 0.5 m
+// apart z-fighting at 20 km). So the GL pipelines carry clip z and w to the fragment and write
+// frag_depth = z / w, the value the other backends rasterise, with the float depth buffer's
+// relative precision. (Writing frag_depth costs early depth tests, so other backends do not.) The
+// GL entry points repeat vs_main's / fs_main's bodies rather than sharing helpers with them, so
+// that the other backends' code is exactly what it was: a shared shading helper made lavapipe's
+// lit pass ~12 % slower.
+struct VOutGl {
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) @interpolate(flat) tile: u32,
+    @location(2) zw: vec2<f32>,
+}
+
+// The same transform as vs_main (kept apart so that vs_main's code is what it always was).
+@vertex
+fn vs_gl(@location(0) pos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOutGl {
+    let o = objects[tile_object[tile]];
+    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    return VOutGl(clip, p, tile, clip.zw);
+}
+
+fn gl_depth(v: VOutGl) -> f32 {
+    return v.zw.x / v.zw.y;
+}
