@@ -130,3 +130,17 @@ def test_stacked_horizons_with_faults_small_error_and_fewer_triangles(view):
     err = image_error(tp.image, none.image)
     assert err["differing_pixel_fraction"] <= 0.001, (name, err)
     assert tp.stats["triangles_drawn"] < 0.8 * none.stats["triangles_drawn"], name
+
+
+def test_tile_pixels_scale_by_the_real_prepass_size():
+    """A 1-pixel-wide image at prepass_scale 0.5: the prepass is 1 x 32 (width cannot shrink), so
+    each prepass pixel stands for 2 image pixels, not 1 / 0.5² = 4 (the counts were 2x too high)."""
+    s = gc.Scene()
+    s.add_heightfield(np.zeros((9, 9)), origin=(-4.0, -4.0), spacing=(1.0, 1.0), tiles=(1, 1))
+    cam = gc.Camera.look_at((0.0, 0.0, 2.0), (0.0, 0.0, 0.0), up=(0, 1, 0), fov_y=90.0)
+    r = gc.Renderer(1, 64)
+    full = r.render(s, cam, culling="none")
+    half = r.render(s, cam, culling="three_pass", pixel_threshold=0, prepass_scale=0.5, conservative=False)
+    covered = int(full.coverage.sum())
+    assert covered > 0
+    assert abs(int(half.tile_pixels.sum()) - covered) <= 2

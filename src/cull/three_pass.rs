@@ -168,10 +168,13 @@ impl CullStrategy for ThreePass {
         let fine = passes::args_buffer(d, "fine_args", &f.pick(f.draw_args, |_| true));
         let first = passes::empty_args_buffer(d, "draw_args", n);
         let threshold = f.options.pixel_threshold;
-        let scaled = (threshold * scale * scale) as f32;
+        let scaled = (threshold * (pw as f64 * ph as f64) / (f.width as f64 * f.height as f64)) as f32;
         f.passes.record_select(d, enc, &counts, &fine, &first, n, scaled, ts("count_ms"));
 
-        let pixels = Pixels::Gpu { counts, scale: 1.0 / (scale * scale) };
+        // Full-image pixels per prepass pixel: the real size ratio (rounding and the 1-pixel floor
+        // make it differ from 1 / scale² for small images).
+        let ratio = (f.width as f64 * f.height as f64) / (pw as f64 * ph as f64);
+        let pixels = Pixels::Gpu { counts, scale: ratio };
         self.predicting = !f.options.conservative && f.options.predict_errors;
         self.tested = f.options.conservative || self.predicting;
         let error_px = ("proxy_error_px", proxy_error_px(f, &dist));

@@ -452,7 +452,8 @@ impl Passes {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("select"), timestamp_writes: ts });
         pass.set_pipeline(&self.select);
         pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups((n as u32).div_ceil(64).max(1), 1, 1);
+        let (x, y) = tile_groups(n);
+        pass.dispatch_workgroups(x, y, 1);
     }
 }
 
@@ -543,8 +544,17 @@ impl Passes {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("select_rest"), timestamp_writes: ts });
         pass.set_pipeline(&self.select_rest);
         pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups((n as u32).div_ceil(64).max(1), 1, 1);
+        let (x, y) = tile_groups(n);
+        pass.dispatch_workgroups(x, y, 1);
     }
+}
+
+/// Workgroups `(x, y)` covering `n` tiles with 64 per group: a 2-D dispatch, since one dimension
+/// holds at most 65,535 groups (4,194,240 tiles); the shaders index `gid.x + gid.y * 65535 * 64`.
+pub fn tile_groups(n: usize) -> (u32, u32) {
+    const MAX: usize = 65_535;
+    let groups = n.div_ceil(64).max(1);
+    (groups.min(MAX) as u32, groups.div_ceil(MAX) as u32)
 }
 
 /// A vertex buffer of box instances (one zeroed box when empty).

@@ -238,3 +238,27 @@ fn depth_read_cost() {
         println!("{}: depth copied to a buffer: {copy:.2} ms", ctx.adapter_description());
     }
 }
+
+/// Beyond 65,535 workgroups of 64 (4,194,240 tiles) the selection dispatches in 2-D and still
+/// handles every tile.
+#[test]
+fn select_handles_more_tiles_than_one_dispatch_dimension() {
+    let Some((ctx, p)) = device() else { return };
+    let d = &ctx.device;
+    let n = 65_535 * 64 + 1000;
+    assert_eq!(passes::tile_groups(n), (65_535, 2));
+    let src: Vec<DrawArgs> = (0..n as u32)
+        .map(|i| DrawArgs { index_count: 3, instance_count: 1, first_index: 0, base_vertex: 0, first_instance: i })
+        .collect();
+    let counts: Vec<u32> = (0..n as u32).map(|i| i % 2).collect();
+    let counts_buf = passes::counts_buffer_init(d, &counts);
+    let out = empty_args_buffer(d, "out", n);
+    let mut enc = ctx.encoder("test");
+    p.record_select(d, &mut enc, &counts_buf, &args_buffer(d, "src", &src), &out, n, 0.0, None);
+    let got: Vec<u32> = read_u32s(&ctx, enc, &out, 5 * n);
+    let got: &[DrawArgs] = bytemuck::cast_slice(&got);
+    for i in [0, 1, 4_194_239, 4_194_240, 4_194_241, n - 1] {
+        assert_eq!(got[i].instance_count, (i % 2) as u32, "draw {i}");
+        assert_eq!(got[i].first_instance, i as u32, "draw {i}");
+    }
+}

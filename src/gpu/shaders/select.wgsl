@@ -24,7 +24,7 @@ struct DrawArgs {
 
 @compute @workgroup_size(64)
 fn select_draws(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+    let i = gid.x + gid.y * (65535u * 64u); // 2-D dispatch beyond 65,535 groups
     if (i >= p.n_tiles) {
         return;
     }
