@@ -22,6 +22,7 @@ use wgpu::util::DeviceExt;
 
 const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
 const BOX_WGSL: &str = include_str!("shaders/box.wgsl");
+const SELECT_WGSL: &str = include_str!("shaders/select_common.wgsl");
 
 /// `source` with the shared box geometry (box.wgsl: `CUBE`, `box_corner`) prepended.
 pub fn with_box_wgsl(source: &str) -> String {
@@ -258,7 +259,7 @@ impl Passes {
         let prepass =
             scene_pipeline("prepass.wgsl", include_str!("shaders/prepass.wgsl"), "fs_id", &[Some(ID_FORMAT.into())]);
         let hist_shader = shader(d, "histogram.wgsl", include_str!("shaders/histogram.wgsl").into());
-        let select_shader = shader(d, "select.wgsl", include_str!("shaders/select.wgsl").into());
+        let select_shader = shader(d, "select.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("shaders/select.wgsl")));
         let histogram = compute(d, "histogram", &hist_layout, &hist_shader, "histogram");
         let select = compute(d, "select", &select_layout, &select_shader, "select_draws");
         let rest_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -271,7 +272,8 @@ impl Passes {
                 storage_entry(4, false, cs),
             ],
         });
-        let rest_shader = shader(d, "select_rest.wgsl", include_str!("shaders/select_rest.wgsl").into());
+        let rest_shader =
+            shader(d, "select_rest.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("shaders/select_rest.wgsl")));
         let select_rest = compute(d, "select_rest", &rest_layout, &rest_shader, "select_rest");
         let fs = wgpu::ShaderStages::FRAGMENT;
         let box_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -432,28 +434,8 @@ impl Passes {
         threshold: f32,
         ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        let params = SelectParams { n_tiles: n as u32, threshold, _pad: [0; 2] };
-        let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("select_params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("select"),
-            layout: &self.select_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: src.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: out.as_entire_binding() },
-            ],
-        });
-        let mut pass =
-            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("select"), timestamp_writes: ts });
-        pass.set_pipeline(&self.select);
-        pass.set_bind_group(0, &bg, &[]);
-        let (x, y) = tile_groups(n);
-        pass.dispatch_workgroups(x, y, 1);
+        let buffers = [counts, src, out];
+        self.run_selection(d, enc, "select", &self.select_layout, &self.select, &buffers, n, threshold, ts);
     }
 }
 
@@ -523,26 +505,39 @@ impl Passes {
         threshold: f32,
         ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
+        let buffers = [counts, src, done, out];
+        self.run_selection(d, enc, "select_rest", &self.rest_layout, &self.select_rest, &buffers, n, threshold, ts);
+    }
+
+    /// One selection dispatch: `SelectParams { n, threshold }` at binding 0, then `buffers` at
+    /// bindings 1.., over `n` tiles in a 2-D dispatch.
+    #[allow(clippy::too_many_arguments)]
+    fn run_selection(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        pipeline: &wgpu::ComputePipeline,
+        buffers: &[&wgpu::Buffer],
+        n: usize,
+        threshold: f32,
+        ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
         let params = SelectParams { n_tiles: n as u32, threshold, _pad: [0; 2] };
         let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("select_rest_params"),
+            label: Some(label),
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("select_rest"),
-            layout: &self.rest_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: src.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: done.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: out.as_entire_binding() },
-            ],
-        });
+        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() }];
+        for (k, b) in buffers.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry { binding: k as u32 + 1, resource: b.as_entire_binding() });
+        }
+        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries });
         let mut pass =
-            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("select_rest"), timestamp_writes: ts });
-        pass.set_pipeline(&self.select_rest);
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: ts });
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bg, &[]);
         let (x, y) = tile_groups(n);
         pass.dispatch_workgroups(x, y, 1);

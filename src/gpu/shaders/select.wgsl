@@ -1,21 +1,7 @@
 // Selection: each tile keeps its draw when its count is above the threshold, otherwise its
 // instance_count becomes 0 (the indirect draws of the next pass are built on the GPU).
 
-struct Params {
-    n_tiles: u32,
-    // Counts at most this switch the draw off (in the counted image's pixels).
-    threshold: f32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
-struct DrawArgs {
-    index_count: u32,
-    instance_count: u32,
-    first_index: u32,
-    base_vertex: i32,
-    first_instance: u32,
-}
+// Params and DrawArgs come from select_common.wgsl (prepended).
 
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> tile_counts: array<u32>;

@@ -1,21 +1,7 @@
 // Second-phase selection: a tile gets its draw when no earlier phase drew it (`done` off) and
 // its count is above the threshold; everything else is switched off.
 
-struct Params {
-    n_tiles: u32,
-    // Counts at most this switch the draw off (in the counted image's pixels).
-    threshold: f32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
-struct DrawArgs {
-    index_count: u32,
-    instance_count: u32,
-    first_index: u32,
-    base_vertex: i32,
-    first_instance: u32,
-}
+// Params and DrawArgs come from select_common.wgsl (prepended).
 
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> tile_counts: array<u32>;
