@@ -232,11 +232,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// The frame's camera: near/far from the visible objects' bounds in render space.
-    fn frame_camera(&self, scene: &Scene, camera: &Camera) -> FrameCamera {
+    /// The frame's camera, relative to `origin`: near/far from the visible objects' bounds.
+    fn frame_camera(&self, scene: &Scene, camera: &Camera, origin: DVec3) -> FrameCamera {
         let zs = DVec3::new(1.0, 1.0, camera.z_scale);
-        let bounds = scene.visible_bounds().map(|(lo, hi)| (lo * zs, hi * zs));
-        camera.frame(scene.origin(), bounds, self.width as f64 / self.height as f64)
+        let bounds = scene.visible_bounds(origin).map(|(lo, hi)| (lo * zs, hi * zs));
+        camera.frame(origin, bounds, self.width as f64 / self.height as f64)
     }
 
     /// Renders `scene` from `camera` with the strategy `opts.culling`.
@@ -260,20 +260,22 @@ impl Renderer {
         let t0 = Instant::now();
         self.upload(scene)?;
         opts.interrupt.check()?;
-        let fc = self.frame_camera(scene, camera);
+        let origin = render_origin(scene, camera);
+        let fc = self.frame_camera(scene, camera, origin);
         if let Some(ts) = self.timestamps.as_mut() {
             ts.begin_frame();
         }
         let Self { ctx, passes, main_targets, geometry, timestamps, strategies, width, height, .. } = self;
         let geometry = geometry.as_ref().expect("uploaded above");
-        let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, geometry);
-        let (draw_args, chosen) = choose_levels(geometry, scene, camera, &fc, *height, opts.lod);
+        let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
+        let (draw_args, chosen) = choose_levels(geometry, scene, camera, &fc, origin, *height, opts.lod);
         let inputs = FrameInputs {
             ctx,
             passes,
             scene,
             camera,
             fc: &fc,
+            origin,
             geometry,
             draw_args: &draw_args,
             scene_bg: &scene_bg,
@@ -494,21 +496,38 @@ impl Renderer {
     }
 }
 
+/// The origin of a frame's render space (world, f64): the point of the visible objects' bounds
+/// nearest to the camera's eye (the eye itself when it is inside them), rounded to a metre. What
+/// is nearest the camera then has the full precision of f32 positions relative to it, whatever the
+/// objects' coordinates, offsets and insertion order (each object's offset from it is computed in
+/// f64, [`crate::scene::Object::placement`]).
+fn render_origin(scene: &Scene, camera: &Camera) -> DVec3 {
+    match scene.visible_bounds(DVec3::ZERO) {
+        Some((lo, hi)) => camera.eye.clamp(lo, hi).round(),
+        None => camera.eye.round(),
+    }
+}
+
 /// Stage 2: the scene bind group of this frame (uniforms, per-object offsets and colours) and
 /// the per-tile object visibility.
+#[allow(clippy::too_many_arguments)]
 fn frame_state(
     ctx: &GpuContext,
     passes: &Passes,
     scene: &Scene,
     camera: &Camera,
     fc: &FrameCamera,
+    origin: DVec3,
     geom: &SceneGeometry,
 ) -> (wgpu::BindGroup, Vec<bool>) {
     let objects = scene.objects();
     let gpu_objects: Vec<GpuObject> = objects
         .iter()
         .map(|o| GpuObject {
-            offset: [o.offset.x as f32, o.offset.y as f32, o.offset.z as f32, 0.0],
+            offset: {
+                let p = o.placement(origin);
+                [p.x as f32, p.y as f32, p.z as f32, 0.0]
+            },
             color: [o.color[0], o.color[1], o.color[2], 1.0],
         })
         .collect();
@@ -531,11 +550,13 @@ type ChosenLevels = (Vec<u8>, Vec<f32>);
 /// exaggeration where that enlarges it and projected at the tile box's nearest point (perspective)
 /// or with the orthographic scale; a box that contains the eye gets level 0. Cheap on the CPU (one
 /// pass over the tiles), so it runs there, before the strategy, with no read-back.
+#[allow(clippy::too_many_arguments)]
 fn choose_levels(
     g: &SceneGeometry,
     scene: &Scene,
     camera: &Camera,
     fc: &FrameCamera,
+    origin: DVec3,
     height: u32,
     lod: Lod,
 ) -> (Vec<DrawArgs>, Option<ChosenLevels>) {
@@ -544,7 +565,7 @@ fn choose_levels(
     let px_per_unit = proj.y_axis.y.abs() * height as f64 / 2.0;
     let perspective = fc.projection == crate::camera::Projection::Perspective;
     let zs = camera.z_scale.max(1.0);
-    let dist2 = g.eye_distances(scene, fc.eye, camera.z_scale);
+    let dist2 = g.eye_distances(scene, origin, fc.eye, camera.z_scale);
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {

@@ -31,9 +31,11 @@ _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fin
 class Scene:
     """A sub-surface scene: height fields and triangle meshes, each cut into tiles with a fine and
     a coarse level of detail. Coordinates are world units (metres), x and y horizontal, z up; inputs
-    are kept in f64 and stored relative to one scene origin, so UTM-sized coordinates keep full
-    precision. Building tiles runs in parallel; Ctrl-C during an ``add_*`` call raises
-    KeyboardInterrupt within a fraction of a second and leaves the scene as it was."""
+    are kept in f64 and each object is stored relative to its own f64 origin (frames render relative
+    to an origin near the camera), so UTM-sized coordinates keep full precision whatever the order
+    objects are added in or how far they are translated. Building tiles runs in parallel; Ctrl-C
+    during an ``add_*`` call raises KeyboardInterrupt within a fraction of a second and leaves the
+    scene as it was."""
 
     def __init__(self) -> None:
         self._s = _geocull.Scene()
@@ -189,7 +191,8 @@ class Scene:
 
     @property
     def origin(self) -> tuple[float, float, float]:
-        """The f64 origin (x, y, z) in metres that positions are stored relative to (set by the first object)."""
+        """A reference f64 origin (x, y, z) in metres: the first object's own origin (each object
+        stores its positions relative to its own; renders use an origin near the camera)."""
         return self._s.origin
 
     @property
@@ -198,7 +201,7 @@ class Scene:
         triangles, visible and hidden alike, offsets (:meth:`translate`) applied, no vertical
         exaggeration; ``None`` when the scene has no triangle (no object yet, or only height fields made
         wholly of holes). Computed in the core from the tiles' boxes (exact to float32 precision of the
-        positions relative to :attr:`origin`)."""
+        positions relative to each object's origin)."""
         return self._s.bounds
 
     @property

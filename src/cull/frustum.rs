@@ -57,7 +57,7 @@ impl CullStrategy for Frustum {
             .iter()
             .zip(&f.geometry.tile_object_cpu)
             .map(|((lo, hi), &oi)| {
-                let off = objects[oi as usize].offset;
+                let off = objects[oi as usize].placement(f.origin);
                 let (a, b) = ((*lo + off) * zs, (*hi + off) * zs);
                 !box_outside(&f.fc.view_proj, a.min(b), a.max(b))
             })

@@ -78,8 +78,11 @@ pub struct FrameInputs<'a> {
     pub passes: &'a Passes,
     pub scene: &'a Scene,
     pub camera: &'a Camera,
-    /// The frame's camera in render space (origin-relative, exaggerated), near/far included.
+    /// The frame's camera in render space (relative to `origin`, exaggerated), near/far included.
     pub fc: &'a FrameCamera,
+    /// The frame's render origin (world, f64); an object's tiles lie at
+    /// `Object::placement(origin)` + their positions, before exaggeration.
+    pub origin: glam::DVec3,
     pub geometry: &'a SceneGeometry,
     /// Per tile, the draw of the level of detail chosen for this frame (`geometry.fine` with
     /// lod = full): what every strategy draws in place of the fine tiles.
@@ -104,6 +107,11 @@ impl FrameInputs<'_> {
     }
     pub fn n_tiles(&self) -> usize {
         self.geometry.n_tiles()
+    }
+    /// Where object `oi` (position in `scene.objects()`) lies in this frame's render space
+    /// (before exaggeration).
+    pub fn placement(&self, oi: usize) -> glam::DVec3 {
+        self.scene.objects()[oi].placement(self.origin)
     }
 }
 

@@ -86,7 +86,7 @@ fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
         if !f.object_visible[i] || g.fine[i].index_count == 0 {
             continue;
         }
-        let off = objects[oi as usize].offset;
+        let off = objects[oi as usize].placement(f.origin);
         let (a, b) = ((*lo + off) * zs, (*hi + off) * zs);
         let (lo, hi) = (a.min(b), a.max(b));
         let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
@@ -152,7 +152,7 @@ impl CullStrategy for ThreePass {
 
         // Pass 1: coarse proxies, front to back.
         let mut coarse = f.pick(&f.geometry.coarse, |_| true);
-        let dist = f.geometry.eye_distances(f.scene, f.fc.eye, f.camera.z_scale);
+        let dist = f.geometry.eye_distances(f.scene, f.origin, f.fc.eye, f.camera.z_scale);
         coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
         let prepass_tris: u64 = coarse.iter().map(|a| a.triangles()).sum();
         let coarse_buf = passes::args_buffer(d, "coarse_args", &coarse);

@@ -192,14 +192,14 @@ impl SceneGeometry {
 
     /// Squared distance from `eye` (render space) to each tile's box, with the objects' offsets
     /// and the exaggeration `z_scale` applied: the key of front-to-back orders.
-    pub fn eye_distances(&self, scene: &Scene, eye: DVec3, z_scale: f64) -> Vec<f64> {
+    pub fn eye_distances(&self, scene: &Scene, origin: DVec3, eye: DVec3, z_scale: f64) -> Vec<f64> {
         let zs = DVec3::new(1.0, 1.0, z_scale);
         let objects = scene.objects();
         self.bbox
             .iter()
             .zip(&self.tile_object_cpu)
             .map(|((lo, hi), &oi)| {
-                let off = objects[oi as usize].offset;
+                let off = objects[oi as usize].placement(origin);
                 let (lo, hi) = ((*lo + off) * zs, (*hi + off) * zs);
                 (eye.clamp(lo, hi) - eye).length_squared()
             })

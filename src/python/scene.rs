@@ -216,7 +216,6 @@ struct TileColumns {
 impl TileColumns {
     fn of(s: &Scene) -> Self {
         let mut t = TileColumns::default();
-        let origin = s.origin();
         for o in s.objects() {
             for tile in &o.tiles {
                 t.object.push(o.id);
@@ -235,7 +234,7 @@ impl TileColumns {
                     t.level_err.push(lv.map_or(f64::NAN, |v| v.1 as f64));
                 }
                 for a in 0..3 {
-                    let off = origin[a] + o.offset[a];
+                    let off = o.origin[a] + o.offset[a];
                     t.lo.push(if tile.is_empty() { f64::NAN } else { tile.bbox_min[a] as f64 + off });
                     t.hi.push(if tile.is_empty() { f64::NAN } else { tile.bbox_max[a] as f64 + off });
                 }

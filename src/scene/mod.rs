@@ -21,7 +21,7 @@ static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 #[derive(Clone, Debug)]
 pub enum ObjectKind {
     /// A height field: its grid layout in the grid's own frame. Sample (i, j) lies at
-    /// `(x0, y0) + R(rotation) (i dx, j dy)` (x0, y0 relative to the scene origin; `dy < 0` for a
+    /// `(x0, y0) + R(rotation) (i dx, j dy)` (x0, y0 relative to the object's origin; `dy < 0` for a
     /// yflipped grid; R counter-clockwise by `rotation` degrees, see `lod::cos_sin_deg`). The heights
     /// live only in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler
     /// needs it.
@@ -39,6 +39,10 @@ pub struct Object {
     pub visible: bool,
     /// Translation applied at draw time (world units).
     pub offset: DVec3,
+    /// The f64 origin of this object's tiles: their f32 positions are relative to it. Each object
+    /// has its own (the centre of its data, rounded to a metre), so precision never depends on the
+    /// order objects were added in, nor on objects added or removed before.
+    pub origin: DVec3,
     pub tiles: Vec<TileMesh>,
 }
 
@@ -52,7 +56,14 @@ impl Object {
     pub fn fine_triangles(&self) -> usize {
         self.tiles.iter().map(|t| t.fine_triangles()).sum()
     }
-    /// Origin-relative bounds of the object's geometry without its offset, or None when empty.
+    /// Where this object's tiles lie relative to `origin` (a render origin): its own origin plus
+    /// its offset minus `origin`, in f64, so that a render space near the camera keeps full
+    /// precision whatever the objects' coordinates and offsets are.
+    pub fn placement(&self, origin: DVec3) -> DVec3 {
+        (self.origin - origin) + self.offset
+    }
+
+    /// Object-origin-relative bounds of the object's geometry without its offset, or None when empty.
     pub fn local_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -173,7 +184,9 @@ impl Scene {
         (self.uid, self.geometry_version)
     }
 
-    /// The f64 origin all positions are stored relative to (set by the first object).
+    /// A reference origin for reports and serialisation: the first object's origin ever added (or
+    /// 0). Renders do not use it: each object stores positions relative to its own origin
+    /// ([`Object::origin`]) and every frame renders relative to an origin near its camera.
     pub fn origin(&self) -> DVec3 {
         self.origin.unwrap_or(DVec3::ZERO)
     }
@@ -204,32 +217,36 @@ impl Scene {
         self.objects.iter().map(|o| o.fine_triangles()).sum()
     }
 
-    /// Origin-relative bounds of the visible objects (offsets applied, no exaggeration).
-    pub fn visible_bounds(&self) -> Option<(DVec3, DVec3)> {
+    /// Bounds of the visible objects relative to `origin` (offsets applied, no exaggeration).
+    pub fn visible_bounds(&self, origin: DVec3) -> Option<(DVec3, DVec3)> {
         self.objects
             .iter()
             .filter(|o| o.visible)
-            .filter_map(|o| o.local_bounds().map(|(a, b)| (a + o.offset, b + o.offset)))
+            .filter_map(|o| {
+                let p = o.placement(origin);
+                o.local_bounds().map(|(a, b)| (a + p, b + p))
+            })
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
     /// World bounds `(min, max)` of every object's geometry, visible and hidden, offsets applied (no
     /// exaggeration); None when the scene has no triangle (no object, or only empty ones, e.g. height
     /// fields wholly made of holes). Taken from the tiles' boxes of the stored f32 origin-relative
-    /// positions, so exact to f32 precision of the coordinates relative to [`Scene::origin`].
+    /// positions, so exact to f32 precision of the coordinates relative to each object's origin.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        let o = self.origin();
         self.objects
             .iter()
-            .filter_map(|ob| ob.local_bounds().map(|(a, b)| (a + ob.offset + o, b + ob.offset + o)))
+            .filter_map(|ob| {
+                let p = ob.origin + ob.offset;
+                ob.local_bounds().map(|(a, b)| (a + p, b + p))
+            })
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
-    /// The scene's origin, or the one the first object with bounds `lo`, `hi` will set (the
-    /// centre, rounded to a metre so that it is a tidy number in reports). Set by `push`, so that
-    /// an interrupted or failed add leaves the scene as it was.
+    /// The origin of a new object with bounds `lo`, `hi`: their centre, rounded to a metre so that
+    /// it is a tidy number in reports (independent of the scene's other objects).
     pub(super) fn origin_for(&self, lo: DVec3, hi: DVec3) -> DVec3 {
-        self.origin.unwrap_or_else(|| ((lo + hi) * 0.5).round())
+        ((lo + hi) * 0.5).round()
     }
 
     /// Adds an object whose tiles are relative to `origin` (from [`Self::origin_for`]).
@@ -241,11 +258,11 @@ impl Scene {
         color: [f32; 3],
         tiles: Vec<TileMesh>,
     ) -> u32 {
-        self.origin = Some(origin);
+        self.origin.get_or_insert(origin);
         let id = self.next_id;
         self.next_id += 1;
         let name = name.unwrap_or_else(|| format!("object{id}"));
-        self.objects.push(Object { id, name, kind, color, visible: true, offset: DVec3::ZERO, tiles });
+        self.objects.push(Object { id, name, kind, color, visible: true, offset: DVec3::ZERO, origin, tiles });
         self.geometry_version += 1;
         id
     }
@@ -293,7 +310,7 @@ impl Scene {
     /// The fine triangles of an object in world coordinates (offset applied): (vertices, faces).
     pub fn geometry(&self, id: u32) -> Result<Geometry> {
         let o = self.object(id)?;
-        let origin = self.origin() + o.offset;
+        let origin = o.origin + o.offset;
         let mut verts = Vec::new();
         let mut faces = Vec::new();
         for t in &o.tiles {
@@ -398,7 +415,7 @@ mod tests {
         for (deg, flip) in [(30.0, false), (-123.4, true), (180.0, false)] {
             let id = s.add_heightfield(&z, 2, 3, f.rotated(deg, flip), (1, 1), None, opts()).unwrap();
             let g = s.object(id).unwrap().height_grid().unwrap();
-            let o = s.origin().z as f32;
+            let o = s.object(id).unwrap().origin.z as f32;
             assert_eq!(g.iter().map(|h| h + o).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0], "{deg}");
         }
         let e = s.add_heightfield(&z, 2, 3, f.rotated(f64::NAN, false), (1, 1), None, opts()).unwrap_err();

@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 2 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 3 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -11,7 +11,8 @@
 //! per object: id u32, name str, kind u8 (0 = height field, 1 = mesh),
 //!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64 (< 0: yflip), rotation f64
 //!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str
-//!   color f32 x 3, visible u8, offset f64 x 3, n_tiles u32
+//!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
+//!   version 3, read as the scene's), n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, indices [u32]
@@ -27,7 +28,7 @@ use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -203,6 +204,9 @@ impl Scene {
             for a in o.offset.to_array() {
                 w.f64(a);
             }
+            for a in o.origin.to_array() {
+                w.f64(a);
+            }
             w.u32(o.tiles.len() as u32);
             for t in &o.tiles {
                 w.u32(t.ix);
@@ -260,6 +264,11 @@ impl Scene {
             let color = r.f32x3()?;
             let visible = r.u8()? != 0;
             let offset = DVec3::from_array(r.f64x3()?);
+            // Version 3: each object's own origin; before, every object used the scene's.
+            let object_origin = if version >= 3 { DVec3::from_array(r.f64x3()?) } else { origin };
+            if !object_origin.is_finite() {
+                return Err(r.err(format!("object {id}: its origin is not finite")));
+            }
             if !offset.is_finite() {
                 return Err(r.err(format!("object {id}: its offset is not finite")));
             }
@@ -288,7 +297,7 @@ impl Scene {
                 }
                 tiles.push(TileMesh { ix, iy, positions, fine, coarse, bbox_min, bbox_max, proxy_error, levels });
             }
-            objects.push(Object { id, name, kind, color, visible, offset, tiles });
+            objects.push(Object { id, name, kind, color, visible, offset, origin: object_origin, tiles });
         }
         r.finish()?;
         Ok(Scene {
@@ -373,9 +382,11 @@ mod tests {
             .unwrap();
         let v2 = s.to_bytes();
         // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
-        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32)
+        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), and no object origin (after
+        // rotation 8, tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is)
         let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
-        let mut v1 = [&v2[..at], &v2[at + 8..]].concat();
+        let origin_at = at + 8 + 16 + 12 + 1 + 24;
+        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 24..]].concat();
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);

@@ -115,7 +115,8 @@ impl CullStrategy for Horizon {
             c.used = self.frame;
             // Tree (object-local, grid frame) -> render space: the rotation about sample (0, 0),
             // then the object's offset (exaggerated like the positions).
-            let offset = DVec3::new(o.offset.x, o.offset.y, o.offset.z * zs);
+            let p = o.placement(f.origin);
+            let offset = DVec3::new(p.x, p.y, p.z * zs);
             let (cs, sn) = cos_sin_deg(*rotation);
             let frame = if (cs, sn) == (1.0, 0.0) {
                 DMat4::from_translation(offset)
