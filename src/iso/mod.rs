@@ -68,6 +68,14 @@ impl VolumeId {
     }
 }
 
+/// Samples in one z slice (`nx * ny`) of a volume of `dims` (nx, ny, nz), or an InputError naming
+/// `values` when the whole volume's sample count overflows.
+fn slice_len((nx, ny, nz): (usize, usize, usize)) -> Result<usize> {
+    nx.checked_mul(ny)
+        .filter(|s| s.checked_mul(nz).is_some())
+        .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))
+}
+
 /// A scalar field sampled on a regular grid.
 ///
 /// `values` is indexed `values[(k*ny + j)*nx + i]`, where `k` is the z index,
@@ -109,10 +117,7 @@ impl Volume {
         ensure(nx <= max && ny <= max && nz <= max, "values", || {
             format!("volume dimensions {nx}x{ny}x{nz} too large")
         })?;
-        let n = nx
-            .checked_mul(ny)
-            .and_then(|v| v.checked_mul(nz))
-            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        let n = slice_len(dims)? * nz;
         ensure(values.len() == n, "values", || {
             format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len())
         })?;
@@ -207,10 +212,7 @@ impl Volume {
         read: impl Fn(usize, &mut [f64]) + Sync,
     ) -> Result<Self> {
         let (nx, ny, nz) = dims;
-        let slice = nx
-            .checked_mul(ny)
-            .filter(|s| s.checked_mul(nz).is_some())
-            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        let slice = slice_len(dims)?;
         let range = |(a, b): (f64, f64), v: &f64| if v.is_finite() { (a.min(*v), b.max(*v)) } else { (a, b) };
         let (lo, hi) = (0..nz)
             .into_par_iter()
@@ -265,11 +267,8 @@ impl Volume {
         spacing: [f64; 3],
         read: impl Fn(usize, &mut [f32]) + Sync,
     ) -> Result<Self> {
-        let (nx, ny, nz) = dims;
-        let slice = nx
-            .checked_mul(ny)
-            .filter(|s| s.checked_mul(nz).is_some())
-            .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))?;
+        let nz = dims.2;
+        let slice = slice_len(dims)?;
         let mut v = vec![0.0f32; slice * nz];
         if slice > 0 {
             v.par_chunks_mut(slice).enumerate().for_each(|(k, out)| read(k, out));
@@ -377,9 +376,8 @@ impl Volume {
         F: Fn(f64, f64, f64) -> f32 + Sync,
     {
         let (nx, ny, nz) = dims;
-        let overflow = || input_err("values", "volume dimensions overflow");
-        let slice = nx.checked_mul(ny).ok_or_else(overflow)?;
-        let total = slice.checked_mul(nz).ok_or_else(overflow)?;
+        let slice = slice_len(dims)?;
+        let total = slice * nz;
         let mut v = vec![0.0f32; total];
         if slice > 0 {
             v.par_chunks_mut(slice).enumerate().for_each(|(k, s)| {
