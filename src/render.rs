@@ -232,10 +232,10 @@ impl Renderer {
         Ok(())
     }
 
-    /// The frame's camera, relative to `origin`: near/far from the visible objects' bounds.
-    fn frame_camera(&self, scene: &Scene, camera: &Camera, origin: DVec3) -> FrameCamera {
+    /// The frame's camera, relative to `origin`: near/far from the visible objects' world bounds.
+    fn frame_camera(&self, camera: &Camera, origin: DVec3, world: Option<(DVec3, DVec3)>) -> FrameCamera {
         let zs = DVec3::new(1.0, 1.0, camera.z_scale);
-        let bounds = scene.visible_bounds(origin).map(|(lo, hi)| (lo * zs, hi * zs));
+        let bounds = world.map(|(lo, hi)| ((lo - origin) * zs, (hi - origin) * zs));
         camera.frame(origin, bounds, self.width as f64 / self.height as f64)
     }
 
@@ -260,8 +260,9 @@ impl Renderer {
         let t0 = Instant::now();
         self.upload(scene)?;
         opts.interrupt.check()?;
-        let origin = render_origin(scene, camera);
-        let fc = self.frame_camera(scene, camera, origin);
+        let world = scene.visible_bounds(DVec3::ZERO);
+        let origin = render_origin(world, camera);
+        let fc = self.frame_camera(camera, origin, world);
         if let Some(ts) = self.timestamps.as_mut() {
             ts.begin_frame();
         }
@@ -501,8 +502,8 @@ impl Renderer {
 /// is nearest the camera then has the full precision of f32 positions relative to it, whatever the
 /// objects' coordinates, offsets and insertion order (each object's offset from it is computed in
 /// f64, [`crate::scene::Object::placement`]).
-fn render_origin(scene: &Scene, camera: &Camera) -> DVec3 {
-    match scene.visible_bounds(DVec3::ZERO) {
+fn render_origin(visible: Option<(DVec3, DVec3)>, camera: &Camera) -> DVec3 {
+    match visible {
         Some((lo, hi)) => camera.eye.clamp(lo, hi).round(),
         None => camera.eye.round(),
     }
