@@ -269,7 +269,8 @@ impl Renderer {
         let Self { ctx, passes, main_targets, geometry, timestamps, strategies, width, height, .. } = self;
         let geometry = geometry.as_ref().expect("uploaded above");
         let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
-        let (draw_args, chosen) = choose_levels(geometry, scene, camera, &fc, origin, *height, opts.lod);
+        let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
+        let (draw_args, chosen) = choose_levels(geometry, camera, &fc, &tile_dist2, *height, opts.lod);
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -279,6 +280,7 @@ impl Renderer {
             origin,
             geometry,
             draw_args: &draw_args,
+            tile_dist2: &tile_dist2,
             scene_bg: &scene_bg,
             object_visible: &object_visible,
             width: *width,
@@ -551,13 +553,11 @@ type ChosenLevels = (Vec<u8>, Vec<f32>);
 /// exaggeration where that enlarges it and projected at the tile box's nearest point (perspective)
 /// or with the orthographic scale; a box that contains the eye gets level 0. Cheap on the CPU (one
 /// pass over the tiles), so it runs there, before the strategy, with no read-back.
-#[allow(clippy::too_many_arguments)]
 fn choose_levels(
     g: &SceneGeometry,
-    scene: &Scene,
     camera: &Camera,
     fc: &FrameCamera,
-    origin: DVec3,
+    dist2: &[f64],
     height: u32,
     lod: Lod,
 ) -> (Vec<DrawArgs>, Option<ChosenLevels>) {
@@ -566,7 +566,6 @@ fn choose_levels(
     let px_per_unit = proj.y_axis.y.abs() * height as f64 / 2.0;
     let perspective = fc.projection == crate::camera::Projection::Perspective;
     let zs = camera.z_scale.max(1.0);
-    let dist2 = g.eye_distances(scene, origin, fc.eye, camera.z_scale);
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {

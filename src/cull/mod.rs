@@ -87,6 +87,9 @@ pub struct FrameInputs<'a> {
     /// Per tile, the draw of the level of detail chosen for this frame (`geometry.fine` with
     /// lod = full): what every strategy draws in place of the fine tiles.
     pub draw_args: &'a [DrawArgs],
+    /// Per tile, the squared distance from the eye to its box in render space (exaggerated): the
+    /// key of front-to-back orders and of the LOD choice, computed once per frame.
+    pub tile_dist2: &'a [f64],
     /// Bind group of the scene passes for this frame.
     pub scene_bg: &'a wgpu::BindGroup,
     /// Per tile: its object is visible (`Scene::set_visible`). Hidden objects are never drawn.

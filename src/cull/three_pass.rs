@@ -152,7 +152,7 @@ impl CullStrategy for ThreePass {
 
         // Pass 1: coarse proxies, front to back.
         let mut coarse = f.pick(&f.geometry.coarse, |_| true);
-        let dist = f.geometry.eye_distances(f.scene, f.origin, f.fc.eye, f.camera.z_scale);
+        let dist = f.tile_dist2;
         coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
         let prepass_tris: u64 = coarse.iter().map(|a| a.triangles()).sum();
         let coarse_buf = passes::args_buffer(d, "coarse_args", &coarse);
@@ -177,7 +177,7 @@ impl CullStrategy for ThreePass {
         let pixels = Pixels::Gpu { counts, scale: ratio };
         self.predicting = !f.options.conservative && f.options.predict_errors;
         self.tested = f.options.conservative || self.predicting;
-        let error_px = ("proxy_error_px", proxy_error_px(f, &dist));
+        let error_px = ("proxy_error_px", proxy_error_px(f, dist));
         if !self.tested {
             let mut v = Visible::new(Draw::Gpu(first), pixels);
             v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
