@@ -27,6 +27,10 @@ pub struct TileMesh {
     pub iy: u32,
     /// Local vertices, relative to the scene origin (world units, not exaggerated).
     pub positions: Vec<[f32; 3]>,
+    /// Per-vertex scalar for colour by data (`values=` of the add functions; a grid's cell
+    /// property): empty when the object has none, else one per entry of `positions`. NaN = no
+    /// data (drawn in the colour map's NaN colour).
+    pub values: Vec<f32>,
     /// Fine (level 0) triangle list into `positions`.
     pub fine: Vec<u32>,
     /// Coarse proxy triangle list into `positions`.

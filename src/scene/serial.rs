@@ -295,7 +295,18 @@ impl Scene {
                         return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
                     }
                 }
-                tiles.push(TileMesh { ix, iy, positions, fine, coarse, bbox_min, bbox_max, proxy_error, levels });
+                tiles.push(TileMesh {
+                    ix,
+                    iy,
+                    positions,
+                    values: Vec::new(),
+                    fine,
+                    coarse,
+                    bbox_min,
+                    bbox_max,
+                    proxy_error,
+                    levels,
+                });
             }
             objects.push(Object { id, name, kind, color, visible, offset, origin: object_origin, tiles });
         }
