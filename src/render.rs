@@ -20,7 +20,7 @@ use crate::gpu::{
 };
 use crate::iso::render::{IsoOptions, IsoOutput, IsoRenderer};
 use crate::iso::{MinMaxOctree, Volume};
-use crate::scene::Scene;
+use crate::scene::{ColorSource, Scene};
 use glam::{DVec3, Mat4};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -524,14 +524,30 @@ fn frame_state(
     geom: &SceneGeometry,
 ) -> (wgpu::BindGroup, Vec<bool>) {
     let objects = scene.objects();
+    // Colour maps: 256 rows per coloured object, then its NaN colour.
+    let mut lut: Vec<[f32; 4]> = Vec::new();
     let gpu_objects: Vec<GpuObject> = objects
         .iter()
-        .map(|o| GpuObject {
-            offset: {
-                let p = o.placement(origin);
-                [p.x as f32, p.y as f32, p.z as f32, 0.0]
-            },
-            color: [o.color[0], o.color[1], o.color[2], 1.0],
+        .map(|o| {
+            let p = o.placement(origin);
+            let cmap = match &o.color_by {
+                None => [0.0; 4],
+                Some(c) => {
+                    let base = lut.len() as f32;
+                    lut.extend(c.lut.iter().chain(std::iter::once(&c.nan_color)).map(|r| [r[0], r[1], r[2], 1.0]));
+                    let (lo, mode) = match c.source {
+                        // z relative to the object's origin, as the vertices are.
+                        ColorSource::Z => (c.clim[0] - o.origin.z, 2.0),
+                        ColorSource::Values => (c.clim[0], 1.0),
+                    };
+                    [lo as f32, (1.0 / (c.clim[1] - c.clim[0])) as f32, mode, base]
+                }
+            };
+            GpuObject {
+                offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
+                color: [o.color[0], o.color[1], o.color[2], 1.0],
+                cmap,
+            }
         })
         .collect();
     let light = fc.light_dir();
@@ -542,7 +558,7 @@ fn frame_state(
         _pad: [0.0; 3],
     };
     let visible = geom.tile_object_cpu.iter().map(|&oi| objects[oi as usize].visible).collect();
-    (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, geom), visible)
+    (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, &lut, geom), visible)
 }
 
 /// Per tile: the level chosen (0 = fine) and its error in pixels.

@@ -91,7 +91,11 @@ def test_vulkan_and_gl_render_the_same_image_and_depth(renderers, case):
         vk = renderers["vulkan"].render(scene, cam, culling=mode, pixel_threshold=0)
         gl = renderers["gl"].render(scene, cam, culling=mode, pixel_threshold=0)
         assert vk.coverage.sum() > 100, (case, mode)
-        np.testing.assert_array_equal(gl.image, vk.image, err_msg=f"{case} {mode}: images differ")
+        # Colour by z (the height fields' default) maps an interpolated scalar through a 256-row colour
+        # map: the backends' interpolation may round a pixel onto the neighbouring row (a step of at
+        # most a few 1/255 in viridis). Coverage, depth and tiles below are exact.
+        diff = np.abs(gl.image.astype(int) - vk.image.astype(int)).max(axis=-1)
+        assert diff.max() <= 4 and (diff > 0).mean() <= 1e-3, (case, mode, diff.max(), (diff > 0).sum())
         np.testing.assert_array_equal(gl.coverage, vk.coverage, err_msg=f"{case} {mode}")
         cov = vk.coverage
         np.testing.assert_allclose(gl.depth[cov], vk.depth[cov], rtol=DEPTH_RTOL, err_msg=f"{case} {mode}")

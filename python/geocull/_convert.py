@@ -33,6 +33,9 @@ __all__ = [
     "integer",
     "expect_instance",
     "color",
+    "Coloring",
+    "coloring",
+    "cmap_table",
     "name",
     "boolean",
     "TrimeshLike",
@@ -170,6 +173,64 @@ def expect_instance(x: Any, cls: type, arg: str) -> Any:
 def color(c: Any) -> tuple[float, float, float] | None:
     """None, or an (r, g, b) tuple of floats from a length-3 sequence (the [0, 1] range is checked in Rust)."""
     return None if c is None else vec3(c, "color")
+
+
+#: What the extension's add functions take for a colouring: (color_by, values, colour-map name,
+#: colour-map table (n, 3) float64, clim, nan_color); None = the object kind's default.
+Coloring: TypeAlias = tuple[
+    str, np.ndarray | None, str | None, np.ndarray | None, tuple[float, float] | None,
+    tuple[float, float, float] | None,
+]
+
+
+def cmap_table(cmap: Any) -> tuple[str | None, np.ndarray | None]:
+    """(name, table) of a colour map argument: a name (resolved by matplotlib when it is installed
+    and knows it, so every matplotlib colour map works; else passed on for the core's built-ins), a
+    matplotlib ``Colormap`` (sampled at 256 points), or an (n, 3) / (n, 4) array of RGB(A) rows in
+    [0, 1] (alpha dropped). None: the default."""
+    if cmap is None:
+        return None, None
+    if isinstance(cmap, str):
+        try:
+            import matplotlib
+        except ImportError:
+            return cmap, None
+        try:
+            cmap = matplotlib.colormaps[cmap]
+        except KeyError:
+            return cmap, None  # the core names the argument and lists its built-ins
+    if callable(cmap) and hasattr(cmap, "N"):  # a matplotlib Colormap
+        rgba = np.asarray(cmap(np.linspace(0.0, 1.0, 256)), dtype=np.float64)
+        return str(getattr(cmap, "name", "custom")), np.ascontiguousarray(rgba[:, :3])
+    a = checked_array(cmap, "cmap", 2)
+    if a.shape[1] not in (3, 4):
+        raise InputError(f"cmap: shape {a.shape} is not (n, 3) or (n, 4) RGB(A) rows")
+    return None, np.ascontiguousarray(a[:, :3], dtype=np.float64)
+
+
+def coloring(
+    color_by: Any, values: Any, cmap: Any, clim: Any, nan_color: Any, ndim: int
+) -> Coloring | None:
+    """The colouring tuple of an add function, or None when nothing was asked. ``values`` (rank
+    ``ndim``; masked samples become NaN) implies ``color_by="values"``; a colour map or range alone
+    implies ``"z"``."""
+    if color_by is None and values is None and cmap is None and clim is None and nan_color is None:
+        return None
+    if color_by is None:
+        color_by = "values" if values is not None else "z"
+    if not isinstance(color_by, str):
+        raise InputError(f"color_by: {color_by!r} is not a string")
+    vals = None
+    if values is not None:
+        data, mask = unmasked(values, "values")
+        vals = float_array(data, "values", ndim)
+        if mask is not None:
+            vals = vals.copy() if np.shares_memory(vals, data) else vals
+            vals[mask] = np.nan
+    name_, table = cmap_table(cmap)
+    lim = None if clim is None else vec2(clim, "clim")
+    nan = None if nan_color is None else vec3(nan_color, "nan_color")
+    return (color_by, vals, name_, table, lim, nan)
 
 
 def name(n: Any) -> str | None:

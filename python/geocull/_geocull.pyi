@@ -7,7 +7,7 @@ The dict shapes below (``@type_check_only`` TypedDicts) exist only for type chec
 extension returns plain dicts with exactly these keys.
 """
 
-from typing import Final, NotRequired, Self, TypedDict, final, type_check_only
+from typing import Final, Literal, NotRequired, Self, TypeAlias, TypedDict, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +15,17 @@ import numpy.typing as npt
 from geocull.results import IsoStats, RenderStats
 
 __version__: Final[str]
+
+# (color_by "z" | "values", values (same shape as the samples / vertices), colour-map name,
+# colour-map table (n, 3) float64, clim, nan_color): geocull._convert.coloring builds it.
+_Coloring: TypeAlias = tuple[
+    str,
+    npt.NDArray[np.float64] | None,
+    str | None,
+    npt.NDArray[np.float64] | None,
+    tuple[float, float] | None,
+    tuple[float, float, float] | None,
+]
 __all__ = [
     "Scene",
     "Camera",
@@ -41,6 +52,9 @@ class ObjectInfo(TypedDict):
     offset: tuple[float, float, float]  # (dx, dy, dz) metres, from translate()
     n_tiles: int
     n_triangles: int  # fine (level 0)
+    color_by: Literal["z", "values"] | None  # None: the flat color
+    cmap: str | None  # the colour map's name ("custom" for a table)
+    clim: tuple[float, float] | None  # the scalars at the colour map's ends (z in metres for "z")
 
 @type_check_only
 class TileTable(TypedDict):
@@ -117,6 +131,7 @@ class Scene:
         null_value: float | None,
         rotation: float,
         yflip: bool,
+        coloring: _Coloring | None = None,
     ) -> int: ...
     def add_mesh(
         self,
@@ -127,10 +142,12 @@ class Scene:
         coarse_factor: float,
         name: str | None,
         color: tuple[float, float, float] | None,
+        coloring: _Coloring | None = None,
     ) -> int: ...
     def remove(self, id: int) -> None: ...
     def set_visible(self, id: int, visible: bool) -> None: ...
     def translate(self, id: int, offset: tuple[float, float, float]) -> None: ...
+    def set_color_by(self, id: int, coloring: _Coloring) -> None: ...
     def set_color(self, id: int, color: tuple[float, float, float]) -> None: ...
     @property
     def n_tiles(self) -> int: ...

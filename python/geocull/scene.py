@@ -7,7 +7,7 @@ values in Rust, and raises :class:`geocull.InputError` naming the argument on ba
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,12 +20,30 @@ from ._errors import InputError
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
 
-__all__ = ["Scene"]
+__all__ = ["Scene", "ColorBy"]
+
+#: What an object can be coloured by: its own z (world units, before vertical exaggeration and
+#: without later translations) or the ``values`` it was added with.
+ColorBy = Literal["z", "values"]
+
+_COLOR_DOC = """
+        Colour by data: ``values`` {values}; ``color_by`` "z" (the object's world z) or "values"
+        (the default when ``values`` is given); ``cmap`` a colour map: a matplotlib name when
+        matplotlib is installed (else one of the built-ins viridis, seismic, gray, terrain, plasma,
+        RdBu_r, sampled from matplotlib's tables), a matplotlib ``Colormap``, or an (n, 3) / (n, 4)
+        array of RGB(A) rows in [0, 1]; default viridis. ``clim`` (lo, hi): the scalars mapped to the
+        colour map's two ends (below and above clamp; matplotlib's mapping of a 256-entry map, as
+        PyVista draws it); default the drawn data's finite range. ``nan_color`` (r, g, b): the colour
+        of NaN values (default mid grey, 0.5). A flat ``color`` and a colouring cannot be combined."""
 
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
                         ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
                         ("bbox_max", "f8", (3,)), ("level_triangles", "u4", (6,)), ("level_error", "f8", (6,))])
+
+
+def _doc(values: str) -> str:
+    return _COLOR_DOC.format(values=values).strip("\n").lstrip()
 
 
 class Scene:
@@ -86,6 +104,11 @@ class Scene:
         null_value: float | None = None,
         rotation: float = 0.0,
         yflip: bool = False,
+        values: ArrayLike | None = None,
+        color_by: ColorBy | None = None,
+        cmap: Any = None,
+        clim: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
@@ -97,13 +120,15 @@ class Scene:
             spacing (metres), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy) when not rotated.
         tiles: (tx, ty) tiles along x and y (each at least one cell wide); tiles share border samples.
         coarse_factor: >= 1; the coarse proxy of each tile has about 1/coarse_factor of its triangles.
-        name: an optional label.  color: (r, g, b) in [0, 1].
+        name: an optional label.  color: (r, g, b) in [0, 1]; without it (and without a colouring)
+            a height field is coloured by its z through viridis over its own z range.
         rotation: degrees counter-clockwise (seen from above) about ``origin`` (xtgeo's convention):
             ``z[j, i]`` sits at ``origin + R(rotation) @ (i*dx, j*dy)``.  yflip: True for xtgeo's
             ``yflip=-1``: rows run towards -y in the grid's frame (``(i*dx, -j*dy)`` before the
             rotation); a bool, so xtgeo's 1 / -1 must be translated (``yflip=surf.yflip == -1``, or use
             :func:`geocull.io.from_xtgeo_surface`). Every culling mode works on rotated grids as on
             axis-aligned ones (horizon culling included).
+        {color}
         Returns the object id.
         """
         nv = None if null_value is None else cv.number(null_value, "null_value")
@@ -115,6 +140,7 @@ class Scene:
         return self._s.add_heightfield(
             za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
             cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
+            cv.coloring(color_by, values, cmap, clim, nan_color, 2),
         )
 
     def add_mesh(
@@ -126,6 +152,11 @@ class Scene:
         coarse_factor: float = 1.0,
         name: str | None = None,
         color: ArrayLike | None = None,
+        values: ArrayLike | None = None,
+        color_by: ColorBy | None = None,
+        cmap: Any = None,
+        clim: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -140,6 +171,7 @@ class Scene:
         are ignored with a :class:`geocull.GeocullWarning`; ``name`` and ``color`` default to the
         ``field_data`` written by :func:`geocull.io.to_pyvista`. Recognised by their attributes, so
         neither package is imported unless such an object is passed.
+        {color}
         Returns the object id.
         """
         mesh = cv.mesh_arrays(vertices)
@@ -160,7 +192,8 @@ class Scene:
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
         return self._s.add_mesh(
-            v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color)
+            v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
+            cv.coloring(color_by, values, cmap, clim, nan_color, 1),
         )
 
     def remove(self, id: int) -> None:
@@ -176,8 +209,19 @@ class Scene:
         self._s.translate(cv.integer(id, "id"), cv.vec3(offset, "offset"))
 
     def set_color(self, id: int, color: ArrayLike) -> None:
-        """Set the colour of object ``id``: (r, g, b) in [0, 1] (no re-upload)."""
+        """Draw object ``id`` in one flat colour (r, g, b) in [0, 1], ending any colour by data (no
+        re-upload)."""
         self._s.set_color(cv.integer(id, "id"), cv.vec3(color, "color"))
+
+    def set_color_by(
+        self, id: int, color_by: ColorBy = "z", cmap: Any = None, clim: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
+    ) -> None:
+        """Colour object ``id`` through a colour map by its z or by the values it was added with
+        (``cmap``, ``clim``, ``nan_color`` as for :meth:`add_heightfield`; no re-upload)."""
+        c = cv.coloring(color_by, None, cmap, clim, nan_color, 1)
+        assert c is not None
+        self._s.set_color_by(cv.integer(id, "id"), c)
 
     @property
     def n_tiles(self) -> int:
@@ -240,3 +284,9 @@ class Scene:
 
     def __repr__(self) -> str:
         return f"<geocull.Scene objects={len(self.object_ids())} tiles={self.n_tiles} triangles={self.n_triangles}>"
+
+
+# The colouring paragraph of the add functions' docstrings.
+Scene.add_heightfield.__doc__ = (Scene.add_heightfield.__doc__ or "").replace(
+    "{color}", _doc("(ny, nx) like z: one scalar per sample (masked samples are NaN)"))
+Scene.add_mesh.__doc__ = (Scene.add_mesh.__doc__ or "").replace("{color}", _doc("(n,): one scalar per vertex"))

@@ -13,6 +13,9 @@ use wgpu::util::DeviceExt;
 pub struct SceneGeometry {
     pub key: (u64, u64),
     pub vertices: Option<wgpu::Buffer>,
+    /// One f32 scalar per vertex, in `vertices`' order (the tiles' `values` for colour by data;
+    /// 0 for tiles without; no data as [`NO_DATA`]): the lit pass's second vertex stream.
+    pub values: Option<wgpu::Buffer>,
     pub indices: Option<wgpu::Buffer>,
     /// Object index (position in `scene.objects()`) of every tile.
     pub tile_object: wgpu::Buffer,
@@ -28,6 +31,11 @@ pub struct SceneGeometry {
     pub bbox: Vec<(DVec3, DVec3)>,
     pub bytes: u64,
 }
+
+/// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
+/// travels as the most negative f32, which the lit pass tests for (`s < -1e37`) and which any
+/// interpolation with it keeps below that (a triangle touching no data is no data).
+pub const NO_DATA: f32 = -f32::MAX;
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
 /// at most `max` bytes, with u32 indices and offsets: a clear error rather than a wrong image.
@@ -83,19 +91,30 @@ impl SceneGeometry {
             wgpu::BufferUsages::empty()
         };
         let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | direct);
+        let sb = mapped("values", nv * 4, wgpu::BufferUsages::VERTEX | direct);
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut levels = Vec::new();
         let tile_bbox = |t: &crate::lod::TileMesh| {
             (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
         };
-        if let (Some(vb), Some(ib)) = (&vb, &ib) {
+        if let (Some(vb), Some(sb), Some(ib)) = (&vb, &sb, &ib) {
             let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
+            let mut smap = sb.slice(..).get_mapped_range_mut().map_err(map_err)?;
             let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
             // Mapped memory is write-only: append whole runs, counting in vertices and indices.
             let (mut v, mut i) = (0usize, 0usize);
-            let mut put_v = |v: &mut usize, data: &[[f32; 3]]| {
+            // Positions and their scalars (zeros when the tile has none), run for run.
+            let mut scratch: Vec<f32> = Vec::new();
+            let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32]| {
                 vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
+                scratch.clear();
+                if vals.is_empty() {
+                    scratch.resize(data.len(), 0.0);
+                } else {
+                    scratch.extend(vals.iter().map(|&x| if x.is_nan() { NO_DATA } else { x }));
+                }
+                smap.slice(*v * 4..(*v + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(&scratch));
                 *v += data.len();
             };
             let mut put_i = |i: &mut usize, data: &[u32]| {
@@ -104,6 +123,7 @@ impl SceneGeometry {
             };
             let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) =
                 (Vec::new(), Vec::new(), Vec::new());
+            let mut cvals: Vec<f32> = Vec::new();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
                     let tile = fine.len() as u32;
@@ -114,7 +134,7 @@ impl SceneGeometry {
                         base_vertex: v as i32,
                         first_instance: tile,
                     });
-                    put_v(&mut v, &t.positions);
+                    put_v(&mut v, &t.positions, &t.values);
                     put_i(&mut i, &t.fine);
                     // The coarse proxy and each LOD level get their own compact copy of the
                     // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -124,12 +144,16 @@ impl SceneGeometry {
                         remap.clear();
                         remap.resize(t.positions.len(), u32::MAX);
                         cverts.clear();
+                        cvals.clear();
                         cidx.clear();
                         for &k in indices {
                             let slot = &mut remap[k as usize];
                             if *slot == u32::MAX {
                                 *slot = cverts.len() as u32;
                                 cverts.push(t.positions[k as usize]);
+                                if !t.values.is_empty() {
+                                    cvals.push(t.values[k as usize]);
+                                }
                             }
                             cidx.push(*slot);
                         }
@@ -140,7 +164,7 @@ impl SceneGeometry {
                             base_vertex: *v as i32,
                             first_instance: tile,
                         };
-                        put_v(v, &cverts);
+                        put_v(v, &cverts, &cvals);
                         put_i(i, &cidx);
                         args
                     };
@@ -164,7 +188,7 @@ impl SceneGeometry {
                 }
             }
         }
-        for b in vb.iter().chain(ib.iter()) {
+        for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
         // Storage buffers may not be empty: pad with one element.
@@ -174,11 +198,12 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&to),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bytes = nv * 12 + ni * 4 + to.len() as u64 * 4;
+        let bytes = nv * 16 + ni * 4 + to.len() as u64 * 4;
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
             vertices: vb,
+            values: sb,
             indices: ib,
             tile_object: tob,
             tile_object_cpu: tile_object,

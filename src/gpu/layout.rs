@@ -42,12 +42,16 @@ pub struct Globals {
 }
 
 /// Per-object state read every frame (`Object` in common.wgsl): translation (world units,
-/// before exaggeration) and colour.
+/// before exaggeration), flat colour, and colour map: `cmap = (lo, 1 / (hi - lo), mode, base)`
+/// with mode 0 = flat, 1 = by the vertex scalar, 2 = by the vertex's object-relative z (then lo
+/// is relative to the object's origin too), and `base` the object's first row in the frame's
+/// colour-map table (256 rows, then the NaN colour).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct GpuObject {
     pub offset: [f32; 4],
     pub color: [f32; 4],
+    pub cmap: [f32; 4],
 }
 
 /// Uniforms of the selection pass (`Params` in select.wgsl).
@@ -74,5 +78,5 @@ pub struct BoxInstance {
 const _: () = assert!(std::mem::size_of::<DrawArgs>() == 20);
 const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
-const _: () = assert!(std::mem::size_of::<GpuObject>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuObject>() == 48);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);

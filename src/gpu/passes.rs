@@ -166,7 +166,12 @@ impl Passes {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let scene_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
-            entries: &[uniform_entry(0, vf), storage_entry(1, true, vf), storage_entry(2, true, vf)],
+            entries: &[
+                uniform_entry(0, vf),
+                storage_entry(1, true, vf),
+                storage_entry(2, true, vf),
+                storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
+            ],
         });
         let cs = wgpu::ShaderStages::COMPUTE;
         let hist_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -218,9 +223,21 @@ impl Passes {
         };
         // GL writes frag_depth from `*_gl` entry points, for reverse-Z precision (common.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
-        let scene_pipeline = |label: &str, file: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>]| {
+        // The lit pass's second vertex stream: one f32 scalar per vertex (colour by data).
+        let value_layout = wgpu::VertexBufferLayout {
+            array_stride: 4,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 0, shader_location: 1 }],
+        };
+        let scene_pipeline = |label: &str,
+                              file: &str,
+                              vs: (&str, &str),
+                              fs: &str,
+                              buffers: &[Option<wgpu::VertexBufferLayout>],
+                              targets: &[Option<wgpu::ColorTargetState>]| {
             let module = shader(d, label, format!("{COMMON_WGSL}\n{file}"));
-            let (vs, fs) = if gl { ("vs_gl", format!("{fs}_gl")) } else { ("vs_main", fs.to_string()) };
+            // (entry point, its GL variant)
+            let (vs, fs) = if gl { (vs.1, format!("{fs}_gl")) } else { (vs.0, fs.to_string()) };
             d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&scene_pl),
@@ -228,7 +245,7 @@ impl Passes {
                     module: &module,
                     entry_point: Some(vs),
                     compilation_options: Default::default(),
-                    buffers: &[Some(vertex_layout.clone())],
+                    buffers,
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
@@ -250,14 +267,22 @@ impl Passes {
         let draw = scene_pipeline(
             "draw.wgsl",
             include_str!("shaders/draw.wgsl"),
+            ("vs_draw", "vs_draw_gl"),
             "fs_main",
+            &[Some(vertex_layout.clone()), Some(value_layout)],
             &[
                 Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL }),
                 Some(ID_FORMAT.into()),
             ],
         );
-        let prepass =
-            scene_pipeline("prepass.wgsl", include_str!("shaders/prepass.wgsl"), "fs_id", &[Some(ID_FORMAT.into())]);
+        let prepass = scene_pipeline(
+            "prepass.wgsl",
+            include_str!("shaders/prepass.wgsl"),
+            ("vs_main", "vs_gl"),
+            "fs_id",
+            &[Some(vertex_layout.clone())],
+            &[Some(ID_FORMAT.into())],
+        );
         let hist_shader = shader(d, "histogram.wgsl", include_str!("shaders/histogram.wgsl").into());
         let select_shader = shader(d, "select.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("shaders/select.wgsl")));
         let histogram = compute(d, "histogram", &hist_layout, &hist_shader, "histogram");
@@ -358,7 +383,7 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "prepass", targets, false, false, false, ts.and_then(|t| t.render("prepass_ms")));
-        self.draw_into(&mut pass, &self.prepass, scene_bg, geom, args);
+        self.draw_into(&mut pass, &self.prepass, false, scene_bg, geom, args);
     }
 
     /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
@@ -375,21 +400,25 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
-        self.draw_into(&mut pass, &self.draw, scene_bg, geom, args);
+        self.draw_into(&mut pass, &self.draw, true, scene_bg, geom, args);
     }
 
     fn draw_into(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         pipeline: &wgpu::RenderPipeline,
+        with_values: bool,
         scene_bg: &wgpu::BindGroup,
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
     ) {
-        if let (Some(vb), Some(ib)) = (&geom.vertices, &geom.indices) {
+        if let (Some(vb), Some(sb), Some(ib)) = (&geom.vertices, &geom.values, &geom.indices) {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, scene_bg, &[]);
             pass.set_vertex_buffer(0, vb.slice(..));
+            if with_values {
+                pass.set_vertex_buffer(1, sb.slice(..));
+            }
             pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
             pass.multi_draw_indexed_indirect(args, 0, geom.n_tiles() as u32);
         }
@@ -613,16 +642,25 @@ impl GpuContext {
 }
 
 impl Passes {
-    /// The scene bind group of one frame: uniforms, per-object state, the tile → object table.
+    /// The scene bind group of one frame: uniforms, per-object state, the tile → object table, and
+    /// the colour-map rows the objects' `cmap.w` point into (RGBA).
     pub fn scene_bind_group(
         &self,
         d: &wgpu::Device,
         globals: &super::layout::Globals,
         objects: &[super::layout::GpuObject],
+        lut: &[[f32; 4]],
         geom: &SceneGeometry,
     ) -> wgpu::BindGroup {
         let zero = [bytemuck::Zeroable::zeroed()];
         let objects = if objects.is_empty() { &zero[..] } else { objects };
+        let zero_row = [[0.0f32; 4]];
+        let lut = if lut.is_empty() { &zero_row[..] } else { lut };
+        let lut_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lut"),
+            contents: bytemuck::cast_slice(lut),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("globals"),
             contents: bytemuck::bytes_of(globals),
@@ -640,6 +678,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 0, resource: globals_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: objects_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: geom.tile_object.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: lut_buf.as_entire_binding() },
             ],
         })
     }

@@ -126,6 +126,8 @@ pub struct GridSpec<'a> {
     /// (cos, sin) of the rotation ([`cos_sin_deg`]); (1, 0) for an axis-aligned grid.
     pub rot: (f64, f64),
     pub yflip: bool,
+    /// Per-sample scalars for colour by data, row-major (ny, nx) like `z`; None = none.
+    pub values: Option<&'a [f64]>,
 }
 
 impl GridSpec<'_> {
@@ -180,6 +182,9 @@ pub fn tile_heightfield(
                     // World position in f64 (rotation included), then origin-relative f32.
                     let (x, y) = g.pos(i, j);
                     tile.positions.push([(x - origin.x) as f32, (y - origin.y) as f32, (at(i, j) - origin.z) as f32]);
+                    if let Some(v) = g.values {
+                        tile.values.push(v[j * g.nx + i] as f32);
+                    }
                 }
                 *slot
             };
@@ -250,10 +255,12 @@ pub fn tile_heightfield(
 }
 
 /// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
-/// `vertices` are world coordinates; `faces` index into them (validated by the caller). Once
+/// `vertices` are world coordinates, `values` optional per-vertex scalars (colour by data);
+/// `faces` index into them (validated by the caller). Once
 /// `stop` is set, tiles not yet started are left empty (as in [`tile_heightfield`]).
 pub fn tile_mesh(
     vertices: &[[f64; 3]],
+    values: Option<&[f64]>,
     faces: &[[u32; 3]],
     origin: DVec3,
     clusters: usize,
@@ -293,6 +300,9 @@ pub fn tile_mesh(
                             (p[1] - origin.y) as f32,
                             (p[2] - origin.z) as f32,
                         ]);
+                        if let Some(vals) = values {
+                            tile.values.push(vals[v as usize] as f32);
+                        }
                     }
                     tile.fine.push(slot);
                 }
@@ -318,13 +328,15 @@ mod tests {
     fn grid_triangles_and_holes() {
         let (nx, ny) = (5, 4);
         let mut z = vec![0.0; nx * ny];
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
+        let g =
+            GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &AtomicBool::new(false));
         let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
         assert_eq!(total, 2 * (nx - 1) * (ny - 1));
         // One NaN sample in the interior removes the 6 triangles touching it.
         z[nx + 2] = f64::NAN;
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
+        let g =
+            GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &AtomicBool::new(false));
         assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
         assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
@@ -334,7 +346,8 @@ mod tests {
     fn lattice_proxy_reaches_the_factor_and_neighbours_share_border_samples() {
         let (nx, ny) = (81, 81);
         let z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + ((k / nx) as f64 * 0.2).cos()).collect();
-        let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
+        let g =
+            GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
         for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
             let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &AtomicBool::new(false));
             let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
@@ -363,7 +376,18 @@ mod tests {
     #[test]
     fn all_nan_tile_is_empty() {
         let z = vec![f64::NAN; 9];
-        let g = GridSpec { z: &z, nx: 3, ny: 3, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false };
+        let g = GridSpec {
+            z: &z,
+            nx: 3,
+            ny: 3,
+            x0: 0.0,
+            y0: 0.0,
+            dx: 1.0,
+            dy: 1.0,
+            rot: (1.0, 0.0),
+            yflip: false,
+            values: None,
+        };
         let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &AtomicBool::new(false));
         assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
     }

@@ -1,16 +1,68 @@
 //! `geocull._geocull.Scene`: objects in, tile table and geometry out.
 
 use super::{lock, run, run_interruptible, with_lock};
+use crate::error::input_err;
 use crate::error::{int_in, object_id};
-use crate::scene::{AddOptions, GridFrame, Scene};
+use crate::scene::{AddOptions, CmapArg, ColorByArg, ColorSource, GridFrame, Scene};
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyReadonlyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::sync::Mutex;
 
 /// Largest tile count accepted (the core checks it against the grid too).
 const MAX_INT: i64 = i32::MAX as i64;
+
+/// The add functions' colouring, as the Python layer passes it: (color_by "z" | "values", values,
+/// colour-map name, colour-map table (n, 3), clim, nan_color).
+type ColoringArgs<'py> = (
+    String,
+    Option<PyReadonlyArrayDyn<'py, f64>>,
+    Option<String>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<(f64, f64)>,
+    Option<(f64, f64, f64)>,
+);
+
+/// The core's colouring argument; `shape` is what `values` must be (`what` describes it).
+fn coloring(c: Option<ColoringArgs<'_>>, shape: &[usize], what: &str) -> PyResult<Option<ColorByArg>> {
+    let Some((by, values, name, table, clim, nan)) = c else { return Ok(None) };
+    let source = match by.as_str() {
+        "z" => ColorSource::Z,
+        "values" => ColorSource::Values,
+        _ => return Err(input_err("color_by", format!("{by:?}; expected \"z\" or \"values\"")).into()),
+    };
+    let values = match values {
+        None => None,
+        Some(v) => {
+            if v.shape() != shape {
+                return Err(input_err("values", format!("values has shape {:?}; expected {what}", v.shape())).into());
+            }
+            Some(super::contiguous(&v, "values")?.to_vec())
+        }
+    };
+    let cmap = match (name, table) {
+        (name, Some(t)) => {
+            if t.shape()[1] != 3 {
+                return Err(input_err(
+                    "cmap",
+                    format!("the table has shape {:?}; expected (n, 3) RGB rows", t.shape()),
+                )
+                .into());
+            }
+            Some(CmapArg::Table(bytemuck::cast_slice(super::contiguous(&t, "cmap")?).to_vec(), name))
+        }
+        (Some(n), None) => Some(CmapArg::Name(n)),
+        (None, None) => None,
+    };
+    Ok(Some(ColorByArg {
+        source,
+        values,
+        cmap,
+        clim: clim.map(|c| [c.0, c.1]),
+        nan_color: nan.map(|c| [c.0, c.1, c.2]),
+    }))
+}
 
 #[pyclass(name = "Scene", module = "geocull._geocull", frozen)]
 pub struct PyScene {
@@ -43,7 +95,7 @@ impl PyScene {
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (z, origin, spacing, tiles, coarse_factor, name, color, null_value, rotation, yflip))]
+    #[pyo3(signature = (z, origin, spacing, tiles, coarse_factor, name, color, null_value, rotation, yflip, coloring=None))]
     fn add_heightfield(
         &self,
         py: Python<'_>,
@@ -57,22 +109,24 @@ impl PyScene {
         null_value: Option<f64>,
         rotation: f64,
         yflip: bool,
+        coloring: Option<ColoringArgs<'_>>,
     ) -> PyResult<u32> {
         let shape = z.shape();
         let (ny, nx) = (shape[0], shape[1]);
         let data = super::contiguous(&z, "z")?;
+        let color_by = self::coloring(coloring, &[ny, nx], &format!("({ny}, {nx}), the shape of z"))?;
         let color = color.map(|c| [c.0, c.1, c.2]);
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
             let tiles = (int_in(tiles.0, "tiles[0]", 1, MAX_INT)?, int_in(tiles.1, "tiles[1]", 1, MAX_INT)?);
             let frame = GridFrame::new([origin.0, origin.1], [spacing.0, spacing.1]).rotated(rotation, yflip);
-            let opts = AddOptions { coarse_factor, name, color, interrupt };
+            let opts = AddOptions { coarse_factor, name, color, color_by, interrupt };
             lock(scene).add_heightfield(data, ny, nx, frame, tiles, null_value, opts)
         })
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (vertices, faces, kind, tiles, coarse_factor, name, color))]
+    #[pyo3(signature = (vertices, faces, kind, tiles, coarse_factor, name, color, coloring=None))]
     fn add_mesh(
         &self,
         py: Python<'_>,
@@ -83,15 +137,18 @@ impl PyScene {
         coarse_factor: f64,
         name: Option<String>,
         color: Option<(f64, f64, f64)>,
+        coloring: Option<ColoringArgs<'_>>,
     ) -> PyResult<u32> {
         let v: &[[f64; 3]] = bytemuck::cast_slice(super::contiguous(&vertices, "vertices")?);
+        let n = v.len();
+        let color_by = self::coloring(coloring, &[n], &format!("({n},), one per vertex"))?;
         let f: &[[i64; 3]] = bytemuck::cast_slice(super::contiguous(&faces, "faces")?);
         let color = color.map(|c| [c.0, c.1, c.2]);
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
             let mut scene = lock(scene);
             let tiles = tiles.map(|t| int_in(t, "tiles", 1, MAX_INT)).transpose()?;
-            scene.add_mesh(v, f, &kind, tiles, AddOptions { coarse_factor, name, color, interrupt })
+            scene.add_mesh(v, f, &kind, tiles, AddOptions { coarse_factor, name, color, color_by, interrupt })
         })
     }
 
@@ -106,6 +163,13 @@ impl PyScene {
     }
     fn set_color(&self, py: Python<'_>, id: i64, color: (f64, f64, f64)) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.set_color(object_id(id)?, [color.0, color.1, color.2]))
+    }
+
+    /// Colours object `id` by z or by the values it was built with (`coloring`'s values must be None).
+    fn set_color_by(&self, py: Python<'_>, id: i64, coloring: ColoringArgs<'_>) -> PyResult<()> {
+        let c = self::coloring(Some(coloring), &[], "none (values are fixed when an object is added)")?
+            .expect("coloring given");
+        with_lock(py, &self.inner, move |s| s.set_color_by(object_id(id)?, &c))
     }
 
     #[getter]
@@ -137,20 +201,22 @@ impl PyScene {
     }
 
     fn object_info<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Bound<'py, PyDict>> {
-        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize);
-        let (id, name, kind, color, visible, offset, n_tiles, n_tris): Info = with_lock(py, &self.inner, move |s| {
-            let o = s.object(object_id(id)?)?;
-            Ok((
-                o.id,
-                o.name.clone(),
-                o.kind_name().to_string(),
-                o.color,
-                o.visible,
-                o.offset,
-                o.tiles.len(),
-                o.fine_triangles(),
-            ))
-        })?;
+        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize, Option<crate::scene::ColorBy>);
+        let (id, name, kind, color, visible, offset, n_tiles, n_tris, color_by): Info =
+            with_lock(py, &self.inner, move |s| {
+                let o = s.object(object_id(id)?)?;
+                Ok((
+                    o.id,
+                    o.name.clone(),
+                    o.kind_name().to_string(),
+                    o.color,
+                    o.visible,
+                    o.offset,
+                    o.tiles.len(),
+                    o.fine_triangles(),
+                    o.color_by.clone(),
+                ))
+            })?;
         let d = PyDict::new(py);
         d.set_item("id", id)?;
         d.set_item("name", name)?;
@@ -160,6 +226,10 @@ impl PyScene {
         d.set_item("offset", (offset.x, offset.y, offset.z))?;
         d.set_item("n_tiles", n_tiles)?;
         d.set_item("n_triangles", n_tris)?;
+        let by = color_by.as_ref().map(|c| if c.source == ColorSource::Z { "z" } else { "values" });
+        d.set_item("color_by", by)?;
+        d.set_item("cmap", color_by.as_ref().map(|c| c.cmap.clone()))?;
+        d.set_item("clim", color_by.as_ref().map(|c| (c.clim[0], c.clim[1])))?;
         Ok(d)
     }
 

@@ -9,7 +9,7 @@
 //! quadtree) works in the grid's frame and folds the rotation into its view-projection matrix, as it
 //! already did with the object's translation (see `cull::horizon::strategy`).
 
-use super::{check_coarse_factor, check_color, AddOptions, Object, ObjectKind, Scene};
+use super::{check_coarse_factor, check_color, AddOptions, ColorByArg, ColorSource, Object, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
 use crate::lod::{self, cos_sin_deg, GridSpec};
@@ -53,7 +53,7 @@ impl Scene {
         frame: GridFrame,
         tiles: (usize, usize),
         null_value: Option<f64>,
-        opts: AddOptions,
+        mut opts: AddOptions,
     ) -> Result<u32> {
         let GridFrame { origin, spacing, rotation, yflip } = frame;
         ensure(nx >= 2 && ny >= 2, "z", || {
@@ -72,7 +72,18 @@ impl Scene {
             format!("rotation is {rotation}; expected a finite angle in degrees (counter-clockwise)")
         })?;
         let rot = cos_sin_deg(rotation);
-        let probe = GridSpec { z, nx, ny, x0: origin[0], y0: origin[1], dx: spacing[0], dy: spacing[1], rot, yflip };
+        let probe = GridSpec {
+            z,
+            nx,
+            ny,
+            x0: origin[0],
+            y0: origin[1],
+            dx: spacing[0],
+            dy: spacing[1],
+            rot,
+            yflip,
+            values: None,
+        };
         // The grid's four corners (the extremes of a rotated rectangle), for the range check and bounds.
         let corners = [probe.pos(0, 0), probe.pos(nx - 1, 0), probe.pos(0, ny - 1), probe.pos(nx - 1, ny - 1)];
         for (i, o) in origin.iter().enumerate() {
@@ -101,6 +112,11 @@ impl Scene {
         }
         let cf = check_coarse_factor(opts.coarse_factor)?;
         let color = check_color(opts.color, self.next_id)?;
+        // Height fields given no colour are coloured by z.
+        let color_by = super::color_by_arg(&opts.color, opts.color_by.take(), || Some(ColorByArg::z()))?;
+        if let Some(c) = &color_by {
+            c.check(Some((nx * ny, &format!("one per sample of z, ({ny}, {nx})"))))?;
+        }
         // Holes: NaN and null_value become NaN; infinities are an error.
         let mut zz: Vec<f64> = Vec::with_capacity(z.len());
         let (mut zmin, mut zmax) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -134,7 +150,16 @@ impl Scene {
             |(lo, hi), c| (lo.min(DVec3::new(c.0, c.1, zmin)), hi.max(DVec3::new(c.0, c.1, zmax))),
         );
         let o = self.origin_for(lo, hi);
-        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy, rot, yflip };
+        let values = color_by.as_ref().and_then(|c| c.values.as_deref());
+        let color_by = match &color_by {
+            None => None,
+            Some(c) if c.source == ColorSource::Z => Some(c.resolve(zz.iter().copied())?),
+            // The range of the values where z is defined (holes draw nothing).
+            Some(c) => {
+                Some(c.resolve(values.unwrap_or(&[]).iter().zip(&zz).filter(|(_, z)| z.is_finite()).map(|(v, _)| *v))?)
+            }
+        };
+        let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy, rot, yflip, values };
         // Interruptible between tiles; on Err the scene is unchanged (the origin is set by push).
         let tile_meshes = opts.interrupt.run_parallel(|stop| lod::tile_heightfield(&grid, o, (tx, ty), cf, stop))?;
         let kind = ObjectKind::Heightfield {
@@ -147,7 +172,7 @@ impl Scene {
             rotation,
             tiles: (tx, ty),
         };
-        Ok(self.push(o, opts.name, kind, color, tile_meshes))
+        Ok(self.push(o, opts.name, kind, color, color_by, tile_meshes))
     }
 }
 

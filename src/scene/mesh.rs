@@ -16,7 +16,7 @@ impl Scene {
         faces: &[[i64; 3]],
         kind: &str,
         clusters: Option<usize>,
-        opts: AddOptions,
+        mut opts: AddOptions,
     ) -> Result<u32> {
         let n = vertices.len();
         for (i, v) in vertices.iter().enumerate() {
@@ -41,6 +41,10 @@ impl Scene {
         }
         let cf = check_coarse_factor(opts.coarse_factor)?;
         let color = check_color(opts.color, self.next_id)?;
+        let color_by = super::color_by_arg(&opts.color, opts.color_by.take(), || None)?;
+        if let Some(c) = &color_by {
+            c.check(Some((n, &format!("one per vertex, {n}"))))?;
+        }
         // Bounds of the referenced vertices only.
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -56,7 +60,19 @@ impl Scene {
         }
         let o = self.origin_for(lo, hi);
         let k = clusters.unwrap_or(1).min(f32faces.len().max(1));
-        let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, &f32faces, o, k, cf, stop))?;
-        Ok(self.push(o, opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, tiles))
+        let values = color_by.as_ref().and_then(|c| c.values.as_deref());
+        let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, values, &f32faces, o, k, cf, stop))?;
+        // The range of what is drawn: the vertices the faces use.
+        let color_by = match &color_by {
+            None => None,
+            Some(c) => Some(c.resolve(tiles.iter().flat_map(|t| -> Box<dyn Iterator<Item = f64>> {
+                if values.is_some() {
+                    Box::new(t.values.iter().map(|&v| v as f64))
+                } else {
+                    Box::new(t.positions.iter().map(|p| p[2] as f64 + o.z))
+                }
+            }))?),
+        };
+        Ok(self.push(o, opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, color_by, tiles))
     }
 }

@@ -10,10 +10,13 @@ use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+mod cmaps;
+pub mod color;
 mod heightfield;
 mod mesh;
 pub(crate) mod serial;
 
+pub use color::{CmapArg, ColorBy, ColorByArg, ColorSource};
 pub use heightfield::GridFrame;
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
@@ -35,7 +38,10 @@ pub struct Object {
     pub id: u32,
     pub name: String,
     pub kind: ObjectKind,
+    /// The flat colour (used when `color_by` is None).
     pub color: [f32; 3],
+    /// Colour through a colour map by z or by the tiles' values (None: the flat `color`).
+    pub color_by: Option<ColorBy>,
     pub visible: bool,
     /// Translation applied at draw time (world units).
     pub offset: DVec3,
@@ -63,6 +69,16 @@ impl Object {
         (self.origin - origin) + self.offset
     }
 
+    /// The scalars colour by `source` reads, in world units for z (every vertex of every tile).
+    pub fn scalars<'a>(&'a self, source: &ColorSource) -> Box<dyn Iterator<Item = f64> + 'a> {
+        match source {
+            ColorSource::Z => {
+                Box::new(self.tiles.iter().flat_map(|t| t.positions.iter().map(|p| p[2] as f64 + self.origin.z)))
+            }
+            ColorSource::Values => Box::new(self.tiles.iter().flat_map(|t| t.values.iter().map(|&v| v as f64))),
+        }
+    }
+
     /// Object-origin-relative bounds of the object's geometry without its offset, or None when empty.
     pub fn local_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -81,6 +97,9 @@ pub struct AddOptions {
     pub coarse_factor: f64,
     pub name: Option<String>,
     pub color: Option<[f64; 3]>,
+    /// Colour by z or by values (see [`color`]); None: the flat `color`, except for height fields
+    /// given no `color`, which are coloured by z (what users of horizons expect).
+    pub color_by: Option<ColorByArg>,
     /// Polled while the tiles are built (between tiles); when it fires the add returns
     /// `Error::Interrupted` and the scene is unchanged.
     pub interrupt: Interrupt,
@@ -89,7 +108,7 @@ pub struct AddOptions {
 impl AddOptions {
     /// `coarse_factor` with the default name and colour and no interrupt.
     pub fn new(coarse_factor: f64) -> Self {
-        Self { coarse_factor, name: None, color: None, interrupt: Interrupt::default() }
+        Self { coarse_factor, name: None, color: None, color_by: None, interrupt: Interrupt::default() }
     }
 }
 
@@ -160,6 +179,24 @@ pub(super) fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
             }
             Ok(c.map(|v| v as f32))
         }
+    }
+}
+
+/// The colouring an add function uses: `opts.color_by`, else `default()` when no flat colour was
+/// given. A flat colour and a colour by data together are an error (one would be ignored).
+pub(super) fn color_by_arg(
+    color: &Option<[f64; 3]>,
+    color_by: Option<ColorByArg>,
+    default: impl FnOnce() -> Option<ColorByArg>,
+) -> Result<Option<ColorByArg>> {
+    match (color, color_by) {
+        (Some(_), Some(_)) => Err(input_err(
+            "color",
+            "color and color_by/values were both given; pass a flat color or a colouring by data, not both",
+        )),
+        (Some(_), None) => Ok(None),
+        (None, Some(c)) => Ok(Some(c)),
+        (None, None) => Ok(default()),
     }
 }
 
@@ -256,13 +293,24 @@ impl Scene {
         name: Option<String>,
         kind: ObjectKind,
         color: [f32; 3],
+        color_by: Option<ColorBy>,
         tiles: Vec<TileMesh>,
     ) -> u32 {
         self.origin.get_or_insert(origin);
         let id = self.next_id;
         self.next_id += 1;
         let name = name.unwrap_or_else(|| format!("object{id}"));
-        self.objects.push(Object { id, name, kind, color, visible: true, offset: DVec3::ZERO, origin, tiles });
+        self.objects.push(Object {
+            id,
+            name,
+            kind,
+            color,
+            color_by,
+            visible: true,
+            offset: DVec3::ZERO,
+            origin,
+            tiles,
+        });
         self.geometry_version += 1;
         id
     }
@@ -301,9 +349,28 @@ impl Scene {
         Ok(())
     }
 
+    /// Draws the object in one flat colour (ending any colour by data).
     pub fn set_color(&mut self, id: u32, color: [f64; 3]) -> Result<()> {
         let c = check_color(Some(color), id)?;
-        self.object_mut(id)?.color = c;
+        let o = self.object_mut(id)?;
+        o.color = c;
+        o.color_by = None;
+        Ok(())
+    }
+
+    /// Colours the object through a colour map by z, or by the values it was built with
+    /// (`source = Values` needs values in its tiles: `arg.values` must be None here). No re-upload.
+    pub fn set_color_by(&mut self, id: u32, arg: &ColorByArg) -> Result<()> {
+        ensure(arg.values.is_none(), "values", || {
+            "values cannot be replaced after an object is built; add it again with new values".into()
+        })?;
+        let o = self.object(id)?;
+        let has_values = o.tiles.iter().any(|t| !t.values.is_empty());
+        ensure(arg.source == ColorSource::Z || has_values, "color_by", || {
+            format!("object {id} was built without values; color_by=\"values\" needs them (add it with values=)")
+        })?;
+        let c = arg.resolve(o.scalars(&arg.source))?;
+        self.object_mut(id)?.color_by = Some(c);
         Ok(())
     }
 

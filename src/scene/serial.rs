@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 3 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 4 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -12,23 +12,27 @@
 //!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64 (< 0: yflip), rotation f64
 //!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str
 //!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
-//!   version 3, read as the scene's), n_tiles u32
+//!   version 3, read as the scene's),
+//!   color_by u8 (0 = flat, 1 = z, 2 = values; version 4), if not flat: cmap str, lut [f32 x 3]
+//!   (256 rows), clim f64 x 2, nan_color f32 x 3; n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
-//!             positions [f32 x 3], fine [u32], coarse [u32], proxy_error f32,
+//!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
+//!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, indices [u32]
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
 //! reports a damaged or foreign buffer as an InputError naming `data`.
 
-use super::{Object, ObjectKind, Scene, NEXT_SCENE_UID};
+use super::color::{resolve_clim, LUT_SIZE};
+use super::{ColorBy, ColorSource, Object, ObjectKind, Scene, NEXT_SCENE_UID};
 use crate::error::{input_err, Error, Result};
 use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -207,6 +211,19 @@ impl Scene {
             for a in o.origin.to_array() {
                 w.f64(a);
             }
+            match &o.color_by {
+                None => w.u8(0),
+                Some(c) => {
+                    w.u8(if c.source == ColorSource::Z { 1 } else { 2 });
+                    w.str(&c.cmap);
+                    w.f32s(bytemuck::cast_slice(&c.lut));
+                    w.f64(c.clim[0]);
+                    w.f64(c.clim[1]);
+                    for v in c.nan_color {
+                        w.f32(v);
+                    }
+                }
+            }
             w.u32(o.tiles.len() as u32);
             for t in &o.tiles {
                 w.u32(t.ix);
@@ -215,6 +232,7 @@ impl Scene {
                     w.f32(*v);
                 }
                 w.f32s(bytemuck::cast_slice(&t.positions));
+                w.f32s(&t.values);
                 w.u32s(&t.fine);
                 w.u32s(&t.coarse);
                 w.f32(t.proxy_error);
@@ -272,6 +290,34 @@ impl Scene {
             if !offset.is_finite() {
                 return Err(r.err(format!("object {id}: its offset is not finite")));
             }
+            let color_by = if version >= 4 {
+                let source = match r.u8()? {
+                    0 => None,
+                    1 => Some(ColorSource::Z),
+                    2 => Some(ColorSource::Values),
+                    k => return Err(r.err(format!("object {id}: unknown colouring {k}"))),
+                };
+                match source {
+                    None => None,
+                    Some(source) => {
+                        let cmap = r.str()?;
+                        let flat = r.f32s()?;
+                        if flat.len() != 3 * LUT_SIZE || flat.iter().any(|v| !(0.0..=1.0).contains(v)) {
+                            return Err(
+                                r.err(format!("object {id}: its colour map is not {LUT_SIZE} RGB rows in [0, 1]"))
+                            );
+                        }
+                        let lut = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                        let (lo, hi) = (r.f64()?, r.f64()?);
+                        let clim = resolve_clim(Some([lo, hi]), std::iter::empty())
+                            .map_err(|_| r.err(format!("object {id}: its colour range is not finite lo < hi")))?;
+                        let nan_color = r.f32x3()?;
+                        Some(ColorBy { source, cmap, lut, clim, nan_color })
+                    }
+                }
+            } else {
+                None
+            };
             let nt = r.u32()? as usize;
             let mut tiles = Vec::with_capacity(nt.min(1 << 16));
             for _ in 0..nt {
@@ -282,6 +328,14 @@ impl Scene {
                     return Err(r.err(format!("object {id}: tile positions are not finite xyz triples")));
                 }
                 let positions: Vec<[f32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                let values = if version >= 4 { r.f32s()? } else { Vec::new() };
+                if !values.is_empty() && values.len() != positions.len() {
+                    return Err(r.err(format!(
+                        "object {id}: a tile has {} values for {} vertices",
+                        values.len(),
+                        positions.len()
+                    )));
+                }
                 let (fine, coarse) = (r.u32s()?, r.u32s()?);
                 let proxy_error = r.f32()?;
                 let nl = r.u32()? as usize;
@@ -299,7 +353,7 @@ impl Scene {
                     ix,
                     iy,
                     positions,
-                    values: Vec::new(),
+                    values,
                     fine,
                     coarse,
                     bbox_min,
@@ -308,7 +362,12 @@ impl Scene {
                     levels,
                 });
             }
-            objects.push(Object { id, name, kind, color, visible, offset, origin: object_origin, tiles });
+            if color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values)
+                && tiles.iter().all(|t: &TileMesh| t.values.is_empty())
+            {
+                return Err(r.err(format!("object {id}: coloured by values but has none")));
+            }
+            objects.push(Object { id, name, kind, color, color_by, visible, offset, origin: object_origin, tiles });
         }
         r.finish()?;
         Ok(Scene {
@@ -328,12 +387,7 @@ mod tests {
 
     fn scene() -> Scene {
         let mut s = Scene::new();
-        let opts = |name: &str| AddOptions {
-            coarse_factor: 4.0,
-            name: Some(name.into()),
-            color: None,
-            interrupt: Default::default(),
-        };
+        let opts = |name: &str| AddOptions { name: Some(name.into()), ..AddOptions::new(4.0) };
         let z: Vec<f64> =
             (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
         s.add_heightfield(&z, 9, 9, GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]), (3, 2), None, opts("top"))
@@ -376,7 +430,7 @@ mod tests {
         // ids continue where the original's would
         let (mut s2, mut t2) = (s.clone(), t);
         let z = vec![0.0; 4];
-        let o = AddOptions { coarse_factor: 1.0, name: None, color: None, interrupt: Default::default() };
+        let o = AddOptions::new(1.0);
         let a = s2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o.clone()).unwrap();
         assert_eq!(t2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o).unwrap(), a);
         assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
@@ -388,16 +442,19 @@ mod tests {
     #[test]
     fn version_1_height_fields_read_as_unrotated() {
         let mut s = Scene::new();
-        let o = AddOptions { coarse_factor: 1.0, name: Some("a".into()), color: None, interrupt: Default::default() };
+        let o = AddOptions { name: Some("a".into()), color: Some([0.5; 3]), ..AddOptions::new(1.0) };
         s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o)
             .unwrap();
         let v2 = s.to_bytes();
         // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
-        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), and no object origin (after
-        // rotation 8, tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is)
+        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
+        // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
+        // byte after it (flat), and no tile values (an empty array after the tile's n_tiles 4,
+        // ix iy 8, bbox 24 and 4 positions 8 + 48)
         let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
         let origin_at = at + 8 + 16 + 12 + 1 + 24;
-        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 24..]].concat();
+        let values_at = origin_at + 24 + 1 + 4 + 8 + 24 + 56;
+        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 25..values_at], &v2[values_at + 8..]].concat();
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);

@@ -16,6 +16,8 @@ struct Object {
     // Translation (world units) applied before exaggeration.
     offset: vec4<f32>,
     color: vec4<f32>,
+    // Colour map (draw.wgsl): lo, 1 / (hi - lo), mode (0 flat, 1 vertex scalar, 2 z), first row.
+    cmap: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> g: Globals;

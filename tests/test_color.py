@@ -1,0 +1,138 @@
+"""Colour by data: z and values through colour maps, clim ends, NaN colour, defaults, errors.
+
+The lit pass multiplies an object's base colour by its shading, so each test renders a white
+flat-coloured copy of the same geometry and view as the shading reference: a pixel coloured
+through a colour map must be (map entry) x (white pixel) within rounding.
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import geocull as gc
+
+W, H = 64, 48
+VIRIDIS_LO = np.array([68, 1, 84]) / 255.0
+VIRIDIS_HI = np.array([253, 231, 37]) / 255.0
+
+
+def top_view() -> gc.Camera:
+    # Orthographic, straight down on the 0..10 x 0..10 square: x to the right, y up the image.
+    return gc.Camera.look_at((5, 5, 50), (5, 5, 0), up=(0, 1, 0), projection="orthographic", ortho_height=12)
+
+
+def flat_square(**kw) -> gc.Scene:
+    s = gc.Scene()
+    s.add_heightfield(np.zeros((11, 11)), spacing=(1, 1), **kw)
+    return s
+
+
+def shade(renderer_small) -> np.ndarray:
+    img = renderer_small(W, H).render(flat_square(color=(1, 1, 1)), top_view()).image
+    return img[..., :3] / 255.0
+
+
+def test_clim_ends_map_to_the_colour_map_ends(renderer_small):
+    # Left half at the low end of clim, right half at the high end (and beyond: clamped).
+    v = np.zeros((11, 11))
+    v[:, :5] = -3.0
+    v[:, 6:] = 7.0
+    img = renderer_small(W, H).render(flat_square(values=v, clim=(-3, 5)), top_view()).image[..., :3] / 255.0
+    ref = shade(renderer_small)
+    left, right = (H // 2, W // 2 - 12), (H // 2, W // 2 + 12)
+    np.testing.assert_allclose(img[left], VIRIDIS_LO * ref[left], atol=2 / 255)
+    np.testing.assert_allclose(img[right], VIRIDIS_HI * ref[right], atol=2 / 255)
+
+
+def test_a_table_colour_map_and_nan_colour(renderer_small):
+    v = np.ones((11, 11))
+    v[:, 6:] = np.nan  # no data: the triangles touching it draw in nan_color
+    red_to_blue = [[1, 0, 0], [0, 0, 1]]
+    s = flat_square(values=v, cmap=red_to_blue, clim=(0, 1), nan_color=(0, 1, 0))
+    img = renderer_small(W, H).render(s, top_view()).image[..., :3] / 255.0
+    ref = shade(renderer_small)
+    left, right = (H // 2, W // 2 - 12), (H // 2, W // 2 + 12)
+    np.testing.assert_allclose(img[left], np.array([0, 0, 1]) * ref[left], atol=2 / 255)
+    np.testing.assert_allclose(img[right], np.array([0, 1, 0]) * ref[right], atol=2 / 255)
+
+
+def test_masked_values_are_no_data(renderer_small):
+    v = np.ma.masked_array(np.ones((11, 11)), mask=np.zeros((11, 11), bool))
+    v.mask[:, 6:] = True
+    s = flat_square(values=v, cmap=[[1, 0, 0], [0, 0, 1]], clim=(0, 1), nan_color=(0, 1, 0))
+    img = renderer_small(W, H).render(s, top_view()).image
+    assert img[H // 2, W // 2 + 12, 1] > 100 and img[H // 2, W // 2 + 12, 2] == 0
+
+
+def test_height_fields_are_coloured_by_z_by_default(renderer_small):
+    # A ramp in y: bottom row z = 0, top row z = 10; viridis over the object's own z range.
+    z = np.repeat(np.linspace(0, 10, 11)[:, None], 11, axis=1)
+    s = gc.Scene()
+    a = s.add_heightfield(z, spacing=(1, 1))
+    info = s.object_info(a)
+    assert (info["color_by"], info["cmap"], info["clim"]) == ("z", "viridis", (0.0, 10.0))
+    img = renderer_small(W, H).render(s, gc.Camera.look_at((5, 5, 60), (5, 5, 5), up=(0, 1, 0))).image
+    ys = np.nonzero(img[:, W // 2, :3].sum(axis=-1) > 0)[0]
+    top, bottom = img[ys.min() + 1, W // 2, :3].astype(float), img[ys.max() - 1, W // 2, :3].astype(float)
+    # viridis: yellow at the top (high z), purple at the bottom; compare hues, shading aside.
+    assert top[1] > top[2] and bottom[2] > bottom[1]
+    # Meshes stay flat unless asked.
+    m = s.add_mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert s.object_info(m)["color_by"] is None
+
+
+def test_mesh_vertex_values_and_set_color_by(renderer_small):
+    v = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
+    f = [[0, 1, 2], [0, 2, 3]]
+    s = gc.Scene()
+    a = s.add_mesh(v, f, values=[0.0, 0.0, 0.0, 0.0], cmap=[[1, 0, 0], [0, 0, 1]], clim=(0, 1))
+    r = renderer_small(W, H)
+    img = r.render(s, top_view()).image
+    assert img[H // 2, W // 2, 0] > 0 and img[H // 2, W // 2, 2] == 0
+    s.set_color_by(a, "values", cmap=[[1, 0, 0], [0, 0, 1]], clim=(-1, 0))
+    img = r.render(s, top_view()).image
+    assert img[H // 2, W // 2, 2] > 0 and img[H // 2, W // 2, 0] == 0
+    s.set_color(a, (0, 1, 0))
+    assert s.object_info(a)["color_by"] is None
+    img = r.render(s, top_view()).image
+    assert img[H // 2, W // 2, 1] > 0 and img[H // 2, W // 2, 0] == img[H // 2, W // 2, 2] == 0
+
+
+def test_colouring_survives_pickling(renderer_small):
+    v = np.random.default_rng(1).random((11, 11))
+    s = flat_square(values=v, cmap="seismic")
+    t = pickle.loads(pickle.dumps(s))
+    r = renderer_small(W, H)
+    np.testing.assert_array_equal(r.render(s, top_view()).image, r.render(t, top_view()).image)
+    assert t.object_info(0)["cmap"] == "seismic"
+
+
+@pytest.mark.parametrize(
+    ("kw", "arg"),
+    [
+        (dict(values=np.zeros((10, 11))), "values"),
+        (dict(values=np.zeros((11, 11)), color=(1, 0, 0)), "color"),
+        (dict(cmap="no-such-map"), "cmap"),
+        (dict(cmap=[[0, 0, 2], [1, 1, 1]]), "cmap"),
+        (dict(clim=(1, 1)), "clim"),
+        (dict(color_by="values"), "values"),
+        (dict(color_by="depth"), "color_by"),
+        (dict(values=np.full((11, 11), np.inf)), "values"),
+        (dict(nan_color=(2, 0, 0), values=np.zeros((11, 11))), "nan_color"),
+    ],
+)
+def test_errors_name_the_argument(kw, arg):
+    with pytest.raises(gc.InputError, match=rf"^{arg}"):
+        flat_square(**kw)
+
+
+def test_set_color_by_values_needs_values():
+    s = gc.Scene()
+    a = s.add_heightfield(np.zeros((3, 3)), color=(1, 1, 1))
+    with pytest.raises(gc.InputError, match="^color_by"):
+        s.set_color_by(a, "values")
+    s.set_color_by(a, "z", cmap="gray")
+    assert s.object_info(a)["cmap"] == "gray"
