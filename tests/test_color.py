@@ -136,3 +136,29 @@ def test_set_color_by_values_needs_values():
         s.set_color_by(a, "values")
     s.set_color_by(a, "z", cmap="gray")
     assert s.object_info(a)["cmap"] == "gray"
+
+
+def test_a_vertical_well_seen_from_the_side_covers_its_column(renderer_small):
+    # Orthographic side view, 2 m per pixel: pixel centres at x = 2 col - 99 and z = 49 - 2 row. The
+    # tube's silhouette half-width lies in [r cos(pi / 8), r] = [4.16, 4.5]: columns with centres
+    # |x| <= 3 (48..51) are covered, |x| >= 5 not; the well spans z in [-100, 0]: rows 25..74.
+    s = gc.Scene()
+    s.add_well([[0, 0, 0], [0, 0, -40], [0, 0, -100]], radius=4.5, color=(1, 1, 1))
+    cam = gc.Camera.look_at((0, -500, -50), (0, 0, -50), projection="orthographic", ortho_height=200)
+    cov = renderer_small(100, 100).render(s, cam).coverage
+    want = np.zeros((100, 100), bool)
+    want[25:75, 48:52] = True
+    np.testing.assert_array_equal(cov, want)
+
+
+def test_a_well_log_colours_the_tube(renderer_small):
+    s = gc.Scene()
+    s.add_well([[0, 0, 0], [0, 0, -100]], radius=20, values=[0.0, 1.0], cmap=[[1, 0, 0], [0, 0, 1]])
+    img = renderer_small(100, 100).render(
+        s, gc.Camera.look_at((0, -500, -50), (0, 0, -50), projection="orthographic", ortho_height=200)).image
+    top, bottom = img[27, 50], img[72, 50]
+    assert top[0] > top[2] and bottom[2] > bottom[0]
+    with pytest.raises(gc.InputError, match="^values"):
+        s.add_well([[0, 0, 0], [0, 0, -100]], values=[1.0, 2.0, 3.0])
+    with pytest.raises(gc.InputError, match="^path"):
+        s.add_well([[0, 0, 0]])

@@ -196,6 +196,32 @@ class Scene:
             cv.coloring(color_by, values, cmap, clim, nan_color, 1),
         )
 
+    def add_well(
+        self,
+        path: ArrayLike,
+        radius: float = 10.0,
+        sides: int = 8,
+        name: str | None = None,
+        color: ArrayLike | None = None,
+        values: ArrayLike | None = None,
+        cmap: Any = None,
+        clim: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
+    ) -> int:
+        """Add a well: ``path`` (n, 3) world stations (x, y, z metres, z up: pass z = -depth for
+        depths) along a deviated well, drawn as a closed tube of ``radius`` metres with ``sides``
+        (3..64) flat sides and flat end caps: an occluder like any mesh (object kind "well"), cut
+        into tiles of 128 segments so that culling drops hidden or off-screen parts. Stations that
+        repeat the previous one are dropped. ``values`` (n,): a log, one value per station,
+        interpolated along the tube and coloured through ``cmap`` / ``clim`` / ``nan_color`` (as for
+        :meth:`add_heightfield`); without values and ``color`` the well gets the palette colour.
+        Returns the object id."""
+        p = cv.float_array(path, "path", 2, 3)
+        return self._s.add_well(
+            p, cv.number(radius, "radius"), cv.integer(sides, "sides"), cv.name(name), cv.color(color),
+            cv.coloring(None, values, cmap, clim, nan_color, 1),
+        )
+
     def remove(self, id: int) -> None:
         """Remove object ``id``."""
         self._s.remove(cv.integer(id, "id"))

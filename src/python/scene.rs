@@ -152,6 +152,30 @@ impl PyScene {
         })
     }
 
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (path, radius, sides, name, color, coloring=None))]
+    fn add_well(
+        &self,
+        py: Python<'_>,
+        path: PyReadonlyArray2<'_, f64>,
+        radius: f64,
+        sides: i64,
+        name: Option<String>,
+        color: Option<(f64, f64, f64)>,
+        coloring: Option<ColoringArgs<'_>>,
+    ) -> PyResult<u32> {
+        let p: &[[f64; 3]] = bytemuck::cast_slice(super::contiguous(&path, "path")?);
+        let n = p.len();
+        let color_by = self::coloring(coloring, &[n], &format!("({n},), one per station of path"))?;
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let sides = int_in(sides, "sides", 3, 64)?;
+            let opts = AddOptions { coarse_factor: 1.0, name, color, color_by, interrupt };
+            lock(scene).add_well(p, radius, sides, opts)
+        })
+    }
+
     fn remove(&self, py: Python<'_>, id: i64) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.remove(object_id(id)?))
     }

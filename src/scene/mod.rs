@@ -15,6 +15,7 @@ pub mod color;
 mod heightfield;
 mod mesh;
 pub(crate) mod serial;
+pub mod well;
 
 pub use color::{CmapArg, ColorBy, ColorByArg, ColorSource};
 pub use heightfield::GridFrame;
