@@ -5,8 +5,8 @@
 //! `sides` >= 3, the tube has one ring of `sides` vertices per station, each ring the regular
 //! polygon of circumradius `radius` centred on the station in the plane normal to the path's
 //! direction there (the mean of the two segments' directions at inner stations), turned from
-//! station to station by parallel transport (no twist), and a flat cap at each end: 2 (n - 1) sides
-//! + 2 (sides - 2) triangles, wound outwards. The polygon's first vertex of the first ring lies
+//! station to station by parallel transport (no twist), and a flat cap at each end, in all
+//! 2 (n - 1) sides plus 2 (sides - 2) triangles, wound outwards. The polygon's first vertex of the first ring lies
 //! along the horizontal normal of the first segment when it has one (+x for a vertical start).
 
 use super::{AddOptions, Scene};
