@@ -19,8 +19,13 @@ from ._errors import InputError
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
+    from .volume import Volume
 
-__all__ = ["Scene", "ColorBy"]
+#: The slice axes of :meth:`Scene.add_slice`: constant i, j or k of the volume.
+SliceAxis = Literal["inline", "crossline", "sample"]
+_AXES = {"inline": 0, "crossline": 1, "sample": 2, "x": 0, "y": 1, "z": 2}
+
+__all__ = ["Scene", "ColorBy", "SliceAxis"]
 
 #: What an object can be coloured by: its own z (world units, before vertical exaggeration and
 #: without later translations) or the ``values`` it was added with.
@@ -57,18 +62,23 @@ class Scene:
 
     def __init__(self) -> None:
         self._s = _geocull.Scene()
+        # Slices' sources, for set_slice_index: id -> (volume, axis, name, colouring).
+        self._slices: dict[int, tuple[Any, int, str | None, cv.Coloring]] = {}
 
     @classmethod
     def _wrap(cls, inner: _geocull.Scene) -> Scene:
         s = cls.__new__(cls)
         s._s = inner
+        s._slices = {}
         return s
 
     def copy(self) -> Scene:
         """An independent copy: the same objects (ids, names, tiles, colours, visibility, offsets)
         in a new scene; editing either leaves the other as it is. ``copy.copy`` and
         ``copy.deepcopy`` do the same."""
-        return Scene._wrap(self._s.copy())
+        s = Scene._wrap(self._s.copy())
+        s._slices = dict(self._slices)
+        return s
 
     def __copy__(self) -> Scene:
         return self.copy()
@@ -222,8 +232,60 @@ class Scene:
             cv.coloring(None, values, cmap, clim, nan_color, 1),
         )
 
+    def add_slice(
+        self,
+        volume: Volume,
+        axis: SliceAxis | int,
+        index: int,
+        cmap: Any = "seismic",
+        clim: ArrayLike | None = None,
+        opacity: float = 1.0,
+        name: str | None = None,
+        nan_color: ArrayLike | None = None,
+    ) -> int:
+        """Add a seismic slice of ``volume``: ``axis`` "inline" (or 0: the plane of constant i, the
+        volume's first axis), "crossline" (1: constant j) or "sample" (2: constant k, a time or depth
+        slice), at sample ``index`` along that axis. It is drawn as the lattice of the volume's
+        samples on the plane (world positions from the volume's origin, spacing and rotation), each
+        sample's value coloured through ``cmap`` (default "seismic") over ``clim`` (default the whole
+        volume's finite range, so every slice of a volume shares its colours) and interpolated
+        across each triangle; NaN samples get ``nan_color``. Slices are opaque occluders (object kind
+        "slice") culled like any object; :meth:`set_slice_index` moves one. ``opacity`` must be 1:
+        semi-transparent slices are not drawn yet. Returns the object id."""
+        from .volume import Volume
+
+        cv.expect_instance(volume, Volume, "volume")
+        if cv.number(opacity, "opacity") != 1.0:
+            raise InputError(f"opacity: {opacity}; only opaque slices (1.0) are drawn so far")
+        ax = self._axis(axis)
+        c = cv.coloring("values", None, cmap, clim, nan_color, 1)
+        assert c is not None
+        id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c)
+        self._slices[id] = (volume, ax, name, c)
+        return id
+
+    def set_slice_index(self, id: int, index: int) -> None:
+        """Move slice ``id`` to sample ``index`` along its axis: its geometry is rebuilt from the
+        volume (the other objects are untouched; the renderer re-uploads the scene's geometry on the
+        next frame). The slice keeps its id, name, colouring, visibility and offset."""
+        i = cv.integer(id, "id")
+        if i not in self._slices:
+            raise InputError(f"id: object {i} is not a slice added to this scene object (copies and "
+                             "unpickled scenes do not keep the volumes of their slices)")
+        volume, ax, name, c = self._slices[i]
+        self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, i)
+
+    @staticmethod
+    def _axis(axis: Any) -> int:
+        if isinstance(axis, str):
+            if axis not in _AXES:
+                raise InputError(f"axis: {axis!r}; expected 'inline', 'crossline', 'sample' or 0, 1, 2")
+            return _AXES[axis]
+        return cv.integer(axis, "axis")
+
     def remove(self, id: int) -> None:
         """Remove object ``id``."""
+        self._slices.pop(id, None)
         self._s.remove(cv.integer(id, "id"))
 
     def set_visible(self, id: int, visible: bool) -> None:

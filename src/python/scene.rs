@@ -176,6 +176,67 @@ impl PyScene {
         })
     }
 
+    /// A slice of `volume` at `index` along `axis` (0: constant i, "inline"; 1: constant j,
+    /// "crossline"; 2: constant k, "sample"), coloured by its samples; `replace` = the id of a
+    /// slice to move there instead of adding one.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (volume, axis, index, name, coloring, replace=None))]
+    fn add_slice(
+        &self,
+        py: Python<'_>,
+        volume: PyRef<'_, super::iso::PyVolume>,
+        axis: i64,
+        index: i64,
+        name: Option<String>,
+        coloring: ColoringArgs<'_>,
+        replace: Option<i64>,
+    ) -> PyResult<u32> {
+        let mut color_by =
+            self::coloring(Some(coloring), &[], "none (the slice's values are the volume's)")?.expect("coloring given");
+        let vol = &volume.inner;
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let axis = int_in(axis, "axis", 0, 2)?;
+            let dims = [vol.nx, vol.ny, vol.nz];
+            let index = int_in(index, "index", 0, dims[axis] as i64 - 1)?;
+            // (u, v) axes of the slice's lattice: the other two, in order.
+            let (ua, va) = match axis {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            let (nu, nv) = (dims[ua], dims[va]);
+            let (mut pos, mut vals) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
+            for v in 0..nv {
+                for u in 0..nu {
+                    let mut ijk = [0; 3];
+                    (ijk[axis], ijk[ua], ijk[va]) = (index, u, v);
+                    pos.push(vol.to_world(vol.sample_position(ijk[0], ijk[1], ijk[2])));
+                    vals.push(vol.value(vol.get(ijk[0], ijk[1], ijk[2])));
+                }
+            }
+            if color_by.clim.is_none() {
+                // The volume's range, so that every slice of it uses the same colours.
+                let r = crate::scene::color::resolve_clim(None, vol.values.iter().map(|&x| vol.value(x)))?;
+                color_by.clim = Some(r);
+            }
+            let opts = AddOptions { coarse_factor: 16.0, name, color: None, color_by: Some(color_by), interrupt };
+            let mut s = lock(scene);
+            let id = s.add_lattice(&pos, vals, (nu, nv), "slice", opts)?;
+            match replace {
+                None => Ok(id),
+                Some(old) => {
+                    let old = object_id(old)?;
+                    if let Err(e) = s.replace_lattice(old, id) {
+                        s.remove(id)?;
+                        return Err(e);
+                    }
+                    Ok(old)
+                }
+            }
+        })
+    }
+
     fn remove(&self, py: Python<'_>, id: i64) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.remove(object_id(id)?))
     }

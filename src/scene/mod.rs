@@ -15,6 +15,7 @@ pub mod color;
 mod heightfield;
 mod mesh;
 pub(crate) mod serial;
+pub mod slice;
 pub mod well;
 
 pub use color::{CmapArg, ColorBy, ColorByArg, ColorSource};
@@ -295,8 +296,15 @@ impl Scene {
         kind: ObjectKind,
         color: [f32; 3],
         color_by: Option<ColorBy>,
-        tiles: Vec<TileMesh>,
+        mut tiles: Vec<TileMesh>,
     ) -> u32 {
+        // Levels of detail bound the geometric error only: an object coloured by data keeps its
+        // full resolution (coarser levels would blur its values), its coarse proxy still culls.
+        if color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
+            for t in &mut tiles {
+                t.levels.clear();
+            }
+        }
         self.origin.get_or_insert(origin);
         let id = self.next_id;
         self.next_id += 1;

@@ -1,0 +1,79 @@
+"""Seismic slices: sample positions and values on the right pixels, opaque occluders culled by
+three_pass, moving a slice, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import geocull as gc
+
+RED_BLUE = [[1, 0, 0], [0, 0, 1]]
+
+
+def checker_volume() -> gc.Volume:
+    # 5 x 5 x 5 samples 10 m apart from (0, 0, -40): value (i + j + k) % 2.
+    i, j, k = np.meshgrid(np.arange(5), np.arange(5), np.arange(5), indexing="ij")
+    return gc.Volume(((i + j + k) % 2).astype(np.float32), origin=(0, 0, -40), spacing=(10, 10, 10), order="xyz")
+
+
+def test_a_crossline_slice_puts_each_sample_on_its_pixel(renderer_small):
+    vol = checker_volume()
+    s = gc.Scene()
+    s.add_slice(vol, "crossline", 2, cmap=RED_BLUE)
+    # Head-on from -y, orthographic, 1 m per pixel over x in [-10, 50], z in [-50, 10].
+    cam = gc.Camera.look_at((20, -100, -20), (20, 0, -20), projection="orthographic", ortho_height=60)
+    img = renderer_small(60, 60).render(s, cam).image.astype(int)
+    for i in range(5):
+        for k in range(5):
+            # Sample (i, 2, k) at x = 10 i, z = -40 + 10 k: column 10 + 10 i, row 50 - 10 k (nudged inside).
+            col = min(10 + 10 * i, 49) if i == 4 else 10 + 10 * i
+            row = max(50 - 10 * k, 10) if k == 4 else 50 - 10 * k
+            px = img[min(row, 49), min(col, 49)]
+            want_blue = (i + 2 + k) % 2 == 1
+            assert (px[2] > px[0]) == want_blue, (i, k, px)
+
+
+def test_an_opaque_slice_hides_the_horizon_behind_and_three_pass_culls_it(renderer_small):
+    vol = checker_volume()
+    s = gc.Scene()
+    # A vertical fault plane behind the slice (seen from -y), two tiles, wholly covered by it.
+    xs, zs = np.meshgrid(np.linspace(5, 35, 7), np.linspace(-35, -5, 7))
+    v = np.c_[xs.ravel(), np.full(49, 30.0), zs.ravel()]
+    f = [[r * 7 + c, r * 7 + c + 1, r * 7 + c + 8] for r in range(6) for c in range(6)]
+    f += [[r * 7 + c, r * 7 + c + 8, r * 7 + c + 7] for r in range(6) for c in range(6)]
+    h = s.add_mesh(v, f, kind="fault", tiles=2, color=(1, 1, 1))
+    sl = s.add_slice(vol, "crossline", 1, cmap=RED_BLUE)
+    cam = gc.Camera.look_at((20, -200, -20), (20, 0, -20), projection="orthographic", ortho_height=60)
+    r = renderer_small(64, 64)
+    full = r.render(s, cam, culling="none")
+    s.set_visible(sl, False)
+    alone = r.render(s, cam, culling="none")
+    assert alone.coverage.sum() > 0
+    s.set_visible(sl, True)
+    tp = r.render(s, cam, culling="three_pass", pixel_threshold=0)
+    np.testing.assert_array_equal(tp.image, full.image)
+    tiles = s.tile_table()
+    behind = tiles["object"] == h
+    assert not tp.tile_drawn[behind].any()  # the horizon's tiles are culled
+    assert (full.tile_pixels[behind] == 0).all()
+
+
+def test_set_slice_index_moves_the_slice_and_keeps_its_id(renderer_small):
+    vol = checker_volume()
+    s = gc.Scene()
+    a = s.add_slice(vol, "sample", 0, cmap=RED_BLUE, name="t0")
+    z0 = s.bounds[0][2]
+    s.set_slice_index(a, 3)
+    assert s.object_ids() == [a]
+    assert s.object_info(a)["name"] == "t0"
+    assert s.bounds[0][2] == pytest.approx(z0 + 30)
+    assert s.object_info(a)["clim"] == (0.0, 1.0)
+    with pytest.raises(gc.InputError, match="^index"):
+        s.set_slice_index(a, 5)
+    with pytest.raises(gc.InputError, match="^axis"):
+        s.add_slice(vol, "diagonal", 0)
+    with pytest.raises(gc.InputError, match="^opacity"):
+        s.add_slice(vol, 0, 0, opacity=0.5)
+    with pytest.raises(gc.InputError, match="^volume"):
+        s.add_slice(np.zeros((3, 3, 3)), 0, 0)  # type: ignore[arg-type]
