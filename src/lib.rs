@@ -13,6 +13,7 @@ pub mod camera;
 pub mod cull;
 pub mod error;
 pub mod gpu;
+pub mod grid;
 pub mod iso;
 pub mod lod;
 pub mod render;

@@ -1,0 +1,246 @@
+//! Small geometry helpers of the grid builder: a fast hash map, a block's vertex table (vertices
+//! keyed by their exact f32 position and their region), and the triangulation of the convex
+//! polygons that faces are made of.
+
+use glam::DVec3;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A multiply-rotate hash (the keys are vertex positions and small integer tuples; SipHash's
+/// DoS resistance buys nothing here and costs a third of the build).
+#[derive(Default)]
+pub(crate) struct FastHasher(u64);
+
+impl FastHasher {
+    #[inline]
+    fn add(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.add(u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+        }
+        for &b in chunks.remainder() {
+            self.add(b as u64);
+        }
+    }
+    fn write_u8(&mut self, v: u8) {
+        self.add(v as u64)
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.add(v as u64)
+    }
+    fn write_i32(&mut self, v: i32) {
+        self.add(v as u32 as u64)
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.add(v)
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.add(v as u64)
+    }
+}
+
+pub(crate) type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+
+pub(crate) const NO_PILLAR: u32 = u32::MAX;
+
+/// The vertices of one block. A vertex is a position (as the tile will store it: f32 relative
+/// to the origin, compared bit for bit) of one region: the surfaces of two regions meeting at a
+/// boundary are separate closed surfaces and share no vertex, so that merging one never pins the
+/// other. `border` marks vertices on the block's outline (kept at every level), `pillar` the
+/// global pillar a vertex lies on (`pj * (ni + 1) + pi`, or [`NO_PILLAR`]).
+pub(crate) struct Verts {
+    map: FastMap<([u32; 3], i32), u32>,
+    pub pos: Vec<[f64; 3]>,
+    pub rel: Vec<[f32; 3]>,
+    pub border: Vec<bool>,
+    pub pillar: Vec<u32>,
+    origin: DVec3,
+}
+
+impl Verts {
+    pub fn new(origin: DVec3) -> Self {
+        Self {
+            map: FastMap::default(),
+            pos: Vec::new(),
+            rel: Vec::new(),
+            border: Vec::new(),
+            pillar: Vec::new(),
+            origin,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// The vertex at world position `p` of `region` (created on first use).
+    pub fn get(&mut self, p: [f64; 3], region: i32, border: bool, pillar: u32) -> u32 {
+        // `+ 0.0` turns -0.0 into +0.0, so that equal positions have equal bits.
+        let rel = [
+            (p[0] - self.origin.x) as f32 + 0.0,
+            (p[1] - self.origin.y) as f32 + 0.0,
+            (p[2] - self.origin.z) as f32 + 0.0,
+        ];
+        let key = (rel.map(f32::to_bits), region);
+        let next = self.pos.len() as u32;
+        let v = *self.map.entry(key).or_insert(next);
+        if v == next {
+            self.pos.push(p);
+            self.rel.push(rel);
+            self.border.push(border);
+            self.pillar.push(pillar);
+        } else {
+            let b = &mut self.border[v as usize];
+            *b |= border;
+            if self.pillar[v as usize] == NO_PILLAR {
+                self.pillar[v as usize] = pillar;
+            }
+        }
+        v
+    }
+
+    pub fn p(&self, v: u32) -> DVec3 {
+        DVec3::from_array(self.pos[v as usize])
+    }
+}
+
+/// `poly` without consecutive repeats (the ring closed), or None when fewer than 3 remain.
+pub(crate) fn clean(poly: &[u32]) -> Option<Vec<u32>> {
+    let mut out: Vec<u32> = Vec::with_capacity(poly.len());
+    for &v in poly {
+        if out.last() != Some(&v) {
+            out.push(v);
+        }
+    }
+    while out.len() > 1 && out.first() == out.last() {
+        out.pop();
+    }
+    (out.len() >= 3).then_some(out)
+}
+
+/// Newell's normal of a polygon (length = twice its area for a planar one).
+pub(crate) fn newell(poly: &[u32], verts: &Verts) -> DVec3 {
+    let mut n = DVec3::ZERO;
+    let c = verts.p(poly[0]);
+    for w in 0..poly.len() {
+        let a = verts.p(poly[w]) - c;
+        let b = verts.p(poly[(w + 1) % poly.len()]) - c;
+        n += a.cross(b);
+    }
+    n
+}
+
+/// Whether a polygon has (numerically) zero area: twice its area under 1e-12 of its perimeter
+/// squared.
+pub(crate) fn zero_area(poly: &[u32], verts: &Verts) -> bool {
+    let n = newell(poly, verts).length();
+    let mut per = 0.0;
+    for w in 0..poly.len() {
+        per += (verts.p(poly[(w + 1) % poly.len()]) - verts.p(poly[w])).length();
+    }
+    !(n > 1e-12 * per * per)
+}
+
+/// Which vertices of a polygon are corners (a turn, not a point inside a straight side), given
+/// its normal `n` (unit).
+fn corners(poly: &[u32], verts: &Verts, n: DVec3) -> Vec<bool> {
+    let m = poly.len();
+    (0..m)
+        .map(|w| {
+            let a = verts.p(poly[(w + m - 1) % m]);
+            let b = verts.p(poly[w]);
+            let c = verts.p(poly[(w + 1) % m]);
+            let (e1, e2) = (b - a, c - b);
+            e1.cross(e2).dot(n).abs() > 1e-9 * e1.length() * e2.length()
+        })
+        .collect()
+}
+
+/// Whether a polygon is convex (every turn the same way as its normal, straight sides allowed
+/// to bend by 1e-6 rad) and of non-zero area.
+pub(crate) fn convex(poly: &[u32], verts: &Verts) -> bool {
+    if poly.len() < 3 || zero_area(poly, verts) {
+        return false;
+    }
+    let n = newell(poly, verts).normalize();
+    let m = poly.len();
+    (0..m).all(|w| {
+        let a = verts.p(poly[(w + m - 1) % m]);
+        let b = verts.p(poly[w]);
+        let c = verts.p(poly[(w + 1) % m]);
+        let (e1, e2) = (b - a, c - b);
+        e1.cross(e2).dot(n) >= -1e-6 * e1.length() * e2.length()
+    })
+}
+
+/// Triangles of a convex polygon (vertex ids in outward order, already [`clean`] and of non-zero
+/// area), wound like the polygon. A fan from a corner whose two neighbours are corners too (then
+/// no triangle has zero area: only the two sides through the apex could hold it, and they have
+/// no inner points); failing that (straight sides with inner points all round), a fan from a new
+/// centre vertex (the mean of the vertices, of `region`).
+pub(crate) fn triangulate(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
+    let m = poly.len();
+    if m == 3 {
+        out.push([poly[0], poly[1], poly[2]]);
+        return;
+    }
+    let n = newell(poly, verts).normalize_or_zero();
+    let c = corners(poly, verts, n);
+    if let Some(a) = (0..m).find(|&w| c[w] && c[(w + 1) % m] && c[(w + m - 1) % m]) {
+        for s in 1..m - 1 {
+            out.push([poly[a], poly[(a + s) % m], poly[(a + s + 1) % m]]);
+        }
+        return;
+    }
+    let mut mean = DVec3::ZERO;
+    for &v in poly {
+        mean += verts.p(v);
+    }
+    mean /= m as f64;
+    let centre = verts.get(mean.to_array(), region, false, NO_PILLAR);
+    for w in 0..m {
+        let (a, b) = (poly[w], poly[(w + 1) % m]);
+        if a != centre && b != centre {
+            out.push([centre, a, b]);
+        }
+    }
+}
+
+/// The convex hull of points (t, s) with their vertex ids, counter-clockwise, without points
+/// inside straight sides (Andrew's monotone chain). Points with the same id must have the same
+/// coordinates (the caller passes each id once).
+pub(crate) fn hull(mut pts: Vec<(f64, f64, u32)>) -> Vec<(f64, f64, u32)> {
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    pts.dedup_by(|a, b| a.2 == b.2);
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: &(f64, f64, u32), a: &(f64, f64, u32), b: &(f64, f64, u32)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut h: Vec<(f64, f64, u32)> = Vec::with_capacity(2 * pts.len());
+    for p in pts.iter() {
+        while h.len() >= 2 && cross(&h[h.len() - 2], &h[h.len() - 1], p) <= 0.0 {
+            h.pop();
+        }
+        h.push(*p);
+    }
+    let lower = h.len() + 1;
+    for p in pts.iter().rev().skip(1) {
+        while h.len() >= lower && cross(&h[h.len() - 2], &h[h.len() - 1], p) <= 0.0 {
+            h.pop();
+        }
+        h.push(*p);
+    }
+    h.pop();
+    h
+}
