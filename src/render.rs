@@ -20,7 +20,7 @@ use crate::gpu::{
 };
 use crate::iso::render::{IsoOptions, IsoOutput, IsoRenderer};
 use crate::iso::{MinMaxOctree, Volume};
-use crate::scene::{ColorSource, Scene};
+use crate::scene::{ColorSource, ObjectKind, Scene};
 use glam::{DVec3, Mat4};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -53,6 +53,39 @@ impl Lod {
     }
 }
 
+/// Which level of detail each block of a reservoir grid uses (`crate::grid`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GridLod {
+    /// Level 0 (every boundary face of the active cells).
+    Full,
+    /// The paper's view-distance ranges (`crate::grid::distance_level`), `alpha` in [8, 15],
+    /// `lambda` in [2, 3], the distance taken from the eye to the block's centre.
+    Distance { alpha: f64, lambda: f64 },
+    /// As `Lod::ScreenError`: the coarsest level whose geometric error projects to at most
+    /// `max_pixel_error` pixels at the block's nearest point.
+    ScreenError { max_pixel_error: f64 },
+}
+
+impl GridLod {
+    pub fn parse(name: &str, alpha: f64, lambda: f64, max_pixel_error: f64) -> Result<Self> {
+        match name {
+            "full" => Ok(Self::Full),
+            "distance" => {
+                crate::grid::validate_alpha_lambda(alpha, lambda)?;
+                Ok(Self::Distance { alpha, lambda })
+            }
+            "screen_error" => match Lod::parse("screen_error", max_pixel_error)? {
+                Lod::ScreenError { max_pixel_error } => Ok(Self::ScreenError { max_pixel_error }),
+                Lod::Full => unreachable!("parsed as screen_error"),
+            },
+            _ => Err(crate::error::input_err(
+                "grid_lod",
+                format!("unknown grid_lod {name:?}; expected \"full\", \"distance\" or \"screen_error\""),
+            )),
+        }
+    }
+}
+
 /// Scenes of at least this many fine triangles may take long to draw (~0.1 s on llvmpipe): on GL
 /// their frames are submitted so that Ctrl-C can stop them (`GpuContext::submit_and_wait`).
 const LONG_FRAME_TRIANGLES: u64 = 1 << 20;
@@ -64,6 +97,8 @@ pub struct RenderOptions {
     pub culling: String,
     pub cull: CullOptions,
     pub lod: Lod,
+    /// The level of detail of reservoir grids' blocks (height fields and meshes follow `lod`).
+    pub grid_lod: GridLod,
     /// Polled between the stages of the frame and while waiting for the GPU; when it fires,
     /// `render` returns `Error::Interrupted` and the renderer stays usable (`crate::error::Interrupt`).
     pub interrupt: Interrupt,
@@ -71,7 +106,13 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { culling: "none".into(), cull: CullOptions::default(), lod: Lod::Full, interrupt: Interrupt::default() }
+        Self {
+            culling: "none".into(),
+            cull: CullOptions::default(),
+            lod: Lod::Full,
+            grid_lod: GridLod::Full,
+            interrupt: Interrupt::default(),
+        }
     }
 }
 
@@ -270,7 +311,8 @@ impl Renderer {
         let geometry = geometry.as_ref().expect("uploaded above");
         let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
         let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
-        let (draw_args, chosen) = choose_levels(geometry, camera, &fc, &tile_dist2, *height, opts.lod);
+        let (draw_args, chosen) =
+            choose_levels(geometry, scene, camera, &fc, &tile_dist2, *height, (opts.lod, opts.grid_lod), origin);
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -315,6 +357,7 @@ impl Renderer {
         };
         let extra = self.strategies[si].report(&report);
         out.stats.extra.extend(extra);
+        grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]));
         if let Some((level, err_px)) = chosen {
             self.lod_stats(&mut out, &level, &err_px);
             out.tile_counts.push(("tile_level", level.iter().map(|&l| l as u32).collect()));
@@ -569,19 +612,35 @@ type ChosenLevels = (Vec<u8>, Vec<f32>);
 /// exaggeration where that enlarges it and projected at the tile box's nearest point (perspective)
 /// or with the orthographic scale; a box that contains the eye gets level 0. Cheap on the CPU (one
 /// pass over the tiles), so it runs there, before the strategy, with no read-back.
+#[allow(clippy::too_many_arguments)]
 fn choose_levels(
     g: &SceneGeometry,
+    scene: &Scene,
     camera: &Camera,
     fc: &FrameCamera,
     dist2: &[f64],
     height: u32,
-    lod: Lod,
+    (lod, grid_lod): (Lod, GridLod),
+    origin: DVec3,
 ) -> (Vec<DrawArgs>, Option<ChosenLevels>) {
-    let Lod::ScreenError { max_pixel_error } = lod else { return (g.fine.clone(), None) };
+    // Per tile: the grid block's leaf cell size, None for tiles of other objects.
+    let mut grid_cell: Vec<Option<(f64, f64)>> = Vec::with_capacity(g.n_tiles());
+    for o in scene.objects() {
+        match &o.kind {
+            ObjectKind::Grid(info) => grid_cell.extend(info.cell_size.iter().map(|&c| Some(c))),
+            _ => grid_cell.extend(std::iter::repeat_n(None, o.tiles.len())),
+        }
+    }
+    let any_grid = grid_cell.iter().any(|c| c.is_some());
+    if lod == Lod::Full && (grid_lod == GridLod::Full || !any_grid) {
+        return (g.fine.clone(), None);
+    }
     let proj = fc.view_proj * fc.view.inverse();
     let px_per_unit = proj.y_axis.y.abs() * height as f64 / 2.0;
     let perspective = fc.projection == crate::camera::Projection::Perspective;
     let zs = camera.z_scale.max(1.0);
+    let zv = DVec3::new(1.0, 1.0, camera.z_scale);
+    let objects = scene.objects();
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {
@@ -594,19 +653,76 @@ fn choose_levels(
         } else {
             zs * px_per_unit
         };
-        let (mut a, mut l, mut e) = (g.fine[i], 0u8, 0.0f32);
-        for (k, &(la, lerr)) in g.levels[i].iter().enumerate() {
-            let px = if lerr == 0.0 { 0.0 } else { lerr as f64 * scale };
-            if px > max_pixel_error {
-                break;
+        let px_of = |lerr: f32| if lerr == 0.0 { 0.0 } else { lerr as f64 * scale };
+        // The coarsest level within `max_px` pixels of error.
+        let screen = |max_px: f64| {
+            let mut l = 0usize;
+            for (k, &(_, lerr)) in g.levels[i].iter().enumerate() {
+                if px_of(lerr) > max_px {
+                    break;
+                }
+                l = k + 1;
             }
-            (a, l, e) = (la, k as u8 + 1, px as f32);
-        }
+            l
+        };
+        let l = match (grid_cell.get(i).copied().flatten(), grid_lod, lod) {
+            (Some(_), GridLod::Full, _) | (None, _, Lod::Full) => 0,
+            (Some(cell), GridLod::Distance { alpha, lambda }, _) => {
+                let (lo, hi) = g.bbox[i];
+                let off = objects[g.tile_object_cpu[i] as usize].placement(origin);
+                let centre = ((lo + hi) * 0.5 + off) * zv;
+                let d = (centre - fc.eye).length();
+                crate::grid::distance_level(d, cell, alpha, lambda, g.levels[i].len())
+            }
+            (Some(_), GridLod::ScreenError { max_pixel_error }, _) => screen(max_pixel_error),
+            (None, _, Lod::ScreenError { max_pixel_error }) => screen(max_pixel_error),
+        };
+        let (a, e) = if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].0, px_of(g.levels[i][l - 1].1) as f32) };
         args.push(a);
-        level.push(l);
+        level.push(l as u8);
         err_px.push(e);
     }
     (args, Some((level, err_px)))
+}
+
+/// Names of the per-level cell and face counts of grids (`grid_cells_level{l}`, `grid_faces_level{l}`).
+const GRID_STATS: [[&str; 2]; 1 + crate::lod::levels::MAX_LEVELS] = [
+    ["grid_cells_level0", "grid_faces_level0"],
+    ["grid_cells_level1", "grid_faces_level1"],
+    ["grid_cells_level2", "grid_faces_level2"],
+    ["grid_cells_level3", "grid_faces_level3"],
+    ["grid_cells_level4", "grid_faces_level4"],
+    ["grid_cells_level5", "grid_faces_level5"],
+];
+
+/// Grids' merged cells and faces drawn per level, over the drawn blocks (only when the scene has
+/// a grid). `level`: each tile's level (None = all 0).
+fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[u8]>) {
+    let mut sums = [[0u64; 2]; GRID_STATS.len()];
+    let (mut any, mut t) = (false, 0usize);
+    for o in scene.objects() {
+        let ObjectKind::Grid(info) = &o.kind else {
+            t += o.tiles.len();
+            continue;
+        };
+        any = true;
+        for b in &info.block_levels {
+            if out.tile_drawn.get(t).copied().unwrap_or(false) {
+                let l = level.map_or(0, |l| l[t] as usize);
+                if let Some(s) = b.get(l.min(b.len().saturating_sub(1))) {
+                    sums[l][0] += s.cells;
+                    sums[l][1] += s.faces;
+                }
+            }
+            t += 1;
+        }
+    }
+    if any {
+        for (names, v) in GRID_STATS.iter().zip(sums) {
+            out.stats.extra.push((names[0], Stat::Count(v[0])));
+            out.stats.extra.push((names[1], Stat::Count(v[1])));
+        }
+    }
 }
 
 /// Stage 4: records the lit fine pass of the visible set; returns the args it draws.

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING as _TYPE_CHECKING
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
 from .camera import Camera, Projection
 from .iso import extract_isosurface
-from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, IsoCullingMode, LodMode, Renderer
+from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, GridLodMode, IsoCullingMode, LodMode, Renderer
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume, VolumeOrder, ZPositive
@@ -56,6 +56,7 @@ __all__ = [
     "CullingMode",
     "IsoCullingMode",
     "LodMode",
+    "GridLodMode",
     "RenderStats",
     "IsoStats",
 ]

@@ -57,6 +57,14 @@ class ObjectInfo(TypedDict):
     clim: tuple[float, float] | None  # the scalars at the colour map's ends (z in metres for "z")
 
 @type_check_only
+class _GridLevelRaw(TypedDict):
+    cells: int
+    faces: int
+    triangles: int
+    vertices: int
+    volume: float
+
+@type_check_only
 class TileTable(TypedDict):
     """``Scene.tile_table()``: one column per key, one row per tile in the renderer's tile order."""
 
@@ -162,6 +170,17 @@ class Scene:
         coloring: _Coloring,
         replace: int | None = None,
     ) -> int: ...
+    def add_grid(
+        self,
+        corners: npt.NDArray[np.float64],  # (nk, nj, ni, 8, 3), C-contiguous
+        active: npt.NDArray[np.bool_] | None,  # (nk, nj, ni)
+        region: npt.NDArray[np.int32] | None,  # (nk, nj, ni)
+        blocks: tuple[int, int],
+        name: str | None,
+        color: tuple[float, float, float] | None,
+        coloring: _Coloring | None = None,
+    ) -> int: ...
+    def grid_levels(self, id: int) -> list[_GridLevelRaw]: ...
     def remove(self, id: int) -> None: ...
     def set_visible(self, id: int, visible: bool) -> None: ...
     def translate(self, id: int, offset: tuple[float, float, float]) -> None: ...
@@ -245,6 +264,9 @@ class Renderer:
         predict_errors: bool,
         lod: str,
         max_pixel_error: float,
+        grid_lod: str = "full",
+        alpha: float = 10.0,
+        lam: float = 2.5,
     ) -> RenderOutput: ...
 
 def culling_modes() -> list[str]: ...

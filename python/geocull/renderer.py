@@ -17,7 +17,7 @@ from .results import IsoResult, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume
 
-__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "LodMode"]
+__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "LodMode", "GridLodMode"]
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
@@ -34,6 +34,8 @@ ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
 
 #: Level-of-detail choice of :meth:`Renderer.render` (``lod=``).
 LodMode = Literal["full", "screen_error"]
+#: Level choices of reservoir grids' blocks (:meth:`Renderer.render`'s ``grid_lod``).
+GridLodMode = Literal["full", "distance", "screen_error"]
 
 
 def _warn_if_nearer_than_near(lo: np.ndarray, hi: np.ndarray, camera: Camera, near: float) -> None:
@@ -140,6 +142,9 @@ class Renderer:
         predict_errors: bool = False,
         lod: LodMode = "full",
         max_pixel_error: float = 0.5,
+        grid_lod: GridLodMode = "full",
+        alpha: float = 10.0,
+        lam: float = 2.5,
     ) -> RenderResult[RenderStats]:
         """Render ``scene`` seen by ``camera`` into a :class:`RenderResult` (see there for the arrays:
         image (H, W, 4), depth (H, W), per-tile counts).
@@ -167,7 +172,14 @@ class Renderer:
         point; neighbouring tiles at different levels meet without cracks: every level keeps its
         tile's border at full resolution). Works with every culling mode. Stats
         ``triangles_level0`` .. ``triangles_level5``, ``lod_max_error_px``, ``lod_max_error_m``.
-        max_pixel_error: > 0, pixels (lod="screen_error").
+        max_pixel_error: > 0, pixels (lod="screen_error" or grid_lod="screen_error").
+        grid_lod: the level of reservoir grids' blocks (:meth:`Scene.add_grid`): "full" (level 0),
+        "distance" (Jia et al.'s view-distance ranges: with L, W a block's mean cell size,
+        S(h) = alpha 2^h max(L, W) and r(h) = lam 2^h sqrt(L^2 + W^2) / 2, leaves up to S(0) and
+        merged level h from S(h) - r(h), the distance taken from the eye to the block's centre;
+        gaps between the paper's ranges take the finer level) or "screen_error" (as lod).
+        alpha: [8, 15]; lam: [2, 3] (grid_lod="distance"). Stats ``grid_cells_level0..5`` and
+        ``grid_faces_level0..5`` count the merged cells and faces drawn per level.
 
         Warns (:class:`geocull.GeocullWarning`) when nothing is drawn because the whole scene lies
         nearer than the near plane.
@@ -192,7 +204,9 @@ class Renderer:
         d = self._r.render(scene._s, camera._c, culling, cv.number(pixel_threshold, "pixel_threshold"),
                            cv.number(prepass_scale, "prepass_scale"), bool(conservative), bool(predict_errors),
                            lod if isinstance(lod, str) else cv.fail_type(lod, "lod", "a string"),
-                           cv.number(max_pixel_error, "max_pixel_error"))
+                           cv.number(max_pixel_error, "max_pixel_error"),
+                           grid_lod if isinstance(grid_lod, str) else cv.fail_type(grid_lod, "grid_lod", "a string"),
+                           cv.number(alpha, "alpha"), cv.number(lam, "lam"))
         res: RenderResult[RenderStats] = RenderResult(d, culling)
         if len(res.tile_pixels) and not res.tile_pixels.any():  # nothing drawn: say so if near clipped all
             t = scene.tile_table()

@@ -16,7 +16,7 @@ import numpy.typing as npt
 if TYPE_CHECKING:
     from ._geocull import IsoOutput, RenderOutput
 
-__all__ = ["RenderStats", "IsoStats", "RenderResult", "IsoResult", "encode_png"]
+__all__ = ["RenderStats", "IsoStats", "GridLevel", "RenderResult", "IsoResult", "encode_png"]
 
 
 class RenderStats(TypedDict):
@@ -55,6 +55,29 @@ class RenderStats(TypedDict):
     triangles_level5: NotRequired[int]
     lod_max_error_px: NotRequired[float]  # lod="screen_error": largest projected error drawn, pixels
     lod_max_error_m: NotRequired[float]  # lod="screen_error": largest geometric error drawn, world units
+    grid_cells_level0: NotRequired[int]  # scenes with a grid: merged cells drawn at level 0 (drawn blocks)
+    grid_faces_level0: NotRequired[int]  # scenes with a grid: faces (polygons) drawn at level 0
+    grid_cells_level1: NotRequired[int]  # ... at cell-merging level 1 (2 x 2 columns merged)
+    grid_faces_level1: NotRequired[int]
+    grid_cells_level2: NotRequired[int]
+    grid_faces_level2: NotRequired[int]
+    grid_cells_level3: NotRequired[int]
+    grid_faces_level3: NotRequired[int]
+    grid_cells_level4: NotRequired[int]
+    grid_faces_level4: NotRequired[int]
+    grid_cells_level5: NotRequired[int]
+    grid_faces_level5: NotRequired[int]
+
+
+class GridLevel(TypedDict):
+    """One level of :meth:`geocull.Scene.grid_levels` (over the whole grid)."""
+
+    cells: int  # merged cells holding at least one drawn cell (level 0: drawn cells)
+    faces: int  # polygons before triangulation
+    triangles: int
+    vertices: int  # distinct vertices (one per cell value: flat colours)
+    volume: float  # m^3 enclosed by the level's surface, every region summed
+    volume_change: float  # (volume - level 0's volume) / level 0's volume
 
 
 class IsoStats(TypedDict):

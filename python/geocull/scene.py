@@ -16,6 +16,7 @@ from . import _convert as cv
 from . import _geocull
 from ._convert import MeshLike
 from ._errors import InputError
+from .results import GridLevel
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
@@ -263,6 +264,67 @@ class Scene:
         id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c)
         self._slices[id] = (volume, ax, name, c)
         return id
+
+    def add_grid(
+        self,
+        corners: ArrayLike,
+        active: ArrayLike | None = None,
+        region: ArrayLike | None = None,
+        values: ArrayLike | None = None,
+        cmap: Any = None,
+        clim: ArrayLike | None = None,
+        blocks: ArrayLike = (8, 8),
+        name: str | None = None,
+        color: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
+    ) -> int:
+        """Add a reservoir grid (a truncated corner-point grid, Eclipse GRDECL / RESQML / xtgeo
+        ``Grid``; :mod:`geocull.grid` converts those).
+
+        corners: (nk, nj, ni, 8, 3) world coordinates (metres, z up) of each cell's corners, kept in
+            f64 (stored relative to the grid's own origin); corner c of a cell has i-bit ``c & 1``,
+            j-bit ``(c >> 1) & 1``, k-bit ``(c >> 2) & 1`` (k-bit 0 = the cell's top), k = 0 the top
+            layer. Collapsed corners (pinch-outs, zero-thickness cells) are legal; a non-finite corner
+            of an active cell is an InputError naming it (inactive cells may hold anything).
+        active: (nk, nj, ni) bool (default all active): inactive cells are holes.
+        region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): faces
+            between regions are drawn and never merged.
+        values: (nk, nj, ni) float cell property, coloured through ``cmap`` / ``clim`` /
+            ``nan_color`` as for :meth:`add_heightfield` (flat per cell; a merged face takes the mean
+            of its cells' values). Without values or ``color`` the grid gets its palette colour.
+        blocks: (bi, bj) cells per block along i and j, each in 1..32: a block is a tile (culled as
+            one) with its own cell-merging levels (a quadtree over its columns, up to log2 of its
+            size), chosen per frame by ``Renderer.render(grid_lod=...)``.
+        Drawn: the boundary faces of the active cells of each region (interior faces never built;
+            faces on faults split where the neighbours' corners differ, so each region's surface is
+            watertight at every level). Returns the object id."""
+        data, mask = cv.unmasked(corners, "corners")
+        if mask is not None:
+            raise InputError("corners: masked corners are not supported; mark their cells inactive")
+        c = cv.float_array(data, "corners", 5)
+        act = None if active is None else np.ascontiguousarray(cv.checked_array(active, "active", 3, kinds="b"))
+        reg = None
+        if region is not None:
+            r = cv.int_array(region, "region", 3)
+            if r.size and (r.min() < np.iinfo(np.int32).min or r.max() > np.iinfo(np.int32).max):
+                raise InputError("region: ids must fit int32")
+            reg = np.ascontiguousarray(r, dtype=np.int32)
+        b = cv.int_array(blocks, "blocks", 1)
+        if b.shape != (2,):
+            raise InputError(f"blocks: shape {b.shape} is not (2,)")
+        return self._s.add_grid(
+            c, act, reg, (cv.integer(b[0], "blocks[0]"), cv.integer(b[1], "blocks[1]")), cv.name(name),
+            cv.color(color), cv.coloring(None, values, cmap, clim, nan_color, 3),
+        )
+
+    def grid_levels(self, id: int) -> list[GridLevel]:
+        """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):
+        cells (merged cells holding a drawn cell), faces (polygons before triangulation),
+        triangles, vertices, volume (m^3 enclosed by the level's surface) and volume_change
+        (relative to level 0; blocks with fewer levels count with their coarsest)."""
+        levels = self._s.grid_levels(cv.integer(id, "id"))
+        v0 = levels[0]["volume"] if levels else 0.0
+        return [GridLevel(**lv, volume_change=(lv["volume"] - v0) / v0 if v0 else 0.0) for lv in levels]
 
     def set_slice_index(self, id: int, index: int) -> None:
         """Move slice ``id`` to sample ``index`` along its axis: its geometry is rebuilt from the

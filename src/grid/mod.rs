@@ -60,6 +60,9 @@ pub struct GridBuild {
     /// Mean leaf cell size (L = mean edge length along i, W = along j, world units, over the
     /// block's drawn cells; (0, 0) for a block without any) of each block.
     pub cell_size: Vec<(f64, f64)>,
+    /// Per block (tile order), per level 0..: the block's own counts (as `levels`; a block stops
+    /// at its coarsest level).
+    pub block_levels: Vec<Vec<LevelStats>>,
 }
 
 /// One level's counts over the whole grid.
@@ -242,8 +245,9 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
         }
     }
     let cell_size = out.iter().map(|o| o.2).collect();
+    let block_levels = out.iter().map(|o| o.1.clone()).collect();
     let tiles = out.into_iter().map(|o| o.0).collect();
-    Ok(GridBuild { tiles, levels, cell_size })
+    Ok(GridBuild { tiles, levels, cell_size, block_levels })
 }
 
 /// Number of merged levels a block of w x h columns allows: until one node covers the block.

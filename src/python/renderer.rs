@@ -5,7 +5,7 @@ use super::scene::PyScene;
 use super::{lock, run, run_interruptible, with_lock};
 use crate::cull::{self, CullOptions, Stat};
 use crate::error::int_in;
-use crate::render::{Lod, RenderOptions, RenderOutput, Renderer};
+use crate::render::{GridLod, Lod, RenderOptions, RenderOutput, Renderer};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -110,7 +110,7 @@ impl PyRenderer {
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error))]
+    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error, grid_lod="full".to_string(), alpha=10.0, lam=2.5))]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -123,12 +123,16 @@ impl PyRenderer {
         predict_errors: bool,
         lod: String,
         max_pixel_error: f64,
+        grid_lod: String,
+        alpha: f64,
+        lam: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (r, s, c) = (&self.inner, &scene.inner, &camera.inner);
         let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
         // Renderer first, then the scene (the lock order of every binding).
         let out = run_interruptible(py, move |interrupt| {
-            let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)?, interrupt };
+            let grid_lod = GridLod::parse(&grid_lod, alpha, lam, max_pixel_error)?;
+            let opts = RenderOptions { culling, cull, lod: Lod::parse(&lod, max_pixel_error)?, grid_lod, interrupt };
             lock(r).render(&lock(s), c, &opts)
         })?;
         output_dict(py, out)

@@ -237,6 +237,68 @@ impl PyScene {
         })
     }
 
+    /// A corner-point grid: `corners` (nk, nj, ni, 8, 3) float64, `active` (nk, nj, ni) bool,
+    /// `region` (nk, nj, ni) int32, values (in `coloring`) one per cell.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (corners, active, region, blocks, name, color, coloring=None))]
+    fn add_grid(
+        &self,
+        py: Python<'_>,
+        corners: PyReadonlyArrayDyn<'_, f64>,
+        active: Option<PyReadonlyArrayDyn<'_, bool>>,
+        region: Option<PyReadonlyArrayDyn<'_, i32>>,
+        blocks: (i64, i64),
+        name: Option<String>,
+        color: Option<(f64, f64, f64)>,
+        coloring: Option<ColoringArgs<'_>>,
+    ) -> PyResult<u32> {
+        let sh = corners.shape().to_vec();
+        if sh.len() != 5 || sh[3] != 8 || sh[4] != 3 {
+            return Err(input_err("corners", format!("shape {sh:?} is not (nk, nj, ni, 8, 3)")).into());
+        }
+        let cells = &sh[..3];
+        let what = format!("({}, {}, {}), one per cell", sh[0], sh[1], sh[2]);
+        for (a, arg) in [
+            (active.as_ref().map(|a| a.shape().to_vec()), "active"),
+            (region.as_ref().map(|r| r.shape().to_vec()), "region"),
+        ] {
+            if let Some(a) = a {
+                if a != cells {
+                    return Err(input_err(arg, format!("shape {a:?}; expected {what}")).into());
+                }
+            }
+        }
+        let color_by = self::coloring(coloring, cells, &what)?;
+        let c = super::contiguous(&corners, "corners")?;
+        let act = active.as_ref().map(|a| super::contiguous(a, "active")).transpose()?;
+        let reg = region.as_ref().map(|r| super::contiguous(r, "region")).transpose()?;
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        let dims = (sh[0], sh[1], sh[2]);
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let blocks = (int_in(blocks.0, "blocks[0]", 1, MAX_INT)?, int_in(blocks.1, "blocks[1]", 1, MAX_INT)?);
+            let opts = AddOptions { coarse_factor: 1.0, name, color, color_by, interrupt };
+            lock(scene).add_grid(dims, c, act, reg, blocks, opts)
+        })
+    }
+
+    /// Per level of grid `id`: a dict of cells, faces, triangles, vertices, volume (m^3).
+    fn grid_levels<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let levels = with_lock(py, &self.inner, move |s| Ok(s.grid_levels(object_id(id)?)?.to_vec()))?;
+        levels
+            .iter()
+            .map(|l| {
+                let d = PyDict::new(py);
+                d.set_item("cells", l.cells)?;
+                d.set_item("faces", l.faces)?;
+                d.set_item("triangles", l.triangles)?;
+                d.set_item("vertices", l.vertices)?;
+                d.set_item("volume", l.volume)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
     fn remove(&self, py: Python<'_>, id: i64) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.remove(object_id(id)?))
     }

@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 mod cmaps;
 pub mod color;
+pub mod grid;
 mod heightfield;
 mod mesh;
 pub(crate) mod serial;
@@ -31,8 +32,10 @@ pub enum ObjectKind {
     /// live only in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler
     /// needs it.
     Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, rotation: f64, tiles: (usize, usize) },
-    /// A triangle mesh; `kind` is the user's label ("fault", "mesh", ...).
+    /// A triangle mesh; `kind` is the user's label ("fault", "mesh", "well", "slice", ...).
     Mesh { kind: String },
+    /// A reservoir grid: its blocks are the tiles, their levels the cell-merging levels.
+    Grid(Box<grid::GridInfo>),
 }
 
 #[derive(Clone, Debug)]
@@ -59,6 +62,7 @@ impl Object {
         match &self.kind {
             ObjectKind::Heightfield { .. } => "heightfield",
             ObjectKind::Mesh { kind } => kind,
+            ObjectKind::Grid(_) => "grid",
         }
     }
     pub fn fine_triangles(&self) -> usize {

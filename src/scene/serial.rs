@@ -8,9 +8,12 @@
 //! ```text
 //! magic b"GCSCENE\0", version u32
 //! has_origin u8, origin f64 x 3, next_id u32, n_objects u32
-//! per object: id u32, name str, kind u8 (0 = height field, 1 = mesh),
+//! per object: id u32, name str, kind u8 (0 = height field, 1 = mesh, 2 = grid, version 4),
 //!   height field: nx u64, ny u64, x0 f64, y0 f64, dx f64, dy f64 (< 0: yflip), rotation f64
-//!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str
+//!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str |
+//!   grid: nk, nj, ni, bi, bj u64, block cell sizes [f32 x 2], levels, then n_blocks u32 and
+//!         each block's levels (levels = n u32, per level cells, faces, triangles, vertices u64,
+//!         volume f64)
 //!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
 //!   version 3, read as the scene's),
 //!   color_by u8 (0 = flat, 1 = z, 2 = values; version 4), if not flat: cmap str, lut [f32 x 3]
@@ -200,6 +203,27 @@ impl Scene {
                     w.u8(1);
                     w.str(kind);
                 }
+                ObjectKind::Grid(g) => {
+                    w.u8(2);
+                    for v in [g.dims.0, g.dims.1, g.dims.2, g.blocks.0, g.blocks.1] {
+                        w.u64(v as u64);
+                    }
+                    w.f32s(&g.cell_size.iter().flat_map(|c| [c.0 as f32, c.1 as f32]).collect::<Vec<_>>());
+                    let put = |w: &mut Writer, ls: &[crate::grid::LevelStats]| {
+                        w.u32(ls.len() as u32);
+                        for l in ls {
+                            for v in [l.cells, l.faces, l.triangles, l.vertices] {
+                                w.u64(v);
+                            }
+                            w.f64(l.volume);
+                        }
+                    };
+                    put(&mut w, &g.levels);
+                    w.u32(g.block_levels.len() as u32);
+                    for b in &g.block_levels {
+                        put(&mut w, b);
+                    }
+                }
             }
             for c in o.color {
                 w.f32(c);
@@ -277,6 +301,36 @@ impl Scene {
                     ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
                 }
                 1 => ObjectKind::Mesh { kind: r.str()? },
+                2 if version >= 4 => {
+                    let d = [r.usize()?, r.usize()?, r.usize()?, r.usize()?, r.usize()?];
+                    let flat = r.f32s()?;
+                    if flat.len() % 2 != 0 {
+                        return Err(r.err(format!("object {id}: its block cell sizes are not pairs")));
+                    }
+                    let cell_size = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
+                    let get = |r: &mut Reader| -> Result<Vec<crate::grid::LevelStats>> {
+                        let n = r.u32()? as usize;
+                        let mut v = Vec::with_capacity(n.min(64));
+                        for _ in 0..n {
+                            let (cells, faces, triangles, vertices) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
+                            v.push(crate::grid::LevelStats { cells, faces, triangles, vertices, volume: r.f64()? });
+                        }
+                        Ok(v)
+                    };
+                    let levels = get(&mut r)?;
+                    let nb = r.u32()? as usize;
+                    let mut block_levels = Vec::with_capacity(nb.min(1 << 16));
+                    for _ in 0..nb {
+                        block_levels.push(get(&mut r)?);
+                    }
+                    ObjectKind::Grid(Box::new(crate::scene::grid::GridInfo {
+                        dims: (d[0], d[1], d[2]),
+                        blocks: (d[3], d[4]),
+                        cell_size,
+                        levels,
+                        block_levels,
+                    }))
+                }
                 k => return Err(r.err(format!("unknown object kind {k}"))),
             };
             let color = r.f32x3()?;

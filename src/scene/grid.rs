@@ -1,0 +1,120 @@
+//! Reservoir grids (corner-point grids, seed 003) as scene objects: each block of columns is a
+//! tile whose LOD levels are the block's cell-merging levels (`crate::grid`), so every culling
+//! strategy applies to grid blocks as to horizon tiles, and the renderer picks each block's level
+//! by view distance or screen-space error (`render::GridLod`).
+
+use super::{check_color, AddOptions, ColorSource, ObjectKind, Scene};
+use crate::camera::MAX_COORD;
+use crate::error::{ensure, num, Result};
+use crate::grid::{self, CornerGrid, LevelStats};
+use crate::lod::levels::MAX_LEVELS;
+use glam::DVec3;
+
+/// The most cells per block side: a block's quadtree then has at most [`MAX_LEVELS`] levels
+/// above its leaves, the levels every tile can hold.
+pub const MAX_BLOCK: usize = 1 << MAX_LEVELS;
+
+/// What a grid object keeps besides its tiles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridInfo {
+    /// (nk, nj, ni) cells.
+    pub dims: (usize, usize, usize),
+    /// (bi, bj) cells per block.
+    pub blocks: (usize, usize),
+    /// Mean leaf cell size (L along i, W along j) of each block, in tile order.
+    pub cell_size: Vec<(f64, f64)>,
+    /// Per level 0..: the whole grid's counts (`grid::LevelStats`).
+    pub levels: Vec<LevelStats>,
+    /// Per block (tile order), per level 0..: its counts; a block with fewer levels stops early.
+    pub block_levels: Vec<Vec<LevelStats>>,
+}
+
+impl Scene {
+    /// Adds a corner-point grid (see `crate::grid::CornerGrid` for the layout): `corners`
+    /// (nk, nj, ni, 8, 3) world coordinates, `active` / `region` per cell, `opts.color_by` values
+    /// one per cell; `blocks` = (bi, bj) cells per block, each in 1..=[`MAX_BLOCK`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_grid(
+        &mut self,
+        dims: (usize, usize, usize),
+        corners: &[f64],
+        active: Option<&[bool]>,
+        region: Option<&[i32]>,
+        blocks: (usize, usize),
+        mut opts: AddOptions,
+    ) -> Result<u32> {
+        let (nk, nj, ni) = dims;
+        for (b, name) in [(blocks.0, 0), (blocks.1, 1)] {
+            ensure((1..=MAX_BLOCK).contains(&b), "blocks", || {
+                format!("blocks[{name}] is {b}; expected 1..={MAX_BLOCK} cells per block")
+            })?;
+        }
+        let n = nk.saturating_mul(nj).saturating_mul(ni);
+        ensure(n > 0, "corners", || format!("corners has shape ({nk}, {nj}, {ni}, 8, 3); expected at least one cell"))?;
+        let color = check_color(opts.color, self.next_id)?;
+        let color_by = super::color_by_arg(&opts.color, opts.color_by.take(), || None)?;
+        if let Some(c) = &color_by {
+            c.check(Some((n, &format!("one per cell, ({nk}, {nj}, {ni})"))))?;
+        }
+        let values = color_by.as_ref().and_then(|c| c.values.as_deref());
+        let g = CornerGrid { nk, nj, ni, corners, active, region, values };
+        // Bounds of the active cells' finite corners (build_grid names a non-finite active corner).
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        if corners.len() == n * 24 {
+            for (c, cell) in corners.chunks_exact(24).enumerate() {
+                if active.is_some_and(|a| a.get(c) == Some(&false)) {
+                    continue;
+                }
+                for p in cell.chunks_exact(3) {
+                    let p = DVec3::new(p[0], p[1], p[2]);
+                    if p.is_finite() {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+            }
+        }
+        if lo.x > hi.x {
+            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
+        }
+        for (a, v) in lo.to_array().into_iter().chain(hi.to_array()).enumerate() {
+            ensure(v.abs() <= MAX_COORD, "corners", || {
+                format!("component {}: corners reach {}; coordinates must be within +-{MAX_COORD:e}", a % 3, num(v))
+            })?;
+        }
+        let o = self.origin_for(lo, hi);
+        let build = opts.interrupt.run_parallel(|stop| grid::build_grid(&g, o, blocks, stop))??;
+        let color_by = match &color_by {
+            None => None,
+            Some(c) if c.source == ColorSource::Z => {
+                Some(c.resolve(build.tiles.iter().flat_map(|t| t.positions.iter().map(|p| p[2] as f64 + o.z)))?)
+            }
+            Some(c) => Some(c.resolve(build.tiles.iter().flat_map(|t| t.values.iter().map(|&v| v as f64)))?),
+        };
+        let info = GridInfo {
+            dims,
+            blocks,
+            cell_size: build.cell_size,
+            levels: build.levels,
+            block_levels: build.block_levels,
+        };
+        let mut tiles = build.tiles;
+        for t in &mut tiles {
+            t.levels.truncate(MAX_LEVELS);
+        }
+        // Cell merging keeps each cell's value (a merged face takes its cells' mean), so grids
+        // coloured by values keep their levels: push would drop them for other kinds.
+        let id = self.next_id;
+        self.push(o, opts.name, ObjectKind::Grid(Box::new(info)), color, None, tiles);
+        self.object_mut(id)?.color_by = color_by;
+        Ok(id)
+    }
+
+    /// The grid's per-level counts (`grid::LevelStats`), level 0 first.
+    pub fn grid_levels(&self, id: u32) -> Result<&[LevelStats]> {
+        match &self.object(id)?.kind {
+            ObjectKind::Grid(g) => Ok(&g.levels),
+            _ => Err(crate::error::input_err("id", format!("object {id} is not a grid"))),
+        }
+    }
+}
