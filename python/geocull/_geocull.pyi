@@ -264,9 +264,9 @@ class Renderer:
         predict_errors: bool,
         lod: str,
         max_pixel_error: float,
-        grid_lod: str = "full",
-        alpha: float = 10.0,
-        lam: float = 2.5,
+        grid_lod: str,
+        alpha: float,
+        lam: float,
     ) -> RenderOutput: ...
 
 def culling_modes() -> list[str]: ...

@@ -110,7 +110,7 @@ impl PyRenderer {
     }
 
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error, grid_lod="full".to_string(), alpha=10.0, lam=2.5))]
+    #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error, grid_lod, alpha, lam))]
     fn render<'py>(
         &self,
         py: Python<'py>,
