@@ -4,7 +4,9 @@
 Rust (src/): every `crate::<module>` path in code (comments ignored) must point to the same module
 or to a lower layer:
 
-    python -> render -> {cull, iso} -> gpu -> scene -> {lod, camera} -> error
+    python -> render -> {cull, iso} -> gpu -> scene -> {grid, camera} -> lod -> error
+
+(`grid` sits at the level of `lod` and may use it; `camera` and `grid` do not use each other.)
 
 (`cull` and `iso` do not use each other; `crate::TestRng`, `crate::Result`, `crate::Error` are the
 crate root's re-exports and allowed everywhere.)
@@ -29,12 +31,13 @@ BELOW: dict[str, set[str]] = {
     "error": set(),
     "camera": {"error"},
     "lod": {"error"},
-    "scene": {"error", "camera", "lod"},
-    "gpu": {"error", "camera", "lod", "scene"},
-    "cull": {"error", "camera", "lod", "scene", "gpu"},
-    "iso": {"error", "camera", "lod", "scene", "gpu"},
-    "render": {"error", "camera", "lod", "scene", "gpu", "cull", "iso"},
-    "python": {"error", "camera", "lod", "scene", "gpu", "cull", "iso", "render"},
+    "grid": {"error", "lod"},
+    "scene": {"error", "camera", "lod", "grid"},
+    "gpu": {"error", "camera", "lod", "grid", "scene"},
+    "cull": {"error", "camera", "lod", "grid", "scene", "gpu"},
+    "iso": {"error", "camera", "lod", "grid", "scene", "gpu"},
+    "render": {"error", "camera", "lod", "grid", "scene", "gpu", "cull", "iso"},
+    "python": {"error", "camera", "lod", "grid", "scene", "gpu", "cull", "iso", "render"},
 }
 ROOT_ITEMS = {"TestRng", "Result", "Error"}
 

@@ -11,6 +11,7 @@ Generators
 ``pesco_synthetic``      the analytic volume of Pesco et al. (isosurface tests)
 ``jacksboro_dem``        a real DEM shipped with matplotlib (metres)
 ``topobathy``            a real topography/bathymetry grid shipped with matplotlib (metres)
+``faulted_grid``         a corner-point reservoir grid: a normal fault, a pinch-out, erosion, regions
 
 Helpers: ``heightfield_mesh`` (a height field's triangles), ``grid_faces`` (the faces of any
 structured surface, e.g. a fault plane), ``depth_colormap``.
@@ -47,6 +48,7 @@ __all__ = [
     "heightfield_mesh",
     "grid_faces",
     "MeshScene",
+    "faulted_grid",
 ]
 
 # Anchor colours (depth fraction 0 = shallowest, 1 = deepest) of a "geological" colormap:
@@ -636,3 +638,78 @@ def topobathy() -> tuple[np.ndarray, tuple[float, float], tuple[float, float]]:
     dx = dlon * _M_PER_DEG * math.cos(math.radians(lat0))
     dy = dlat * _M_PER_DEG
     return np.ascontiguousarray(z), (0.0, 0.0), (float(dx), float(dy))
+
+
+def faulted_grid(
+    ni: int = 100,
+    nj: int = 100,
+    nk: int = 100,
+    throw: float = 7.5,
+    seed: int = 0,
+    spacing: tuple[float, float] = (50.0, 50.0),
+    thickness: float = 2.0,
+) -> dict[str, np.ndarray]:
+    """A layered corner-point reservoir grid (Jia et al.'s test case, synthetic): nk layers of
+    mean ``thickness`` metres under a smooth top near z = -1500 m, on vertical pillars
+    ``spacing`` metres apart, with
+
+    - a normal fault: the columns i >= ni // 2 are thrown down by ``throw`` metres in the middle of
+      the fault, tapering to 0.6 x ``throw`` at its ends (j = 0 and j = nj), so the layers of the
+      two blocks cross each other along it (choose a throw that is not a multiple of the layer
+      thickness to see partial overlaps);
+    - a pinch-out zone: layer nk // 2 thins to zero thickness towards x = 0 (zero for x <= 20 % of
+      the grid's length, full from 40 %): fully collapsed cells there, wedge cells with collapsed
+      corners in between;
+    - an erosional truncation: an unconformity cuts the top layers down by up to 3 layers towards
+      +y (its corners are clamped to the erosion surface);
+    - inactive cells: those collapsed by the pinch-out or the erosion, the deepest fifth of the
+      layers in the quarter i < ni / 4 (below a contact), and 0.2 % at random;
+    - four regions: 1 + (fault block, i >= ni // 2) + 2 (layers k >= nk // 2);
+    - a porosity-like property (0.1 .. 0.3, NaN in inactive cells).
+
+    Returns ``dict(corners=(nk, nj, ni, 8, 3) float64 world x, y, z (z up, metres),
+    active=(nk, nj, ni) bool, region=(nk, nj, ni) int32, values=(nk, nj, ni) float64)`` in the
+    corner order of :mod:`geocull.grid` (corner c: i-bit c & 1, j-bit (c >> 1) & 1, k-bit (c >> 2)
+    & 1, k = 0 the top). Deterministic for a given ``seed``.
+    """
+    if ni < 2 or nj < 1 or nk < 2:
+        raise InputError(f"ni, nj, nk: ({ni}, {nj}, {nk}); need ni >= 2, nj >= 1, nk >= 2")
+    rng = np.random.default_rng(seed)
+    dx, dy = float(spacing[0]), float(spacing[1])
+    lx, ly = ni * dx, nj * dy
+    X, Y = np.meshgrid(np.arange(ni + 1) * dx, np.arange(nj + 1) * dy)  # pillars, (nj+1, ni+1)
+    extent = max(lx, ly)
+    top = -1500.0 + _smooth_field(rng, X, Y, extent, amplitude=0.15 * nk * thickness)
+    # Layer thicknesses at the pillars, (nk, nj+1, ni+1): a gentle lateral variation per layer.
+    phase = rng.uniform(0, 2 * np.pi, size=(nk, 1, 1))
+    th = thickness * (1.0 + 0.25 * np.sin(2 * np.pi * X[None] / extent + phase) * np.cos(2 * np.pi * Y[None] / extent))
+    kp = nk // 2
+    th[kp] *= np.clip((X - 0.2 * lx) / (0.2 * lx), 0.0, 1.0)
+    H = top[None] - np.concatenate([np.zeros((1,) + X.shape), np.cumsum(th, axis=0)])  # (nk+1, nj+1, ni+1)
+    cb = np.arange(8)
+    K = np.arange(nk)[:, None, None, None] + ((cb >> 2) & 1)
+    J = np.arange(nj)[None, :, None, None] + ((cb >> 1) & 1)
+    ic = np.arange(ni)[None, None, :, None] + (cb & 1)
+    z = H[K, J, ic]  # (nk, nj, ni, 8)
+    i_f = ni // 2
+    taper = 0.6 + 0.4 * np.sin(np.pi * np.arange(nj + 1) / max(nj, 1))  # per pillar row
+    hanging = (np.arange(ni) >= i_f)[None, None, :, None]
+    z = z - hanging * (throw * taper)[J]
+    # Erosion after faulting: an unconformity down to 3 layers below the top towards +y.
+    above = top.max() + 1.0
+    erosion = above - (above - top + 3.0 * thickness) * np.clip((Y - 0.4 * ly) / (0.6 * ly), 0.0, 1.0)
+    erosion = np.where(Y <= 0.4 * ly, np.inf, erosion)
+    z = np.minimum(z, erosion[J, ic])
+    corners = np.empty((nk, nj, ni, 8, 3))
+    corners[..., 0] = X[J, ic]
+    corners[..., 1] = Y[J, ic]
+    corners[..., 2] = z
+    collapsed = np.all(z[..., :4] == z[..., 4:], axis=-1)
+    kk, jj, ii = np.meshgrid(np.arange(nk), np.arange(nj), np.arange(ni), indexing="ij")
+    active = ~collapsed & ~((kk >= nk - max(1, nk // 5)) & (ii < ni / 4)) & (rng.random((nk, nj, ni)) >= 0.002)
+    region = (1 + (ii >= i_f) + 2 * (kk >= kp)).astype(np.int32)
+    xc, yc = corners[..., 0].mean(axis=-1), corners[..., 1].mean(axis=-1)
+    values = 0.2 + 0.05 * np.sin(kk / 3.0) + 0.04 * np.sin(2 * np.pi * xc / extent) * np.cos(2 * np.pi * yc / extent)
+    values = values + rng.normal(0.0, 0.01, size=values.shape)
+    values = np.where(active, np.clip(values, 0.1, 0.3), np.nan)
+    return {"corners": corners, "active": active, "region": region, "values": values}

@@ -71,6 +71,16 @@ pub(crate) struct Block {
     pub j1: usize,
 }
 
+impl Block {
+    /// Pillar column `pi` is a seam with a neighbouring block (of a grid `ni` cells wide).
+    pub fn seam_i(&self, pi: usize, ni: usize) -> bool {
+        (pi == self.i0 && self.i0 > 0) || (pi == self.i1 && self.i1 < ni)
+    }
+    pub fn seam_j(&self, pj: usize, nj: usize) -> bool {
+        (pj == self.j0 && self.j0 > 0) || (pj == self.j1 && self.j1 < nj)
+    }
+}
+
 /// A line of an interface: heights at t = 0 and t = 1 and the end points.
 #[derive(Clone, Copy)]
 struct Line {
@@ -114,6 +124,9 @@ struct SideCell {
     bot: Line,
 }
 
+/// A pillar's breakpoints: (height s, position), sorted by s.
+type Breakpoints = Vec<(f64, [f64; 3])>;
+
 /// The level-0 builder of one block.
 pub(crate) struct Level0<'c, 'a> {
     pub ctx: &'c Ctx<'a>,
@@ -121,7 +134,7 @@ pub(crate) struct Level0<'c, 'a> {
     pub verts: Verts,
     pub faces: Vec<Face>,
     /// Pillar breakpoints (s, position), sorted by s, built on first use; index local pillar.
-    pillars: Vec<Option<Vec<(f64, [f64; 3])>>>,
+    pillars: Vec<Option<Breakpoints>>,
     /// Crossings on the edges of top/bottom faces: (cell, side 0..4, 0 = top / 1 = bottom) ->
     /// vertex ids in order of increasing t along that side's interface.
     cross: FastMap<(usize, u8, u8), Vec<u32>>,
@@ -140,8 +153,10 @@ impl<'c, 'a> Level0<'c, 'a> {
         }
     }
 
+    /// Whether a pillar lies on a seam with another block (the grid's own outline is not a seam:
+    /// no neighbour has to meet it, so it merges like the inside).
     fn pillar_border(&self, pi: usize, pj: usize) -> bool {
-        pi == self.b.i0 || pi == self.b.i1 || pj == self.b.j0 || pj == self.b.j1
+        self.b.seam_i(pi, self.ctx.g.ni) || self.b.seam_j(pj, self.ctx.g.nj)
     }
 
     fn pillar_id(&self, pi: usize, pj: usize) -> u32 {
@@ -264,12 +279,12 @@ impl<'c, 'a> Level0<'c, 'a> {
             let (pi, j) = (a, bb);
             let lo = (pi >= 1).then(|| (j, pi - 1));
             let hi = (pi < g.ni).then_some((j, pi));
-            ((pi, j), (pi, j + 1), lo, hi, pi == blk.i0 || pi == blk.i1)
+            ((pi, j), (pi, j + 1), lo, hi, blk.seam_i(pi, g.ni))
         } else {
             let (i, pj) = (a, bb);
             let lo = (pj >= 1).then(|| (pj - 1, i));
             let hi = (pj < g.nj).then_some((pj, i));
-            ((i, pj), (i + 1, pj), lo, hi, pj == blk.j0 || pj == blk.j1)
+            ((i, pj), (i + 1, pj), lo, hi, blk.seam_j(pj, g.nj))
         };
         let (lo_c, hi_c): ([usize; 4], [usize; 4]) =
             if !jface { ([1, 3, 5, 7], [0, 2, 4, 6]) } else { ([2, 3, 6, 7], [0, 1, 4, 5]) };

@@ -7,10 +7,10 @@
 //! of the children along that side. A group merges when every child along the side has one
 //! whole face, all of one region (never across regions; faults and inactive cells cut faces into
 //! pieces or leave children without a face, so nothing merges across them), the side is not on
-//! the block's outline (kept at full resolution at every level, so that neighbouring blocks at
-//! any levels meet exactly), and no vertex inside the group's outline is used by a face outside
+//! a seam with another block (seams are kept at full resolution at every level, so that
+//! neighbouring blocks at any levels meet exactly; the grid's own outline merges like the inside), and no vertex inside the group's outline is used by a face outside
 //! the group (no T-junction). The merged face is the group's outline with every vertex removed
-//! that is not one of the parent's corners, not on the block outline, and used by exactly two
+//! that is not one of the parent's corners, not on a seam, and used by exactly two
 //! faces, both merged faces that remove it along the same two edges (so the edge u-v-w becomes
 //! u-w on both sides). A group whose reduced outline would be concave, or which would move the
 //! surface by more than the faces' tolerance (half the cell size across the face: a layer's top
@@ -56,7 +56,13 @@ struct Group {
 }
 
 /// Level h (>= 1) from level h - 1.
-pub(crate) fn next_level(prev: &LevelFaces, h: u32, b: Block, ni: usize, verts: &mut Verts) -> LevelFaces {
+pub(crate) fn next_level(
+    prev: &LevelFaces,
+    h: u32,
+    b: Block,
+    (ni, nj): (usize, usize),
+    verts: &mut Verts,
+) -> LevelFaces {
     let (bw, bh) = ((b.i1 - b.i0) as u32, (b.j1 - b.j0) as u32);
     let nodes_at = |n: u32, hh: u32| n.div_ceil(1 << hh);
     let (cw, ch) = (nodes_at(bw, h - 1), nodes_at(bh, h - 1));
@@ -85,16 +91,24 @@ pub(crate) fn next_level(prev: &LevelFaces, h: u32, b: Block, ni: usize, verts: 
         let ja = b.j0 as u32 + (pj << h);
         let jb = (b.j0 as u32 + ((pj + 1) << h)).min(b.j1 as u32);
         let (children, border, corner_pillars): (Vec<(u32, u32)>, bool, Vec<u32>) = match d {
-            0 => (ys.iter().map(|&y| (xs[0], y)).collect(), pi == 0, vec![pillar_id(ia, ja), pillar_id(ia, jb)]),
+            0 => (
+                ys.iter().map(|&y| (xs[0], y)).collect(),
+                pi == 0 && b.seam_i(b.i0, ni),
+                vec![pillar_id(ia, ja), pillar_id(ia, jb)],
+            ),
             1 => (
                 ys.iter().map(|&y| (*xs.last().unwrap_or(&0), y)).collect(),
-                pi + 1 == pw,
+                pi + 1 == pw && b.seam_i(b.i1, ni),
                 vec![pillar_id(ib, ja), pillar_id(ib, jb)],
             ),
-            2 => (xs.iter().map(|&x| (x, ys[0])).collect(), pj == 0, vec![pillar_id(ia, ja), pillar_id(ib, ja)]),
+            2 => (
+                xs.iter().map(|&x| (x, ys[0])).collect(),
+                pj == 0 && b.seam_j(b.j0, nj),
+                vec![pillar_id(ia, ja), pillar_id(ib, ja)],
+            ),
             3 => (
                 xs.iter().map(|&x| (x, *ys.last().unwrap_or(&0))).collect(),
-                pj + 1 == ph,
+                pj + 1 == ph && b.seam_j(b.j1, nj),
                 vec![pillar_id(ia, jb), pillar_id(ib, jb)],
             ),
             _ => (

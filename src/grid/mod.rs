@@ -322,7 +322,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
     tile.fine = fine;
     stats.push(st);
     for h in 1..=block_levels(bw, bh) {
-        lev = merge::next_level(&lev, h, b, g.ni, &mut verts);
+        lev = merge::next_level(&lev, h, b, (g.ni, g.nj), &mut verts);
         let (idx, mut st) = emit(&lev, &verts, &mut tile, h + 1);
         let s = 1usize << h;
         let (nw, nh) = (bw.div_ceil(s), bh.div_ceil(s));

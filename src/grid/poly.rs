@@ -55,7 +55,7 @@ pub(crate) const NO_PILLAR: u32 = u32::MAX;
 /// The vertices of one block. A vertex is a position (as the tile will store it: f32 relative
 /// to the origin, compared bit for bit) of one region: the surfaces of two regions meeting at a
 /// boundary are separate closed surfaces and share no vertex, so that merging one never pins the
-/// other. `border` marks vertices on the block's outline (kept at every level), `pillar` the
+/// other. `border` marks vertices on a seam with another block (kept at every level), `pillar` the
 /// global pillar a vertex lies on (`pj * (ni + 1) + pi`, or [`NO_PILLAR`]).
 pub(crate) struct Verts {
     map: FastMap<([u32; 3], i32), u32>,
@@ -147,7 +147,7 @@ pub(crate) fn zero_area(poly: &[u32], verts: &Verts) -> bool {
     for w in 0..poly.len() {
         per += (verts.p(poly[(w + 1) % poly.len()]) - verts.p(poly[w])).length();
     }
-    !(n > 1e-12 * per * per)
+    n.partial_cmp(&(1e-12 * per * per)) != Some(std::cmp::Ordering::Greater)
 }
 
 /// Which vertices of a polygon are corners (a turn, not a point inside a straight side), given
