@@ -13,9 +13,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _convert as cv
-from . import _geocull
+from . import _geocull, _progress
 from ._convert import MeshLike
 from ._errors import InputError
+from ._progress import ProgressLike
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
@@ -86,6 +87,7 @@ class Scene:
         null_value: float | None = None,
         rotation: float = 0.0,
         yflip: bool = False,
+        progress: ProgressLike = None,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
@@ -104,6 +106,9 @@ class Scene:
             rotation); a bool, so xtgeo's 1 / -1 must be translated (``yflip=surf.yflip == -1``, or use
             :func:`geocull.io.from_xtgeo_surface`). Every culling mode works on rotated grids as on
             axis-aligned ones (horizon culling included).
+        progress: None (a bar in notebooks for builds over a second, silence in scripts), True (a
+            bar), False, or ``f(fraction, message)`` called with the fraction of tiles built
+            (see :mod:`geocull._progress`).
         Returns the object id.
         """
         nv = None if null_value is None else cv.number(null_value, "null_value")
@@ -112,10 +117,11 @@ class Scene:
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
-        return self._s.add_heightfield(
-            za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
-            cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
-        )
+        with _progress.task(progress, tt[0] * tt[1], "add_heightfield: tiles"):  # read by the core
+            return self._s.add_heightfield(
+                za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
+                cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
+            )
 
     def add_mesh(
         self,
@@ -126,6 +132,7 @@ class Scene:
         coarse_factor: float = 1.0,
         name: str | None = None,
         color: ArrayLike | None = None,
+        progress: ProgressLike = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -140,6 +147,7 @@ class Scene:
         are ignored with a :class:`geocull.GeocullWarning`; ``name`` and ``color`` default to the
         ``field_data`` written by :func:`geocull.io.to_pyvista`. Recognised by their attributes, so
         neither package is imported unless such an object is passed.
+        progress: as for :meth:`add_heightfield` (the fraction of clusters built).
         Returns the object id.
         """
         mesh = cv.mesh_arrays(vertices)
@@ -159,9 +167,10 @@ class Scene:
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
-        return self._s.add_mesh(
-            v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color)
-        )
+        with _progress.task(progress, k or 1, "add_mesh: tiles"):  # read by the core
+            return self._s.add_mesh(
+                v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color)
+            )
 
     def remove(self, id: int) -> None:
         """Remove object ``id``."""
