@@ -11,7 +11,7 @@ Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`
 :mod:`~geocull.results`, :mod:`~geocull.volume`, :mod:`~geocull.iso` (re-exported here), and,
 imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in and out),
 :mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.report`,
-:mod:`~geocull.bench`.
+:mod:`~geocull.bench`, :mod:`~geocull.testing` (image comparison and the pytest plugin).
 """
 
 import importlib as _importlib
@@ -34,6 +34,7 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import iso as iso
     from . import pyvista as pyvista
     from . import report as report
+    from . import testing as testing
 
 __version__ = "0.1.0"
 __all__ = [
@@ -60,7 +61,7 @@ __all__ = [
     "IsoStats",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io")
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing")
 
 
 def __getattr__(name: str) -> _ModuleType:
