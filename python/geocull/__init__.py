@@ -15,8 +15,8 @@ imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in an
 """
 
 import importlib as _importlib
-from types import ModuleType as _ModuleType
 from typing import TYPE_CHECKING as _TYPE_CHECKING
+from typing import Any as _Any
 
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
 from .camera import Camera, Projection
@@ -35,6 +35,7 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import pyvista as pyvista
     from . import report as report
     from . import testing as testing
+    from .viewer import Viewer as Viewer
 
 __version__ = "0.1.0"
 __all__ = [
@@ -59,20 +60,23 @@ __all__ = [
     "LodMode",
     "RenderStats",
     "IsoStats",
+    "Viewer",
 ]
 
 _SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing")
 
 
-def __getattr__(name: str) -> _ModuleType:
+def __getattr__(name: str) -> _Any:
     """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.io``: imported on
     first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched; ``gc.io`` imports
     xtgeo, segyio, trimesh only inside the functions that need them)."""
     if name in _SUBMODULES:
         return _importlib.import_module(f".{name}", __name__)
+    if name == "Viewer":  # the notebook viewer (geocull.viewer): its widget libraries load when one is made
+        return _importlib.import_module(".viewer", __name__).Viewer
     raise AttributeError(f"module 'geocull' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
     """The module's attributes plus the lazily imported submodules, for tab completion."""
-    return sorted(set(globals()) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_SUBMODULES) | {"Viewer"})
