@@ -11,7 +11,8 @@ Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`
 :mod:`~geocull.results`, :mod:`~geocull.volume`, :mod:`~geocull.iso` (re-exported here), and,
 imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in and out),
 :mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.report`,
-:mod:`~geocull.bench`, :mod:`~geocull.testing` (image comparison and the pytest plugin).
+:mod:`~geocull.bench`, :mod:`~geocull.testing` (image comparison and the pytest plugin),
+:mod:`~geocull.distributed` (many views on a Dask cluster), and the notebook viewer ``Viewer``.
 """
 
 import importlib as _importlib
@@ -30,6 +31,7 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import bench as bench
     from . import compare as compare
     from . import data as data
+    from . import distributed as distributed
     from . import io as io
     from . import iso as iso
     from . import pyvista as pyvista
@@ -63,7 +65,7 @@ __all__ = [
     "Viewer",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing")
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing", "distributed")
 
 
 def __getattr__(name: str) -> _Any:

@@ -45,20 +45,44 @@ def demo(argv: list[str]) -> int:
     return 0
 
 
+def bench_distributed(argv: list[str]) -> int:
+    """``python -m geocull bench-distributed [options]``: frames/s of geocull.distributed.render_views on
+    LocalClusters of 1, 2, ... worker processes, side by side."""
+    p = argparse.ArgumentParser(prog="python -m geocull bench-distributed",
+                                description="Frames/s of render_views on LocalClusters of 1, 2, ... workers.")
+    p.add_argument("--workers", default="1,2", help="comma-separated worker counts (default 1,2)")
+    p.add_argument("--views", type=int, default=16)
+    p.add_argument("--size", type=int, default=120, help="samples per horizon side")
+    p.add_argument("--width", type=int, default=320)
+    p.add_argument("--height", type=int, default=256)
+    p.add_argument("--culling", default="three_pass")
+    a = p.parse_args(argv)
+    from geocull.distributed import benchmark
+
+    rows = benchmark([int(n) for n in a.workers.split(",")], a.views, a.size, a.width, a.height, a.culling)
+    print(f"{'workers':>8} {'views':>6} {'seconds':>8} {'frames/s':>9} {'x 1 worker':>11}")
+    for r in rows:
+        print(f"{r['workers']:>8} {r['views']:>6} {r['seconds']:>8.2f} {r['frames_per_s']:>9.1f} "
+              f"{r['ratio_to_1']:>11.2f}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
-    """``python -m geocull {demo,bench} ...``; returns the exit status."""
+    """``python -m geocull {demo,bench,bench-distributed} ...``; returns the exit status."""
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m geocull {demo,bench} [options]  (each takes --help)")
+        print("usage: python -m geocull {demo,bench,bench-distributed} [options]  (each takes --help)")
         return 0 if argv else 2
     cmd, rest = argv[0], argv[1:]
     if cmd == "demo":
         return demo(rest)
+    if cmd == "bench-distributed":
+        return bench_distributed(rest)
     if cmd == "bench":
         from geocull.bench import main as bench_main
 
         return bench_main(rest)
-    print(f"unknown command {cmd!r}; expected demo or bench", file=sys.stderr)
+    print(f"unknown command {cmd!r}; expected demo, bench or bench-distributed", file=sys.stderr)
     return 2
 
 
