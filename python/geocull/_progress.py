@@ -80,11 +80,9 @@ class _TqdmBar:
         k = int(round(fraction * 1000))
         if message:
             self.bar.set_description_str(message[:60], refresh=False)
-        if k > self.n:
+        if k > self.n:  # tqdm redraws (and, past its delay, first shows the bar) on update
             self.bar.update(k - self.n)
             self.n = k
-        else:
-            self.bar.refresh()
         if fraction >= 1.0:
             self.bar.close()
 
