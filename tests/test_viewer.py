@@ -76,3 +76,60 @@ def test_widget_messages_drive_the_view(scene, renderer_small):
     n = st.frames
     v.handle_message({"type": "other"})  # ignored
     assert st.frames == n
+
+
+HARNESS = r"""
+const handlers = {}, sent = [], drawn = [];
+const listeners = {};
+const canvas = {
+  style: {}, width: 0, height: 0,
+  addEventListener: (t, f) => { listeners[t] = f; },
+  setPointerCapture: () => {},
+  getContext: () => ({ putImageData: (img) => drawn.push([img.width, img.height, img.data.length]) }),
+};
+globalThis.document = { createElement: () => canvas };
+globalThis.ImageData = class { constructor(d, w, h) { this.data = d; this.width = w; this.height = h; } };
+const state = { width: 4, height: 2, frame: new DataView(new Uint8Array(32).buffer) };
+const model = {
+  get: (k) => state[k], on: (ev, f) => { handlers[ev] = f; }, send: (m) => sent.push(m),
+};
+const el = { appendChild: () => {} };
+const mod = await import(process.argv[2]);
+mod.default.render({ model, el });
+const ev = (x, y) => ({ clientX: x, clientY: y, pointerId: 1 });
+listeners.pointerdown(ev(0, 0));
+listeners.pointermove(ev(5, 0));      // sent at once
+listeners.pointermove(ev(12, 3));     // the frame is not back yet: merged
+listeners.pointermove(ev(20, 3));
+let prevented = 0;
+listeners.wheel({ deltaY: 100, preventDefault: () => { prevented++; } });
+handlers["change:frame"]();           // the frame arrives: drawn, then the merged moves go out
+listeners.pointerup();
+listeners.pointermove(ev(30, 3));     // not dragging: nothing
+handlers["change:frame"]();
+console.log(JSON.stringify({ sent, drawn, prevented }));
+"""
+
+
+def test_browser_code_merges_moves_while_a_frame_is_on_its_way(tmp_path):
+    """The widget's JavaScript under node with a stand-in model and canvas: one request at a time,
+    the moves made meanwhile merged into the next, frames drawn at the model's size."""
+    import json
+    import shutil
+    import subprocess
+
+    from geocull.viewer import _ESM
+
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not installed")
+    (tmp_path / "viewer.mjs").write_text(_ESM)
+    (tmp_path / "harness.mjs").write_text(HARNESS)
+    p = subprocess.run([node, str(tmp_path / "harness.mjs"), str(tmp_path / "viewer.mjs")],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert out["sent"] == [{"type": "view", "dx": 5, "dy": 0, "wheel": 0},
+                           {"type": "view", "dx": 15, "dy": 3, "wheel": 100}]
+    assert out["prevented"] == 1
+    assert out["drawn"][-1] == [4, 2, 32] and len(out["drawn"]) == 3  # at render, then on each frame
