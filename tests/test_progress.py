@@ -115,3 +115,18 @@ def test_sweep_and_bench_progress():
     bench.run(bench._config(a), progress=cb)
     fr = check_fractions(seen)
     assert pytest.approx(1 / 3) in fr and pytest.approx(2 / 3) in fr  # two builds, one view
+
+
+def test_scene_spec_build_reports_every_object():
+    from geocull.data import stacked_test_scene
+
+    spec = stacked_test_scene(n=64, n_horizons=3)
+    seen, cb = recorder()
+    scene = spec.build(tiles=(4, 4), coarse_factor=4, progress=cb)
+    fr = check_fractions(seen)
+    assert len(scene.object_ids()) == len(spec.horizons) + len(spec.faults)
+    # every object ends its share: the fractions after each object's last report are its cumulative weight
+    w = [2.0 * h["z"].size for h in spec.horizons] + [float(len(f["faces"])) for f in spec.faults]
+    marks = np.cumsum(w)[:-1] / sum(w)
+    assert all(any(abs(f - m) < 1e-9 for f in fr) for m in marks), (fr, marks)
+    assert any("object 2/" in m for _, m in seen)

@@ -7,6 +7,7 @@ import argparse
 import sys
 import time
 from collections.abc import Callable
+from typing import Any
 
 
 def demo(argv: list[str]) -> int:
@@ -42,10 +43,11 @@ def demo(argv: list[str]) -> int:
     print(f"adapter: {r.adapter_info}; {a.width}x{a.height}; best of {n} frames after a warm-up")
     name, kw = standard_views(spec, aspect=a.width / a.height)[0]
     cam = gc.Camera.look_at(**kw)
-    modes = {"none": dict(culling="none"), "three_pass": dict(culling="three_pass", pixel_threshold=10)}
+    modes: dict[str, dict[str, Any]] = {"none": dict(culling="none"),
+                                        "three_pass": dict(culling="three_pass", pixel_threshold=10)}
     first = {m: r.render(scene, cam, **o) for m, o in modes.items()}  # warm-up: upload, pipelines
 
-    def job(o: dict) -> Callable[[], float]:
+    def job(o: dict[str, Any]) -> Callable[[], float]:
         return lambda: float(r.render(scene, cam, **o).stats["total_ms"])
 
     times = timed_rounds([(m, job(o)) for m, o in modes.items()], n)
