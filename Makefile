@@ -10,7 +10,7 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan gl build demo test test-rust test-python test-gl lint bench bench-quick examples-quick clean
+.PHONY: setup vulkan gl build demo test test-rust test-python test-gl lint bench bench-quick bench-distributed examples-quick notebooks clean
 
 setup: vulkan gl build
 
@@ -79,12 +79,21 @@ bench: setup
 bench-quick: setup
 	$(PY) -m geocull bench --quick --json out/bench_quick.json
 
+# Frames/s of geocull.distributed.render_views on LocalClusters of 1 and 2 worker processes.
+bench-distributed: setup
+	$(PY) -m geocull bench-distributed --workers 1,2
+
 # Every example in its quick mode (CI runs them so they cannot rot); outputs under out/examples.
 examples-quick: setup
 	$(PY) examples/seeds_study.py --quick --out out/examples/seeds
 	$(PY) examples/iso_table.py --quick --out out/examples/iso_table
 	$(PY) examples/horizon_dem.py --width 320 --height 240 --spots 1 --repeat 1 --out out/examples/horizon
 	$(PY) examples/geodata_scene.py --quick --out out/examples/geodata
+
+# Every example notebook executed in a fresh kernel (nbclient), as CI does; outputs are never
+# committed: the executed copies go to out/notebooks.
+notebooks: setup
+	$(PY) scripts/run_notebooks.py --out out/notebooks
 
 clean:
 	rm -rf $(VENV) target demo.png out

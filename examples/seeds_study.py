@@ -44,6 +44,11 @@ def say(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+def sweep_progress(fraction: float, msg: str) -> None:
+    """report.sweep's progress callback: its messages, with the fraction of views done."""
+    say(f"{fraction * 100:5.1f} % {msg}")
+
+
 Row = dict[str, Any]
 
 
@@ -195,14 +200,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     sweeps: dict[str, list[Row]] = {}
     say("sweep 1/3: tiles")
     sweeps["tiles"] = report.sweep(spec, views, thresholds=[10], coarse_factors=[25], tiles=TILES, prepass_scales=[1.0],
-                                   renderer=renderer, repeats=repeats, progress=say)
+                                   renderer=renderer, repeats=repeats, progress=sweep_progress)
     say("sweep 2/3: threshold x prepass scale")
     sweeps["threshold_prepass"] = report.sweep(spec, views, thresholds=THRESHOLDS, coarse_factors=[25], tiles=[10],
                                                prepass_scales=PREPASS, renderer=renderer, repeats=repeats,
-                                               progress=say)
+                                               progress=sweep_progress)
     say("sweep 3/3: coarse factor")
     sweeps["coarse"] = report.sweep(spec, views, thresholds=[0, 10], coarse_factors=COARSE, tiles=[10],
-                                    prepass_scales=[1.0], renderer=renderer, repeats=repeats, progress=say)
+                                    prepass_scales=[1.0], renderer=renderer, repeats=repeats, progress=sweep_progress)
 
     summaries: dict[str, list[Row]] = {}
     for name, rows in sweeps.items():

@@ -6,6 +6,9 @@
 //! and target, so a camera keeps looking at the same geological point whatever the exaggeration
 //! (the same convention as VTK's `SetScale` with the camera placed in scaled coordinates).
 
+mod orbit;
+pub use orbit::{Lens, Orbit};
+
 use crate::error::{ensure, input_err, num, Result};
 use glam::dcamera::rh::{proj::directx, view::look_at_mat4};
 use glam::{DMat4, DVec3};

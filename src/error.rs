@@ -2,7 +2,7 @@
 //! (`InputError` for bad arguments, `DeviceError` for adapter/driver trouble, `KeyboardInterrupt`
 //! for [`Error::Interrupted`]), and the cancellation hook [`Interrupt`] that long work polls.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
@@ -80,12 +80,67 @@ pub fn object_id(v: i64) -> Result<u32> {
 ///   rayon's workers build tiles, and a set flag makes the workers skip the tiles not started.
 ///
 /// No global state: two renders on two threads each have their own hook.
+///
+/// Progress rides along: a hook may carry a progress callback ([`Interrupt::with_progress`]),
+/// which [`Interrupt::run_parallel`]'s polling loop calls on the same calling thread with the
+/// number of items the job's workers have finished so far ([`Work::item_done`]); it returns
+/// true to stop the work, like the hook (the binding's callback raised).
 #[derive(Clone, Default)]
-pub struct Interrupt(Option<Arc<dyn Fn() -> bool + Send + Sync>>);
+pub struct Interrupt(Option<Arc<dyn Fn() -> bool + Send + Sync>>, Option<Arc<dyn Fn(usize) -> bool + Send + Sync>>);
 
 impl std::fmt::Debug for Interrupt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(if self.0.is_some() { "Interrupt(hook)" } else { "Interrupt(none)" })
+    }
+}
+
+/// What the workers of a parallel build share with the polling thread: the stop flag (the
+/// `&AtomicBool` the tile loops read, through `Deref`) and the count of finished items (tiles)
+/// that progress reports.
+#[derive(Debug, Default)]
+pub struct Work {
+    stop: AtomicBool,
+    done: AtomicUsize,
+}
+
+impl std::ops::Deref for Work {
+    type Target = AtomicBool;
+    fn deref(&self) -> &AtomicBool {
+        &self.stop
+    }
+}
+
+/// A parallel job's view of its [`Work`]: the stop flag, and where finished items are counted
+/// (nowhere for a bare `AtomicBool`, as tests pass).
+pub trait Progress: Sync {
+    fn stop_flag(&self) -> &AtomicBool;
+    fn item_done(&self) {}
+}
+
+impl Progress for AtomicBool {
+    fn stop_flag(&self) -> &AtomicBool {
+        self
+    }
+}
+
+impl Progress for Work {
+    fn stop_flag(&self) -> &AtomicBool {
+        &self.stop
+    }
+    fn item_done(&self) {
+        Work::item_done(self)
+    }
+}
+
+impl Work {
+    /// One more item finished (any worker thread).
+    #[inline]
+    pub fn item_done(&self) {
+        self.done.fetch_add(1, Ordering::Relaxed);
+    }
+    /// Items finished so far.
+    pub fn done(&self) -> usize {
+        self.done.load(Ordering::Relaxed)
     }
 }
 
@@ -95,7 +150,20 @@ impl Interrupt {
 
     /// A hook: `stop()` returns true when the work should stop.
     pub fn new(stop: impl Fn() -> bool + Send + Sync + 'static) -> Self {
-        Self(Some(Arc::new(stop)))
+        Self(Some(Arc::new(stop)), None)
+    }
+
+    /// This hook with a progress callback: `progress(done)` is called while
+    /// [`Self::run_parallel`] waits (every [`Self::POLL`], on the calling thread) with the items
+    /// finished so far; true stops the work as the hook does.
+    pub fn with_progress(self, progress: impl Fn(usize) -> bool + Send + Sync + 'static) -> Self {
+        let stop = self.0.unwrap_or_else(|| Arc::new(|| false));
+        Self(Some(stop), Some(Arc::new(progress)))
+    }
+
+    /// Calls the progress callback (if any) with `done`; true = stop.
+    fn report(&self, done: usize) -> bool {
+        self.1.as_ref().is_some_and(|p| p(done))
     }
 
     /// Whether there is a hook at all (without one, nothing needs polling).
@@ -115,8 +183,8 @@ impl Interrupt {
     /// every [`Self::POLL`]; when it says stop, the flag passed to `job` is set, `job` should
     /// return soon (skipping work not started) and the result is `Err(Error::Interrupted)`.
     /// Without a hook, `job` runs on this thread.
-    pub fn run_parallel<T: Send>(&self, job: impl FnOnce(&AtomicBool) -> T + Send) -> Result<T> {
-        let stop = AtomicBool::new(false);
+    pub fn run_parallel<T: Send>(&self, job: impl FnOnce(&Work) -> T + Send) -> Result<T> {
+        let stop = Work::default();
         if !self.is_set() {
             return Ok(job(&stop));
         }
@@ -131,7 +199,7 @@ impl Interrupt {
             });
             // Until the job reports (or its thread dies: the channel disconnects).
             while let Err(mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(Self::POLL) {
-                if !stop.load(Ordering::Relaxed) && self.check().is_err() {
+                if !stop.load(Ordering::Relaxed) && (self.check().is_err() || self.report(stop.done())) {
                     stop.store(true, Ordering::Relaxed);
                 }
             }
@@ -175,5 +243,39 @@ mod tests {
         assert!(matches!(r, Err(Error::Interrupted)));
         assert_eq!(calls.load(Ordering::Relaxed), 2);
         assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
+    }
+
+    /// Progress is reported on the polling thread with monotone counts of the items done; a
+    /// callback that returns true stops the job like the hook.
+    #[test]
+    fn run_parallel_reports_progress_and_stops_on_request() {
+        let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let s = seen.clone();
+        let caller = std::thread::current().id();
+        let hook = Interrupt::default().with_progress(move |done| {
+            assert_eq!(std::thread::current().id(), caller);
+            s.lock().unwrap().push(done);
+            false
+        });
+        let n = hook
+            .run_parallel(|work| {
+                for _ in 0..6 {
+                    std::thread::sleep(Duration::from_millis(15));
+                    work.item_done();
+                }
+                work.done()
+            })
+            .unwrap();
+        assert_eq!(n, 6);
+        let seen = seen.lock().unwrap().clone();
+        assert!(!seen.is_empty() && seen.windows(2).all(|w| w[0] <= w[1]) && seen.iter().all(|&d| d <= 6), "{seen:?}");
+        let stopper = Interrupt::default().with_progress(|done| done >= 1);
+        let r = stopper.run_parallel(|work| {
+            while !work.load(Ordering::Relaxed) {
+                work.item_done();
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        });
+        assert!(matches!(r, Err(Error::Interrupted)));
     }
 }

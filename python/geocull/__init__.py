@@ -11,12 +11,13 @@ Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`
 :mod:`~geocull.results`, :mod:`~geocull.volume`, :mod:`~geocull.iso` (re-exported here), and,
 imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in and out),
 :mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.report`,
-:mod:`~geocull.bench`.
+:mod:`~geocull.bench`, :mod:`~geocull.testing` (image comparison and the pytest plugin),
+:mod:`~geocull.distributed` (many views on a Dask cluster), and the notebook viewer ``Viewer``.
 """
 
 import importlib as _importlib
-from types import ModuleType as _ModuleType
 from typing import TYPE_CHECKING as _TYPE_CHECKING
+from typing import Any as _Any
 
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
 from .camera import Camera, Projection
@@ -30,10 +31,13 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import bench as bench
     from . import compare as compare
     from . import data as data
+    from . import distributed as distributed
     from . import io as io
     from . import iso as iso
     from . import pyvista as pyvista
     from . import report as report
+    from . import testing as testing
+    from .viewer import Viewer as Viewer
 
 __version__ = "0.1.0"
 __all__ = [
@@ -59,20 +63,23 @@ __all__ = [
     "GridLodMode",
     "RenderStats",
     "IsoStats",
+    "Viewer",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io")
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing", "distributed")
 
 
-def __getattr__(name: str) -> _ModuleType:
+def __getattr__(name: str) -> _Any:
     """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.io``: imported on
     first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched; ``gc.io`` imports
     xtgeo, segyio, trimesh only inside the functions that need them)."""
     if name in _SUBMODULES:
         return _importlib.import_module(f".{name}", __name__)
+    if name == "Viewer":  # the notebook viewer (geocull.viewer): its widget libraries load when one is made
+        return _importlib.import_module(".viewer", __name__).Viewer
     raise AttributeError(f"module 'geocull' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
     """The module's attributes plus the lazily imported submodules, for tab completion."""
-    return sorted(set(globals()) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_SUBMODULES) | {"Viewer"})

@@ -216,6 +216,36 @@ class Camera:
         ortho_height: float | None,
         z_scale: float,
     ) -> Camera: ...
+    @staticmethod
+    def orbit(
+        target: tuple[float, float, float],
+        azimuth: float,
+        elevation: float,
+        distance: float,
+        up: tuple[float, float, float],
+        fov_y: float,
+        near: float | None,
+        far: float | None,
+        projection: str,
+        ortho_height: float | None,
+        z_scale: float,
+    ) -> Camera: ...
+    @staticmethod
+    def fit(
+        lo: tuple[float, float, float],
+        hi: tuple[float, float, float],
+        azimuth: float,
+        elevation: float,
+        margin: float,
+        aspect: float,
+        up: tuple[float, float, float],
+        fov_y: float,
+        projection: str,
+        z_scale: float,
+    ) -> Camera: ...
+    def orbit_angles(self) -> tuple[float, float, float]: ...
+    def rotated(self, d_azimuth: float, d_elevation: float) -> Camera: ...
+    def zoomed(self, factor: float) -> Camera: ...
     @property
     def eye(self) -> tuple[float, float, float]: ...
     @property

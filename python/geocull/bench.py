@@ -37,6 +37,9 @@ from typing import Any
 
 import numpy as np
 
+from . import _progress
+from ._progress import ProgressLike
+
 __all__ = ["main", "run", "format_table"]
 
 THRESHOLD = 10
@@ -116,8 +119,16 @@ def _select_views(views, spec_arg) -> list:
     return [(n, byname[n]) for n in names]
 
 
-def run(cfg: dict[str, Any]) -> dict[str, Any]:
-    """Run the benchmark described by ``cfg`` (see :func:`_config`); returns summary and rows."""
+def run(cfg: dict[str, Any], progress: ProgressLike = None) -> dict[str, Any]:
+    """Run the benchmark described by ``cfg`` (see :func:`_config`); returns summary and rows.
+    progress: None (a bar in notebooks, silence in scripts: the command line prints its own
+    messages), True, False or ``f(fraction, message)`` over the two scene builds and the views
+    (:mod:`geocull._progress`)."""
+    with _progress.task(progress, 1, "bench") as task:
+        return _run(cfg, task)
+
+
+def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
     import geocull as gc
 
     from . import report
@@ -131,14 +142,17 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     spec = gullfaks_like(nx=cfg["size"], ny=cfg["size"], n_faults=cfg["n_faults"],
                          fault_triangles=cfg["fault_triangles"])
     gen_s = time.perf_counter() - t0
+    task.total = 2 + len(_select_views(cfg["views"], (spec, 45.0, 1.0, w / h)))  # two builds, then the views
     _say(f"bench: building tiles + LOD (tiles {TILES[0]}x{TILES[1]}, coarse factor {COARSE_FACTOR})")
     t0 = time.perf_counter()
     scene = spec.build(tiles=TILES, coarse_factor=COARSE_FACTOR)
     build_s = time.perf_counter() - t0
+    task.advance(1, "bench: second scene (coarser proxies)")
     renderer = gc.Renderer(w, h)
     # The same scene with coarser proxies (a cheaper prepass), in its own renderer so that
     # switching scenes never re-uploads geometry inside a timed frame.
     scene_alt = spec.build(tiles=TILES, coarse_factor=COARSE_ALT)
+    task.advance(1, "bench: views")
     targets = {COARSE_FACTOR: (scene, renderer), COARSE_ALT: (scene_alt, gc.Renderer(w, h))}
 
     def render(cam, rk):
@@ -191,6 +205,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     gpu_bytes = None
     pv_setup_s: list[float] = []
     for vi, (vname, kw) in enumerate(views):
+        task.update(task.done, f"bench: view {vi + 1}/{len(views)} {vname}")
         cam = gc.Camera.look_at(**kw)
         _say(f"bench: view {vi + 1}/{len(views)} {vname}: warm-up")
         first = {name: render(cam, rk) for name, rk in methods}
@@ -294,6 +309,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             rows.append(row)
         del first, ref
         _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
+        task.advance(1)
 
     # geometric means over views, per method
     per_method: dict[str, dict[str, Any]] = {}

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._errors import InputError
+from ._progress import ProgressLike
 
 if TYPE_CHECKING:
     from .scene import Scene
@@ -131,36 +132,56 @@ class SceneSpec:
         coarse_factor: float = 25,
         fault_tiles: int | None = None,
         fault_coarse_factor: float = 10,
+        progress: ProgressLike = None,
     ) -> Scene:
         """Create a :class:`geocull.Scene` holding every horizon and fault of this spec.
 
         Horizons go in with ``add_heightfield(tiles=tiles, coarse_factor=coarse_factor)``, faults with
         ``add_mesh(kind="fault", tiles=fault_tiles, coarse_factor=fault_coarse_factor)``; object ids
-        follow the order horizons first, then faults.
+        follow the order horizons first, then faults. progress: as for
+        :meth:`geocull.Scene.add_heightfield`, over the whole build (objects weighted by their
+        triangles, each reporting its tiles as they are built).
         """
         import geocull  # lazy: the spec itself needs no extension
 
+        from . import _progress
+
+        weights = [2.0 * np.asarray(h["z"]).size for h in self.horizons] + [float(len(f["faces"])) for f in self.faults]
         scene = geocull.Scene()
-        for h in self.horizons:
-            scene.add_heightfield(
-                h["z"],
-                origin=tuple(h["origin"]),
-                spacing=tuple(h["spacing"]),
-                tiles=tuple(tiles),
-                coarse_factor=coarse_factor,
-                name=h["name"],
-                color=tuple(h["color"]),
-            )
-        for f in self.faults:
-            scene.add_mesh(
-                f["vertices"],
-                f["faces"],
-                kind="fault",
-                tiles=fault_tiles,
-                coarse_factor=fault_coarse_factor,
-                name=f["name"],
-                color=tuple(f["color"]),
-            )
+        with _progress.task(progress, sum(weights), "SceneSpec.build") as task:
+
+            def part(k: int, done: float) -> _progress.ProgressLike:
+                """The progress of object k, mapped into the build's (False when nothing shows)."""
+                if not task.enabled:
+                    return False
+                msg = f"SceneSpec.build: object {k + 1}/{len(weights)}"
+                return lambda f, _m: task.update(done + f * weights[k], msg)
+
+            done = 0.0
+            for k, h in enumerate(self.horizons):
+                scene.add_heightfield(
+                    h["z"],
+                    origin=tuple(h["origin"]),
+                    spacing=tuple(h["spacing"]),
+                    tiles=tuple(tiles),
+                    coarse_factor=coarse_factor,
+                    name=h["name"],
+                    color=tuple(h["color"]),
+                    progress=part(k, done),
+                )
+                done += weights[k]
+            for k, f in enumerate(self.faults, start=len(self.horizons)):
+                scene.add_mesh(
+                    f["vertices"],
+                    f["faces"],
+                    kind="fault",
+                    tiles=fault_tiles,
+                    coarse_factor=fault_coarse_factor,
+                    name=f["name"],
+                    color=tuple(f["color"]),
+                    progress=part(k, done),
+                )
+                done += weights[k]
         return scene
 
 

@@ -27,14 +27,15 @@ import itertools
 import json
 import math
 import statistics
-import sys
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 
+from . import _progress
 from ._errors import InputError
+from ._progress import ProgressLike
 
 if TYPE_CHECKING:
     from .camera import Camera
@@ -67,14 +68,6 @@ COLUMNS = (
 
 
 # --------------------------------------------------------------------------- helpers
-
-
-def _progress_fn(progress) -> Callable[[str], None]:
-    if progress is None or progress is False:
-        return lambda msg: None
-    if progress is True:
-        return lambda msg: print(msg, file=sys.stderr, flush=True)
-    return progress
 
 
 def _tiles_tuple(t) -> tuple[int, int]:
@@ -234,6 +227,7 @@ def _sweep_scene(
                     **risk,
                 )
             )
+        say(None)  # one view done
     return rows
 
 
@@ -252,7 +246,7 @@ def sweep(
     fault_tiles: int | None = None,
     fault_coarse_factor: float = 10,
     renderer: Renderer | None = None,
-    progress: bool | Callable[[str], None] = False,
+    progress: ProgressLike = None,
     as_frame: Literal[False] = False,
 ) -> list[dict[str, Any]]: ...
 @overload
@@ -270,7 +264,7 @@ def sweep(
     fault_tiles: int | None = None,
     fault_coarse_factor: float = 10,
     renderer: Renderer | None = None,
-    progress: bool | Callable[[str], None] = False,
+    progress: ProgressLike = None,
     *,
     as_frame: Literal[True],
 ) -> Any: ...
@@ -288,7 +282,7 @@ def sweep(
     fault_tiles: int | None = None,
     fault_coarse_factor: float = 10,
     renderer: Renderer | None = None,
-    progress: bool | Callable[[str], None] = False,
+    progress: ProgressLike = None,
     as_frame: bool = False,
 ) -> list[dict[str, Any]] | Any:
     """Sweep the culling parameters of a scene and measure speed against error, side by side.
@@ -312,6 +306,9 @@ def sweep(
         argument may be any iterable (a generator too); each is read once.
     repeats: timed rounds after the warm-up round (times are the minimum; ``median_ms`` too).
     renderer: a ``geocull.Renderer`` to reuse (its size wins over width/height).
+    progress: None (a bar in notebooks, silence in scripts), True (a bar: tqdm when installed,
+        else text on stderr), False, or ``f(fraction, message)``: fractions of the views swept
+        (over every scene build), monotone, ending at exactly 1.0 (:mod:`geocull._progress`).
 
     Returns a list of dicts, one per (scene build, view, method point), with the keys of
     :data:`COLUMNS` (``tiles`` is ``"10x10"``, None for a built scene; ``pixel_threshold`` and
@@ -323,7 +320,6 @@ def sweep(
 
     from .data import SceneSpec
 
-    say = _progress_fn(progress)
     repeats = max(1, int(repeats))
     # Every iterable argument is read once, here: a generator consumed by a check would otherwise
     # leave nothing for the loops (and silently drop their runs).
@@ -362,8 +358,23 @@ def sweep(
         renderer = gc.Renderer(int(width), int(height))
     cams = _cameras(cameras, spec, renderer.width, renderer.height)
 
+    n_builds = 1 if not is_spec else len(tls) * len(cfs)
+    with _progress.task(progress, n_builds * len(cams), "sweep") as task:
+        return _sweep_all(scene_or_spec, spec, cams, renderer, thresholds, prepass_scales, repeats, methods,
+                          tls if is_spec else [], cfs if is_spec else [], fault_tiles, fault_coarse_factor,
+                          as_frame, task)
+
+
+def _sweep_all(scene_or_spec, spec, cams, renderer, thresholds, prepass_scales, repeats, methods, tls, cfs,
+               fault_tiles, fault_coarse_factor, as_frame: bool, task: _progress.Task) -> Any:
+    def say(msg: str | None) -> None:  # a message, or None when a view is done
+        if msg is None:
+            task.advance(1)
+        else:
+            task.update(task.done, msg.strip())
+
     rows: list[dict[str, Any]] = []
-    if not is_spec:
+    if spec is None:
         say(f"sweep: built scene, {len(cams)} view(s)")
         rows += _sweep_scene(
             scene_or_spec, cams, renderer, thresholds, prepass_scales, repeats, methods,

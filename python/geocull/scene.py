@@ -13,10 +13,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _convert as cv
-from . import _geocull
+from . import _geocull, _progress
 from ._convert import MeshLike
 from ._errors import InputError
 from .results import GridLevel
+from ._progress import ProgressLike
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
@@ -120,6 +121,7 @@ class Scene:
         cmap: Any = None,
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
+        progress: ProgressLike = None,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
@@ -140,6 +142,9 @@ class Scene:
             :func:`geocull.io.from_xtgeo_surface`). Every culling mode works on rotated grids as on
             axis-aligned ones (horizon culling included).
         {color}
+        progress: None (a bar in notebooks for builds over a second, silence in scripts), True (a
+            bar), False, or ``f(fraction, message)`` called with the fraction of tiles built
+            (see :mod:`geocull._progress`).
         Returns the object id.
         """
         nv = None if null_value is None else cv.number(null_value, "null_value")
@@ -148,11 +153,12 @@ class Scene:
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
-        return self._s.add_heightfield(
-            za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
-            cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
-            cv.coloring(color_by, values, cmap, clim, nan_color, 2),
-        )
+        with _progress.task(progress, tt[0] * tt[1], "add_heightfield: tiles"):  # read by the core
+            return self._s.add_heightfield(
+                za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
+                cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
+                cv.coloring(color_by, values, cmap, clim, nan_color, 2),
+            )
 
     def add_mesh(
         self,
@@ -168,6 +174,7 @@ class Scene:
         cmap: Any = None,
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
+        progress: ProgressLike = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -183,6 +190,7 @@ class Scene:
         ``field_data`` written by :func:`geocull.io.to_pyvista`. Recognised by their attributes, so
         neither package is imported unless such an object is passed.
         {color}
+        progress: as for :meth:`add_heightfield` (the fraction of clusters built).
         Returns the object id.
         """
         mesh = cv.mesh_arrays(vertices)
@@ -202,10 +210,11 @@ class Scene:
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
-        return self._s.add_mesh(
-            v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
-            cv.coloring(color_by, values, cmap, clim, nan_color, 1),
-        )
+        with _progress.task(progress, k or 1, "add_mesh: tiles"):  # read by the core
+            return self._s.add_mesh(
+                v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
+                cv.coloring(color_by, values, cmap, clim, nan_color, 1),
+            )
 
     def add_well(
         self,
@@ -277,6 +286,7 @@ class Scene:
         name: str | None = None,
         color: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
+        progress: ProgressLike = None,
     ) -> int:
         """Add a reservoir grid (a truncated corner-point grid, Eclipse GRDECL / RESQML / xtgeo
         ``Grid``; :mod:`geocull.grid` converts those).
@@ -297,7 +307,9 @@ class Scene:
             size), chosen per frame by ``Renderer.render(grid_lod=...)``.
         Drawn: the boundary faces of the active cells of each region (interior faces never built;
             faces on faults split where the neighbours' corners differ, so each region's surface is
-            watertight at every level). Returns the object id."""
+            watertight at every level). Built block by block in parallel with the GIL released;
+            ``progress`` as for :meth:`add_heightfield` (the fraction of blocks built).
+            Returns the object id."""
         data, mask = cv.unmasked(corners, "corners")
         if mask is not None:
             raise InputError("corners: masked corners are not supported; mark their cells inactive")
@@ -312,10 +324,12 @@ class Scene:
         b = cv.int_array(blocks, "blocks", 1)
         if b.shape != (2,):
             raise InputError(f"blocks: shape {b.shape} is not (2,)")
-        return self._s.add_grid(
-            c, act, reg, (cv.integer(b[0], "blocks[0]"), cv.integer(b[1], "blocks[1]")), cv.name(name),
-            cv.color(color), cv.coloring(None, values, cmap, clim, nan_color, 3),
-        )
+        bb = (cv.integer(b[0], "blocks[0]"), cv.integer(b[1], "blocks[1]"))
+        n_blocks = -(-c.shape[2] // max(bb[0], 1)) * -(-c.shape[1] // max(bb[1], 1))
+        with _progress.task(progress, n_blocks, "add_grid: blocks"):  # read by the core
+            return self._s.add_grid(
+                c, act, reg, bb, cv.name(name), cv.color(color), cv.coloring(None, values, cmap, clim, nan_color, 3),
+            )
 
     def grid_levels(self, id: int) -> list[GridLevel]:
         """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):

@@ -20,12 +20,14 @@ pub(crate) mod poly;
 #[cfg(test)]
 mod tests;
 
-use crate::error::{ensure, input_err, num, Result};
+use crate::error::{ensure, input_err, num, Progress, Result};
 use crate::lod::{levels::Level, TileMesh};
 use faces::{Block, Level0};
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+#[cfg(test)]
+use std::sync::atomic::AtomicBool;
+use std::sync::atomic::Ordering;
 
 /// A corner-point grid: nk x nj x ni cells (k = 0 the top), 8 corners each.
 pub struct CornerGrid<'a> {
@@ -200,7 +202,7 @@ fn validate(g: &CornerGrid, origin: DVec3, blocks: (usize, usize)) -> Result<usi
 /// block along i and j (each >= 1). Works block by block in parallel (rayon); polls `stop`
 /// between blocks (blocks not started once it is set are left empty; the caller discards the
 /// result). Never panics on any input of the right length.
-pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &AtomicBool) -> Result<GridBuild> {
+pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &impl Progress) -> Result<GridBuild> {
     let n = validate(g, origin, blocks)?;
     // Up and handedness from the active cells' mean axes.
     let probe = Ctx { g, up: 1.0, flip: false, origin };
@@ -222,11 +224,13 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
         .into_par_iter()
         .map(|t| {
             let (bx, by) = (t % nbx, t / nbx);
-            if stop.load(Ordering::Relaxed) {
+            if stop.stop_flag().load(Ordering::Relaxed) {
                 return (TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() }, Vec::new(), (0.0, 0.0));
             }
             let b = Block { i0: bx * bi, i1: ((bx + 1) * bi).min(g.ni), j0: by * bj, j1: ((by + 1) * bj).min(g.nj) };
-            build_block(&ctx, b, (bx, by))
+            let out = build_block(&ctx, b, (bx, by));
+            stop.item_done();
+            out
         })
         .collect();
     let nlev = out.iter().map(|o| o.1.len()).max().unwrap_or(0);

@@ -16,9 +16,10 @@
 pub mod levels;
 pub mod simplify;
 
+use crate::error::Work;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 
 /// One tile of one object.
 #[derive(Clone, Debug, Default)]
@@ -155,7 +156,7 @@ pub fn tile_heightfield(
     origin: DVec3,
     tiles: (usize, usize),
     coarse_factor: f32,
-    stop: &AtomicBool,
+    stop: &Work,
 ) -> Vec<TileMesh> {
     let (tx, ty) = tiles;
     let bx = tile_bounds(g.nx, tx);
@@ -251,6 +252,7 @@ pub fn tile_heightfield(
             }
             tile.finish(coarse_factor, lattice)
         })
+        .inspect(|_| stop.item_done())
         .collect()
 }
 
@@ -265,7 +267,7 @@ pub fn tile_mesh(
     origin: DVec3,
     clusters: usize,
     coarse_factor: f32,
-    stop: &AtomicBool,
+    stop: &Work,
 ) -> Vec<TileMesh> {
     let (ids, n) = if clusters <= 1 || faces.len() <= 1 {
         (vec![0u32; faces.len()], 1)
@@ -309,6 +311,7 @@ pub fn tile_mesh(
             }
             tile.finish(coarse_factor, None)
         })
+        .inspect(|_| stop.item_done())
         .collect()
 }
 
@@ -330,14 +333,14 @@ mod tests {
         let mut z = vec![0.0; nx * ny];
         let g =
             GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &AtomicBool::new(false));
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &Work::default());
         let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
         assert_eq!(total, 2 * (nx - 1) * (ny - 1));
         // One NaN sample in the interior removes the 6 triangles touching it.
         z[nx + 2] = f64::NAN;
         let g =
             GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &AtomicBool::new(false));
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &Work::default());
         assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
         assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
     }
@@ -349,7 +352,7 @@ mod tests {
         let g =
             GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
         for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
-            let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &AtomicBool::new(false));
+            let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &Work::default());
             let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
             let coarse: usize = tiles.iter().map(|t| t.coarse_triangles()).sum();
             let ratio = fine as f64 / coarse as f64;
@@ -388,7 +391,7 @@ mod tests {
             yflip: false,
             values: None,
         };
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &AtomicBool::new(false));
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &Work::default());
         assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
     }
 }

@@ -1,7 +1,7 @@
 //! `geocull._geocull.Camera`: a look-at camera (validated in the core).
 
 use super::run;
-use crate::camera::{Camera, Projection};
+use crate::camera::{Camera, Lens, Orbit, Projection};
 use numpy::ndarray::Array2;
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -36,6 +36,71 @@ impl PyCamera {
                 .map(|inner| Self { inner })
         })
     }
+    /// `Camera::orbit`: the eye at `distance` from `target`, compass `azimuth`, `elevation` (degrees).
+    #[allow(clippy::too_many_arguments)]
+    #[staticmethod]
+    #[pyo3(signature = (target, azimuth, elevation, distance, up, fov_y, near, far, projection, ortho_height, z_scale))]
+    fn orbit(
+        py: Python<'_>,
+        target: (f64, f64, f64),
+        azimuth: f64,
+        elevation: f64,
+        distance: f64,
+        up: (f64, f64, f64),
+        fov_y: f64,
+        near: Option<f64>,
+        far: Option<f64>,
+        projection: String,
+        ortho_height: Option<f64>,
+        z_scale: f64,
+    ) -> PyResult<Self> {
+        run(py, move || {
+            let projection = Projection::parse(&projection)?;
+            let lens = Lens { up: up.into(), fov_y, near, far, projection, ortho_height, z_scale };
+            Camera::orbit(target.into(), Orbit { azimuth, elevation, distance }, lens).map(|inner| Self { inner })
+        })
+    }
+
+    /// `Camera::fit`: the closest view of the box `lo..hi` from `azimuth`, `elevation`.
+    #[allow(clippy::too_many_arguments)]
+    #[staticmethod]
+    #[pyo3(signature = (lo, hi, azimuth, elevation, margin, aspect, up, fov_y, projection, z_scale))]
+    fn fit(
+        py: Python<'_>,
+        lo: (f64, f64, f64),
+        hi: (f64, f64, f64),
+        azimuth: f64,
+        elevation: f64,
+        margin: f64,
+        aspect: f64,
+        up: (f64, f64, f64),
+        fov_y: f64,
+        projection: String,
+        z_scale: f64,
+    ) -> PyResult<Self> {
+        run(py, move || {
+            let projection = Projection::parse(&projection)?;
+            let lens = Lens { up: up.into(), fov_y, projection, z_scale, ..Lens::default() };
+            Camera::fit(lo.into(), hi.into(), azimuth, elevation, margin, aspect, lens).map(|inner| Self { inner })
+        })
+    }
+
+    /// (azimuth, elevation, distance) of the eye about the target.
+    fn orbit_angles(&self) -> (f64, f64, f64) {
+        let o = self.inner.orbit_angles();
+        (o.azimuth, o.elevation, o.distance)
+    }
+
+    fn rotated(&self, py: Python<'_>, d_azimuth: f64, d_elevation: f64) -> PyResult<Self> {
+        let c = self.inner.clone();
+        run(py, move || c.rotated(d_azimuth, d_elevation).map(|inner| Self { inner }))
+    }
+
+    fn zoomed(&self, py: Python<'_>, factor: f64) -> PyResult<Self> {
+        let c = self.inner.clone();
+        run(py, move || c.zoomed(factor).map(|inner| Self { inner }))
+    }
+
     #[getter]
     fn eye(&self) -> (f64, f64, f64) {
         self.inner.eye.into()

@@ -47,25 +47,46 @@ impl From<Error> for PyErr {
 /// hook runs Python's signal handlers (`check_signals`, on the calling thread, taking the GIL for a
 /// moment; handlers only run on the main thread); the exception a handler raised is kept and
 /// raised here, so a custom SIGINT handler's exception comes through as it is.
+///
+/// Progress: when a `geocull._progress.Task` is active on this thread (`with task(...)`, see
+/// python/geocull/_progress.py), the hook carries it, and parallel builds call it with the count
+/// of tiles finished, on this thread with the GIL taken for a moment (`Interrupt::with_progress`);
+/// an exception it raises stops the work and is raised here.
 pub(crate) fn run_interruptible<T: Send>(
     py: Python<'_>,
     f: impl FnOnce(Interrupt) -> crate::Result<T> + Send,
 ) -> PyResult<T> {
     let raised: Arc<Mutex<Option<PyErr>>> = Arc::default();
     let slot = raised.clone();
-    let hook = Interrupt::new(move || match Python::attach(|py| py.check_signals()) {
+    let mut hook = Interrupt::new(move || match Python::attach(|py| py.check_signals()) {
         Ok(()) => false,
         Err(e) => {
             *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
             true
         }
     });
+    if let Some(task) = active_progress(py)? {
+        let slot = raised.clone();
+        hook = hook.with_progress(move |done| match Python::attach(|py| task.call1(py, (done,)).map(|_| ())) {
+            Ok(()) => false,
+            Err(e) => {
+                *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                true
+            }
+        });
+    }
     let out = run(py, move || f(hook));
     let handler_error = raised.lock().unwrap_or_else(|p| p.into_inner()).take();
     match (out, handler_error) {
         (Err(_), Some(handler_error)) => Err(handler_error),
         (out, _) => out,
     }
+}
+
+/// The progress task active on this thread (`geocull._progress._active()`), if any.
+fn active_progress(py: Python<'_>) -> PyResult<Option<Py<PyAny>>> {
+    let t = py.import("geocull._progress")?.getattr("_active")?.call0()?;
+    Ok(if t.is_none() { None } else { Some(t.unbind()) })
 }
 
 /// Runs `f` without the GIL, turning errors and panics into Python exceptions.
