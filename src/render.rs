@@ -341,8 +341,10 @@ impl Renderer {
         let cull_ms = tc.elapsed().as_secs_f64() * 1e3;
         opts.interrupt.check()?;
         let final_args = draw(&inputs, &mut enc, &visible);
+        let lenses = draw_lenses(&inputs, &mut enc);
         let ts_rb = timestamps.as_ref().and_then(|t| t.resolve(&ctx.device, &mut enc));
         ctx.submit_and_wait(enc.finish(), &opts.interrupt, geometry.fine_triangles() >= LONG_FRAME_TRIANGLES)?;
+        let lens_stats = lenses.map(|l| l.stats(ctx)).transpose()?;
         let total_ms = (t0.elapsed() - untimed).as_secs_f64() * 1e3;
         ctx.take_error()?;
         let mut out = self.read_back(&fc, visible, &final_args, ts_rb)?;
@@ -358,6 +360,7 @@ impl Renderer {
         let extra = self.strategies[si].report(&report);
         out.stats.extra.extend(extra);
         grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]));
+        out.stats.extra.extend(lens_stats.unwrap_or_default());
         if let Some((level, err_px)) = chosen {
             self.lod_stats(&mut out, &level, &err_px);
             out.tile_counts.push(("tile_level", level.iter().map(|&l| l as u32).collect()));
@@ -588,7 +591,7 @@ fn frame_state(
             };
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
-                color: [o.color[0], o.color[1], o.color[2], 1.0],
+                color: [o.color[0], o.color[1], o.color[2], o.opacity],
                 cmap,
             }
         })
@@ -600,7 +603,13 @@ fn frame_state(
         z_scale: camera.z_scale as f32,
         _pad: [0.0; 3],
     };
-    let visible = geom.tile_object_cpu.iter().map(|&oi| objects[oi as usize].visible).collect();
+    // Translucent objects (lenses) are no occluders: strategies see them as hidden; draw_lenses
+    // draws them after the opaque image.
+    let visible = geom
+        .tile_object_cpu
+        .iter()
+        .map(|&oi| objects[oi as usize].visible && objects[oi as usize].opacity >= 1.0)
+        .collect();
     (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, &lut, geom), visible)
 }
 
@@ -683,6 +692,118 @@ fn choose_levels(
         err_px.push(e);
     }
     (args, Some((level, err_px)))
+}
+
+/// What [`draw_lenses`] recorded: per lens slice tested, its count read back after the frame.
+struct LensFrame {
+    counts: wgpu::Buffer,
+    /// Per tested slice, the lens (object index) it belongs to.
+    lens_of: Vec<usize>,
+}
+
+impl LensFrame {
+    /// `lens_slices_tested`, `lens_slices_drawn`, `lenses_hidden` (wholly behind the opaque image).
+    fn stats(&self, ctx: &GpuContext) -> Result<Vec<(&'static str, Stat)>> {
+        readback::map_all([&self.counts]);
+        ctx.wait()?;
+        let c: Vec<u32> = readback::read_mapped(&self.counts)?;
+        let drawn = c.iter().take(self.lens_of.len()).filter(|&&k| k > 0).count();
+        let mut shown: std::collections::BTreeMap<usize, bool> = Default::default();
+        for (k, &l) in self.lens_of.iter().enumerate() {
+            *shown.entry(l).or_default() |= c[k] > 0;
+        }
+        Ok(vec![
+            ("lens_slices_tested", Stat::Count(self.lens_of.len() as u64)),
+            ("lens_slices_drawn", Stat::Count(drawn as u64)),
+            ("lenses_hidden", Stat::Count(shown.values().filter(|s| !**s).count() as u64)),
+        ])
+    }
+}
+
+/// Stage 4b: volume lenses (`scene::lens`), after the opaque image in the same encoder: per lens
+/// the stack of slices whose normal is closest to the view direction, farthest first, each
+/// slice's box tested against the opaque depth (a box reaching the near plane is always drawn),
+/// the visible ones selected on the GPU and blended in that order. None without a visible lens.
+fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Option<LensFrame> {
+    let g = f.geometry;
+    let objects = f.scene.objects();
+    let zs = DVec3::new(1.0, 1.0, f.camera.z_scale);
+    // (distance, tile, lens) of the slices to draw.
+    let mut chosen: Vec<(f64, usize, usize)> = Vec::new();
+    let mut first = 0usize;
+    for (oi, o) in objects.iter().enumerate() {
+        let range = first..first + o.tiles.len();
+        first = range.end;
+        if !o.visible || o.opacity >= 1.0 || o.tiles.is_empty() {
+            continue;
+        }
+        // The stack (tile ix = axis) whose slices face the eye most squarely.
+        let normal = |t: &crate::lod::TileMesh| -> DVec3 {
+            let p = |k: usize| DVec3::from_array(t.positions[t.fine[k] as usize].map(f64::from)) * zs;
+            (p(1) - p(0)).cross(p(2) - p(0)).normalize_or_zero()
+        };
+        let mut best = [0.0f64; 3];
+        for t in o.tiles.iter().filter(|t| t.fine.len() >= 3) {
+            let a = (t.ix as usize).min(2);
+            best[a] = best[a].max(normal(t).dot(f.fc.forward).abs());
+        }
+        let axis = (0..3).max_by(|&a, &b| best[a].total_cmp(&best[b])).unwrap_or(2) as u32;
+        let off = o.placement(f.origin);
+        for (ti, t) in range.zip(&o.tiles) {
+            if t.ix == axis && !t.fine.is_empty() {
+                let (lo, hi) = g.bbox[ti];
+                let c = ((lo + hi) * 0.5 + off) * zs;
+                chosen.push(((c - f.fc.eye).length(), ti, oi));
+            }
+        }
+    }
+    if chosen.is_empty() {
+        return None;
+    }
+    chosen.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let d = &f.ctx.device;
+    let m = chosen.len();
+    let mut boxes = Vec::with_capacity(m);
+    let mut init = vec![0u32; m];
+    for (p, &(_, ti, oi)) in chosen.iter().enumerate() {
+        let off = objects[oi].placement(f.origin);
+        let (lo, hi) = g.bbox[ti];
+        let (a, b) = ((lo + off) * zs, (hi + off) * zs);
+        let (lo, hi) = (a.min(b), a.max(b));
+        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
+        let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
+        let nearest = (0..8)
+            .map(|c| {
+                let q = DVec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                );
+                (q - f.fc.eye).dot(f.fc.forward)
+            })
+            .fold(f64::INFINITY, f64::min);
+        if nearest <= f.fc.near * 1.001 + 1e-9 {
+            init[p] = 1;
+        }
+        boxes.push(crate::gpu::layout::BoxInstance {
+            lo: lo.as_vec3().to_array(),
+            id: p as u32,
+            hi: hi.as_vec3().to_array(),
+            _pad: 0,
+        });
+    }
+    let counts = passes::counts_buffer_init(d, &init);
+    let boxes_buf = passes::boxes_buffer(d, &boxes);
+    let skip = passes::empty_args_buffer(d, "lens_skip", m);
+    enc.clear_buffer(&skip, 0, None);
+    f.passes.record_box_test(d, enc, f.scene_bg, f.main_targets, &boxes_buf, m, &skip, &counts, None);
+    let src: Vec<DrawArgs> = chosen.iter().map(|&(_, ti, _)| g.fine[ti]).collect();
+    let src = passes::args_buffer(d, "lens_args", &src);
+    let out = passes::empty_args_buffer(d, "lens_draws", m);
+    f.passes.record_select(d, enc, &counts, &src, &out, m, 0.0, None);
+    f.passes.record_draw_blend(enc, f.main_targets, f.scene_bg, g, &out, m);
+    let rb = readback::copy_buffer(d, enc, &counts, 4 * m as u64);
+    Some(LensFrame { counts: rb, lens_of: chosen.iter().map(|c| c.2).collect() })
 }
 
 /// Names of the per-level cell and face counts of grids (`grid_cells_level{l}`, `grid_faces_level{l}`).

@@ -310,3 +310,15 @@ def test_numpy_scalars_and_sequences_are_accepted():
     info = s.object_info(0)
     assert np.allclose(info["color"], (0.1, 0.2, 0.3))
     assert s.geometry(0)[0][:, 0].max() == 1 + 2 * 4
+
+
+def test_misaligned_float_arrays_are_accepted():
+    # A float64 view at an odd byte offset (as Dask's out-of-band buffers can arrive).
+    import geocull as gc
+
+    buf = np.zeros(8 * 9 + 1, np.uint8)
+    z = np.frombuffer(buf.data, dtype=np.float64, count=9, offset=1).reshape(3, 3)
+    assert not z.flags.aligned
+    s = gc.Scene()
+    s.add_heightfield(z)
+    assert s.n_triangles == 8

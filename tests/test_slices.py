@@ -77,3 +77,40 @@ def test_set_slice_index_moves_the_slice_and_keeps_its_id(renderer_small):
         s.add_slice(vol, 0, 0, opacity=0.5)
     with pytest.raises(gc.InputError, match="^volume"):
         s.add_slice(np.zeros((3, 3, 3)), 0, 0)  # type: ignore[arg-type]
+
+
+def uniform_volume(value: float = 1.0) -> gc.Volume:
+    return gc.Volume(np.full((5, 5, 5), value, np.float32), origin=(0, 0, -40), spacing=(10, 10, 10), order="xyz")
+
+
+def test_a_lens_over_black_blends_to_the_expected_colour(renderer_small):
+    # Two samples deep along the view (j = 1..2): two slices of colour c and opacity a over black
+    # give c (1 - (1 - a)^2), unlit.
+    s = gc.Scene()
+    s.add_lens(uniform_volume(), ((0, 4), (1, 2), (0, 4)), cmap=[[0.2, 0.6, 1.0], [0.2, 0.6, 1.0]], clim=(0, 2),
+               opacity=0.4)
+    cam = gc.Camera.look_at((20, -100, -20), (20, 0, -20), projection="orthographic", ortho_height=60)
+    res = renderer_small(60, 60).render(s, cam)
+    want = np.array([0.2, 0.6, 1.0]) * (1 - 0.6 ** 2) * 255
+    np.testing.assert_allclose(res.image[30, 30, :3], want, atol=2)
+    assert not res.coverage.any()  # writes no depth
+    assert res.stats["lens_slices_tested"] == 2 and res.stats["lens_slices_drawn"] == 2
+    assert res.stats["lenses_hidden"] == 0
+
+
+def test_a_lens_behind_a_slice_draws_nothing(renderer_small):
+    s = gc.Scene()
+    vol = checker_volume()
+    s.add_lens(uniform_volume(), ((0, 4), (3, 4), (0, 4)), opacity=0.5)
+    alone = gc.Scene()
+    alone.add_slice(vol, "crossline", 0, cmap=RED_BLUE)
+    s.add_slice(vol, "crossline", 0, cmap=RED_BLUE)  # in front of the lens, seen from -y, covering it
+    cam = gc.Camera.look_at((20, -100, -20), (20, 0, -20), projection="orthographic", ortho_height=60)
+    r = renderer_small(60, 60)
+    res = r.render(s, cam, culling="three_pass", pixel_threshold=0)
+    np.testing.assert_array_equal(res.image, r.render(alone, cam).image)
+    assert res.stats["lenses_hidden"] == 1 and res.stats["lens_slices_drawn"] == 0
+    with pytest.raises(gc.InputError, match="^opacity"):
+        s.add_lens(vol, ((0, 4), (0, 4), (0, 4)), opacity=1.0)
+    with pytest.raises(gc.InputError, match=r"^box\[1\]"):
+        s.add_lens(vol, ((0, 4), (2, 2), (0, 4)))

@@ -65,9 +65,11 @@ def checked_array(x: Any, arg: str, ndim: int, last: int | None = None, kinds: s
 
 
 def float_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:
-    """C-contiguous float64 copy (or view) of a real-valued array checked as by :func:`checked_array`."""
+    """C-contiguous, aligned float64 copy (or view) of a real-valued array checked as by
+    :func:`checked_array` (buffers from other processes, e.g. Dask's out-of-band pickles, may be
+    misaligned, which the core cannot read in place)."""
     a = checked_array(x, arg, ndim, last)
-    return np.ascontiguousarray(a, dtype=np.float64)
+    return np.require(a, dtype=np.float64, requirements=["C", "A"])
 
 
 def unmasked(x: Any, arg: str) -> tuple[Any, np.ndarray | None]:
@@ -98,7 +100,7 @@ def heights(z: Any, null_value: float | None, arg: str = "z") -> np.ndarray:
             info = np.iinfo(a.dtype)
             if info.min <= null_value <= info.max:
                 null |= a == np.asarray(int(null_value), dtype=a.dtype)
-    out = np.ascontiguousarray(a, dtype=np.float64)
+    out = np.require(a, dtype=np.float64, requirements=["C", "A"])
     if null.any():
         if out is a or np.shares_memory(out, a):
             out = out.copy()

@@ -170,6 +170,14 @@ class Scene:
         coloring: _Coloring,
         replace: int | None = None,
     ) -> int: ...
+    def add_lens(
+        self,
+        volume: Volume,
+        bx: tuple[tuple[int, int], tuple[int, int], tuple[int, int]],
+        opacity: float,
+        name: str | None,
+        coloring: _Coloring,
+    ) -> int: ...
     def add_grid(
         self,
         corners: npt.NDArray[np.float64],  # (nk, nj, ni, 8, 3), C-contiguous

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import resource
 import time
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -36,7 +37,7 @@ def _views(bounds: tuple[tuple[float, ...], tuple[float, ...]]) -> dict[str, Any
     }
 
 
-def level_table(levels: list[dict[str, Any]]) -> list[dict[str, float]]:
+def level_table(levels: Sequence[Mapping[str, Any]]) -> list[dict[str, float]]:
     """Per level: faces and vertices as % of level 0, volume change in % (the paper's figures)."""
     f0, v0 = levels[0]["faces"] or 1, levels[0]["vertices"] or 1
     return [

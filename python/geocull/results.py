@@ -55,6 +55,9 @@ class RenderStats(TypedDict):
     triangles_level5: NotRequired[int]
     lod_max_error_px: NotRequired[float]  # lod="screen_error": largest projected error drawn, pixels
     lod_max_error_m: NotRequired[float]  # lod="screen_error": largest geometric error drawn, world units
+    lens_slices_tested: NotRequired[int]  # scenes with a visible lens: slices whose box was tested
+    lens_slices_drawn: NotRequired[int]  # ... of which in front of the opaque image somewhere (drawn)
+    lenses_hidden: NotRequired[int]  # ... lenses wholly hidden (nothing drawn)
     grid_cells_level0: NotRequired[int]  # scenes with a grid: merged cells drawn at level 0 (drawn blocks)
     grid_faces_level0: NotRequired[int]  # scenes with a grid: faces (polygons) drawn at level 0
     grid_cells_level1: NotRequired[int]  # ... at cell-merging level 1 (2 x 2 columns merged)

@@ -16,8 +16,8 @@ from . import _convert as cv
 from . import _geocull, _progress
 from ._convert import MeshLike
 from ._errors import InputError
-from .results import GridLevel
 from ._progress import ProgressLike
+from .results import GridLevel
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
@@ -273,6 +273,36 @@ class Scene:
         id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c)
         self._slices[id] = (volume, ax, name, c)
         return id
+
+    def add_lens(
+        self,
+        volume: Volume,
+        box: ArrayLike,
+        cmap: Any = "viridis",
+        clim: ArrayLike | None = None,
+        opacity: float = 0.3,
+        name: str | None = None,
+        nan_color: ArrayLike | None = None,
+    ) -> int:
+        """Add a volume lens: the semi-transparent sub-volume of ``volume`` over ``box`` =
+        ((i0, i1), (j0, j1), (k0, k1)), inclusive sample index ranges (at least 2 samples along each
+        axis), coloured by its samples through ``cmap`` over ``clim`` (default the whole volume's
+        range; NaN samples in ``nan_color``) with ``opacity`` in (0, 1) per slice. It is drawn as a
+        stack of slices through the box, one per sample along the axis closest to the view direction,
+        farthest first, alpha-blended over the opaque image, unlit and writing no depth (object kind
+        "lens"). It never occludes; each frame its slices' boxes are tested against the opaque depth
+        and hidden slices are not drawn (stats ``lens_slices_tested``, ``lens_slices_drawn``,
+        ``lenses_hidden``). Returns the object id."""
+        from .volume import Volume
+
+        cv.expect_instance(volume, Volume, "volume")
+        b = cv.int_array(box, "box", 2, 2)
+        if b.shape != (3, 2):
+            raise InputError(f"box: shape {b.shape} is not (3, 2): ((i0, i1), (j0, j1), (k0, k1))")
+        bx = tuple((cv.integer(b[a, 0], f"box[{a}]"), cv.integer(b[a, 1], f"box[{a}]")) for a in range(3))
+        c = cv.coloring("values", None, cmap, clim, nan_color, 1)
+        assert c is not None
+        return self._s.add_lens(volume._v, bx, cv.number(opacity, "opacity"), cv.name(name), c)  # type: ignore[arg-type]
 
     def add_grid(
         self,

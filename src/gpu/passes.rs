@@ -50,6 +50,7 @@ pub struct Passes {
     hist_layout: wgpu::BindGroupLayout,
     select_layout: wgpu::BindGroupLayout,
     draw: wgpu::RenderPipeline,
+    draw_blend: wgpu::RenderPipeline,
     prepass: wgpu::RenderPipeline,
     histogram: wgpu::ComputePipeline,
     select: wgpu::ComputePipeline,
@@ -234,7 +235,8 @@ impl Passes {
                               vs: (&str, &str),
                               fs: &str,
                               buffers: &[Option<wgpu::VertexBufferLayout>],
-                              targets: &[Option<wgpu::ColorTargetState>]| {
+                              targets: &[Option<wgpu::ColorTargetState>],
+                              depth: &wgpu::DepthStencilState| {
             let module = shader(d, label, format!("{COMMON_WGSL}\n{file}"));
             // (entry point, its GL variant)
             let (vs, fs) = if gl { (vs.1, format!("{fs}_gl")) } else { (vs.0, fs.to_string()) };
@@ -252,7 +254,7 @@ impl Passes {
                     cull_mode: None,
                     ..Default::default()
                 },
-                depth_stencil: Some(depth_state.clone()),
+                depth_stencil: Some(depth.clone()),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -269,11 +271,30 @@ impl Passes {
             include_str!("shaders/draw.wgsl"),
             ("vs_draw", "vs_draw_gl"),
             "fs_main",
-            &[Some(vertex_layout.clone()), Some(value_layout)],
+            &[Some(vertex_layout.clone()), Some(value_layout.clone())],
             &[
                 Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL }),
                 Some(ID_FORMAT.into()),
             ],
+            &depth_state,
+        );
+        // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
+        // but not written, the tile ids left as the opaque pass wrote them.
+        let draw_blend = scene_pipeline(
+            "draw.wgsl (blended)",
+            include_str!("shaders/draw.wgsl"),
+            ("vs_draw", "vs_draw_gl"),
+            "fs_main",
+            &[Some(vertex_layout.clone()), Some(value_layout.clone())],
+            &[
+                Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+                Some(wgpu::ColorTargetState { format: ID_FORMAT, blend: None, write_mask: wgpu::ColorWrites::empty() }),
+            ],
+            &wgpu::DepthStencilState { depth_write_enabled: Some(false), ..depth_state.clone() },
         );
         let prepass = scene_pipeline(
             "prepass.wgsl",
@@ -282,6 +303,7 @@ impl Passes {
             "fs_id",
             &[Some(vertex_layout.clone())],
             &[Some(ID_FORMAT.into())],
+            &depth_state,
         );
         let hist_shader = shader(d, "histogram.wgsl", include_str!("shaders/histogram.wgsl").into());
         let select_shader = shader(d, "select.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("shaders/select.wgsl")));
@@ -361,6 +383,7 @@ impl Passes {
             hist_layout,
             select_layout,
             draw,
+            draw_blend,
             prepass,
             histogram,
             select,
@@ -401,6 +424,29 @@ impl Passes {
     ) {
         let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
         self.draw_into(&mut pass, &self.draw, true, scene_bg, geom, args);
+    }
+
+    /// Pass: `args` (`n` draws, in their order) blended over `targets`' colour with their objects'
+    /// opacity, depth tested against what is there, nothing else written (volume lenses).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_draw_blend(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        scene_bg: &wgpu::BindGroup,
+        geom: &SceneGeometry,
+        args: &wgpu::Buffer,
+        n: usize,
+    ) {
+        let mut pass = begin(enc, "draw_blend", targets, true, true, true, None);
+        if let (Some(vb), Some(sb), Some(ib)) = (&geom.vertices, &geom.values, &geom.indices) {
+            pass.set_pipeline(&self.draw_blend);
+            pass.set_bind_group(0, scene_bg, &[]);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.set_vertex_buffer(1, sb.slice(..));
+            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.multi_draw_indexed_indirect(args, 0, n as u32);
+        }
     }
 
     fn draw_into(

@@ -59,9 +59,8 @@ impl TileMesh {
         self.coarse.len() / 3
     }
 
-    /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
-    /// `coarse` is given.
-    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
+    /// Sets `bbox_min` / `bbox_max` from the positions (zeros when there are none).
+    pub fn compute_bbox(&mut self) {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.positions {
@@ -76,6 +75,12 @@ impl TileMesh {
         }
         self.bbox_min = lo;
         self.bbox_max = hi;
+    }
+
+    /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
+    /// `coarse` is given.
+    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
+        self.compute_bbox();
         (self.coarse, self.proxy_error) =
             coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         if self.levels.is_empty() && !self.fine.is_empty() {

@@ -237,6 +237,71 @@ impl PyScene {
         })
     }
 
+    /// A volume lens: the sub-volume of `volume` over the inclusive sample ranges `bx`
+    /// ((i0, i1), (j0, j1), (k0, k1)), as stacks of slices along each axis, blended with `opacity`.
+    #[pyo3(signature = (volume, bx, opacity, name, coloring))]
+    fn add_lens(
+        &self,
+        py: Python<'_>,
+        volume: PyRef<'_, super::iso::PyVolume>,
+        bx: [(i64, i64); 3],
+        opacity: f64,
+        name: Option<String>,
+        coloring: ColoringArgs<'_>,
+    ) -> PyResult<u32> {
+        let mut color_by =
+            self::coloring(Some(coloring), &[], "none (the lens's values are the volume's)")?.expect("coloring given");
+        let vol = &volume.inner;
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let dims = [vol.nx, vol.ny, vol.nz];
+            let mut r = [(0usize, 0usize); 3];
+            for a in 0..3 {
+                let arg = ["box[0]", "box[1]", "box[2]"][a];
+                let lo = int_in(bx[a].0, arg, 0, dims[a] as i64 - 1)?;
+                let hi = int_in(bx[a].1, arg, 0, dims[a] as i64 - 1)?;
+                crate::error::ensure(hi > lo, arg, || {
+                    format!("({lo}, {hi}); a lens needs at least 2 samples along every axis (lo < hi, inclusive)")
+                })?;
+                r[a] = (lo, hi);
+            }
+            let mut slices = Vec::new();
+            for axis in 0..3 {
+                let (ua, va) = match axis {
+                    0 => (1, 2),
+                    1 => (0, 2),
+                    _ => (0, 1),
+                };
+                let (nu, nv) = (r[ua].1 - r[ua].0 + 1, r[va].1 - r[va].0 + 1);
+                for index in r[axis].0..=r[axis].1 {
+                    let (mut positions, mut values) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
+                    for v in 0..nv {
+                        for u in 0..nu {
+                            let mut ijk = [0; 3];
+                            (ijk[axis], ijk[ua], ijk[va]) = (index, r[ua].0 + u, r[va].0 + v);
+                            positions.push(vol.to_world(vol.sample_position(ijk[0], ijk[1], ijk[2])));
+                            values.push(vol.value(vol.get(ijk[0], ijk[1], ijk[2])));
+                        }
+                    }
+                    slices.push(crate::scene::lens::LensSlice {
+                        axis: axis as u32,
+                        index: index as u32,
+                        positions,
+                        values,
+                        nu,
+                        nv,
+                    });
+                }
+            }
+            if color_by.clim.is_none() {
+                let rng = crate::scene::color::resolve_clim(None, vol.values.iter().map(|&x| vol.value(x)))?;
+                color_by.clim = Some(rng);
+            }
+            let opts = AddOptions { coarse_factor: 1.0, name, color: None, color_by: Some(color_by), interrupt };
+            lock(scene).add_lens(slices, opacity, opts)
+        })
+    }
+
     /// A corner-point grid: `corners` (nk, nj, ni, 8, 3) float64, `active` (nk, nj, ni) bool,
     /// `region` (nk, nj, ni) int32, values (in `coloring`) one per cell.
     #[allow(clippy::too_many_arguments)]

@@ -14,6 +14,7 @@ mod cmaps;
 pub mod color;
 pub mod grid;
 mod heightfield;
+pub mod lens;
 mod mesh;
 pub(crate) mod serial;
 pub mod slice;
@@ -47,6 +48,9 @@ pub struct Object {
     pub color: [f32; 3],
     /// Colour through a colour map by z or by the tiles' values (None: the flat `color`).
     pub color_by: Option<ColorBy>,
+    /// 1 for opaque objects; below 1 a translucent one (a volume lens): never an occluder, drawn
+    /// blended after the opaque image, back to front, unlit.
+    pub opacity: f32,
     pub visible: bool,
     /// Translation applied at draw time (world units).
     pub offset: DVec3,
@@ -319,6 +323,7 @@ impl Scene {
             kind,
             color,
             color_by,
+            opacity: 1.0,
             visible: true,
             offset: DVec3::ZERO,
             origin,

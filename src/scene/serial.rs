@@ -17,7 +17,7 @@
 //!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
 //!   version 3, read as the scene's),
 //!   color_by u8 (0 = flat, 1 = z, 2 = values; version 4), if not flat: cmap str, lut [f32 x 3]
-//!   (256 rows), clim f64 x 2, nan_color f32 x 3; n_tiles u32
+//!   (256 rows), clim f64 x 2, nan_color f32 x 3; opacity f32 (version 4); n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
 //!             fine [u32], coarse [u32], proxy_error f32,
@@ -248,6 +248,7 @@ impl Scene {
                     }
                 }
             }
+            w.f32(o.opacity);
             w.u32(o.tiles.len() as u32);
             for t in &o.tiles {
                 w.u32(t.ix);
@@ -372,6 +373,10 @@ impl Scene {
             } else {
                 None
             };
+            let opacity = if version >= 4 { r.f32()? } else { 1.0 };
+            if !(opacity > 0.0 && opacity <= 1.0) {
+                return Err(r.err(format!("object {id}: its opacity is not in (0, 1]")));
+            }
             let nt = r.u32()? as usize;
             let mut tiles = Vec::with_capacity(nt.min(1 << 16));
             for _ in 0..nt {
@@ -421,7 +426,18 @@ impl Scene {
             {
                 return Err(r.err(format!("object {id}: coloured by values but has none")));
             }
-            objects.push(Object { id, name, kind, color, color_by, visible, offset, origin: object_origin, tiles });
+            objects.push(Object {
+                id,
+                name,
+                kind,
+                color,
+                color_by,
+                opacity,
+                visible,
+                offset,
+                origin: object_origin,
+                tiles,
+            });
         }
         r.finish()?;
         Ok(Scene {
@@ -503,12 +519,12 @@ mod tests {
         // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
         // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
         // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
-        // byte after it (flat), and no tile values (an empty array after the tile's n_tiles 4,
+        // byte and opacity after it (flat, 1), and no tile values (an empty array after the tile's n_tiles 4,
         // ix iy 8, bbox 24 and 4 positions 8 + 48)
         let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
         let origin_at = at + 8 + 16 + 12 + 1 + 24;
-        let values_at = origin_at + 24 + 1 + 4 + 8 + 24 + 56;
-        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 25..values_at], &v2[values_at + 8..]].concat();
+        let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
+        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 8..]].concat();
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);

@@ -54,13 +54,15 @@ fn fs_main(v: VOutDraw) -> FOut {
     if (dot(n0, n0) > 0.0) {
         n = normalize(n0);
     }
-    let c = base_color(objects[tile_object[v.tile]], v.s);
+    let o = objects[tile_object[v.tile]];
+    let c = base_color(o, v.s);
     // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
     // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
     let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
     var out: FOut;
-    out.color = vec4<f32>(c * shade, 1.0);
+    // Translucent objects (volume lenses, drawn blended) are unlit, with the object's opacity.
+    out.color = vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a);
     out.id = v.tile + 1u;
     return out;
 }
@@ -97,8 +99,9 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     if (dot(n0, n0) > 0.0) {
         n = normalize(n0);
     }
-    let c = base_color(objects[tile_object[v.tile]], v.s);
+    let o = objects[tile_object[v.tile]];
+    let c = base_color(o, v.s);
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
     let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
-    return FOutGl(vec4<f32>(c * shade, 1.0), v.tile + 1u, v.zw.x / v.zw.y);
+    return FOutGl(vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a), v.tile + 1u, v.zw.x / v.zw.y);
 }
