@@ -62,6 +62,17 @@ fn key(t: &TileMesh, v: u32) -> Key {
 /// its reverse once (watertight, consistently wound); no triangle repeats a vertex or has zero
 /// area. Vertices are keyed by exact position and value (tests give values = region).
 fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result::Result<usize, String> {
+    closed(tiles, pick, false).map(|x| x.0)
+}
+
+/// As [`watertight`]; with `non_manifold`, an edge may be used n > 1 times if its reverse is too
+/// (cells of a region touching along an edge only: 4 faces meet there by nature). Returns the
+/// triangles and the number of such edges.
+fn closed(
+    tiles: &[TileMesh],
+    pick: impl Fn(usize) -> usize,
+    non_manifold: bool,
+) -> std::result::Result<(usize, usize), String> {
     let mut edges: HashMap<(Key, Key), u32> = HashMap::new();
     let mut ntri = 0;
     for (b, t) in tiles.iter().enumerate() {
@@ -81,8 +92,13 @@ fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result:
             ntri += 1;
         }
     }
+    let mut shared = 0;
     for (&(a, b), &n) in &edges {
         let back = edges.get(&(b, a)).copied().unwrap_or(0);
+        if non_manifold && n == back && n > 1 {
+            shared += 1;
+            continue;
+        }
         if n != 1 || back != 1 {
             let pa = a.0.map(f32::from_bits);
             let pb = b.0.map(f32::from_bits);
@@ -92,7 +108,7 @@ fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result:
             ));
         }
     }
-    Ok(ntri)
+    Ok((ntri, shared / 2))
 }
 
 #[test]
@@ -447,9 +463,13 @@ fn perf_1m_faulted_grid() {
     let region: Vec<i32> = (0..n).map(|x| ((x % ni >= 50) as i32) + 2 * ((x / (ni * nj) >= 60) as i32)).collect();
     let values: Vec<f64> = (0..n).map(|x| (x % 977) as f64 / 977.0).collect();
     let g = CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+    perf_table(&g);
+}
+
+fn perf_table(g: &CornerGrid) {
     for blocks in [(8, 8), (16, 16)] {
         let t0 = std::time::Instant::now();
-        let b = build(&g, blocks);
+        let b = build(g, blocks);
         let dt = t0.elapsed().as_secs_f64();
         println!(
             "blocks {blocks:?}: build {dt:.2} s on {} threads, {} tiles",
@@ -471,4 +491,36 @@ fn perf_1m_faulted_grid() {
             );
         }
     }
+}
+
+/// The same table for a grid dumped by Python (`GEOCULL_GRID_RAW=prefix`: `prefix.dims` = "nk nj
+/// ni", `prefix.corners` f64, `prefix.active` u8, `prefix.region` i32, `prefix.values` f64, all
+/// little-endian C order, e.g. from `geocull.data.faulted_grid()`), checked closed at every level
+/// (its random inactive cells make edges where cells touch along an edge only: allowed). `GEOCULL_GRID_RAW=/tmp/fg cargo test --release raw_grid -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn perf_raw_grid() {
+    let Ok(prefix) = std::env::var("GEOCULL_GRID_RAW") else { return };
+    let read = |ext: &str| std::fs::read(format!("{prefix}.{ext}")).unwrap();
+    let dims: Vec<usize> =
+        String::from_utf8(read("dims")).unwrap().split_whitespace().map(|x| x.parse().unwrap()).collect();
+    let (nk, nj, ni) = (dims[0], dims[1], dims[2]);
+    let f64s =
+        |b: Vec<u8>| -> Vec<f64> { b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect() };
+    let c = f64s(read("corners"));
+    let active: Vec<bool> = read("active").iter().map(|&x| x != 0).collect();
+    let region: Vec<i32> = read("region").chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap())).collect();
+    // Values = region, so that the watertightness check keys vertices per region.
+    let values: Vec<f64> = region.iter().map(|&r| r as f64).collect();
+    let g = CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+    perf_table(&g);
+    let b = build(&g, (8, 8));
+    for h in 0..b.levels.len() {
+        let (n, e) = closed(&b.tiles, |_| h, true).unwrap_or_else(|e| panic!("level {h}: {e}"));
+        println!("level {h}: closed, {n} triangles, {e} edges where cells touch along an edge only");
+    }
+    let nbx = ni.div_ceil(8);
+    let top = b.levels.len() - 1;
+    closed(&b.tiles, |t| if (t % nbx + t / nbx).is_multiple_of(2) { 0 } else { top }, true).unwrap();
+    println!("checkerboard of levels 0 / {top}: closed");
 }
