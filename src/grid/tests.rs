@@ -396,6 +396,72 @@ fn garbage_never_panics() {
     }
 }
 
+/// Random pillar grids where every column is thrown by its own plane (an offset and a tilt: every
+/// interface a fault whose layers cross), layers whose thickness is a non-negative plane (zero
+/// at a corner pillar, or everywhere: pinch-outs), random inactive cells and regions: closed at
+/// every level and across seams of different levels (random inactive cells can make cells of one
+/// region touch along an edge only, where four faces meet: allowed when balanced), and level 0
+/// encloses exactly the drawn cells' volume (all their faces are planar here).
+#[test]
+fn random_faulted_pillar_grids_are_closed() {
+    let mut rng = crate::TestRng(11);
+    for case in 0..40 {
+        let (ni, nj, nk) = (rng.irange(2, 9), rng.irange(2, 9), rng.irange(1, 6));
+        let (dx, dy) = (3.0, 2.0);
+        // Layer thickness planes t_k = a + b x + c y >= 0 on the grid.
+        let planes: Vec<[f64; 3]> = (0..nk)
+            .map(|_| match rng.irange(0, 4) {
+                0 => [0.0; 3],
+                1 => [0.0, rng.range(0.0, 0.1), rng.range(0.0, 0.1)],
+                _ => [rng.range(0.2, 2.0), rng.range(-0.01, 0.05), rng.range(-0.01, 0.05)],
+            })
+            .collect();
+        let depth = |k: usize, x: f64, y: f64| -> f64 {
+            planes[..k].iter().map(|p| (p[0] + p[1] * x + p[2] * y).max(0.0)).sum()
+        };
+        let throws: Vec<[f64; 3]> = (0..ni * nj)
+            .map(|_| {
+                if rng.f() < 0.3 {
+                    [0.0; 3]
+                } else {
+                    [rng.range(-3.0, 3.0), rng.range(-0.3, 0.3), rng.range(-0.3, 0.3)]
+                }
+            })
+            .collect();
+        let c = grid_from(ni, nj, nk, |(ci, cj, _), (i, j, k)| {
+            let (x, y) = (i as f64 * dx, j as f64 * dy);
+            let t = throws[cj * ni + ci];
+            [x, y, -depth(k, x, y) - (t[0] + t[1] * x + t[2] * y)]
+        });
+        let n = ni * nj * nk;
+        let active: Vec<bool> = (0..n).map(|_| rng.f() < 0.85).collect();
+        let region: Vec<i32> = (0..n).map(|_| (rng.f() < 0.3) as i32).collect();
+        let values: Vec<f64> = region.iter().map(|&r| r as f64).collect();
+        let g =
+            CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+        let blocks = (rng.irange(1, 5), rng.irange(1, 5));
+        let b = build(&g, blocks);
+        let nl = b.levels.len();
+        for lev in 0..nl {
+            closed(&b.tiles, |_| lev, true)
+                .unwrap_or_else(|e| panic!("case {case} {ni}x{nj}x{nk} {blocks:?} level {lev}: {e}"));
+        }
+        closed(&b.tiles, |t| (t * 7 + case) % nl, true).unwrap_or_else(|e| panic!("case {case} mixed: {e}"));
+        let mut want = 0.0;
+        for (cell, &on) in active.iter().enumerate() {
+            if on {
+                let z = |cc: usize| c[cell * 24 + cc * 3 + 2];
+                want += dx * dy * ((z(0) + z(1) + z(2) + z(3)) - (z(4) + z(5) + z(6) + z(7))) / 4.0;
+            }
+        }
+        let v0 = b.levels[0].volume;
+        assert!((v0 - want).abs() <= 1e-9 * want.max(1.0), "case {case}: level 0 volume {v0} != {want}");
+        for l in &b.levels {
+            assert!((l.volume - v0).abs() <= 0.03 * v0 + 1e-9, "case {case}: {} vs {v0}", l.volume);
+        }
+    }
+}
+
 #[test]
 fn distance_levels_at_hand_computed_distances() {
     // L = W = 1, alpha 10, lambda 2.5: S(h) - r(h) = 2^h (10 - 2.5 sqrt(2) / 2) = 2^h 8.2322...
