@@ -198,6 +198,22 @@ pub(crate) fn convex(poly: &[u32], verts: &Verts) -> bool {
 /// no inner points); failing that (straight sides with inner points all round), a fan from a new
 /// centre vertex (the mean of the vertices, of `region`).
 pub(crate) fn triangulate(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
+    let first = out.len();
+    fan(poly, verts, region, out);
+    // A vertex can repeat non-consecutively where two positions round to the same f32: drop the
+    // triangles that would repeat it (zero area).
+    let mut w = first;
+    for r in first..out.len() {
+        let t = out[r];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            out[w] = t;
+            w += 1;
+        }
+    }
+    out.truncate(w);
+}
+
+fn fan(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
     let m = poly.len();
     if m == 3 {
         out.push([poly[0], poly[1], poly[2]]);
