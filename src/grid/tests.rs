@@ -590,3 +590,25 @@ fn perf_raw_grid() {
     closed(&b.tiles, |t| if (t % nbx + t / nbx).is_multiple_of(2) { 0 } else { top }, true).unwrap();
     println!("checkerboard of levels 0 / {top}: closed");
 }
+
+#[test]
+fn positions_are_relative_to_the_origin() {
+    let (ni, nj, nk) = (6, 5, 3);
+    let off = [461_000.0, 5_930_000.0, -1500.0];
+    let c = faulted(ni, nj, nk, 0.4, 3);
+    let moved: Vec<f64> = c.iter().enumerate().map(|(x, v)| v + off[x % 3]).collect();
+    let g = CornerGrid { nk, nj, ni, corners: &c, active: None, region: None, values: None };
+    let gm = CornerGrid { nk, nj, ni, corners: &moved, active: None, region: None, values: None };
+    let a = build(&g, (4, 4));
+    let b = build_grid(&gm, DVec3::from_array(off), (4, 4), &AtomicBool::new(false)).unwrap();
+    for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
+        assert_eq!(ta.positions, tb.positions);
+        assert_eq!(ta.fine, tb.fine);
+        assert_eq!((ta.bbox_min, ta.bbox_max), (tb.bbox_min, tb.bbox_max));
+    }
+    assert_eq!(a.levels.len(), b.levels.len());
+    for (la, lb) in a.levels.iter().zip(&b.levels) {
+        assert_eq!((la.faces, la.triangles, la.vertices), (lb.faces, lb.triangles, lb.vertices));
+        assert!((la.volume - lb.volume).abs() < 1e-9 * la.volume);
+    }
+}
