@@ -267,9 +267,10 @@ impl<'c, 'a> Level0<'c, 'a> {
         }
     }
 
-    /// The interface: `jface` false = between columns (j, a - 1) and (j, a) (pillars (a, j) at
-    /// t = 0 and (a, j + 1) at t = 1); true = between (a - 1, i) and (a, i) with i = `a`... see
-    /// below: for j-interfaces `a` is the column i and `b` the pillar row pj.
+    /// The faces of this block's cells on one interface. `jface` false: the i-interface at pillar
+    /// column `a` = pi, row `bb` = j, between columns (j, pi - 1) and (j, pi), pillars (pi, j) at
+    /// t = 0 and (pi, j + 1) at t = 1. `jface` true: the j-interface of column `a` = i at pillar
+    /// row `bb` = pj, between columns (pj - 1, i) and (pj, i), pillars (i, pj) and (i + 1, pj).
     fn interface(&mut self, jface: bool, a: usize, bb: usize) {
         let g = self.ctx.g;
         let blk = self.b;

@@ -52,6 +52,15 @@ pub(crate) type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
 pub(crate) const NO_PILLAR: u32 = u32::MAX;
 
+/// Merged faces may bend inwards at a kept vertex by this much (sine of the angle): surfaces
+/// that curve make the kept vertices of a merged outline slightly reflex; real concavity (an L
+/// shape) turns by 90 degrees.
+pub(crate) const CONVEX_TOL: f64 = 0.02;
+
+/// A vertex whose outline turns by less than this (sine of the angle, about 3 degrees) lies on a
+/// straight side for the choice of a fan apex.
+pub(crate) const STRAIGHT: f64 = 0.05;
+
 /// The vertices of one block. A vertex is a position (as the tile will store it: f32 relative
 /// to the origin, compared bit for bit) of one region: the surfaces of two regions meeting at a
 /// boundary are separate closed surfaces and share no vertex, so that merging one never pins the
@@ -150,8 +159,9 @@ pub(crate) fn zero_area(poly: &[u32], verts: &Verts) -> bool {
     n.partial_cmp(&(1e-12 * per * per)) != Some(std::cmp::Ordering::Greater)
 }
 
-/// Which vertices of a polygon are corners (a turn, not a point inside a straight side), given
-/// its normal `n` (unit).
+/// Which vertices of a polygon are corners (a turn of more than [`STRAIGHT`], not a point inside
+/// a (nearly) straight side: a fan apex on a side's chain would give slivers along it), given its
+/// normal `n` (unit).
 fn corners(poly: &[u32], verts: &Verts, n: DVec3) -> Vec<bool> {
     let m = poly.len();
     (0..m)
@@ -160,13 +170,13 @@ fn corners(poly: &[u32], verts: &Verts, n: DVec3) -> Vec<bool> {
             let b = verts.p(poly[w]);
             let c = verts.p(poly[(w + 1) % m]);
             let (e1, e2) = (b - a, c - b);
-            e1.cross(e2).dot(n).abs() > 1e-9 * e1.length() * e2.length()
+            e1.cross(e2).dot(n).abs() > STRAIGHT * e1.length() * e2.length()
         })
         .collect()
 }
 
-/// Whether a polygon is convex (every turn the same way as its normal, straight sides allowed
-/// to bend by 1e-6 rad) and of non-zero area.
+/// Whether a polygon is convex (every turn the same way as its normal, up to [`CONVEX_TOL`]) and
+/// of non-zero area.
 pub(crate) fn convex(poly: &[u32], verts: &Verts) -> bool {
     if poly.len() < 3 || zero_area(poly, verts) {
         return false;
@@ -178,7 +188,7 @@ pub(crate) fn convex(poly: &[u32], verts: &Verts) -> bool {
         let b = verts.p(poly[w]);
         let c = verts.p(poly[(w + 1) % m]);
         let (e1, e2) = (b - a, c - b);
-        e1.cross(e2).dot(n) >= -1e-6 * e1.length() * e2.length()
+        e1.cross(e2).dot(n) >= -CONVEX_TOL * e1.length() * e2.length()
     })
 }
 
@@ -188,6 +198,22 @@ pub(crate) fn convex(poly: &[u32], verts: &Verts) -> bool {
 /// no inner points); failing that (straight sides with inner points all round), a fan from a new
 /// centre vertex (the mean of the vertices, of `region`).
 pub(crate) fn triangulate(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
+    let first = out.len();
+    fan(poly, verts, region, out);
+    // A vertex can repeat non-consecutively where two positions round to the same f32: drop the
+    // triangles that would repeat it (zero area).
+    let mut w = first;
+    for r in first..out.len() {
+        let t = out[r];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            out[w] = t;
+            w += 1;
+        }
+    }
+    out.truncate(w);
+}
+
+fn fan(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
     let m = poly.len();
     if m == 3 {
         out.push([poly[0], poly[1], poly[2]]);

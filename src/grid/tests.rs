@@ -62,6 +62,17 @@ fn key(t: &TileMesh, v: u32) -> Key {
 /// its reverse once (watertight, consistently wound); no triangle repeats a vertex or has zero
 /// area. Vertices are keyed by exact position and value (tests give values = region).
 fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result::Result<usize, String> {
+    closed(tiles, pick, false).map(|x| x.0)
+}
+
+/// As [`watertight`]; with `non_manifold`, an edge may be used n > 1 times if its reverse is too
+/// (cells of a region touching along an edge only: 4 faces meet there by nature). Returns the
+/// triangles and the number of such edges.
+fn closed(
+    tiles: &[TileMesh],
+    pick: impl Fn(usize) -> usize,
+    non_manifold: bool,
+) -> std::result::Result<(usize, usize), String> {
     let mut edges: HashMap<(Key, Key), u32> = HashMap::new();
     let mut ntri = 0;
     for (b, t) in tiles.iter().enumerate() {
@@ -81,8 +92,13 @@ fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result:
             ntri += 1;
         }
     }
+    let mut shared = 0;
     for (&(a, b), &n) in &edges {
         let back = edges.get(&(b, a)).copied().unwrap_or(0);
+        if non_manifold && n == back && n > 1 {
+            shared += 1;
+            continue;
+        }
         if n != 1 || back != 1 {
             let pa = a.0.map(f32::from_bits);
             let pb = b.0.map(f32::from_bits);
@@ -92,7 +108,7 @@ fn watertight(tiles: &[TileMesh], pick: impl Fn(usize) -> usize) -> std::result:
             ));
         }
     }
-    Ok(ntri)
+    Ok((ntri, shared / 2))
 }
 
 #[test]
@@ -380,6 +396,72 @@ fn garbage_never_panics() {
     }
 }
 
+/// Random pillar grids where every column is thrown by its own plane (an offset and a tilt: every
+/// interface a fault whose layers cross), layers whose thickness is a non-negative plane (zero
+/// at a corner pillar, or everywhere: pinch-outs), random inactive cells and regions: closed at
+/// every level and across seams of different levels (random inactive cells can make cells of one
+/// region touch along an edge only, where four faces meet: allowed when balanced), and level 0
+/// encloses exactly the drawn cells' volume (all their faces are planar here).
+#[test]
+fn random_faulted_pillar_grids_are_closed() {
+    let mut rng = crate::TestRng(11);
+    for case in 0..40 {
+        let (ni, nj, nk) = (rng.irange(2, 9), rng.irange(2, 9), rng.irange(1, 6));
+        let (dx, dy) = (3.0, 2.0);
+        // Layer thickness planes t_k = a + b x + c y >= 0 on the grid.
+        let planes: Vec<[f64; 3]> = (0..nk)
+            .map(|_| match rng.irange(0, 4) {
+                0 => [0.0; 3],
+                1 => [0.0, rng.range(0.0, 0.1), rng.range(0.0, 0.1)],
+                _ => [rng.range(0.2, 2.0), rng.range(-0.01, 0.05), rng.range(-0.01, 0.05)],
+            })
+            .collect();
+        let depth = |k: usize, x: f64, y: f64| -> f64 {
+            planes[..k].iter().map(|p| (p[0] + p[1] * x + p[2] * y).max(0.0)).sum()
+        };
+        let throws: Vec<[f64; 3]> = (0..ni * nj)
+            .map(|_| {
+                if rng.f() < 0.3 {
+                    [0.0; 3]
+                } else {
+                    [rng.range(-3.0, 3.0), rng.range(-0.3, 0.3), rng.range(-0.3, 0.3)]
+                }
+            })
+            .collect();
+        let c = grid_from(ni, nj, nk, |(ci, cj, _), (i, j, k)| {
+            let (x, y) = (i as f64 * dx, j as f64 * dy);
+            let t = throws[cj * ni + ci];
+            [x, y, -depth(k, x, y) - (t[0] + t[1] * x + t[2] * y)]
+        });
+        let n = ni * nj * nk;
+        let active: Vec<bool> = (0..n).map(|_| rng.f() < 0.85).collect();
+        let region: Vec<i32> = (0..n).map(|_| (rng.f() < 0.3) as i32).collect();
+        let values: Vec<f64> = region.iter().map(|&r| r as f64).collect();
+        let g =
+            CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+        let blocks = (rng.irange(1, 5), rng.irange(1, 5));
+        let b = build(&g, blocks);
+        let nl = b.levels.len();
+        for lev in 0..nl {
+            closed(&b.tiles, |_| lev, true)
+                .unwrap_or_else(|e| panic!("case {case} {ni}x{nj}x{nk} {blocks:?} level {lev}: {e}"));
+        }
+        closed(&b.tiles, |t| (t * 7 + case) % nl, true).unwrap_or_else(|e| panic!("case {case} mixed: {e}"));
+        let mut want = 0.0;
+        for (cell, &on) in active.iter().enumerate() {
+            if on {
+                let z = |cc: usize| c[cell * 24 + cc * 3 + 2];
+                want += dx * dy * ((z(0) + z(1) + z(2) + z(3)) - (z(4) + z(5) + z(6) + z(7))) / 4.0;
+            }
+        }
+        let v0 = b.levels[0].volume;
+        assert!((v0 - want).abs() <= 1e-9 * want.max(1.0), "case {case}: level 0 volume {v0} != {want}");
+        for l in &b.levels {
+            assert!((l.volume - v0).abs() <= 0.03 * v0 + 1e-9, "case {case}: {} vs {v0}", l.volume);
+        }
+    }
+}
+
 #[test]
 fn distance_levels_at_hand_computed_distances() {
     // L = W = 1, alpha 10, lambda 2.5: S(h) - r(h) = 2^h (10 - 2.5 sqrt(2) / 2) = 2^h 8.2322...
@@ -447,9 +529,13 @@ fn perf_1m_faulted_grid() {
     let region: Vec<i32> = (0..n).map(|x| ((x % ni >= 50) as i32) + 2 * ((x / (ni * nj) >= 60) as i32)).collect();
     let values: Vec<f64> = (0..n).map(|x| (x % 977) as f64 / 977.0).collect();
     let g = CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+    perf_table(&g);
+}
+
+fn perf_table(g: &CornerGrid) {
     for blocks in [(8, 8), (16, 16)] {
         let t0 = std::time::Instant::now();
-        let b = build(&g, blocks);
+        let b = build(g, blocks);
         let dt = t0.elapsed().as_secs_f64();
         println!(
             "blocks {blocks:?}: build {dt:.2} s on {} threads, {} tiles",
@@ -470,5 +556,59 @@ fn perf_1m_faulted_grid() {
                 100.0 * (l.volume - l0.volume) / l0.volume
             );
         }
+    }
+}
+
+/// The same table for a grid dumped by Python (`GEOCULL_GRID_RAW=prefix`: `prefix.dims` = "nk nj
+/// ni", `prefix.corners` f64, `prefix.active` u8, `prefix.region` i32, `prefix.values` f64, all
+/// little-endian C order, e.g. from `geocull.data.faulted_grid()`), checked closed at every level
+/// (its random inactive cells make edges where cells touch along an edge only: allowed). `GEOCULL_GRID_RAW=/tmp/fg cargo test --release raw_grid -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn perf_raw_grid() {
+    let Ok(prefix) = std::env::var("GEOCULL_GRID_RAW") else { return };
+    let read = |ext: &str| std::fs::read(format!("{prefix}.{ext}")).unwrap();
+    let dims: Vec<usize> =
+        String::from_utf8(read("dims")).unwrap().split_whitespace().map(|x| x.parse().unwrap()).collect();
+    let (nk, nj, ni) = (dims[0], dims[1], dims[2]);
+    let f64s =
+        |b: Vec<u8>| -> Vec<f64> { b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect() };
+    let c = f64s(read("corners"));
+    let active: Vec<bool> = read("active").iter().map(|&x| x != 0).collect();
+    let region: Vec<i32> = read("region").chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap())).collect();
+    // Values = region, so that the watertightness check keys vertices per region.
+    let values: Vec<f64> = region.iter().map(|&r| r as f64).collect();
+    let g = CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
+    perf_table(&g);
+    let b = build(&g, (8, 8));
+    for h in 0..b.levels.len() {
+        let (n, e) = closed(&b.tiles, |_| h, true).unwrap_or_else(|e| panic!("level {h}: {e}"));
+        println!("level {h}: closed, {n} triangles, {e} edges where cells touch along an edge only");
+    }
+    let nbx = ni.div_ceil(8);
+    let top = b.levels.len() - 1;
+    closed(&b.tiles, |t| if (t % nbx + t / nbx).is_multiple_of(2) { 0 } else { top }, true).unwrap();
+    println!("checkerboard of levels 0 / {top}: closed");
+}
+
+#[test]
+fn positions_are_relative_to_the_origin() {
+    let (ni, nj, nk) = (6, 5, 3);
+    let off = [461_000.0, 5_930_000.0, -1500.0];
+    let c = faulted(ni, nj, nk, 0.4, 3);
+    let moved: Vec<f64> = c.iter().enumerate().map(|(x, v)| v + off[x % 3]).collect();
+    let g = CornerGrid { nk, nj, ni, corners: &c, active: None, region: None, values: None };
+    let gm = CornerGrid { nk, nj, ni, corners: &moved, active: None, region: None, values: None };
+    let a = build(&g, (4, 4));
+    let b = build_grid(&gm, DVec3::from_array(off), (4, 4), &AtomicBool::new(false)).unwrap();
+    for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
+        assert_eq!(ta.positions, tb.positions);
+        assert_eq!(ta.fine, tb.fine);
+        assert_eq!((ta.bbox_min, ta.bbox_max), (tb.bbox_min, tb.bbox_max));
+    }
+    assert_eq!(a.levels.len(), b.levels.len());
+    for (la, lb) in a.levels.iter().zip(&b.levels) {
+        assert_eq!((la.faces, la.triangles, la.vertices), (lb.faces, lb.triangles, lb.vertices));
+        assert!((la.volume - lb.volume).abs() < 1e-9 * la.volume);
     }
 }
