@@ -31,6 +31,7 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import bench as bench
     from . import compare as compare
     from . import data as data
+    from . import grid as grid
     from . import distributed as distributed
     from . import io as io
     from . import iso as iso
@@ -66,7 +67,7 @@ __all__ = [
     "Viewer",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing", "distributed")
+_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing", "distributed", "grid")
 
 
 def __getattr__(name: str) -> _Any:
