@@ -89,6 +89,7 @@ examples-quick: setup
 	$(PY) examples/iso_table.py --quick --out out/examples/iso_table
 	$(PY) examples/horizon_dem.py --width 320 --height 240 --spots 1 --repeat 1 --out out/examples/horizon
 	$(PY) examples/geodata_scene.py --quick --out out/examples/geodata
+	$(PY) examples/grid_levels.py --quick --out out/examples/grid
 
 # Every example notebook executed in a fresh kernel (nbclient), as CI does; outputs are never
 # committed: the executed copies go to out/notebooks.
