@@ -1,0 +1,110 @@
+"""The seismic-scene benchmark (``python -m geocull bench --scene seismic``, issue 14): the
+Gullfaks-like horizons and faults with three seismic slices (an inline, a crossline and a time
+slice through a synthetic amplitude cube spanning the scene) and one volume lens, as in seed
+000's Figure 1. Per view, side by side in one run: the frame time of none and three_pass
+(conservative, threshold 0) without and with the slices and the lens, the tiles three_pass culls
+with and without the slices (the culling the slices cause), the lens's slices drawn or hidden, and
+the cost of moving a slice (``set_slice_index``). Nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+__all__ = ["run", "format_table", "amplitude_cube"]
+
+
+def amplitude_cube(bounds: tuple[float, ...], n: tuple[int, int, int], seed: int = 0) -> tuple[np.ndarray, tuple, tuple]:
+    """A synthetic post-stack amplitude cube (x, y, z) spanning ``bounds`` = (xmin, xmax, ymin, ymax,
+    zmin, zmax): layered reflectors (a sine in depth, gently dipping) with noise. Returns
+    (values (nx, ny, nz) float32, origin, spacing)."""
+    x0, x1, y0, y1, z0, z1 = bounds
+    nx, ny, nz = n
+    rng = np.random.default_rng(seed)
+    x, y, z = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(y0, y1, ny), np.linspace(z0, z1, nz), indexing="ij")
+    v = np.sin((z + 0.02 * (x - x0) + 0.01 * (y - y0)) / max((z1 - z0) / 40, 1e-9))
+    v = (v + 0.3 * rng.standard_normal(v.shape)).astype(np.float32)
+    spacing = ((x1 - x0) / (nx - 1), (y1 - y0) / (ny - 1), (z1 - z0) / (nz - 1))
+    return v, (x0, y0, z0), spacing
+
+
+def _best(fn: Any, repeats: int) -> tuple[Any, float]:
+    fn()
+    out, best = None, float("inf")
+    for _ in range(max(1, repeats)):
+        out = fn()
+        best = min(best, out.stats["total_ms"])
+    return out, best
+
+
+def run(cfg: dict[str, Any]) -> dict[str, Any]:
+    """Runs the benchmark; ``cfg``: size (horizon samples per side), n_faults, width, height,
+    repeats, cube ((nx, ny, nz) samples of the amplitude cube), views (count)."""
+    import geocull as gc
+    from geocull.data import gullfaks_like, standard_views
+
+    w, h, rep = int(cfg["width"]), int(cfg["height"]), int(cfg.get("repeats", 3))
+    spec = gullfaks_like(nx=int(cfg["size"]), ny=int(cfg["size"]), n_faults=int(cfg.get("n_faults", 12)))
+    plain = spec.build(tiles=(10, 10), coarse_factor=25)
+    scene = spec.build(tiles=(10, 10), coarse_factor=25)
+    n = tuple(cfg.get("cube", (120, 120, 80)))
+    vals, origin, spacing = amplitude_cube(spec.bounds, n)  # type: ignore[arg-type]
+    vol = gc.Volume(vals, origin=origin, spacing=spacing, order="xyz")
+    t = time.perf_counter()
+    ids = [scene.add_slice(vol, "inline", n[0] // 3), scene.add_slice(vol, "crossline", 2 * n[1] // 3),
+           scene.add_slice(vol, "sample", n[2] // 4)]
+    slices_s = time.perf_counter() - t
+    # Near the top of the cube, over the shallowest horizon in most views.
+    lens_box = ((n[0] // 2, n[0] // 2 + n[0] // 6), (n[1] // 4, n[1] // 4 + n[1] // 6), (3 * n[2] // 4, n[2] - 1))
+    scene.add_lens(vol, lens_box, cmap="plasma", opacity=0.25)
+    views = [(name, gc.Camera.look_at(**kw)) for name, kw in standard_views(spec)][: int(cfg.get("views", 7))]
+    r_plain, r_scene = gc.Renderer(w, h), gc.Renderer(w, h)
+    _, frame_ms = _best(lambda: r_scene.render(scene, views[0][1], culling="none"), 1)
+    t = time.perf_counter()
+    scene.set_slice_index(ids[0], n[0] // 3 + 1)
+    move_ms = (time.perf_counter() - t) * 1e3
+    t = time.perf_counter()
+    r_scene.render(scene, views[0][1], culling="none")  # with the re-upload after the move
+    move_frame_ms = (time.perf_counter() - t) * 1e3
+    out: dict[str, Any] = dict(width=w, height=h, triangles=plain.n_triangles, slice_triangles=scene.n_triangles -
+                               plain.n_triangles, slices_build_s=slices_s, move_ms=move_ms,
+                               move_frame_ms=move_frame_ms, frame_ms=frame_ms, rows=[])
+    tp = dict(culling="three_pass", pixel_threshold=0)
+    for name, cam in views:
+        base_none, t_none = _best(lambda cam=cam: r_plain.render(plain, cam, culling="none"), rep)
+        base_tp, t_tp = _best(lambda cam=cam: r_plain.render(plain, cam, **tp), rep)
+        with_none, t_wnone = _best(lambda cam=cam: r_scene.render(scene, cam, culling="none"), rep)
+        with_tp, t_wtp = _best(lambda cam=cam: r_scene.render(scene, cam, **tp), rep)
+        st = with_tp.stats
+        out["rows"].append(dict(
+            view=name, none_ms=t_none, tp_ms=t_tp, none_slices_ms=t_wnone, tp_slices_ms=t_wtp,
+            tiles_culled=int(base_tp.stats["tiles_total"] - base_tp.stats["tiles_drawn"]),
+            tiles_culled_slices=int(st["tiles_total"] - st["tiles_drawn"]),
+            tris_tp=int(base_tp.stats["triangles_drawn"]), tris_tp_slices=int(st["triangles_drawn"]),
+            lens_drawn=int(st.get("lens_slices_drawn", 0)), lens_tested=int(st.get("lens_slices_tested", 0)),
+            lens_hidden=int(st.get("lenses_hidden", 0)),
+            same_image=bool(np.array_equal(with_tp.image, with_none.image)),
+        ))
+    return out
+
+
+def format_table(res: dict[str, Any]) -> str:
+    """The printed table."""
+    lines = [
+        f"seismic scene: {res['triangles']:,} horizon + fault triangles, three slices + a lens add "
+        f"{res['slice_triangles']:,} triangles ({res['slices_build_s']:.2f} s to build the slices); moving a slice "
+        f"{res['move_ms']:.0f} ms, the next frame (re-upload) {res['move_frame_ms']:.0f} ms against {res['frame_ms']:.0f} ms; "
+        f"{res['width']}x{res['height']}",
+        "view            | none ms | +slices | three_pass | +slices | culled tiles | +slices | triangles tp | +slices "
+        "| lens drawn/tested | tp = none",
+    ]
+    for r in res["rows"]:
+        lines.append(
+            f"{r['view'][:15]:15s} | {r['none_ms']:7.1f} | {r['none_slices_ms']:7.1f} | {r['tp_ms']:10.1f} | "
+            f"{r['tp_slices_ms']:7.1f} | {r['tiles_culled']:12d} | {r['tiles_culled_slices']:7d} | "
+            f"{r['tris_tp']:12,d} | {r['tris_tp_slices']:7,d} | {r['lens_drawn']:>8d}/{r['lens_tested']:<8d} | "
+            f"{r['same_image']}")
+    return "\n".join(lines)
