@@ -76,7 +76,7 @@ class IsoStats(TypedDict):
     patches_extracted: int  # surface patches extracted this frame
     occluder_ms: float  # ms, occluder selection + occlusion map (GPU finished)
     cull_ms: float  # ms, coarse-to-fine node tests, read-backs included
-    extract_ms: float  # ms, marching tetrahedra (cache look-ups included)
+    extract_ms: float  # ms, marching cubes (cache look-ups included)
     draw_ms: float  # ms, vertex assembly, upload and the lit draw (GPU finished)
     surface_ms: float  # ms, extract_ms + draw_ms
     total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back excluded

@@ -8,8 +8,8 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+use super::march::SurfacePatch;
 use super::octree::NodeInfo;
-use super::tetra::SurfacePatch;
 use crate::error::{Error, Result};
 pub(super) use crate::gpu::layout::BoxInstance;
 use crate::gpu::passes::box_vertex_layout;

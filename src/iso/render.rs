@@ -23,13 +23,15 @@
 //!    unmarked pixels reset to far) done with a depth-texture read instead of stencil + sorting,
 //!    and for both orders (below→above and above→below).
 //!
-//!    **Why it is conservative.** The rendered surface is the zero set of the piecewise-linear
-//!    (marching-tetrahedra) interpolant `g - w`, which is continuous over the whole volume (the
-//!    tetrahedra are crack free). Inside a node, `g` is a convex combination of the node's samples,
-//!    so `g < w` in every Below box and `g > w` in every Above box (closed boxes; Below and Above
-//!    nodes never touch because touching nodes share samples). On the ray segment between the
-//!    Below point and the Above point (inside the convex volume) `g - w` changes sign, so the
-//!    watertight surface is hit strictly before `M(p)`. Any surface point behind `M(p)` is hidden.
+//!    **Why it is conservative.** The rendered surface is the marching-cubes surface
+//!    ([`super::march`]): crack free, it is closed except where NaN cells stop it, and inside every
+//!    cell it separates the cell's above corners from its below corners, so it splits the volume
+//!    into an above and a below side. A Below box holds no triangle (all its samples are below,
+//!    none of its cells is cut, and no neighbour's triangle reaches its faces: those have no
+//!    crossing edge), so it lies on the below side; an Above box on the above side (Below and Above
+//!    nodes never touch because touching nodes share samples). The ray segment between the Below
+//!    point and the Above point (inside the convex volume) goes from one side to the other, so it
+//!    crosses the surface strictly before `M(p)`. Any surface point behind `M(p)` is hidden.
 //! 3. **Node test**, coarse to fine from `cull_depth - 2` to `cull_depth`: the front faces of the
 //!    boxes of the straddling nodes (expanded by a small epsilon) are rasterised without a depth
 //!    attachment; the fragment shader compares each fragment's depth with `M` and counts, per node,
@@ -39,7 +41,7 @@
 //!    The surface inside a node lies inside its box, so on every pixel where the node's surface is
 //!    the first hit, the box's entry point is nearer than `M(p)`: the culled image equals the
 //!    unculled one. Boxes that reach the near plane (or contain the eye) are visible untested.
-//! 4. **Surface**: marching tetrahedra ([`super::tetra`]) in the visible nodes at `cull_depth`,
+//! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
 //!
 //! Depths count from the root (0) as in the octree; the leaves (single cells) are at
@@ -53,9 +55,9 @@ use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{Class, MinMaxOctree, NodeInfo};
 use super::passes::{draw_map, draw_surface, test_nodes, BoxInstance, Globals, IsoPasses, Occluders, Space, Targets};
-use super::tetra::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -149,7 +151,7 @@ pub struct IsoStats {
     pub occluder_ms: f64,
     /// Coarse-to-fine node tests, read-backs included.
     pub cull_ms: f64,
-    /// Marching tetrahedra (cache look-ups included).
+    /// Marching cubes (cache look-ups included).
     pub extract_ms: f64,
     /// Vertex assembly, upload and the lit draw (GPU finished).
     pub draw_ms: f64,
@@ -513,7 +515,7 @@ impl IsoRenderer {
             vec![true; candidates.len()]
         };
 
-        // ---- Marching tetrahedra in the visible nodes (cached per node).
+        // ---- Marching cubes in the visible nodes (cached per node).
         let t_ex = Instant::now();
         let patches: Vec<Arc<SurfacePatch>> = if opts.use_cache {
             let iso = &mut *self;
@@ -524,7 +526,7 @@ impl IsoRenderer {
             p
         } else {
             stats.patches_extracted = visible.len() as u32;
-            super::tetra::extract_nodes(vol, w, &visible).into_iter().map(Arc::new).collect()
+            super::march::extract_nodes(vol, w, &visible).into_iter().map(Arc::new).collect()
         };
         stats.extract_ms = t_ex.elapsed().as_secs_f64() * 1e3;
         opts.interrupt.check()?;
