@@ -1,6 +1,7 @@
 //! The isosurface passes: pipelines (iso.wgsl), their targets, and the three steps that record
-//! and submit them: the occlusion map ([`draw_map`]), the node test ([`test_nodes`]) and the lit
-//! surface ([`draw_surface`]). `super::render` decides what goes into them.
+//! and submit them: the occlusion map ([`record_map`]: a compute march per pixel through the
+//! occluder depth's class grid, [`ClassGrid`]), the node test ([`test_nodes`]) and the lit surface
+//! ([`draw_surface`]). `super::render` decides what goes into them.
 
 use std::sync::Arc;
 
@@ -33,20 +34,62 @@ pub(super) struct Targets {
     pub(super) id: wgpu::TextureView,
     pub(super) depth_tex: wgpu::Texture,
     pub(super) depth: wgpu::TextureView,
-    pub(super) below: wgpu::TextureView,
-    pub(super) above: wgpu::TextureView,
-    pub(super) map_tex: wgpu::Texture,
-    pub(super) map: wgpu::TextureView,
+    /// The occlusion map: reverse-Z depth per pixel (row-major, row 0 = top), 0 = nothing proven.
+    pub(super) map: wgpu::Buffer,
 }
 
-/// Occluder boxes of one (isovalue, occluder depth), on the GPU.
-pub(super) struct Occluders {
-    pub(super) key: (u32, u32, [u64; 4]),
-    pub(super) below: Option<wgpu::Buffer>,
-    pub(super) above: Option<wgpu::Buffer>,
+/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl).
+pub(super) struct ClassGrid {
+    pub(super) key: (u32, u32),
+    pub(super) buffer: wgpu::Buffer,
+    pub(super) dims: [u32; 3],
     pub(super) n_below: u32,
     pub(super) n_above: u32,
+    pub(super) n_nan: u32,
 }
+
+/// Node classes of the map pass (iso.wgsl).
+pub(super) const CLASS_PASS: u32 = 0;
+pub(super) const CLASS_BELOW: u32 = 1;
+pub(super) const CLASS_ABOVE: u32 = 2;
+pub(super) const CLASS_NAN: u32 = 3;
+
+impl ClassGrid {
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word and uploads them.
+    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u32]) -> Self {
+        let mut words = vec![0u32; classes.len().div_ceil(16).max(1)];
+        let (mut n_below, mut n_above, mut n_nan) = (0, 0, 0);
+        for (i, &c) in classes.iter().enumerate() {
+            words[i / 16] |= c << ((i % 16) * 2);
+            match c {
+                CLASS_BELOW => n_below += 1,
+                CLASS_ABOVE => n_above += 1,
+                CLASS_NAN => n_nan += 1,
+                _ => {}
+            }
+        }
+        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_classes"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        Self { key, buffer, dims, n_below, n_above, n_nan }
+    }
+}
+
+/// Uniforms of the map pass and of the node test (iso.wgsl `MapParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(super) struct MapParams {
+    pub(super) inv_view_proj: [[f32; 4]; 4],
+    pub(super) lo: [f32; 4],
+    pub(super) hi: [f32; 4],
+    pub(super) node: [f32; 4],
+    pub(super) dims: [u32; 4],
+    pub(super) size: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<MapParams>() == 144);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 
@@ -73,61 +116,46 @@ impl Space {
 /// Bind-group layouts and pipelines of the isosurface passes.
 pub(super) struct IsoPasses {
     pub(super) globals_layout: wgpu::BindGroupLayout,
-    pub(super) ref_layout: wgpu::BindGroupLayout,
+    pub(super) map_layout: wgpu::BindGroupLayout,
     pub(super) test_layout: wgpu::BindGroupLayout,
-    pub(super) near_pipeline: wgpu::RenderPipeline,
-    pub(super) beyond_pipeline: wgpu::RenderPipeline,
+    pub(super) map_pipeline: wgpu::ComputePipeline,
     pub(super) test_pipeline: wgpu::RenderPipeline,
     pub(super) surf_pipeline: wgpu::RenderPipeline,
+}
+
+fn buffer_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BufferBindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
 }
 
 impl IsoPasses {
     pub(super) fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
+        let vfc = vf | wgpu::ShaderStages::COMPUTE;
         let fs = wgpu::ShaderStages::FRAGMENT;
-        // Depth textures read as unfilterable float (see iso.wgsl: GLSL has no depth textureLoad).
-        let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: fs,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let uniform = wgpu::BufferBindingType::Uniform;
+        let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
         let globals_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso_globals"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: vf,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[buffer_entry(0, vfc, uniform)],
         });
-        let ref_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso_ref"),
-            entries: &[depth_tex_entry(0)],
+        let map_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_map"),
+            entries: &[buffer_entry(0, cs, uniform), buffer_entry(1, cs, ro), buffer_entry(2, cs, rw)],
         });
         let test_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso_test"),
-            entries: &[
-                depth_tex_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-            ],
+            entries: &[buffer_entry(0, fs, ro), buffer_entry(1, fs, rw), buffer_entry(2, fs, uniform)],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("iso.wgsl"),
@@ -141,7 +169,7 @@ impl IsoPasses {
             })
         };
         let pl_globals = pl("iso_globals", &[Some(&globals_layout)]);
-        let pl_ref = pl("iso_ref", &[Some(&globals_layout), Some(&ref_layout)]);
+        let pl_map = pl("iso_map", &[Some(&globals_layout), Some(&map_layout)]);
         let pl_test = pl("iso_test", &[Some(&globals_layout), Some(&test_layout)]);
         let depth_write = Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
@@ -153,57 +181,31 @@ impl IsoPasses {
         // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
         let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
-        let (vs_box, fs_near, fs_beyond, fs_test) =
-            (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
+        let (vs_box, fs_test) = (entry("vs_box"), entry("fs_test"));
         let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
-        let box_vs = wgpu::VertexState {
-            module: &shader,
-            entry_point: Some(&vs_box),
-            compilation_options: Default::default(),
-            buffers: &[Some(box_vertex_layout())],
-        };
         let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
             cull_mode: cull,
             front_face: wgpu::FrontFace::Ccw,
             ..Default::default()
         };
-        let near_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_near"),
-            layout: Some(&pl_globals),
-            vertex: box_vs.clone(),
-            primitive: prim(None),
-            depth_stencil: depth_write.clone(),
-            multisample: Default::default(),
-            fragment: gl.then(|| wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_near),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let beyond_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_beyond"),
-            layout: Some(&pl_ref),
-            vertex: box_vs.clone(),
-            primitive: prim(None),
-            depth_stencil: depth_write.clone(),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_beyond),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
+        let map_pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("iso_map"),
+            layout: Some(&pl_map),
+            module: &shader,
+            entry_point: Some("cs_map"),
+            compilation_options: Default::default(),
             cache: None,
         });
         let test_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("iso_test"),
             layout: Some(&pl_test),
-            vertex: box_vs,
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some(&vs_box),
+                compilation_options: Default::default(),
+                buffers: &[Some(box_vertex_layout())],
+            },
             primitive: prim(Some(wgpu::Face::Back)),
             depth_stencil: None,
             multisample: Default::default(),
@@ -249,50 +251,43 @@ impl IsoPasses {
             multiview_mask: None,
             cache: None,
         });
-        Self { globals_layout, ref_layout, test_layout, near_pipeline, beyond_pipeline, test_pipeline, surf_pipeline }
+        Self { globals_layout, map_layout, test_layout, map_pipeline, test_pipeline, surf_pipeline }
     }
 }
 
 impl Targets {
-    /// Keeps `slot` holding targets of `width` × `height`.
-    pub(super) fn ensure<'a>(slot: &'a mut Option<Targets>, d: &wgpu::Device, width: u32, height: u32) -> &'a Targets {
-        if slot.as_ref().is_none_or(|t| (t.width, t.height) != (width, height)) {
-            let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
-            let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
-            let tb = wgpu::TextureUsages::TEXTURE_BINDING;
-            let cs = wgpu::TextureUsages::COPY_SRC;
-            let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
-            let id = tex("iso_id", ID_FORMAT, ra);
-            // Depth and the map are copied back, or read through a shader where they cannot be.
-            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
-            let below = tex("iso_below", DEPTH_FORMAT, ra | tb);
-            let above = tex("iso_above", DEPTH_FORMAT, ra | tb);
-            let map_tex = tex("iso_map", DEPTH_FORMAT, ra | tb | cs);
-            let v = |t: &wgpu::Texture| t.create_view(&Default::default());
-            *slot = Some(Targets {
-                width,
-                height,
-                color: v(&color_tex),
-                color_tex,
-                id: v(&id),
-                depth: v(&depth_tex),
-                depth_tex,
-                below: v(&below),
-                above: v(&above),
-                map: v(&map_tex),
-                map_tex,
-            });
+    /// Keeps `slot` holding targets of `width` × `height`; true when it made new ones.
+    pub(super) fn ensure(slot: &mut Option<Targets>, d: &wgpu::Device, width: u32, height: u32) -> bool {
+        if slot.as_ref().is_some_and(|t| (t.width, t.height) == (width, height)) {
+            return false;
         }
-        slot.as_ref().unwrap()
+        let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
+        let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let tb = wgpu::TextureUsages::TEXTURE_BINDING;
+        let cs = wgpu::TextureUsages::COPY_SRC;
+        let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
+        let id = tex("iso_id", ID_FORMAT, ra);
+        // Depth is copied back, or read through a shader where it cannot be.
+        let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
+        let map = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso_map"),
+            size: 4 * width as u64 * height as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let v = |t: &wgpu::Texture| t.create_view(&Default::default());
+        *slot = Some(Targets {
+            width,
+            height,
+            color: v(&color_tex),
+            color_tex,
+            id: v(&id),
+            depth: v(&depth_tex),
+            depth_tex,
+            map,
+        });
+        true
     }
-}
-
-fn depth_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
-    Some(wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
-        stencil_ops: None,
-    })
 }
 
 fn pass<'e>(
@@ -313,71 +308,60 @@ fn pass<'e>(
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: if color.is_some() { &colors } else { &[] },
-        depth_stencil_attachment: depth.and_then(depth_attachment),
+        depth_stencil_attachment: depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
         timestamp_writes: None,
         occlusion_query_set: None,
         multiview_mask: None,
     })
 }
 
-/// Passes 1–3 of the occlusion map (see the module docs); waits for the GPU.
-pub(super) fn draw_map(
-    ctx: &GpuContext,
+/// Records the occlusion map (one compute pass, one invocation per pixel) into `enc`.
+pub(super) fn record_map(
+    d: &wgpu::Device,
+    enc: &mut wgpu::CommandEncoder,
     iso: &IsoPasses,
     tg: &Targets,
     globals_bg: &wgpu::BindGroup,
-    occ: &Occluders,
-) -> Result<()> {
-    let d = &ctx.device;
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_map") });
-    for (view, buf, n) in [(&tg.below, &occ.below, occ.n_below), (&tg.above, &occ.above, occ.n_above)] {
-        let mut p = pass(&mut enc, "iso_nearest", None, Some(view));
-        if let Some(b) = buf {
-            p.set_pipeline(&iso.near_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            p.set_vertex_buffer(0, b.slice(..));
-            p.draw(0..36, 0..n);
-        }
-    }
-    let ref_bg = |v: &wgpu::TextureView| {
-        d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("iso_ref"),
-            layout: &iso.ref_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(v) }],
-        })
-    };
-    let (bg_below, bg_above) = (ref_bg(&tg.below), ref_bg(&tg.above));
-    {
-        let mut p = pass(&mut enc, "iso_map", None, Some(&tg.map));
-        if occ.n_below > 0 && occ.n_above > 0 {
-            p.set_pipeline(&iso.beyond_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            // Above boxes behind the nearest Below point, then Below boxes behind the nearest Above point.
-            p.set_bind_group(1, &bg_below, &[]);
-            p.set_vertex_buffer(0, occ.above.as_ref().unwrap().slice(..));
-            p.draw(0..36, 0..occ.n_above);
-            p.set_bind_group(1, &bg_above, &[]);
-            p.set_vertex_buffer(0, occ.below.as_ref().unwrap().slice(..));
-            p.draw(0..36, 0..occ.n_below);
-        }
-    }
-    ctx.queue.submit([enc.finish()]);
-    ctx.wait()?;
-    ctx.take_error()
+    grid: &ClassGrid,
+    params: &wgpu::Buffer,
+) {
+    let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("iso_map"),
+        layout: &iso.map_layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
+        ],
+    });
+    let mut p = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_map"), timestamp_writes: None });
+    p.set_pipeline(&iso.map_pipeline);
+    p.set_bind_group(0, globals_bg, &[]);
+    p.set_bind_group(1, &bg, &[]);
+    p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
 }
 
-/// Visible-pixel count of every box against the map (one submission and read-back).
+/// Visible-pixel count of every box against the map: records into `enc` (after whatever it
+/// holds, e.g. the map pass), submits, and reads the counts back (one submission, one read-back).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn test_nodes(
     ctx: &GpuContext,
+    mut enc: wgpu::CommandEncoder,
     iso: &IsoPasses,
     tg: &Targets,
     globals_bg: &wgpu::BindGroup,
+    params: &wgpu::Buffer,
     boxes: &[BoxInstance],
 ) -> Result<Vec<u32>> {
+    let d = &ctx.device;
     if boxes.is_empty() {
+        ctx.queue.submit([enc.finish()]);
         return Ok(Vec::new());
     }
-    let d = &ctx.device;
     let size = 4 * boxes.len() as u64;
     let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("iso_test_boxes"),
@@ -400,11 +384,11 @@ pub(super) fn test_nodes(
         label: Some("iso_test"),
         layout: &iso.test_layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&tg.map) },
+            wgpu::BindGroupEntry { binding: 0, resource: tg.map.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
         ],
     });
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_test") });
     enc.clear_buffer(&counts, 0, None);
     {
         let mut p = pass(&mut enc, "iso_test", Some(&tg.id), None);

@@ -3,35 +3,35 @@
 //! [`IsoRenderer::render`] (through `Renderer::render_isosurface`) draws the isosurface `f = w` of a [`Volume`], extracting surface
 //! only inside octree nodes that can be seen:
 //!
-//! 1. **Occluders** (view independent, cached per isovalue and build depth): descending the
-//!    min/max octree from the root, every node of depth <= `occluder_depth` that lies wholly
-//!    below `w` (`max < w`) becomes a *Below* box and every node wholly above (`min > w`) an
-//!    *Above* box; straddling nodes are refined down to `occluder_depth` and never occlude.
-//!    The union of these boxes equals the union of the Below/Above nodes *at* `occluder_depth`
-//!    (the paper's set), with far fewer boxes. Boxes are shrunk by a small epsilon.
-//! 2. **Occlusion map** (three depth-only passes, reverse-Z, at image resolution):
-//!    * pass 1: all faces of the Below boxes, depth test Greater → `B(p)`, the nearest point of a
-//!      Below box on pixel `p`'s ray (0 = none);
-//!    * pass 2: the same for the Above boxes → `A(p)`;
-//!    * pass 3 into the map `M` (cleared to 0 = far): all faces of the Above boxes, discarding
-//!      fragments not strictly farther than `B(p)`, then all faces of the Below boxes discarding
-//!      fragments not strictly farther than `A(p)`; depth test Greater keeps the nearest survivor.
-//!
-//!    So `M(p)` is the nearest point on the ray that lies in a box of one class *behind* a point
-//!    of a box of the other class (0 where no such pair exists). This is the paper's stencil
-//!    formulation (Below boxes mark the stencil, Above boxes drawn front to back where it is set,
-//!    unmarked pixels reset to far) done with a depth-texture read instead of stencil + sorting,
-//!    and for both orders (below→above and above→below).
+//! 1. **Classes** (view independent, cached per isovalue and occluder depth, kept on the GPU):
+//!    every node at `occluder_depth` is *Below* (`max < w`, no NaN), *Above* (`min > w`, no NaN),
+//!    *NaN* (some sample is NaN), or passable (it may hold surface); 2 bits per node.
+//! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z): the pixel's ray
+//!    walks the class grid near to far (3-D DDA) and stops at the first node of one class met
+//!    after a node of the other class with no NaN node in between; `M(p)` is the depth of that
+//!    node's entry point (pushed a thousandth of a cell farther), 0 (= nothing proven) where no
+//!    such pair lies on the ray. This is the paper's set (Below nodes, then Above nodes behind
+//!    them, or the other way round) without drawing a box: the earlier version rasterised
+//!    every Below / Above box three times (~500k boxes, 6 M triangles for the Pesco field 128³)
+//!    where a pixel's walk visits a few dozen nodes and usually stops at the second class change.
 //!
 //!    **Why it is conservative.** The rendered surface is the marching-cubes surface
 //!    ([`super::march`]): crack free, it is closed except where NaN cells stop it, and inside every
-//!    cell it separates the cell's above corners from its below corners, so it splits the volume
-//!    into an above and a below side. A Below box holds no triangle (all its samples are below,
-//!    none of its cells is cut, and no neighbour's triangle reaches its faces: those have no
-//!    crossing edge), so it lies on the below side; an Above box on the above side (Below and Above
-//!    nodes never touch because touching nodes share samples). The ray segment between the Below
-//!    point and the Above point (inside the convex volume) goes from one side to the other, so it
-//!    crosses the surface strictly before `M(p)`. Any surface point behind `M(p)` is hidden.
+//!    cell it separates the cell's above corners from its below corners. A Below box holds no
+//!    triangle and no triangle touches it (its cells are not cut, its faces have no crossing edge),
+//!    so it lies on the below side; an Above box on the above side (Below and Above nodes never
+//!    touch because touching nodes share samples). A ray segment that goes from a Below node to an
+//!    Above node (or back) through NaN-free nodes only stays where the surface is closed, so it
+//!    crosses the surface strictly before `M(p)`: any surface point behind `M(p)` is hidden.
+//!
+//!    **The domain.** The paper assumes a convex domain where the field is defined everywhere.
+//!    Here the domain is the NaN-free cells, which need not be convex (NaN borders, slabs, holes):
+//!    a segment from Below to Above may leave it through NaN cells, where the surface has a
+//!    boundary and can be passed by, so a NaN node breaks every pair across it (the walk forgets
+//!    the class it saw), and NaN nodes are never Below or Above themselves. What stays
+//!    conservative: the proof only uses segments inside NaN-free nodes at `occluder_depth` (the
+//!    volume's box is convex, so the segment never leaves it); a coarse occluder depth with a few
+//!    NaN samples loses occluders (whole nodes count as NaN), never correctness.
 //! 3. **Node test**, coarse to fine from `cull_depth - 2` to `cull_depth`: the front faces of the
 //!    boxes of the straddling nodes (expanded by a small epsilon) are rasterised without a depth
 //!    attachment; the fragment shader compares each fragment's depth with `M` and counts, per node,
@@ -57,7 +57,10 @@ use wgpu::util::DeviceExt;
 
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{Class, MinMaxOctree, NodeInfo};
-use super::passes::{draw_map, draw_surface, test_nodes, BoxInstance, Globals, IsoPasses, Occluders, Space, Targets};
+use super::passes::{
+    draw_surface, record_map, test_nodes, BoxInstance, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets,
+    CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, CLASS_PASS,
+};
 use super::Volume;
 use crate::camera::{Camera, FrameCamera};
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -147,9 +150,13 @@ pub struct IsoStats {
     /// Patches found in the cache / extracted this frame.
     pub patches_cached: u32,
     pub patches_extracted: u32,
-    /// Occluder selection + occlusion map (GPU finished).
+    /// Nodes at the occluder depth with a NaN sample (never occluders; they stop the map's walk).
+    pub occluder_nodes_nan: u32,
+    /// The class grid (first frame of an isovalue and occluder depth, else 0) and the recording of
+    /// the map pass, on the CPU; the pass itself runs on the GPU with the first node test and is
+    /// part of `cull_ms` (one submission).
     pub occluder_ms: f64,
-    /// Coarse-to-fine node tests, read-backs included.
+    /// Occlusion map (GPU) and the coarse-to-fine node tests, read-backs included.
     pub cull_ms: f64,
     /// Marching cubes (cache look-ups included).
     pub extract_ms: f64,
@@ -157,8 +164,16 @@ pub struct IsoStats {
     pub draw_ms: f64,
     /// extract_ms + draw_ms.
     pub surface_ms: f64,
-    /// Whole frame, from the call to the GPU finishing the image (no read-back).
+    /// Whole frame, from the call to the GPU finishing the image (no read-back, no setup).
     pub total_ms: f64,
+    /// One-time work this frame paid for before its clock started (not in `total_ms`): pipeline
+    /// creation and the case table (the renderer's first isosurface frame), targets (first frame
+    /// at a size). 0 on other frames.
+    pub setup_ms: f64,
+    /// Queue submissions and GPU-to-host read-backs inside the frame (the node tests' counts; the
+    /// image read-back after the frame is not counted).
+    pub submissions: u32,
+    pub readbacks: u32,
     pub readback_ms: f64,
     /// Bytes held by the renderer's isosurface caches after the frame (patches and straddling-node
     /// lists), at most `IsoOptions::cache_budget`.
@@ -196,19 +211,27 @@ pub struct IsoRenderer {
     passes: IsoPasses,
     targets: Option<Targets>,
     source: Option<super::VolumeId>,
-    occluders: Option<Occluders>,
+    classes: Option<ClassGrid>,
+    /// Setup time not yet reported (pipelines made in `new`).
+    setup_ms: f64,
     /// Straddling nodes per (isovalue bits, depth).
     straddling: Vec<StraddlingEntry>,
     patches: PatchCache,
 }
 
 impl IsoRenderer {
+    /// Creates the pipelines (and the marching-cubes case table); their time is reported as the
+    /// first frame's `setup_ms`.
     pub fn new(d: &wgpu::Device) -> Self {
+        let t = Instant::now();
+        let passes = IsoPasses::new(d);
+        super::march::cases::cases();
         Self {
-            passes: IsoPasses::new(d),
+            passes,
             targets: None,
             source: None,
-            occluders: None,
+            classes: None,
+            setup_ms: t.elapsed().as_secs_f64() * 1e3,
             straddling: Vec::new(),
             patches: PatchCache::new(),
         }
@@ -217,7 +240,7 @@ impl IsoRenderer {
     /// Drops every cache when the volume changed.
     fn bind_volume(&mut self, vol: &Volume) {
         if !self.source.as_ref().is_some_and(|s| s.matches(vol)) {
-            self.occluders = None;
+            self.classes = None;
             self.straddling.clear();
             self.patches.clear();
             self.source = Some(super::VolumeId::of(vol));
@@ -250,7 +273,7 @@ impl IsoRenderer {
 
     /// Drops the cached patches, occluders and node lists (the pipelines stay).
     pub fn clear_cache(&mut self) {
-        self.occluders = None;
+        self.classes = None;
         self.straddling.clear();
         self.patches.clear();
         self.source = None;
@@ -296,6 +319,20 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
         frontier = next;
     }
     (below, above)
+}
+
+/// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
+/// (NaN-free by [`NodeInfo::classify`]), NaN (any NaN sample: outside the domain), else passable.
+pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
+    tree.nodes_at_depth(depth)
+        .par_iter()
+        .map(|n| match n.classify(w) {
+            _ if n.has_nan => CLASS_NAN,
+            Class::Below => CLASS_BELOW,
+            Class::Above => CLASS_ABOVE,
+            _ => CLASS_PASS,
+        })
+        .collect()
 }
 
 /// True when some part of the box (grid frame, turned into render space by `model`) is not in
@@ -347,6 +384,12 @@ impl IsoRenderer {
             format!("cull_depth is {cull_depth}; this volume's octree has depths 0..={maxd}")
         })?;
 
+        // One-time work first, outside the frame's clock: targets at a new size.
+        let t_setup = Instant::now();
+        let made = Targets::ensure(&mut self.targets, &ctx.device, width, height);
+        let targets_ms = if made { t_setup.elapsed().as_secs_f64() * 1e3 } else { 0.0 };
+        let setup_ms = std::mem::take(&mut self.setup_ms) + targets_ms;
+
         let t0 = Instant::now();
         let (lo, hi) = vol.bounds();
         // Boxes and patches live in the volume's grid frame, relative to its centre (`space`). A
@@ -379,14 +422,13 @@ impl IsoRenderer {
             color: [opts.color[0], opts.color[1], opts.color[2], 1.0],
         };
         let min_spacing = vol.spacing.iter().cloned().fold(f64::INFINITY, f64::min);
-        // Occluders shrink, tested boxes grow, by a thousandth of a cell: rasterisation ties never
-        // cull a visible node.
+        // The map is pushed farther and tested boxes grow by a thousandth of a cell: rounding never
+        // culls a visible node.
         let eps = 1e-3 * min_spacing;
 
         let d = &ctx.device;
         let iso: &mut IsoRenderer = self;
         iso.bind_volume(vol);
-        Targets::ensure(&mut iso.targets, d, width, height);
         // A quarter of the budget for node lists, the rest for patches.
         let (list_budget, patch_budget) = (opts.cache_budget / 4, opts.cache_budget - opts.cache_budget / 4);
         iso.patches.set_budget(patch_budget);
@@ -394,36 +436,12 @@ impl IsoRenderer {
         let implicit = opts.culling == IsoCulling::Implicit;
         let t_occ = Instant::now();
         if implicit {
-            let okey = (
-                norm_bits(w),
-                occ_depth,
-                [
-                    space.origin.x.to_bits(),
-                    space.origin.y.to_bits(),
-                    space.origin.z.to_bits(),
-                    camera.z_scale.to_bits(),
-                ],
-            );
-            if iso.occluders.as_ref().is_none_or(|o| o.key != okey) {
-                iso.occluders = None;
-                let (below, above) = occluder_nodes(tree, w, occ_depth);
-                let make = |nodes: &[NodeInfo], label: &str| {
-                    (!nodes.is_empty()).then(|| {
-                        let inst: Vec<BoxInstance> = nodes.par_iter().map(|n| space.instance(n, 0, -eps)).collect();
-                        d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some(label),
-                            contents: bytemuck::cast_slice(&inst),
-                            usage: wgpu::BufferUsages::VERTEX,
-                        })
-                    })
-                };
-                iso.occluders = Some(Occluders {
-                    key: okey,
-                    below: make(&below, "iso_below"),
-                    above: make(&above, "iso_above"),
-                    n_below: below.len() as u32,
-                    n_above: above.len() as u32,
-                });
+            // View independent: the node classes at the occluder depth (kept on the GPU).
+            let key = (norm_bits(w), occ_depth);
+            if iso.classes.as_ref().is_none_or(|g| g.key != key) {
+                iso.classes = None;
+                let dims = tree.dims_at_depth(occ_depth).expect("occ_depth <= max depth");
+                iso.classes = Some(ClassGrid::new(d, key, dims, &node_classes(tree, w, occ_depth)));
             }
         }
         let iso: &IsoRenderer = &*iso;
@@ -446,16 +464,41 @@ impl IsoRenderer {
         };
         let mut node_pixels = vec![0u32; candidates.len()];
         let mut map_out = None;
+        let tg = iso.targets.as_ref().unwrap();
+        // The map pass's parameters (also bound by the node test, for the image width).
+        let params_buf = implicit.then(|| {
+            let grid = iso.classes.as_ref().unwrap();
+            let inv = view_proj.inverse();
+            let s = (1u64 << (maxd - occ_depth)) as f64;
+            let node = DVec3::new(vol.spacing[0] * s, vol.spacing[1] * s, vol.spacing[2] * s * space.z_scale);
+            let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+            let p = MapParams {
+                inv_view_proj: Mat4::from_cols_array(&inv.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+                lo: f4(plo, eps.min(eps * space.z_scale)),
+                hi: f4(phi, 0.0),
+                node: f4(node, 0.0),
+                dims: [grid.dims[0], grid.dims[1], grid.dims[2], width],
+                size: [height, 0, 0, 0],
+            };
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_map_params"),
+                contents: bytemuck::bytes_of(&p),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        });
 
         // ---- Occlusion map, then coarse-to-fine node tests.
         let visible: Vec<NodeInfo> = if !implicit {
             candidates.to_vec()
         } else {
-            let occ = iso.occluders.as_ref().unwrap();
-            stats.occluder_boxes_below = occ.n_below;
-            stats.occluder_boxes_above = occ.n_above;
-            draw_map(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, occ)?;
-            opts.interrupt.check()?;
+            let grid = iso.classes.as_ref().unwrap();
+            let params = params_buf.as_ref().unwrap();
+            stats.occluder_boxes_below = grid.n_below;
+            stats.occluder_boxes_above = grid.n_above;
+            stats.occluder_nodes_nan = grid.n_nan;
+            // The map pass goes into the first node test's submission.
+            let mut enc = Some(d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_cull") }));
+            record_map(d, enc.as_mut().unwrap(), &iso.passes, tg, &globals_bg, grid, params);
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let start = cull_depth.saturating_sub(2);
@@ -466,7 +509,12 @@ impl IsoRenderer {
                 let boxes: Vec<BoxInstance> =
                     level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
                 let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, &model, b)).collect();
-                let counts = test_nodes(ctx, &iso.passes, iso.targets.as_ref().unwrap(), &globals_bg, &boxes)?;
+                let enc = enc.take().unwrap_or_else(|| {
+                    d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_cull") })
+                });
+                let counts = test_nodes(ctx, enc, &iso.passes, tg, &globals_bg, params, &boxes)?;
+                stats.submissions += 1;
+                stats.readbacks += !boxes.is_empty() as u32;
                 opts.interrupt.check()?;
                 stats.nodes_tested += level.len() as u32;
                 let vis: Vec<NodeInfo> = level
@@ -537,6 +585,7 @@ impl IsoRenderer {
         let iso: &IsoRenderer = &*self;
         let tg = iso.targets.as_ref().unwrap();
         let (tris, verts) = draw_surface(ctx, &iso.passes, &globals_bg, tg, &patches, &space)?;
+        stats.submissions += 1;
         stats.surface_triangles = tris;
         stats.surface_vertices = verts;
         stats.draw_ms = t_draw.elapsed().as_secs_f64() * 1e3;
@@ -548,9 +597,18 @@ impl IsoRenderer {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
         let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
         let depth_rb = ctx.read_depth(&mut enc, &tg.depth_tex);
-        let map_rb = (opts.return_map && implicit).then(|| ctx.read_depth(&mut enc, &tg.map_tex));
+        let map_rb = (opts.return_map && implicit).then(|| {
+            let b = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("iso_map_rb"),
+                size: tg.map.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            enc.copy_buffer_to_buffer(&tg.map, 0, &b, 0, tg.map.size());
+            b
+        });
         ctx.queue.submit([enc.finish()]);
-        for b in [&color_rb.buffer, depth_rb.buffer()].into_iter().chain(map_rb.as_ref().map(|m| m.buffer())) {
+        for b in [&color_rb.buffer, depth_rb.buffer()].into_iter().chain(map_rb.as_ref()) {
             b.slice(..).map_async(wgpu::MapMode::Read, |_| {});
         }
         ctx.wait()?;
@@ -559,11 +617,14 @@ impl IsoRenderer {
         let lin = |raw: Vec<f32>| -> Vec<f32> { raw.par_iter().map(|&v| fc.linear_depth(v)).collect() };
         let depth = lin(depth_rb.read()?);
         if let Some(m) = &map_rb {
-            map_out = Some(lin(m.read()?));
+            let raw: Vec<f32> =
+                bytemuck::cast_slice(&m.slice(..).get_mapped_range().map_err(crate::gpu::map_err)?).to_vec();
+            map_out = Some(lin(raw));
         } else if opts.return_map {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }
         stats.readback_ms = t_rb.elapsed().as_secs_f64() * 1e3;
+        stats.setup_ms = setup_ms;
         stats.cache_bytes = self.cache_bytes() as u64;
         Ok(IsoOutput {
             width,
