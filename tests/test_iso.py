@@ -176,7 +176,8 @@ def test_pesco_synthetic_conservative_over_views_and_depths(renderer):
     for az in (20.0, 200.0):
         cam, _ = cam_around(az, 25.0, dist=30.0)
         ref = renderer.render_isosurface(v, 0.0, cam, culling="none", cull_depth=md - 2)
-        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md, md - 1)):
+        # occluders coarser, as coarse as, and finer than the tested nodes
+        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md, md - 1), (md - 2, md - 1), (md - 1, md - 1)):
             res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
             assert np.array_equal(res.image, ref.image), (az, od, cd)
             assert res.stats["surface_triangles"] <= ref.stats["surface_triangles"]

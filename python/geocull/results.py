@@ -63,8 +63,8 @@ class IsoStats(TypedDict):
 
     surface_triangles: int  # triangles of the drawn surface
     surface_vertices: int  # vertices of the drawn surface
-    nodes_tested: int  # octree nodes tested against the occlusion map, all levels together
-    nodes_tested_cull_depth: int  # nodes tested at cull_depth itself
+    nodes_tested: int  # octree nodes tested against the occlusion map (the straddling nodes at cull_depth)
+    nodes_tested_cull_depth: int  # = nodes_tested (one level since the map and the test are one walk)
     nodes_visible: int  # visible nodes at cull_depth (every straddling node for culling="none")
     nodes_straddling: int  # nodes at cull_depth that may hold surface (= len(nodes))
     occluder_boxes_below: int  # nodes at occluder_depth wholly below the isovalue (NaN-free), in the map's grid
@@ -183,8 +183,8 @@ class IsoResult(RenderResult[IsoStats]):
 
     nodes: (n, 4) uint32 [depth, ix, iy, iz], the nodes at ``cull_depth`` that may hold surface, in
     octree order (ix along x, iy along y, iz along z, in units of the node's size).  tile_pixels: (n,)
-    uint32 pixels where each node's box is in front of the occlusion map (0 if a coarser ancestor was
-    hidden, or for culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
+    uint32 pixels whose ray enters the node before the occlusion map (0 when hidden, and for
+    culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
     :class:`IsoStats`.  occlusion_map: (H, W) float32 distance along the view axis (exaggerated world
     units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
     """

@@ -1,5 +1,5 @@
-// Implicit occluders (Pesco et al.): the occlusion map marched per pixel through the occluder
-// depth's class grid, exact per-node visible-pixel counts against it, and the lit isosurface.
+// Implicit occluders (Pesco et al.): the occlusion map and the per-node visible-pixel counts,
+// marched per pixel through the occluder classes, and the lit isosurface.
 // Depth is reverse-Z everywhere (1 = near, 0 = far): "nearer" means a larger depth value.
 
 struct Globals {
@@ -11,55 +11,72 @@ struct Globals {
 
 @group(0) @binding(0) var<uniform> g: Globals;
 
-// CUBE and box_corner come from gpu/shaders/box.wgsl (prepended).
-
-struct BoxOut {
-    // Invariant: the test pass rasterises identical depths for identical boxes.
-    @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) @interpolate(flat) id: u32,
-}
-
-// One instance per box: lo.xyz + id (bit pattern in w), hi.xyz.
-@vertex
-fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
-    var out: BoxOut;
-    out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
-    out.id = bitcast<u32>(lo.w);
-    return out;
-}
-
-// ---- The occlusion map: one invocation per pixel walks its ray through the grid of nodes at the
-// occluder depth (3-D DDA, near to far) and stops at the first node of one class (Below / Above)
-// met after a node of the other class with no NaN node in between; the map is the depth of that
-// node's entry point, pushed farther by `lo.w` (render units). 0 (= far, nothing proven) where no
-// such pair exists. Classes: 2 bits per node, 16 per word: 0 = may hold surface (passable),
-// 1 = Below, 2 = Above, 3 = has a NaN sample (outside the domain: resets the walk).
+// ---- The occlusion map and the node test in one compute pass, one invocation per pixel: the
+// pixel's ray walks the grid of cells at the march depth (the finer of the occluder and cull depths)
+// near to far (3-D DDA) and stops in the first occluder node of one class (Below / Above) met after
+// an occluder node of the other class with no NaN node in between; the map is the depth of that
+// node's entry point, pushed farther by `lo.w` (render units), 0 (= far, nothing proven) where no
+// such pair exists. Every cull node the walk enters up to and including that cell is seen on this
+// pixel: `counts[node] += 1` (the pixels where the node's box is in front of the map); a node the
+// ray passes within `hi.w` (grid units) of is counted too, so rounding never skips one.
+// Classes: 2 bits per occluder node, 16 per word: 0 = may hold surface (passable), 1 = Below,
+// 2 = Above, 3 = has a NaN sample (outside the domain: resets the walk).
 struct MapParams {
     inv_view_proj: mat4x4<f32>,
-    // xyz: the volume's box (render space); lo.w: the margin, hi.w unused.
+    // xyz: the volume's box (render space); lo.w: the map's margin (render units); hi.w: the
+    // margin for counting a neighbouring node (fraction of a march cell).
     lo: vec4<f32>,
     hi: vec4<f32>,
-    // xyz: a node's size (render space); the last node per axis may end earlier, at `hi`.
+    // xyz: a march cell's size (render space); the last one per axis may end earlier, at `hi`.
     node: vec4<f32>,
-    // xyz: nodes per axis; w: image width.
+    // xyz: march cells per axis; w: image width.
     dims: vec4<u32>,
-    // x: image height.
+    // x: image height; y: march depth - occluder depth; z: march depth - cull depth.
     size: vec4<u32>,
+    // xyz: occluder nodes per axis; w: unused.
+    occ_dims: vec4<u32>,
+    // xyz: cull nodes per axis; w: unused.
+    cull_dims: vec4<u32>,
 }
 
 @group(1) @binding(0) var<uniform> mp: MapParams;
 @group(1) @binding(1) var<storage, read> classes: array<u32>;
 @group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
+@group(1) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
 
 fn node_class(c: vec3<i32>) -> u32 {
-    let u = vec3<u32>(c);
-    let i = (u.z * mp.dims.y + u.y) * mp.dims.x + u.x;
+    let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
+    let i = (u.z * mp.occ_dims.y + u.y) * mp.occ_dims.x + u.x;
     return (classes[i >> 4u] >> ((i & 15u) * 2u)) & 3u;
+}
+
+fn cull_node(c: vec3<i32>) -> u32 {
+    let u = vec3<u32>(c) >> vec3<u32>(mp.size.z);
+    return (u.z * mp.cull_dims.y + u.y) * mp.cull_dims.x + u.x;
 }
 
 fn unproject(ndc: vec3<f32>) -> vec3<f32> {
     let p = mp.inv_view_proj * vec4<f32>(ndc, 1.0);
     return p.xyz / p.w;
+}
+
+// At the entry point `g` (march-cell units) of cell `c`: for every axis but the one just crossed
+// (`crossed`), when `g` lies within `hi.w` of a cell plane, counts the cull node of the cell on its
+// other side (once: not `own`), which the ray may have skipped by rounding.
+fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i32) {
+    for (var a = 0; a < 3; a++) {
+        let r = floor(g[a] + 0.5);
+        if (a != crossed && abs(g[a] - r) < mp.hi.w) {
+            var n = c;
+            n[a] = select(i32(r), i32(r) - 1, c[a] == i32(r));
+            if (n[a] != c[a] && n[a] >= 0 && n[a] < dims[a]) {
+                let id = cull_node(n);
+                if (id != own) {
+                    atomicAdd(&counts[id], 1u);
+                }
+            }
+        }
+    }
 }
 
 @compute @workgroup_size(8, 8)
@@ -92,7 +109,15 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         let tdelta = abs(mp.node.xyz * inv);
         var last = 0u;
         var t_enter = t0;
+        var counted = 0xffffffffu;
+        var crossed = -1;
         loop {
+            let own = cull_node(c);
+            if (own != counted) {
+                atomicAdd(&counts[own], 1u);
+                counted = own;
+            }
+            count_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, own, crossed);
             let k = node_class(c);
             if (k == 3u) {
                 last = 0u;
@@ -110,16 +135,19 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 break;
             }
             t_enter = tm;
-            // One axis at a time: a ray through an edge or corner visits the nodes beside it too.
+            // One axis at a time: a ray through an edge or corner visits the cells beside it too.
             if (tnext.x <= tm) {
                 c.x += stp.x;
                 tnext.x += tdelta.x;
+                crossed = 0;
             } else if (tnext.y <= tm) {
                 c.y += stp.y;
                 tnext.y += tdelta.y;
+                crossed = 1;
             } else {
                 c.z += stp.z;
                 tnext.z += tdelta.z;
+                crossed = 2;
             }
             if (any(c < vec3<i32>(0)) || any(c >= dims)) {
                 break;
@@ -127,28 +155,6 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     map_out[gid.y * w + gid.x] = result;
-}
-
-// Node test: count the pixels where the node box's front face is nearer than (or as near as) the
-// occlusion map. The comparison is done here, by hand, so no early-depth-test feature is needed
-// and hidden fragments are never counted.
-@group(1) @binding(0) var<storage, read> map_depth: array<f32>;
-@group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
-// The map pass's parameters (for the image width).
-@group(1) @binding(2) var<uniform> tp: MapParams;
-
-fn map_at(xy: vec2<f32>) -> f32 {
-    let p = vec2<u32>(floor(xy));
-    return map_depth[p.y * tp.dims.w + p.x];
-}
-
-@fragment
-fn fs_test(v: BoxOut) -> @location(0) u32 {
-    if (v.clip.z >= map_at(v.clip.xy)) {
-        atomicAdd(&counts[v.id], 1u);
-        return v.id + 1u;
-    }
-    return 0u;
 }
 
 // The isosurface: positions relative to the volume centre (render space), smooth normals.
@@ -182,29 +188,6 @@ fn fs_surf(v: SurfOut) -> @location(0) vec4<f32> {
 // gpu/shaders/common.wgsl). The bodies repeat those above rather than sharing helpers, so that the
 // other backends' entry points compile exactly as before (a shared shading helper measurably
 // slowed lavapipe's lit pass).
-
-struct BoxOutGl {
-    @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) @interpolate(flat) id: u32,
-    @location(1) zw: vec2<f32>,
-}
-
-@vertex
-fn vs_box_gl(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOutGl {
-    let c = CUBE[vi];
-    let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
-    let clip = g.view_proj * vec4<f32>(select(lo.xyz, hi.xyz, sel), 1.0);
-    return BoxOutGl(clip, bitcast<u32>(lo.w), clip.zw);
-}
-
-@fragment
-fn fs_test_gl(v: BoxOutGl) -> @location(0) u32 {
-    if (v.zw.x / v.zw.y >= map_at(v.clip.xy)) {
-        atomicAdd(&counts[v.id], 1u);
-        return v.id + 1u;
-    }
-    return 0u;
-}
 
 struct SurfOutGl {
     @builtin(position) clip: vec4<f32>,

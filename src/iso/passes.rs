@@ -1,7 +1,7 @@
-//! The isosurface passes: pipelines (iso.wgsl), their targets, and the three steps that record
-//! and submit them: the occlusion map ([`record_map`]: a compute march per pixel through the
-//! occluder depth's class grid, [`ClassGrid`]), the node test ([`test_nodes`]) and the lit surface
-//! ([`draw_surface`]). `super::render` decides what goes into them.
+//! The isosurface passes: pipelines (iso.wgsl), their targets, and the two steps that record and
+//! submit them: the occlusion map with the node test ([`march`]: a compute walk per pixel through
+//! the occluder depth's class grid, [`ClassGrid`]) and the lit surface ([`draw_surface`]).
+//! `super::render` decides what goes into them.
 
 use std::sync::Arc;
 
@@ -10,11 +10,8 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::march::SurfacePatch;
-use super::octree::NodeInfo;
 use crate::error::{Error, Result};
-pub(super) use crate::gpu::layout::BoxInstance;
-use crate::gpu::passes::box_vertex_layout;
-use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
+use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::gpu::{map_err, GpuContext};
 use glam::DVec3;
 
@@ -31,7 +28,6 @@ pub(super) struct Targets {
     pub(super) height: u32,
     pub(super) color_tex: wgpu::Texture,
     pub(super) color: wgpu::TextureView,
-    pub(super) id: wgpu::TextureView,
     pub(super) depth_tex: wgpu::Texture,
     pub(super) depth: wgpu::TextureView,
     /// The occlusion map: reverse-Z depth per pixel (row-major, row 0 = top), 0 = nothing proven.
@@ -87,9 +83,11 @@ pub(super) struct MapParams {
     pub(super) node: [f32; 4],
     pub(super) dims: [u32; 4],
     pub(super) size: [u32; 4],
+    pub(super) occ_dims: [u32; 4],
+    pub(super) cull_dims: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<MapParams>() == 144);
+const _: () = assert!(std::mem::size_of::<MapParams>() == 176);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 
@@ -104,22 +102,13 @@ impl Space {
         let r = DVec3::from_array(p) - self.origin;
         DVec3::new(r.x, r.y, r.z * self.z_scale)
     }
-    /// Box instance in render space, grown by `grow` (negative shrinks) world units per side.
-    pub(super) fn instance(&self, n: &NodeInfo, id: u32, grow: f64) -> BoxInstance {
-        let lo = self.point(n.bbox_min.map(|v| v - grow));
-        let hi = self.point(n.bbox_max.map(|v| v + grow));
-        let (lo, hi) = (lo.min(hi), lo.max(hi));
-        BoxInstance { lo: lo.as_vec3().to_array(), id, hi: hi.as_vec3().to_array(), _pad: 0 }
-    }
 }
 
 /// Bind-group layouts and pipelines of the isosurface passes.
 pub(super) struct IsoPasses {
     pub(super) globals_layout: wgpu::BindGroupLayout,
     pub(super) map_layout: wgpu::BindGroupLayout,
-    pub(super) test_layout: wgpu::BindGroupLayout,
     pub(super) map_pipeline: wgpu::ComputePipeline,
-    pub(super) test_pipeline: wgpu::RenderPipeline,
     pub(super) surf_pipeline: wgpu::RenderPipeline,
 }
 
@@ -140,7 +129,6 @@ impl IsoPasses {
     pub(super) fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let vfc = vf | wgpu::ShaderStages::COMPUTE;
-        let fs = wgpu::ShaderStages::FRAGMENT;
         let cs = wgpu::ShaderStages::COMPUTE;
         let uniform = wgpu::BufferBindingType::Uniform;
         let ro = wgpu::BufferBindingType::Storage { read_only: true };
@@ -151,15 +139,16 @@ impl IsoPasses {
         });
         let map_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso_map"),
-            entries: &[buffer_entry(0, cs, uniform), buffer_entry(1, cs, ro), buffer_entry(2, cs, rw)],
-        });
-        let test_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso_test"),
-            entries: &[buffer_entry(0, fs, ro), buffer_entry(1, fs, rw), buffer_entry(2, fs, uniform)],
+            entries: &[
+                buffer_entry(0, cs, uniform),
+                buffer_entry(1, cs, ro),
+                buffer_entry(2, cs, rw),
+                buffer_entry(3, cs, rw),
+            ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("iso.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(crate::gpu::passes::with_box_wgsl(include_str!("iso.wgsl")).into()),
+            source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()),
         });
         let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
             d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -170,7 +159,6 @@ impl IsoPasses {
         };
         let pl_globals = pl("iso_globals", &[Some(&globals_layout)]);
         let pl_map = pl("iso_map", &[Some(&globals_layout), Some(&map_layout)]);
-        let pl_test = pl("iso_test", &[Some(&globals_layout), Some(&test_layout)]);
         let depth_write = Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(true),
@@ -181,7 +169,6 @@ impl IsoPasses {
         // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
         let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
-        let (vs_box, fs_test) = (entry("vs_box"), entry("fs_test"));
         let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
         let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
@@ -195,27 +182,6 @@ impl IsoPasses {
             module: &shader,
             entry_point: Some("cs_map"),
             compilation_options: Default::default(),
-            cache: None,
-        });
-        let test_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_test"),
-            layout: Some(&pl_test),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some(&vs_box),
-                compilation_options: Default::default(),
-                buffers: &[Some(box_vertex_layout())],
-            },
-            primitive: prim(Some(wgpu::Face::Back)),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_test),
-                compilation_options: Default::default(),
-                targets: &[Some(ID_FORMAT.into())],
-            }),
-            multiview_mask: None,
             cache: None,
         });
         const SURF_ATTRS: [wgpu::VertexAttribute; 2] = [
@@ -251,7 +217,7 @@ impl IsoPasses {
             multiview_mask: None,
             cache: None,
         });
-        Self { globals_layout, map_layout, test_layout, map_pipeline, test_pipeline, surf_pipeline }
+        Self { globals_layout, map_layout, map_pipeline, surf_pipeline }
     }
 }
 
@@ -266,7 +232,6 @@ impl Targets {
         let tb = wgpu::TextureUsages::TEXTURE_BINDING;
         let cs = wgpu::TextureUsages::COPY_SRC;
         let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
-        let id = tex("iso_id", ID_FORMAT, ra);
         // Depth is copied back, or read through a shader where it cannot be.
         let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
         let map = d.create_buffer(&wgpu::BufferDescriptor {
@@ -276,16 +241,7 @@ impl Targets {
             mapped_at_creation: false,
         });
         let v = |t: &wgpu::Texture| t.create_view(&Default::default());
-        *slot = Some(Targets {
-            width,
-            height,
-            color: v(&color_tex),
-            color_tex,
-            id: v(&id),
-            depth: v(&depth_tex),
-            depth_tex,
-            map,
-        });
+        *slot = Some(Targets { width, height, color: v(&color_tex), color_tex, depth: v(&depth_tex), depth_tex, map });
         true
     }
 }
@@ -319,55 +275,20 @@ fn pass<'e>(
     })
 }
 
-/// Records the occlusion map (one compute pass, one invocation per pixel) into `enc`.
-pub(super) fn record_map(
-    d: &wgpu::Device,
-    enc: &mut wgpu::CommandEncoder,
+/// The occlusion map and the node test (one compute pass, one invocation per pixel, see iso.wgsl):
+/// one submission, one read-back. Returns, per cull node (x fastest, then y, z; `n_nodes` of
+/// them), the pixels on which the node is in front of the map.
+pub(super) fn march(
+    ctx: &GpuContext,
     iso: &IsoPasses,
     tg: &Targets,
     globals_bg: &wgpu::BindGroup,
     grid: &ClassGrid,
     params: &wgpu::Buffer,
-) {
-    let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("iso_map"),
-        layout: &iso.map_layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
-        ],
-    });
-    let mut p = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_map"), timestamp_writes: None });
-    p.set_pipeline(&iso.map_pipeline);
-    p.set_bind_group(0, globals_bg, &[]);
-    p.set_bind_group(1, &bg, &[]);
-    p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
-}
-
-/// Visible-pixel count of every box against the map: records into `enc` (after whatever it
-/// holds, e.g. the map pass), submits, and reads the counts back (one submission, one read-back).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn test_nodes(
-    ctx: &GpuContext,
-    mut enc: wgpu::CommandEncoder,
-    iso: &IsoPasses,
-    tg: &Targets,
-    globals_bg: &wgpu::BindGroup,
-    params: &wgpu::Buffer,
-    boxes: &[BoxInstance],
+    n_nodes: usize,
 ) -> Result<Vec<u32>> {
     let d = &ctx.device;
-    if boxes.is_empty() {
-        ctx.queue.submit([enc.finish()]);
-        return Ok(Vec::new());
-    }
-    let size = 4 * boxes.len() as u64;
-    let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("iso_test_boxes"),
-        contents: bytemuck::cast_slice(boxes),
-        usage: wgpu::BufferUsages::VERTEX,
-    });
+    let size = 4 * n_nodes.max(1) as u64;
     let counts = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_counts"),
         size,
@@ -381,29 +302,32 @@ pub(super) fn test_nodes(
         mapped_at_creation: false,
     });
     let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("iso_test"),
-        layout: &iso.test_layout,
+        label: Some("iso_map"),
+        layout: &iso.map_layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: tg.map.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: counts.as_entire_binding() },
         ],
     });
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
     enc.clear_buffer(&counts, 0, None);
     {
-        let mut p = pass(&mut enc, "iso_test", Some(&tg.id), None);
-        p.set_pipeline(&iso.test_pipeline);
+        let mut p =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_march"), timestamp_writes: None });
+        p.set_pipeline(&iso.map_pipeline);
         p.set_bind_group(0, globals_bg, &[]);
         p.set_bind_group(1, &bg, &[]);
-        p.set_vertex_buffer(0, inst.slice(..));
-        p.draw(0..36, 0..boxes.len() as u32);
+        p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
     }
     enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, size);
     ctx.queue.submit([enc.finish()]);
     rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     ctx.wait()?;
     ctx.take_error()?;
-    let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+    let mut v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+    v.truncate(n_nodes);
     Ok(v)
 }
 

@@ -32,15 +32,15 @@
 //!    conservative: the proof only uses segments inside NaN-free nodes at `occluder_depth` (the
 //!    volume's box is convex, so the segment never leaves it); a coarse occluder depth with a few
 //!    NaN samples loses occluders (whole nodes count as NaN), never correctness.
-//! 3. **Node test**, coarse to fine from `cull_depth - 2` to `cull_depth`: the front faces of the
-//!    boxes of the straddling nodes (expanded by a small epsilon) are rasterised without a depth
-//!    attachment; the fragment shader compares each fragment's depth with `M` and counts, per node,
-//!    the pixels where the box is nearer than or as near as the map (`atomicAdd` into a storage
-//!    buffer; exact counts, one front-face fragment per pixel of a convex box). A node is visible
-//!    when its count is > 0; only the children of visible nodes are tested at the next depth.
-//!    The surface inside a node lies inside its box, so on every pixel where the node's surface is
-//!    the first hit, the box's entry point is nearer than `M(p)`: the culled image equals the
-//!    unculled one. Boxes that reach the near plane (or contain the eye) are visible untested.
+//! 3. **Node test**, in the same walk: every node at `cull_depth` that the pixel's ray enters before
+//!    it stops (the stopping cell included; also a node the ray passes within a thousandth of a
+//!    cell of, so rounding never skips one) is counted on that pixel. A node is visible when its
+//!    count is > 0: exactly the pixels where its box is nearer than the map, i.e. what rasterising
+//!    the boxes and comparing with the map gave (the earlier version: three levels of box draws,
+//!    three submissions and read-backs; the same visible sets on the Pesco field), in one
+//!    read-back. The surface inside a node lies inside its box, so on every pixel where the node's
+//!    surface is the first hit, the ray enters the node before `M(p)`: the culled image equals the
+//!    unculled one. Nodes in front of the near plane are walked from the near plane, as drawn.
 //! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
 //!
@@ -58,11 +58,11 @@ use wgpu::util::DeviceExt;
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{Class, MinMaxOctree, NodeInfo};
 use super::passes::{
-    draw_surface, record_map, test_nodes, BoxInstance, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets,
-    CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, CLASS_PASS,
+    draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN,
+    CLASS_PASS,
 };
 use super::Volume;
-use crate::camera::{Camera, FrameCamera};
+use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
 use crate::gpu::{GpuContext, ReadbackTexture};
 
@@ -95,7 +95,8 @@ impl IsoCulling {
 #[derive(Clone, Debug)]
 pub struct IsoOptions {
     pub culling: IsoCulling,
-    /// Depth of the occluder nodes (root = 0); `None` = `max_depth - 1`.
+    /// Depth of the occluder nodes (root = 0); `None` = `max_depth` (single cells: the class grid
+    /// costs 2 bits per cell and the walk little more than at coarser depths).
     pub occluder_depth: Option<u32>,
     /// Depth of the nodes tested and extracted (root = 0); `None` = `max_depth - 2`.
     pub cull_depth: Option<u32>,
@@ -141,7 +142,7 @@ pub struct IsoStats {
     pub nodes_visible: u32,
     /// Straddling nodes at the cull depth (what culling = none extracts).
     pub nodes_straddling: u32,
-    /// Below / Above occluder boxes drawn into the map.
+    /// Below / Above nodes at the occluder depth (the map's class grid).
     pub occluder_boxes_below: u32,
     pub occluder_boxes_above: u32,
     pub occluder_depth: u32,
@@ -156,7 +157,7 @@ pub struct IsoStats {
     /// the map pass, on the CPU; the pass itself runs on the GPU with the first node test and is
     /// part of `cull_ms` (one submission).
     pub occluder_ms: f64,
-    /// Occlusion map (GPU) and the coarse-to-fine node tests, read-backs included.
+    /// Occlusion map and node test (one GPU walk per pixel), read-back included.
     pub cull_ms: f64,
     /// Marching cubes (cache look-ups included).
     pub extract_ms: f64,
@@ -335,21 +336,6 @@ pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
         .collect()
 }
 
-/// True when some part of the box (grid frame, turned into render space by `model`) is not in
-/// front of the near plane (so the test pass could miss it): such nodes are treated as visible.
-fn reaches_near_plane(fc: &FrameCamera, model: &DMat4, b: &BoxInstance) -> bool {
-    let mut dmin = f64::INFINITY;
-    for i in 0..8 {
-        let c = model.transform_point3(DVec3::new(
-            if i & 1 == 0 { b.lo[0] } else { b.hi[0] } as f64,
-            if i & 2 == 0 { b.lo[1] } else { b.hi[1] } as f64,
-            if i & 4 == 0 { b.lo[2] } else { b.hi[2] } as f64,
-        ));
-        dmin = dmin.min((c - fc.eye).dot(fc.forward));
-    }
-    dmin <= fc.near * 1.001 + 1e-9
-}
-
 impl IsoRenderer {
     /// Renders the isosurface `vol = isovalue` (in the volume's units, f64) seen by `camera` into
     /// `width` × `height` targets of its own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
@@ -375,7 +361,7 @@ impl IsoRenderer {
             "the octree was built from another volume".into()
         })?;
         let maxd = tree.max_depth();
-        let occ_depth = opts.occluder_depth.unwrap_or(maxd.saturating_sub(1));
+        let occ_depth = opts.occluder_depth.unwrap_or(maxd);
         let cull_depth = opts.cull_depth.unwrap_or(maxd.saturating_sub(2));
         ensure(occ_depth <= maxd, "occluder_depth", || {
             format!("occluder_depth is {occ_depth}; this volume's octree has depths 0..={maxd}")
@@ -422,8 +408,7 @@ impl IsoRenderer {
             color: [opts.color[0], opts.color[1], opts.color[2], 1.0],
         };
         let min_spacing = vol.spacing.iter().cloned().fold(f64::INFINITY, f64::min);
-        // The map is pushed farther and tested boxes grow by a thousandth of a cell: rounding never
-        // culls a visible node.
+        // The map is pushed farther by a thousandth of a cell: rounding never culls a visible node.
         let eps = 1e-3 * min_spacing;
 
         let d = &ctx.device;
@@ -465,95 +450,52 @@ impl IsoRenderer {
         let mut node_pixels = vec![0u32; candidates.len()];
         let mut map_out = None;
         let tg = iso.targets.as_ref().unwrap();
-        // The map pass's parameters (also bound by the node test, for the image width).
-        let params_buf = implicit.then(|| {
-            let grid = iso.classes.as_ref().unwrap();
-            let inv = view_proj.inverse();
-            let s = (1u64 << (maxd - occ_depth)) as f64;
-            let node = DVec3::new(vol.spacing[0] * s, vol.spacing[1] * s, vol.spacing[2] * s * space.z_scale);
-            let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
-            let p = MapParams {
-                inv_view_proj: Mat4::from_cols_array(&inv.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
-                lo: f4(plo, eps.min(eps * space.z_scale)),
-                hi: f4(phi, 0.0),
-                node: f4(node, 0.0),
-                dims: [grid.dims[0], grid.dims[1], grid.dims[2], width],
-                size: [height, 0, 0, 0],
-            };
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("iso_map_params"),
-                contents: bytemuck::bytes_of(&p),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-        });
-
-        // ---- Occlusion map, then coarse-to-fine node tests.
+        // ---- Occlusion map and node test: one walk per pixel, one submission, one read-back.
         let visible: Vec<NodeInfo> = if !implicit {
             candidates.to_vec()
         } else {
             let grid = iso.classes.as_ref().unwrap();
-            let params = params_buf.as_ref().unwrap();
             stats.occluder_boxes_below = grid.n_below;
             stats.occluder_boxes_above = grid.n_above;
             stats.occluder_nodes_nan = grid.n_nan;
-            // The map pass goes into the first node test's submission.
-            let mut enc = Some(d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_cull") }));
-            record_map(d, enc.as_mut().unwrap(), &iso.passes, tg, &globals_bg, grid, params);
+            // The walk steps through cells of the finer of the two depths.
+            let md_march = occ_depth.max(cull_depth);
+            let cell = (1u64 << (maxd - md_march)) as f64;
+            let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
+            let march_dims = tree.dims_at_depth(md_march).expect("depth checked");
+            let cull_dims = tree.dims_at_depth(cull_depth).expect("depth checked");
+            let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+            let inv = view_proj.inverse();
+            let p = MapParams {
+                inv_view_proj: Mat4::from_cols_array(&inv.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+                lo: f4(plo, eps.min(eps * space.z_scale)),
+                hi: f4(phi, 1e-3),
+                node: f4(size, 0.0),
+                dims: [march_dims[0], march_dims[1], march_dims[2], width],
+                size: [height, md_march - occ_depth, md_march - cull_depth, 0],
+                occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
+                cull_dims: [cull_dims[0], cull_dims[1], cull_dims[2], 0],
+            };
+            let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_map_params"),
+                contents: bytemuck::bytes_of(&p),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
-            let start = cull_depth.saturating_sub(2);
-            let mut level: Vec<NodeInfo> =
-                if start == cull_depth { candidates.to_vec() } else { tree.straddling_at_depth(w, start) };
-            let mut d_level = start;
-            let vis_final: Vec<NodeInfo> = loop {
-                let boxes: Vec<BoxInstance> =
-                    level.par_iter().enumerate().map(|(i, n)| space.instance(n, i as u32, eps)).collect();
-                let forced: Vec<bool> = boxes.par_iter().map(|b| reaches_near_plane(&fc, &model, b)).collect();
-                let enc = enc.take().unwrap_or_else(|| {
-                    d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_cull") })
-                });
-                let counts = test_nodes(ctx, enc, &iso.passes, tg, &globals_bg, params, &boxes)?;
-                stats.submissions += 1;
-                stats.readbacks += !boxes.is_empty() as u32;
-                opts.interrupt.check()?;
-                stats.nodes_tested += level.len() as u32;
-                let vis: Vec<NodeInfo> = level
-                    .iter()
-                    .zip(&counts)
-                    .zip(&forced)
-                    .filter(|((_, &c), &f)| c > 0 || f)
-                    .map(|((n, _), _)| *n)
-                    .collect();
-                if d_level == cull_depth {
-                    stats.nodes_tested_cull_depth = level.len() as u32;
-                    let index: std::collections::HashMap<(u32, u32, u32), usize> =
-                        candidates.iter().enumerate().map(|(i, n)| ((n.ix, n.iy, n.iz), i)).collect();
-                    for (n, &c) in level.iter().zip(&counts) {
-                        if let Some(&i) = index.get(&(n.ix, n.iy, n.iz)) {
-                            node_pixels[i] = c;
-                        }
-                    }
-                    // Keep octree order (the order of `candidates`), like culling = none.
-                    let mut keep = vec![false; candidates.len()];
-                    for n in &vis {
-                        if let Some(&i) = index.get(&(n.ix, n.iy, n.iz)) {
-                            keep[i] = true;
-                        }
-                    }
-                    break candidates.iter().zip(&keep).filter(|(_, &k)| k).map(|(n, _)| *n).collect();
-                }
-                level = vis
-                    .par_iter()
-                    .flat_map_iter(|n| {
-                        let mut c = tree.children(n);
-                        c.retain(|c| c.straddles(w));
-                        c
-                    })
-                    .collect();
-                d_level += 1;
-            };
+            let n_cull = cull_dims.iter().map(|&v| v as usize).product();
+            let counts = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cull)?;
+            stats.submissions += 1;
+            stats.readbacks += 1;
+            opts.interrupt.check()?;
+            stats.nodes_tested = candidates.len() as u32;
+            stats.nodes_tested_cull_depth = candidates.len() as u32;
+            let at = |n: &NodeInfo| counts[((n.iz * cull_dims[1] + n.iy) * cull_dims[0] + n.ix) as usize];
+            for (px, n) in node_pixels.iter_mut().zip(candidates.iter()) {
+                *px = at(n);
+            }
             stats.cull_ms = t_cull.elapsed().as_secs_f64() * 1e3;
-            vis_final
+            candidates.iter().filter(|n| at(n) > 0).copied().collect()
         };
         stats.nodes_visible = visible.len() as u32;
         let node_drawn: Vec<bool> = if implicit {
