@@ -177,7 +177,7 @@ def test_pesco_synthetic_conservative_over_views_and_depths(renderer):
         cam, _ = cam_around(az, 25.0, dist=30.0)
         ref = renderer.render_isosurface(v, 0.0, cam, culling="none", cull_depth=md - 2)
         # occluders coarser, as coarse as, and finer than the tested nodes
-        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md, md - 1), (md - 2, md - 1), (md - 1, md - 1)):
+        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md - 2, md - 1), (md - 1, md - 1), (md, md - 1)):
             res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
             assert np.array_equal(res.image, ref.image), (az, od, cd)
             assert res.stats["surface_triangles"] <= ref.stats["surface_triangles"]
