@@ -325,15 +325,12 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
 /// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
 /// (NaN-free by [`NodeInfo::classify`]), NaN (any NaN sample: outside the domain), else passable.
 pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
-    tree.nodes_at_depth(depth)
-        .par_iter()
-        .map(|n| match n.classify(w) {
-            _ if n.has_nan => CLASS_NAN,
-            Class::Below => CLASS_BELOW,
-            Class::Above => CLASS_ABOVE,
-            _ => CLASS_PASS,
-        })
-        .collect()
+    tree.map_at_depth(depth, |min, max, nan| match super::octree::classify_range(min, max, w) {
+        _ if nan => CLASS_NAN,
+        Class::Below => CLASS_BELOW,
+        Class::Above => CLASS_ABOVE,
+        _ => CLASS_PASS,
+    })
 }
 
 impl IsoRenderer {
