@@ -31,7 +31,8 @@ struct MapParams {
     node: vec4<f32>,
     // xyz: march cells per axis; w: image width.
     dims: vec4<u32>,
-    // x: image height; y: march depth - occluder depth; z: march depth - cull depth.
+    // x: image height; y: march depth - occluder depth; z: march depth - cull depth; w: 1 = also
+    // mark every march cell entered in `cells_seen` (1 bit each).
     size: vec4<u32>,
     // xyz: occluder nodes per axis; w: unused.
     occ_dims: vec4<u32>,
@@ -43,6 +44,19 @@ struct MapParams {
 @group(1) @binding(1) var<storage, read> classes: array<u32>;
 @group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
 @group(1) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
+@group(1) @binding(4) var<storage, read_write> cells_seen: array<atomic<u32>>;
+
+fn mark_cell(c: vec3<i32>) {
+    if (mp.size.w == 1u) {
+        let u = vec3<u32>(c);
+        let i = (u.z * mp.dims.y + u.y) * mp.dims.x + u.x;
+        let bit = 1u << (i & 31u);
+        // Most cells are seen by many rays: a load first spares the atomic read-modify-write.
+        if ((atomicLoad(&cells_seen[i >> 5u]) & bit) == 0u) {
+            atomicOr(&cells_seen[i >> 5u], bit);
+        }
+    }
+}
 
 fn node_class(c: vec3<i32>) -> u32 {
     let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
@@ -60,20 +74,34 @@ fn unproject(ndc: vec3<f32>) -> vec3<f32> {
     return p.xyz / p.w;
 }
 
-// At the entry point `g` (march-cell units) of cell `c`: for every axis but the one just crossed
-// (`crossed`), when `g` lies within `hi.w` of a cell plane, counts the cull node of the cell on its
-// other side (once: not `own`), which the ray may have skipped by rounding.
+// At the entry point `g` (march-cell units) of cell `c`: every cell that touches `g` within `hi.w`
+// along each axis (across a face, an edge or a corner) is marked and its cull node counted (once:
+// not `own`); the ray may have skipped it by rounding. The axis just crossed (`crossed`) has its
+// other side marked already.
 fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i32) {
+    var off = vec3<i32>(0);
+    var any_near = false;
     for (var a = 0; a < 3; a++) {
         let r = floor(g[a] + 0.5);
         if (a != crossed && abs(g[a] - r) < mp.hi.w) {
-            var n = c;
-            n[a] = select(i32(r), i32(r) - 1, c[a] == i32(r));
-            if (n[a] != c[a] && n[a] >= 0 && n[a] < dims[a]) {
-                let id = cull_node(n);
-                if (id != own) {
-                    atomicAdd(&counts[id], 1u);
-                }
+            off[a] = select(1, -1, c[a] == i32(r));
+            any_near = true;
+        }
+    }
+    if (!any_near) {
+        return;
+    }
+    for (var m = 1; m < 8; m++) {
+        let pick = vec3<bool>((m & 1) != 0, (m & 2) != 0, (m & 4) != 0);
+        if (any(pick & (off == vec3<i32>(0)))) {
+            continue;
+        }
+        let n = c + select(vec3<i32>(0), off, pick);
+        if (all(n >= vec3<i32>(0)) && all(n < dims)) {
+            mark_cell(n);
+            let id = cull_node(n);
+            if (id != own) {
+                atomicAdd(&counts[id], 1u);
             }
         }
     }
@@ -112,6 +140,7 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         var counted = 0xffffffffu;
         var crossed = -1;
         loop {
+            mark_cell(c);
             let own = cull_node(c);
             if (own != counted) {
                 atomicAdd(&counts[own], 1u);

@@ -47,6 +47,10 @@ pub struct SurfacePatch {
     pub normals: Vec<[f32; 3]>,
     /// Indices into `positions`/`normals`.
     pub triangles: Vec<[u32; 3]>,
+    /// The triangles of the box's `c`-th cell (x fastest, then y, z) are
+    /// `triangles[cell_starts[c]..cell_starts[c + 1]]` (cells in that order; one entry more than
+    /// cells). Empty for a patch that is no box's (`concat`, `default`).
+    pub cell_starts: Vec<u32>,
 }
 
 impl SurfacePatch {
@@ -211,6 +215,7 @@ fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_pla
         for j in lo[1]..hi[1] {
             let row = vol.index(0, j, k);
             for i in lo[0]..hi[0] {
+                patch.cell_starts.push(patch.triangles.len() as u32);
                 let base = row + i;
                 let mut mask = 0usize;
                 let mut nan = false;
@@ -278,6 +283,7 @@ fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_pla
         }
         std::mem::swap(&mut plane_a, &mut plane_b);
     }
+    patch.cell_starts.push(patch.triangles.len() as u32);
     SerialOut { patch, bottom, top: if keep_planes { plane_a } else { Vec::new() } }
 }
 
@@ -372,10 +378,20 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     let own_lens: Vec<usize> = numberings.iter().map(|nb| nb.own).collect();
     let tri_lens: Vec<usize> = parts.iter().map(|p| p.patch.triangles.len()).collect();
 
+    // Cell order is chunk order: each chunk's starts, offset by the triangles before it.
+    let mut cell_starts = Vec::with_capacity((hi[0] - lo[0]) * (hi[1] - lo[1]) * layers + 1);
+    let mut tri_base = 0u32;
+    for p in &parts {
+        let s = &p.patch.cell_starts;
+        cell_starts.extend(s[..s.len() - 1].iter().map(|&v| v + tri_base));
+        tri_base += p.patch.triangles.len() as u32;
+    }
+    cell_starts.push(tri_base);
     let mut out = SurfacePatch {
         positions: vec![[0.0; 3]; total],
         normals: vec![[0.0; 3]; total],
         triangles: vec![[0; 3]; tri_lens.iter().sum()],
+        cell_starts,
     };
     let pos_parts = split_lengths(&mut out.positions, &own_lens);
     let nrm_parts = split_lengths(&mut out.normals, &own_lens);
@@ -432,6 +448,7 @@ pub fn patch_bytes(p: &SurfacePatch) -> usize {
         + p.positions.capacity() * std::mem::size_of::<[f64; 3]>()
         + p.normals.capacity() * std::mem::size_of::<[f32; 3]>()
         + p.triangles.capacity() * std::mem::size_of::<[u32; 3]>()
+        + p.cell_starts.capacity() * 4
 }
 
 struct Entry {
@@ -505,6 +522,7 @@ impl PatchCache {
                 p.positions.shrink_to_fit();
                 p.normals.shrink_to_fit();
                 p.triangles.shrink_to_fit();
+                p.cell_starts.shrink_to_fit();
                 (patch_key(w, n), Arc::new(p))
             })
             .collect();

@@ -144,6 +144,7 @@ impl IsoPasses {
                 buffer_entry(1, cs, ro),
                 buffer_entry(2, cs, rw),
                 buffer_entry(3, cs, rw),
+                buffer_entry(4, cs, rw),
             ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -277,7 +278,9 @@ fn pass<'e>(
 
 /// The occlusion map and the node test (one compute pass, one invocation per pixel, see iso.wgsl):
 /// one submission, one read-back. Returns, per cull node (x fastest, then y, z; `n_nodes` of
-/// them), the pixels on which the node is in front of the map.
+/// them), the pixels on which the node is in front of the map, and with `n_cells` > 0 the bits
+/// of the march cells entered (cell `i` is bit `i % 32` of word `i / 32`).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn march(
     ctx: &GpuContext,
     iso: &IsoPasses,
@@ -286,12 +289,20 @@ pub(super) fn march(
     grid: &ClassGrid,
     params: &wgpu::Buffer,
     n_nodes: usize,
-) -> Result<Vec<u32>> {
+    n_cells: usize,
+) -> Result<(Vec<u32>, Vec<u32>)> {
     let d = &ctx.device;
-    let size = 4 * n_nodes.max(1) as u64;
+    let words = n_cells.div_ceil(32);
+    let size = 4 * (n_nodes.max(1) + words) as u64;
+    let cells = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_cells_seen"),
+        size: 4 * words.max(1) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     let counts = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_counts"),
-        size,
+        size: 4 * n_nodes.max(1) as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -309,10 +320,12 @@ pub(super) fn march(
             wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 3, resource: counts.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: cells.as_entire_binding() },
         ],
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
     enc.clear_buffer(&counts, 0, None);
+    enc.clear_buffer(&cells, 0, None);
     {
         let mut p =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_march"), timestamp_writes: None });
@@ -321,28 +334,38 @@ pub(super) fn march(
         p.set_bind_group(1, &bg, &[]);
         p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
     }
-    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, size);
+    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, 4 * n_nodes.max(1) as u64);
+    if words > 0 {
+        enc.copy_buffer_to_buffer(&cells, 0, &rb, 4 * n_nodes.max(1) as u64, 4 * words as u64);
+    }
     ctx.queue.submit([enc.finish()]);
     rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     ctx.wait()?;
     ctx.take_error()?;
-    let mut v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
-    v.truncate(n_nodes);
-    Ok(v)
+    let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
+    let n = n_nodes.max(1);
+    Ok((v[..n_nodes].to_vec(), v[n..n + words].to_vec()))
 }
 
-/// Uploads the patches (render space, f32) and draws them lit; waits for the GPU.
+/// Uploads the patches (render space, f32) and draws them lit; waits for the GPU. With `ranges`,
+/// only the triangles `[a, b)` of each patch's ranges are drawn (the visible cells').
 pub(super) fn draw_surface(
     ctx: &GpuContext,
     iso: &IsoPasses,
     globals_bg: &wgpu::BindGroup,
     tg: &Targets,
     patches: &[Arc<SurfacePatch>],
+    ranges: Option<&[Vec<[u32; 2]>]>,
     space: &Space,
 ) -> Result<(u64, u64)> {
     let d = &ctx.device;
     let nv: usize = patches.iter().map(|p| p.positions.len()).sum();
-    let nt: usize = patches.iter().map(|p| p.triangles.len()).sum();
+    let tri_count = |i: usize| match ranges {
+        Some(r) => r[i].iter().map(|[a, b]| (b - a) as usize).sum(),
+        None => patches[i].triangles.len(),
+    };
+    let counts: Vec<usize> = (0..patches.len()).map(tri_count).collect();
+    let nt: usize = counts.iter().sum();
     let max = ctx.limits.max_buffer_size;
     if (nv as u64) * 24 > max || (nt as u64) * 12 > max {
         return Err(Error::Device(format!(
@@ -370,23 +393,34 @@ pub(super) fn draw_surface(
         }
         let mut ichunks: Vec<&mut [[u32; 3]]> = Vec::with_capacity(patches.len());
         let mut rest = idx.as_mut_slice();
-        for p in patches {
-            let (h, t) = rest.split_at_mut(p.triangles.len());
+        for &n in &counts {
+            let (h, t) = rest.split_at_mut(n);
             ichunks.push(h);
             rest = t;
         }
-        vchunks.into_par_iter().zip(ichunks).zip(patches.par_iter().zip(&voff)).for_each(|((vc, ic), (p, &base))| {
-            for (k, v) in vc.iter_mut().enumerate() {
-                let q = space.point(p.positions[k]);
-                let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
-                // Normals transform with the inverse transpose of the exaggeration.
-                *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
-            }
-            let base = base as u32;
-            for (t, tri) in ic.iter_mut().zip(&p.triangles) {
-                *t = [tri[0] + base, tri[1] + base, tri[2] + base];
-            }
-        });
+        let work: Vec<(usize, &Arc<SurfacePatch>)> = patches.iter().enumerate().collect();
+        vchunks.into_par_iter().zip(ichunks).zip(work.par_iter().zip(&voff)).for_each(
+            |((vc, ic), (&(i, p), &base))| {
+                for (k, v) in vc.iter_mut().enumerate() {
+                    let q = space.point(p.positions[k]);
+                    let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
+                    // Normals transform with the inverse transpose of the exaggeration.
+                    *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
+                }
+                let base = base as u32;
+                let mut out = ic.iter_mut();
+                let mut put = |tris: &[[u32; 3]]| {
+                    // tris first: zip pulls from its first iterator before it finds the second empty
+                    for (tri, t) in tris.iter().zip(&mut out) {
+                        *t = [tri[0] + base, tri[1] + base, tri[2] + base];
+                    }
+                };
+                match ranges {
+                    Some(r) => r[i].iter().for_each(|&[a, b]| put(&p.triangles[a as usize..b as usize])),
+                    None => put(&p.triangles),
+                }
+            },
+        );
     }
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
     let (vb, ib) = if nt > 0 {

@@ -43,6 +43,12 @@
 //!    unculled one. Nodes in front of the near plane are walked from the near plane, as drawn.
 //! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
+//!    Of each patch only the triangles of the cells some ray entered before the map are drawn
+//!    (the walk also sets one bit per cell of the march grid; patches index their triangles by
+//!    cell, `SurfacePatch::cell_starts`): the same argument per cell as per node, at the
+//!    granularity of single cells when the occluders are cells (the default), so the patches stay
+//!    per node (cacheable) and the drawn triangles are per cell. On the Pesco field 128³ this
+//!    takes the face ratio from 0.43-0.49 (nodes of 2³-4³ cells) to 0.39.
 //!
 //! Depths count from the root (0) as in the octree; the leaves (single cells) are at
 //! `tree.max_depth()`. A volume of 256³ samples has 255 cells per axis and max depth 8, matching
@@ -333,6 +339,36 @@ pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
     })
 }
 
+/// The triangle ranges of `p` (the patch of node `n`) that lie in march cells set in `bits`
+/// (grid `mdims`, a volume cell `c` is march cell `c >> shift`), consecutive cells merged.
+fn visible_ranges(p: &SurfacePatch, n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> Vec<[u32; 2]> {
+    let mut out: Vec<[u32; 2]> = Vec::new();
+    if p.cell_starts.is_empty() {
+        return out;
+    }
+    let (lo, hi) = (n.cell_lo, n.cell_hi);
+    let mut c = 0usize;
+    for k in lo[2]..hi[2] {
+        for j in lo[1]..hi[1] {
+            for i in lo[0]..hi[0] {
+                let (a, b) = (p.cell_starts[c], p.cell_starts[c + 1]);
+                c += 1;
+                if a == b {
+                    continue;
+                }
+                let m = (((k >> shift) * mdims[1] + (j >> shift)) * mdims[0] + (i >> shift)) as usize;
+                if bits[m / 32] >> (m % 32) & 1 == 1 {
+                    match out.last_mut() {
+                        Some(r) if r[1] == a => r[1] = b,
+                        _ => out.push([a, b]),
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
 impl IsoRenderer {
     /// Renders the isosurface `vol = isovalue` (in the volume's units, f64) seen by `camera` into
     /// `width` × `height` targets of its own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
@@ -448,6 +484,9 @@ impl IsoRenderer {
         let mut map_out = None;
         let tg = iso.targets.as_ref().unwrap();
         // ---- Occlusion map and node test: one walk per pixel, one submission, one read-back.
+        // `seen`: the march cells some ray entered before the map (bits), their grid, and the shift
+        // from volume cells to march cells.
+        let mut seen: Option<(Vec<u32>, [u32; 3], u32)> = None;
         let visible: Vec<NodeInfo> = if !implicit {
             candidates.to_vec()
         } else {
@@ -466,10 +505,10 @@ impl IsoRenderer {
             let p = MapParams {
                 inv_view_proj: Mat4::from_cols_array(&inv.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
                 lo: f4(plo, eps.min(eps * space.z_scale)),
-                hi: f4(phi, 1e-3),
+                hi: f4(phi, 1e-2),
                 node: f4(size, 0.0),
                 dims: [march_dims[0], march_dims[1], march_dims[2], width],
-                size: [height, md_march - occ_depth, md_march - cull_depth, 0],
+                size: [height, md_march - occ_depth, md_march - cull_depth, 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
                 cull_dims: [cull_dims[0], cull_dims[1], cull_dims[2], 0],
             };
@@ -481,7 +520,9 @@ impl IsoRenderer {
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let n_cull = cull_dims.iter().map(|&v| v as usize).product();
-            let counts = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cull)?;
+            let n_cells = march_dims.iter().map(|&v| v as usize).product();
+            let (counts, bits) = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cull, n_cells)?;
+            seen = Some((bits, march_dims, maxd - md_march));
             stats.submissions += 1;
             stats.readbacks += 1;
             opts.interrupt.check()?;
@@ -523,7 +564,11 @@ impl IsoRenderer {
         let d = &ctx.device;
         let iso: &IsoRenderer = &*self;
         let tg = iso.targets.as_ref().unwrap();
-        let (tris, verts) = draw_surface(ctx, &iso.passes, &globals_bg, tg, &patches, &space)?;
+        // Of the visible nodes' patches, only the cells some ray entered before the map.
+        let ranges: Option<Vec<Vec<[u32; 2]>>> = seen.as_ref().map(|(bits, mdims, shift)| {
+            visible.par_iter().zip(&patches).map(|(n, p)| visible_ranges(p, n, bits, *mdims, *shift)).collect()
+        });
+        let (tris, verts) = draw_surface(ctx, &iso.passes, &globals_bg, tg, &patches, ranges.as_deref(), &space)?;
         stats.submissions += 1;
         stats.surface_triangles = tris;
         stats.surface_vertices = verts;

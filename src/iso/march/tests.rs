@@ -387,3 +387,28 @@ fn vertices_lie_on_the_trilinear_isosurface() {
         assert!(on_edges as f64 > 0.99 * p.vertex_count() as f64);
     }
 }
+
+#[test]
+fn cell_starts_index_each_cells_triangles() {
+    let vol = pesco_synthetic(41);
+    // a small box (serial) and the whole volume (parallel z-chunks)
+    for (lo, hi) in [([3u32, 5, 7], [17u32, 12, 30]), ([0; 3], [40; 3])] {
+        let p = extract(&vol, 0.0, lo, hi);
+        let n = [0, 1, 2].map(|a| (hi[a] - lo[a]) as usize);
+        assert_eq!(p.cell_starts.len(), n[0] * n[1] * n[2] + 1);
+        assert_eq!(*p.cell_starts.last().unwrap() as usize, p.triangle_count());
+        assert!(p.cell_starts.windows(2).all(|w| w[0] <= w[1]));
+        for (c, w) in p.cell_starts.windows(2).enumerate() {
+            let cell = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+            for t in &p.triangles[w[0] as usize..w[1] as usize] {
+                for &v in t {
+                    let q = p.positions[v as usize];
+                    for a in 0..3 {
+                        let g = (q[a] - vol.origin[a]) / vol.spacing[a] - lo[a] as f64 - cell[a] as f64;
+                        assert!((-1e-9..=1.0 + 1e-9).contains(&g), "cell {cell:?} vertex {q:?}");
+                    }
+                }
+            }
+        }
+    }
+}
