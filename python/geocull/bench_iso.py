@@ -54,8 +54,13 @@ def load_volume(name: str, n: int) -> tuple[np.ndarray, tuple[float, float, floa
     else:
         raise SystemExit(f"--iso-volumes: unknown volume {name!r}; known: {', '.join(VOLUMES)}")
     nx, ny, nz = d.dimensions
-    vals = np.asarray(d[key]).reshape(nz, ny, nx).astype(np.float32)
-    return vals, tuple(map(float, d.origin)), tuple(map(float, d.spacing)), iso  # type: ignore[return-value]
+    a = np.asarray(d[key])
+    o = np.array(d.origin, dtype=np.float64)
+    if a.size != nx * ny * nz:  # cell data (channels): one sample per cell, at the cell centres
+        nx, ny, nz = nx - 1, ny - 1, nz - 1
+        o = o + 0.5 * np.array(d.spacing)
+    vals = a.reshape(nz, ny, nx).astype(np.float32)
+    return vals, tuple(map(float, o)), tuple(map(float, d.spacing)), iso  # type: ignore[return-value]
 
 
 def views(origin, spacing, shape, n_views: int) -> list[tuple[str, Any]]:
