@@ -98,7 +98,10 @@ fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i3
         }
         let n = c + select(vec3<i32>(0), off, pick);
         if (all(n >= vec3<i32>(0)) && all(n < dims)) {
-            mark_cell(n);
+            let kn = node_class(n);
+            if (kn == 0u || kn == 3u) {
+                mark_cell(n);
+            }
             let id = cull_node(n);
             if (id != own) {
                 atomicAdd(&counts[id], 1u);
@@ -140,14 +143,17 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         var counted = 0xffffffffu;
         var crossed = -1;
         loop {
-            mark_cell(c);
+            let k = node_class(c);
+            // Below / Above cells (uniform, NaN-free) hold no triangle: the others need their bit.
+            if (k == 0u || k == 3u) {
+                mark_cell(c);
+            }
             let own = cull_node(c);
             if (own != counted) {
                 atomicAdd(&counts[own], 1u);
                 counted = own;
             }
             count_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, own, crossed);
-            let k = node_class(c);
             if (k == 3u) {
                 last = 0u;
             } else if (k != 0u) {
