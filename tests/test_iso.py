@@ -176,7 +176,8 @@ def test_pesco_synthetic_conservative_over_views_and_depths(renderer):
     for az in (20.0, 200.0):
         cam, _ = cam_around(az, 25.0, dist=30.0)
         ref = renderer.render_isosurface(v, 0.0, cam, culling="none", cull_depth=md - 2)
-        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md, md - 1)):
+        # occluders coarser, as coarse as, and finer than the tested nodes
+        for od, cd in ((md - 1, md - 2), (md - 2, md - 3), (md - 2, md - 1), (md - 1, md - 1), (md, md - 1)):
             res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
             assert np.array_equal(res.image, ref.image), (az, od, cd)
             assert res.stats["surface_triangles"] <= ref.stats["surface_triangles"]
@@ -225,7 +226,7 @@ def test_patch_cache_is_bounded_by_its_budget():
     v = sphere_volume(40, 0.6)
     cam, _ = cam_around(30)
     assert gc.iso.cache_budget(r) == r.iso_cache_budget == 256 * 2**20
-    a = r.render_isosurface(v, 0.0, cam)
+    a = r.render_isosurface(v, 0.3, cam)  # the largest surface of those below
     one = a.stats["cache_bytes"]
     assert one > 0
     budget = int(2.5 * one)
@@ -250,3 +251,126 @@ def test_patch_cache_is_bounded_by_its_budget():
         gc.iso.set_cache_budget(r, -1)
     with pytest.raises(gc.InputError, match="^bytes"):
         gc.iso.set_cache_budget(r, 1.5)
+
+
+# ---- NaN: outside the domain, never an occluder, never crossed by a proof
+
+
+def nan_slab_volume(n=40):
+    """Above (x > 0.7) | NaN slab (0.6 <= x <= 0.7) | Below, holding a blob (a ball where the
+    field is above) near x = 0.2: seen from +x, the Above and Below regions pair up across the slab,
+    but no surface lies between them (NaN cells have none), so the blob is visible."""
+    z, y, x, h = grid(n, 0.0, 1.0)
+    blob = np.sqrt((x - 0.2) ** 2 + (y - 0.5) ** 2 + (z - 0.5) ** 2) < 0.15
+    vals = np.where(x > 0.7, 1.0, np.where(blob, 1.0, -1.0)) + 0 * (y + z)
+    vals = np.where((x >= 0.6) & (x <= 0.7), np.nan, vals).astype(np.float32)
+    return gc.Volume(vals, spacing=(h, h, h))
+
+
+def test_nan_slab_does_not_hide_what_none_shows(renderer):
+    v = nan_slab_volume()
+    md = v.max_depth()
+    cam = gc.Camera.look_at((4.0, 0.5, 0.5), (0.0, 0.5, 0.5), up=(0, 0, 1), fov_y=30.0)
+    ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+    assert np.isfinite(ref.depth).sum() > 100  # the blob is seen
+    for od, cd in ((md, md - 1), (md - 1, md - 2), (md - 2, md - 3)):
+        res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd, return_map=True)
+        np.testing.assert_array_equal(res.image, ref.image)
+        assert res.stats["occluder_nodes_nan"] > 0 and res.stats["occluder_boxes_above"] > 0
+        # nothing is proven through the slab: where the map holds, it lies behind the blob's surface
+        # (a Below node then an Above node inside the blob)
+        m = res.occlusion_map
+        proven = np.isfinite(m)
+        assert np.isfinite(ref.depth[proven]).all()
+        assert (ref.depth[proven] <= m[proven] * (1 + 1e-5)).all()
+
+
+def test_nodes_with_nan_are_not_occluders():
+    vals = np.ones((9, 9, 9), np.float32)
+    vals[4, 4, 4] = np.nan
+    v = gc.Volume(vals)
+    # depth 1: 8 nodes of 4^3 cells; those touching sample (4, 4, 4) are all of them
+    nodes = v.nodes(1)
+    assert (nodes["min"] == 1.0).all()
+    r = gc.Renderer(32, 32)
+    res = r.render_isosurface(v, 0.0, gc.Camera.look_at((20, 15, 10), (4, 4, 4)), occluder_depth=1, cull_depth=1)
+    assert res.stats["occluder_boxes_above"] == 0 and res.stats["occluder_nodes_nan"] == 8
+
+
+@pytest.mark.parametrize("border", [1, 3])
+def test_nan_borders_implicit_equals_none(renderer, border):
+    vals, origin, spacing = data.pesco_synthetic(40)
+    vals = vals.copy()
+    for ax in range(3):
+        sl = [slice(None)] * 3
+        sl[ax] = slice(0, border)
+        vals[tuple(sl)] = np.nan
+        sl[ax] = slice(-border, None)
+        vals[tuple(sl)] = np.nan
+    v = gc.Volume(vals, origin=origin, spacing=spacing)
+    md = v.max_depth()
+    for az in (20.0, 200.0):
+        cam, _ = cam_around(az, 25.0, dist=30.0)
+        ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+        for od, cd in ((md - 1, md - 2), (md, md - 1)):
+            res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
+            np.testing.assert_array_equal(res.image, ref.image)
+        # the border stops no proof inside: the hidden part is still culled
+        assert res.stats["surface_triangles"] < 0.9 * ref.stats["surface_triangles"]
+    # no triangle through a NaN cell: every vertex lies inside the finite core
+    verts, _ = gc.extract_isosurface(v, 0.0)
+    lo = np.array(origin) + border * np.array(spacing)
+    hi = np.array(origin) + (39 - border) * np.array(spacing)
+    assert (verts >= lo - 1e-9).all() and (verts <= hi + 1e-9).all()
+
+
+# ---- Marching cubes: closed, on the isovalue, VTK's triangle count
+
+
+def edge_use(faces):
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    return counts
+
+
+def test_extract_isosurface_is_watertight_on_closed_fields():
+    rng = np.random.default_rng(3)
+    vals = rng.uniform(-1, 1, (18, 17, 16)).astype(np.float32)  # ambiguous faces everywhere
+    vals[[0, -1], :, :] = vals[:, [0, -1], :] = vals[:, :, [0, -1]] = 1.0
+    for v in (sphere_volume(30, 0.6), gc.Volume(vals, spacing=(0.5, 1.0, 2.0))):
+        verts, faces = gc.extract_isosurface(v, 0.0)
+        assert len(faces) > 0
+        assert (edge_use(faces) == 2).all()
+
+
+@pytest.mark.parametrize("n", [32, 48])
+def test_triangle_count_matches_vtk_flying_edges(n):
+    pv = pytest.importorskip("pyvista")
+    vals, origin, spacing = data.pesco_synthetic(n)
+    g = pv.ImageData(dimensions=vals.shape[::-1], origin=origin, spacing=spacing)
+    g.point_data["f"] = vals.ravel()
+    vtk_count = g.contour([0.0], scalars="f", method="flying_edges").n_cells
+    verts, faces = gc.extract_isosurface(gc.Volume(vals, origin=origin, spacing=spacing), 0.0)
+    assert abs(len(faces) / vtk_count - 1.0) < 0.02, (len(faces), vtk_count)
+    # the vertices lie on the isovalue: trilinear interpolation of the samples there is ~0
+    from scipy.ndimage import map_coordinates
+
+    g = (verts - np.array(origin)) / np.array(spacing)
+    # edge vertices (two grid coordinates integral); the rare loop centroids are not on the surface
+    on_edge = (np.abs(g - np.round(g)) < 1e-6).sum(axis=1) >= 2
+    assert on_edge.mean() > 0.99
+    f = map_coordinates(vals.astype(np.float64), g[on_edge][:, ::-1].T, order=1)  # (k, j, i)
+    assert np.abs(f).max() < 1e-5
+
+
+def test_setup_is_reported_apart_from_the_frame():
+    r = gc.Renderer(40, 40)
+    v = sphere_volume(16, 0.5)
+    cam, _ = cam_around(30)
+    a = r.render_isosurface(v, 0.0, cam)
+    b = r.render_isosurface(v, 0.0, cam)
+    assert a.stats["setup_ms"] > 0 and b.stats["setup_ms"] == 0
+    # one submission for the map and the first node test, one per further level, one for the draw
+    s = b.stats
+    assert s["readbacks"] >= 1 and s["submissions"] == s["readbacks"] + 1
+    assert r.render_isosurface(v, 0.0, cam, culling="none").stats["readbacks"] == 0

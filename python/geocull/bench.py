@@ -19,6 +19,9 @@ drawn) for geocull methods; for PyVista (shading differs) coverage agreement and
 error. Also printed: scene build time, triangles, host + GPU bytes per fine triangle, peak RSS,
 adapter. ``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
 
+``--scene iso``: isosurfaces instead (:mod:`geocull.bench_iso`): geocull none / implicit, cold and
+warm, against PyVista flying edges + render, on the Pesco field and real volumes from PyVista's wheel.
+
 ``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
 ``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
 """
@@ -74,6 +77,13 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--size", type=int, help="samples per horizon side (default 418; quick 120)")
     p.add_argument("--no-pyvista", action="store_true", help="skip the PyVista rows")
     p.add_argument("--no-horizon", action="store_true", help="skip CPU horizon culling")
+    p.add_argument("--scene", choices=("gullfaks", "iso"), default="gullfaks",
+                   help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso)")
+    p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
+                   "(default all; quick: pesco)")
+    p.add_argument("--iso-n", type=int, help="iso: samples per axis of the Pesco field (default 128; quick 32)")
+    p.add_argument("--occluder-depth", type=int, help="iso: octree depth of the occluders (default: geocull's)")
+    p.add_argument("--cull-depth", type=int, help="iso: octree depth of the tested nodes (default: geocull's)")
     return p
 
 
@@ -96,6 +106,20 @@ def _config(a: argparse.Namespace) -> dict[str, Any]:
             cfg[k] = v
     cfg["pyvista"] = not a.no_pyvista
     cfg["horizon"] = not a.no_horizon
+    cfg["scene"] = a.scene
+    if a.scene == "iso":
+        from .bench_iso import VOLUMES
+
+        small = mode != "full"
+        cfg.update(width=a.width or (96 if mode == "tiny" else 128 if small else 512),
+                   height=a.height or (96 if mode == "tiny" else 128 if small else 512),
+                   iso_views=int(a.views) if a.views and str(a.views).isdigit()
+                   else (1 if mode == "tiny" else 2 if small else 8),
+                   repeats=a.repeats or (1 if small else 3),
+                   iso_n=a.iso_n or (24 if mode == "tiny" else 32 if small else 128),
+                   iso_volumes=[v.strip() for v in a.iso_volumes.split(",")] if a.iso_volumes else
+                   (["pesco"] if small else list(VOLUMES)),
+                   occluder_depth=a.occluder_depth, cull_depth=a.cull_depth)
     return cfg
 
 
@@ -441,8 +465,14 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m geocull bench [options]``: run the benchmark and print its table; returns the exit status."""
     a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     cfg = _config(a)
-    result = run(cfg)
-    print(format_table(result), flush=True)
+    if cfg["scene"] == "iso":
+        from . import bench_iso
+
+        result = bench_iso.run(cfg)
+        print(bench_iso.format_table(result), flush=True)
+    else:
+        result = run(cfg)
+        print(format_table(result), flush=True)
     if a.json:
         from .report import write_json
 

@@ -7,18 +7,22 @@
 >>> res = r.render_isosurface(vol, 0.0, cam, culling="implicit")
 >>> res.stats["surface_triangles"], res.stats["nodes_visible"], res.stats["total_ms"]
 
-How it works (details in ``src/iso/render.rs``): a min/max octree over the volume's cells; the
-nodes wholly below / wholly above the isovalue at ``occluder_depth`` are drawn as boxes into an
-occlusion map holding, per pixel, the nearest point that lies in a box of one class *behind* a point
-of a box of the other class (a ray that goes from "below" to "above" must cross the surface before
-that point). Octree nodes that may hold surface are tested against the map coarse to fine down to
-``cull_depth`` (exact visible-pixel counts), and marching tetrahedra run only inside visible nodes.
-The method is conservative: the culled image equals the unculled one.
+How it works (details in ``src/iso/render.rs``): a min/max octree over the volume's cells classes
+every node at ``occluder_depth`` as wholly below, wholly above, NaN (any NaN sample) or possibly
+holding surface. One GPU pass walks each pixel's ray through those classes and stops at the first
+node of one class met after a node of the other with no NaN node between (a ray that goes from
+"below" to "above" inside the domain must cross the surface before that point): the occlusion map.
+The same walk counts, per node at ``cull_depth``, the pixels whose ray enters it before stopping;
+marching cubes run only inside the nodes with a count > 0. The method is conservative: the culled
+image equals the unculled one, NaN samples (no data) included: they lie outside the domain, never
+occlude, and a proof never crosses them.
 
-Depths count from the root (0). Leaves are single cells at ``volume.max_depth()``; a 256³ volume has
-max depth 8 like the paper's, a 128³ one max depth 7 (the paper's depth d is our d - 1 there).
-Surfaces are marching *tetrahedra* (6 per cell, crack free), about twice the triangles of classic
-marching cubes.
+Depths count from the root (0). Leaves are single cells at ``volume.max_depth()``: a 128³ volume has
+max depth 7; defaults: occluder_depth = max depth (single cells), cull_depth = max depth - 2.
+Surfaces are marching cubes with a consistent, generated case table (ambiguous faces resolved by the
+face-centre decider, the mean of the face's four samples, identically from both cells): crack free
+and closed wherever no NaN stops it, with VTK flying edges' triangle count within 2 % (-1.6 % on the
+Pesco field 128³).
 
 Caches: a renderer keeps the patches it extracted (per volume, isovalue and node) within a memory
 budget, 256 MiB by default (:func:`set_cache_budget`); ``stats["cache_bytes"]`` is what it holds.
@@ -75,7 +79,7 @@ def extract_isosurface(volume: Volume, isovalue: float) -> tuple[np.ndarray, np.
     (metres, z up, the volume's rotation applied), faces (m, 3) int64)``.
 
     These are the triangles :meth:`geocull.Renderer.render_isosurface` draws with culling="none"
-    (marching tetrahedra over every octree node that straddles the isovalue, run in the core with
+    (marching cubes over every octree node that straddles the isovalue, run in the core with
     the GIL released), welded: vertices shared by neighbouring patches appear once (they are bit
     identical). Zero-area triangles (a sample exactly at the isovalue) are kept, as the renderer
     keeps them. Triangles wind counter-clockwise seen from the side of increasing values.

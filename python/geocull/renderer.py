@@ -234,7 +234,7 @@ class Renderer:
         culling: one of :data:`ISO_CULLING_MODES`: "implicit" (occlusion map of implicit occluders,
         extract only visible nodes) or "none" (extract and draw every node that may hold surface:
         the reference).
-        occluder_depth: octree depth of the occluder nodes (root = 0; default max_depth - 1).
+        occluder_depth: octree depth of the occluder nodes (root = 0; default max_depth: single cells).
         cull_depth: octree depth of the nodes tested and extracted (default max_depth - 2).
         color: (r, g, b) in [0, 1].  cache: reuse patches extracted by earlier frames (per volume,
         isovalue and node); False extracts afresh (for timing).  return_map: also return the occlusion
@@ -243,9 +243,9 @@ class Renderer:
 
         The result's ``tile_pixels`` / ``tile_drawn`` are per *node*: one entry per node at
         ``cull_depth`` that may hold surface (``result.nodes``: (n, 4) [depth, ix, iy, iz]) — the
-        pixels where its box is in front of the occlusion map (0 if a coarser ancestor was hidden or for
-        culling="none") and whether it was extracted and drawn. ``stats``: :class:`IsoStats`
-        (surface_triangles, nodes_tested (all levels), nodes_visible, nodes_straddling,
+        pixels whose ray enters it before the occlusion map (0 when hidden, and for culling="none") and
+        whether it was extracted and drawn. ``stats``: :class:`IsoStats`
+        (surface_triangles, nodes_tested, nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
         (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, ...). Patches are kept
         within :attr:`iso_cache_budget` bytes.

@@ -89,23 +89,27 @@ class IsoStats(TypedDict):
 
     surface_triangles: int  # triangles of the drawn surface
     surface_vertices: int  # vertices of the drawn surface
-    nodes_tested: int  # octree nodes tested against the occlusion map, all levels together
-    nodes_tested_cull_depth: int  # nodes tested at cull_depth itself
+    nodes_tested: int  # octree nodes tested against the occlusion map (the straddling nodes at cull_depth)
+    nodes_tested_cull_depth: int  # = nodes_tested (one level since the map and the test are one walk)
     nodes_visible: int  # visible nodes at cull_depth (every straddling node for culling="none")
     nodes_straddling: int  # nodes at cull_depth that may hold surface (= len(nodes))
-    occluder_boxes_below: int  # occluder boxes wholly below the isovalue drawn into the map
-    occluder_boxes_above: int  # occluder boxes wholly above the isovalue drawn into the map
+    occluder_boxes_below: int  # nodes at occluder_depth wholly below the isovalue (NaN-free), in the map's grid
+    occluder_boxes_above: int  # nodes at occluder_depth wholly above the isovalue (NaN-free), in the map's grid
+    occluder_nodes_nan: int  # nodes at occluder_depth with a NaN sample: never occluders, they stop the map's walk
     occluder_depth: int  # octree depth of the occluder nodes used
     cull_depth: int  # octree depth of the nodes tested and extracted
     max_depth: int  # octree depth of the single-cell leaves
     patches_cached: int  # surface patches found in the renderer's cache
     patches_extracted: int  # surface patches extracted this frame
-    occluder_ms: float  # ms, occluder selection + occlusion map (GPU finished)
-    cull_ms: float  # ms, coarse-to-fine node tests, read-backs included
-    extract_ms: float  # ms, marching tetrahedra (cache look-ups included)
+    occluder_ms: float  # ms, CPU: node classes (first frame of an isovalue/depth) + recording the map pass
+    cull_ms: float  # ms, the occlusion map on the GPU + coarse-to-fine node tests, read-backs included
+    extract_ms: float  # ms, marching cubes (cache look-ups included)
     draw_ms: float  # ms, vertex assembly, upload and the lit draw (GPU finished)
     surface_ms: float  # ms, extract_ms + draw_ms
-    total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back excluded
+    total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back and setup excluded
+    setup_ms: float  # ms, one-time work before the clock (pipelines, case table, targets at a new size); else 0
+    submissions: int  # queue submissions inside the frame
+    readbacks: int  # GPU-to-host read-backs inside the frame (node-test counts; the image read-back excluded)
     readback_ms: float  # ms, wall time to copy image and depth back
     cache_bytes: int  # bytes the renderer's isosurface caches hold after the frame (<= its iso_cache_budget)
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
@@ -205,8 +209,8 @@ class IsoResult(RenderResult[IsoStats]):
 
     nodes: (n, 4) uint32 [depth, ix, iy, iz], the nodes at ``cull_depth`` that may hold surface, in
     octree order (ix along x, iy along y, iz along z, in units of the node's size).  tile_pixels: (n,)
-    uint32 pixels where each node's box is in front of the occlusion map (0 if a coarser ancestor was
-    hidden, or for culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
+    uint32 pixels whose ray enters the node before the occlusion map (0 when hidden, and for
+    culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
     :class:`IsoStats`.  occlusion_map: (H, W) float32 distance along the view axis (exaggerated world
     units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
     """

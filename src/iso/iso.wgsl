@@ -1,6 +1,6 @@
-// Implicit occluders (Pesco et al.): occlusion map from octree boxes, exact per-node visible-pixel
-// counts against it, and the lit isosurface. Depth is reverse-Z everywhere (1 = near, 0 = far):
-// "nearer" means a larger depth value.
+// Implicit occluders (Pesco et al.): the occlusion map and the per-node visible-pixel counts,
+// marched per pixel through the occluder classes, and the lit isosurface.
+// Depth is reverse-Z everywhere (1 = near, 0 = far): "nearer" means a larger depth value.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -11,51 +11,185 @@ struct Globals {
 
 @group(0) @binding(0) var<uniform> g: Globals;
 
-// CUBE and box_corner come from gpu/shaders/box.wgsl (prepended).
-
-struct BoxOut {
-    // Invariant: the map passes and the test pass rasterise identical depths for identical boxes.
-    @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) @interpolate(flat) id: u32,
+// ---- The occlusion map and the node test in one compute pass, one invocation per pixel: the
+// pixel's ray walks the grid of cells at the march depth (the finer of the occluder and cull depths)
+// near to far (3-D DDA) and stops in the first occluder node of one class (Below / Above) met after
+// an occluder node of the other class with no NaN node in between; the map is the depth of that
+// node's entry point, pushed farther by `lo.w` (render units), 0 (= far, nothing proven) where no
+// such pair exists. Every cull node the walk enters up to and including that cell is seen on this
+// pixel: `counts[node] += 1` (the pixels where the node's box is in front of the map); a node the
+// ray passes within `hi.w` (grid units) of is counted too, so rounding never skips one.
+// Classes: 2 bits per occluder node, 16 per word: 0 = may hold surface (passable), 1 = Below,
+// 2 = Above, 3 = has a NaN sample (outside the domain: resets the walk).
+struct MapParams {
+    inv_view_proj: mat4x4<f32>,
+    // xyz: the volume's box (render space); lo.w: the map's margin (render units); hi.w: the
+    // margin for counting a neighbouring node (fraction of a march cell).
+    lo: vec4<f32>,
+    hi: vec4<f32>,
+    // xyz: a march cell's size (render space); the last one per axis may end earlier, at `hi`.
+    node: vec4<f32>,
+    // xyz: march cells per axis; w: image width.
+    dims: vec4<u32>,
+    // x: image height; y: march depth - occluder depth; z: march depth - cull depth; w: 1 = also
+    // mark every march cell entered in `cells_seen` (1 bit each).
+    size: vec4<u32>,
+    // xyz: occluder nodes per axis; w: unused.
+    occ_dims: vec4<u32>,
+    // xyz: cull nodes per axis; w: unused.
+    cull_dims: vec4<u32>,
 }
 
-// One instance per box: lo.xyz + id (bit pattern in w), hi.xyz.
-@vertex
-fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOut {
-    var out: BoxOut;
-    out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
-    out.id = bitcast<u32>(lo.w);
-    return out;
-}
+@group(1) @binding(0) var<uniform> mp: MapParams;
+@group(1) @binding(1) var<storage, read> classes: array<u32>;
+@group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
+@group(1) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
+@group(1) @binding(4) var<storage, read_write> cells_seen: array<atomic<u32>>;
 
-// Pass 3 of the map: keep only fragments strictly farther than the reference depth (the nearest
-// point of the boxes of the other class on this pixel's ray); the depth test (Greater) then keeps
-// the nearest of them. Depth textures are bound as unfilterable float (`texture_2d<f32>`, `.r`):
-// naga's GLSL backend cannot `textureLoad` a `texture_depth_2d`.
-@group(1) @binding(0) var ref_depth: texture_2d<f32>;
-
-@fragment
-fn fs_beyond(v: BoxOut) {
-    let r = textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
-    if (v.clip.z >= r) {
-        discard;
+fn mark_cell(c: vec3<i32>) {
+    if (mp.size.w == 1u) {
+        let u = vec3<u32>(c);
+        let i = (u.z * mp.dims.y + u.y) * mp.dims.x + u.x;
+        let bit = 1u << (i & 31u);
+        // Most cells are seen by many rays: a load first spares the atomic read-modify-write.
+        if ((atomicLoad(&cells_seen[i >> 5u]) & bit) == 0u) {
+            atomicOr(&cells_seen[i >> 5u], bit);
+        }
     }
 }
 
-// Node test: count the pixels where the node box's front face is nearer than (or as near as) the
-// occlusion map. The comparison is done here, by hand, so no early-depth-test feature is needed
-// and hidden fragments are never counted.
-@group(1) @binding(0) var map_depth: texture_2d<f32>;
-@group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
+fn node_class(c: vec3<i32>) -> u32 {
+    let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
+    let i = (u.z * mp.occ_dims.y + u.y) * mp.occ_dims.x + u.x;
+    return (classes[i >> 4u] >> ((i & 15u) * 2u)) & 3u;
+}
 
-@fragment
-fn fs_test(v: BoxOut) -> @location(0) u32 {
-    let m = textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0).r;
-    if (v.clip.z >= m) {
-        atomicAdd(&counts[v.id], 1u);
-        return v.id + 1u;
+fn cull_node(c: vec3<i32>) -> u32 {
+    let u = vec3<u32>(c) >> vec3<u32>(mp.size.z);
+    return (u.z * mp.cull_dims.y + u.y) * mp.cull_dims.x + u.x;
+}
+
+fn unproject(ndc: vec3<f32>) -> vec3<f32> {
+    let p = mp.inv_view_proj * vec4<f32>(ndc, 1.0);
+    return p.xyz / p.w;
+}
+
+// At the entry point `g` (march-cell units) of cell `c`: every cell that touches `g` within `hi.w`
+// along each axis (across a face, an edge or a corner) is marked and its cull node counted (once:
+// not `own`); the ray may have skipped it by rounding. The axis just crossed (`crossed`) has its
+// other side marked already.
+fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i32) {
+    var off = vec3<i32>(0);
+    var any_near = false;
+    for (var a = 0; a < 3; a++) {
+        let r = floor(g[a] + 0.5);
+        if (a != crossed && abs(g[a] - r) < mp.hi.w) {
+            off[a] = select(1, -1, c[a] == i32(r));
+            any_near = true;
+        }
     }
-    return 0u;
+    if (!any_near) {
+        return;
+    }
+    for (var m = 1; m < 8; m++) {
+        let pick = vec3<bool>((m & 1) != 0, (m & 2) != 0, (m & 4) != 0);
+        if (any(pick & (off == vec3<i32>(0)))) {
+            continue;
+        }
+        let n = c + select(vec3<i32>(0), off, pick);
+        if (all(n >= vec3<i32>(0)) && all(n < dims)) {
+            let kn = node_class(n);
+            if (kn == 0u || kn == 3u) {
+                mark_cell(n);
+            }
+            let id = cull_node(n);
+            if (id != own) {
+                atomicAdd(&counts[id], 1u);
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = mp.dims.w;
+    let h = mp.size.x;
+    if (gid.x >= w || gid.y >= h) {
+        return;
+    }
+    let ndc = vec2<f32>((f32(gid.x) + 0.5) / f32(w) * 2.0 - 1.0, 1.0 - (f32(gid.y) + 0.5) / f32(h) * 2.0);
+    // From the near plane along the pixel's ray (t = 0 at the near plane).
+    let o = unproject(vec3<f32>(ndc, 1.0));
+    var d = unproject(vec3<f32>(ndc, 0.5)) - o;
+    d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
+    let inv = 1.0 / d;
+    let ta = (mp.lo.xyz - o) * inv;
+    let tb = (mp.hi.xyz - o) * inv;
+    let tmin = min(ta, tb);
+    let tmax = max(ta, tb);
+    let t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+    let t1 = min(min(tmax.x, tmax.y), tmax.z);
+    var result = 0.0;
+    if (t0 < t1) {
+        let dims = vec3<i32>(mp.dims.xyz);
+        let p = o + d * t0;
+        var c = vec3<i32>(clamp(floor((p - mp.lo.xyz) / mp.node.xyz), vec3<f32>(0.0), vec3<f32>(dims - 1)));
+        let stp = select(vec3<i32>(-1), vec3<i32>(1), d > vec3<f32>(0.0));
+        let ahead = select(vec3<f32>(0.0), vec3<f32>(1.0), d > vec3<f32>(0.0));
+        var tnext = (mp.lo.xyz + (vec3<f32>(c) + ahead) * mp.node.xyz - o) * inv;
+        let tdelta = abs(mp.node.xyz * inv);
+        var last = 0u;
+        var t_enter = t0;
+        var counted = 0xffffffffu;
+        var crossed = -1;
+        loop {
+            let k = node_class(c);
+            // Below / Above cells (uniform, NaN-free) hold no triangle: the others need their bit.
+            if (k == 0u || k == 3u) {
+                mark_cell(c);
+            }
+            let own = cull_node(c);
+            if (own != counted) {
+                atomicAdd(&counts[own], 1u);
+                counted = own;
+            }
+            count_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, own, crossed);
+            if (k == 3u) {
+                last = 0u;
+            } else if (k != 0u) {
+                if (last != 0u && last != k) {
+                    let q = o + d * (t_enter + mp.lo.w / length(d));
+                    let clip = g.view_proj * vec4<f32>(q, 1.0);
+                    result = clamp(clip.z / clip.w, 0.0, 1.0);
+                    break;
+                }
+                last = k;
+            }
+            let tm = min(min(tnext.x, tnext.y), tnext.z);
+            if (tm >= t1) {
+                break;
+            }
+            t_enter = tm;
+            // One axis at a time: a ray through an edge or corner visits the cells beside it too.
+            if (tnext.x <= tm) {
+                c.x += stp.x;
+                tnext.x += tdelta.x;
+                crossed = 0;
+            } else if (tnext.y <= tm) {
+                c.y += stp.y;
+                tnext.y += tdelta.y;
+                crossed = 1;
+            } else {
+                c.z += stp.z;
+                tnext.z += tdelta.z;
+                crossed = 2;
+            }
+            if (any(c < vec3<i32>(0)) || any(c >= dims)) {
+                break;
+            }
+        }
+    }
+    map_out[gid.y * w + gid.x] = result;
 }
 
 // The isosurface: positions relative to the volume centre (render space), smooth normals.
@@ -89,43 +223,6 @@ fn fs_surf(v: SurfOut) -> @location(0) vec4<f32> {
 // gpu/shaders/common.wgsl). The bodies repeat those above rather than sharing helpers, so that the
 // other backends' entry points compile exactly as before (a shared shading helper measurably
 // slowed lavapipe's lit pass).
-
-struct BoxOutGl {
-    @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) @interpolate(flat) id: u32,
-    @location(1) zw: vec2<f32>,
-}
-
-@vertex
-fn vs_box_gl(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(1) hi: vec4<f32>) -> BoxOutGl {
-    let c = CUBE[vi];
-    let sel = vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u);
-    let clip = g.view_proj * vec4<f32>(select(lo.xyz, hi.xyz, sel), 1.0);
-    return BoxOutGl(clip, bitcast<u32>(lo.w), clip.zw);
-}
-
-@fragment
-fn fs_near_gl(v: BoxOutGl) -> @builtin(frag_depth) f32 {
-    return v.zw.x / v.zw.y;
-}
-
-@fragment
-fn fs_beyond_gl(v: BoxOutGl) -> @builtin(frag_depth) f32 {
-    let z = v.zw.x / v.zw.y;
-    if (z >= textureLoad(ref_depth, vec2<i32>(floor(v.clip.xy)), 0).r) {
-        discard;
-    }
-    return z;
-}
-
-@fragment
-fn fs_test_gl(v: BoxOutGl) -> @location(0) u32 {
-    if (v.zw.x / v.zw.y >= textureLoad(map_depth, vec2<i32>(floor(v.clip.xy)), 0).r) {
-        atomicAdd(&counts[v.id], 1u);
-        return v.id + 1u;
-    }
-    return 0u;
-}
 
 struct SurfOutGl {
     @builtin(position) clip: vec4<f32>,

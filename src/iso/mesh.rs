@@ -1,15 +1,15 @@
 //! The whole isosurface of a volume as one mesh in world coordinates: the triangles the renderer
-//! draws with `culling = none` (marching tetrahedra over every node that straddles the isovalue,
+//! draws with `culling = none` (marching cubes over every node that straddles the isovalue,
 //! at the renderer's default cull depth), for export (PyVista, trimesh, a scene's `add_mesh`).
 //!
-//! Patches share their boundary vertices bit for bit (`super::tetra`), so vertices are welded by
+//! Patches share their boundary vertices bit for bit (`super::march`), so vertices are welded by
 //! their exact grid-frame position; triangles are kept as extracted (zero-area ones too: they draw
 //! nothing, as in the renderer). Positions are turned into the world by the volume's rotation in f64.
 
 use std::collections::HashMap;
 
+use super::march::extract_nodes;
 use super::octree::MinMaxOctree;
-use super::tetra::extract_nodes;
 use super::Volume;
 use crate::error::{ensure, Result};
 
@@ -65,7 +65,7 @@ mod tests {
         let vol = super::super::sphere_field(20, 0.6);
         let tree = MinMaxOctree::build(&vol);
         let m = isosurface_mesh(&vol, &tree, 0.0).unwrap();
-        let all = super::super::tetra::extract(&vol, 0.0, [0; 3], [19; 3]);
+        let all = super::super::march::extract(&vol, 0.0, [0; 3], [19; 3]);
         assert_eq!(m.faces.len(), all.triangle_count());
         // Welded and closed: every edge is shared by exactly two triangles.
         let mut edges: HashMap<(u32, u32), u32> = HashMap::new();

@@ -9,7 +9,7 @@
 //!   the vertical through its origin; [`layout`]: how a user's array (zyx or xyz order, z
 //!   positive up or down) maps onto it.
 //! * [`octree::MinMaxOctree`]: per-node min/max over cells, built with rayon.
-//! * [`tetra`]: crack-free, Kuhn-decomposition marching tetrahedra, per box of
+//! * [`march`]: crack-free marching cubes (generated table, face-centre decider), per box of
 //!   cells, plus a patch cache keyed by isovalue and node.
 //! * [`mesh`]: the whole isosurface as one welded world-space mesh (the renderer's triangles).
 //!
@@ -30,14 +30,16 @@ use crate::scene::serial::{Reader, Writer};
 const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
 pub mod layout;
+pub mod march;
 pub mod mesh;
 pub mod octree;
 mod passes;
 pub mod render;
-pub mod tetra;
+/// The extraction's former name (marching tetrahedra), kept for paths that use it.
+pub use march as tetra;
 
+pub use march::{extract, extract_nodes, PatchCache, SurfacePatch};
 pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
-pub use tetra::{extract, extract_nodes, PatchCache, SurfacePatch};
 
 /// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
 /// address from being reused), its value offset and its geometry.
@@ -456,8 +458,8 @@ mod tests {
         assert_eq!(v.residual(1e8 + 0.5, "isovalue").unwrap(), 0.5);
         let shifted =
             Volume::from_f64(&vals.iter().map(|x| x - 1e8).collect::<Vec<_>>(), (n, n, n), [0.0; 3], [1.0; 3]).unwrap();
-        let a = super::tetra::extract(&v, v.residual(1e8, "w").unwrap(), [0; 3], [8; 3]);
-        let b = super::tetra::extract(&shifted, shifted.residual(0.0, "w").unwrap(), [0; 3], [8; 3]);
+        let a = super::march::extract(&v, v.residual(1e8, "w").unwrap(), [0; 3], [8; 3]);
+        let b = super::march::extract(&shifted, shifted.residual(0.0, "w").unwrap(), [0; 3], [8; 3]);
         assert!(a.triangle_count() > 0);
         assert_eq!(a, b);
         let t = MinMaxOctree::build(&v);

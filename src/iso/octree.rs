@@ -13,8 +13,12 @@
 //! single cells, at most 125 samples each) are answered by scanning the volume's samples, which
 //! the tree shares (`Arc`). The public numbering is unchanged: depth `D` = single cells.
 //!
-//! NaN samples carry no surface: they are skipped in min/max, and a node whose
-//! samples are all NaN gets `min = +inf, max = -inf` ([`Class::Empty`]).
+//! **NaN samples** are outside the domain and carry no surface: they are skipped in min/max (a
+//! node whose samples are all NaN gets `min = +inf, max = -inf`), and every node records whether
+//! any of its samples is NaN (`has_nan`). A node with a NaN is never wholly below or wholly above
+//! ([`Class::Below`] / [`Class::Above`] are NaN-free by definition), so it never acts as an
+//! implicit occluder: it is [`Class::Straddles`] when its finite samples straddle the isovalue (some
+//! of its NaN-free cells may hold surface), else [`Class::Empty`].
 
 use std::sync::Arc;
 
@@ -28,13 +32,14 @@ pub const BRICK_LEVELS: u32 = 3;
 /// Position of an isovalue relative to a node's value range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Class {
-    /// `max < w`: the node lies wholly below the isovalue.
+    /// `max < w` and no NaN: the node lies wholly below the isovalue.
     Below,
-    /// `min > w`: the node lies wholly above the isovalue.
+    /// `min > w` and no NaN: the node lies wholly above the isovalue.
     Above,
-    /// `min <= w <= max`: the node may contain surface.
+    /// `min <= w <= max` over the finite samples: the node may contain surface.
     Straddles,
-    /// All samples NaN: no surface.
+    /// No surface, and not an occluder: all samples NaN, or some NaN and the finite ones all on
+    /// one side.
     Empty,
 }
 
@@ -49,6 +54,8 @@ pub struct NodeInfo {
     pub min: f32,
     /// Maximum of the non-NaN samples of the node's cells (`-inf` if none).
     pub max: f32,
+    /// Some sample of the node's cells is NaN (outside the domain).
+    pub has_nan: bool,
     /// First cell (inclusive) per axis.
     pub cell_lo: [u32; 3],
     /// Last cell (exclusive) per axis, clamped to the volume's cells.
@@ -66,7 +73,10 @@ impl NodeInfo {
     /// Classifies the node against isovalue `w` (see [`Class`]).
     #[inline]
     pub fn classify(&self, w: f32) -> Class {
-        classify_range(self.min, self.max, w)
+        match classify_range(self.min, self.max, w) {
+            Class::Below | Class::Above if self.has_nan => Class::Empty,
+            c => c,
+        }
     }
 
     /// True when the node may contain the isosurface `w`.
@@ -107,6 +117,8 @@ struct Level {
     dims: [u32; 3],
     min: Vec<f32>,
     max: Vec<f32>,
+    /// Some sample is NaN.
+    nan: Vec<bool>,
 }
 
 impl Level {
@@ -162,20 +174,21 @@ fn nan_max(a: f32, b: f32) -> f32 {
 }
 
 /// Min/max of the non-NaN samples `lo..=hi` (per axis, sample indices) of a volume with `samples`
-/// samples per axis; `(+inf, -inf)` when all are NaN.
-fn scan(v: &[f32], samples: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> (f32, f32) {
+/// samples per axis (`(+inf, -inf)` when all are NaN), and whether any is NaN.
+fn scan(v: &[f32], samples: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> (f32, f32, bool) {
     let (nx, ny) = (samples[0], samples[1]);
-    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+    let (mut mn, mut mx, mut nan) = (f32::INFINITY, f32::NEG_INFINITY, false);
     for k in lo[2]..=hi[2] {
         for j in lo[1]..=hi[1] {
             let row = (k * ny + j) * nx;
             for &x in &v[row + lo[0]..=row + hi[0]] {
                 mn = nan_min(mn, x);
                 mx = nan_max(mx, x);
+                nan |= x.is_nan();
             }
         }
     }
-    (mn, mx)
+    (mn, mx, nan)
 }
 
 impl MinMaxOctree {
@@ -196,32 +209,38 @@ impl MinMaxOctree {
             let n = bx * by * dims[2] as usize;
             let mut min = vec![f32::INFINITY; n];
             let mut max = vec![f32::NEG_INFINITY; n];
+            let mut nan = vec![false; n];
             let v = &vol.values[..];
             let (nx, ny) = (vol.nx, vol.ny);
             // Cells b*s .. (b+1)*s of axis a (clamped), i.e. samples b*s ..= that end.
             let span = |b: usize, a: usize| (b * s, ((b + 1) * s).min(cells[a] as usize));
-            min.par_chunks_mut(bx * by).zip(max.par_chunks_mut(bx * by)).enumerate().for_each(|(bz, (mn, mx))| {
-                let (z0, z1) = span(bz, 2);
-                for byi in 0..by {
-                    let (y0, y1) = span(byi, 1);
-                    let (mn, mx) = (&mut mn[byi * bx..(byi + 1) * bx], &mut mx[byi * bx..(byi + 1) * bx]);
-                    for k in z0..=z1 {
-                        for j in y0..=y1 {
-                            let row = &v[(k * ny + j) * nx..(k * ny + j + 1) * nx];
-                            for bxi in 0..bx {
-                                let (x0, x1) = span(bxi, 0);
-                                let (mut lo, mut hi) = (mn[bxi], mx[bxi]);
-                                for &x in &row[x0..=x1] {
-                                    lo = nan_min(lo, x);
-                                    hi = nan_max(hi, x);
+            let slab = bx * by;
+            min.par_chunks_mut(slab).zip(max.par_chunks_mut(slab)).zip(nan.par_chunks_mut(slab)).enumerate().for_each(
+                |(bz, ((mn, mx), na))| {
+                    let (z0, z1) = span(bz, 2);
+                    for byi in 0..by {
+                        let (y0, y1) = span(byi, 1);
+                        let r = byi * bx..(byi + 1) * bx;
+                        let (mn, mx, na) = (&mut mn[r.clone()], &mut mx[r.clone()], &mut na[r]);
+                        for k in z0..=z1 {
+                            for j in y0..=y1 {
+                                let row = &v[(k * ny + j) * nx..(k * ny + j + 1) * nx];
+                                for bxi in 0..bx {
+                                    let (x0, x1) = span(bxi, 0);
+                                    let (mut lo, mut hi, mut n) = (mn[bxi], mx[bxi], na[bxi]);
+                                    for &x in &row[x0..=x1] {
+                                        lo = nan_min(lo, x);
+                                        hi = nan_max(hi, x);
+                                        n |= x.is_nan();
+                                    }
+                                    (mn[bxi], mx[bxi], na[bxi]) = (lo, hi, n);
                                 }
-                                (mn[bxi], mx[bxi]) = (lo, hi);
                             }
                         }
                     }
-                }
-            });
-            Level { dims, min, max }
+                },
+            );
+            Level { dims, min, max, nan }
         };
 
         let mut levels = vec![bricks];
@@ -233,28 +252,32 @@ impl MinMaxOctree {
             let n = px * py * pz;
             let mut min = vec![f32::INFINITY; n];
             let mut max = vec![f32::NEG_INFINITY; n];
-            min.par_chunks_mut(px * py).zip(max.par_chunks_mut(px * py)).enumerate().for_each(|(z, (mn, mx))| {
-                let z = z as u32;
-                for y in 0..py as u32 {
-                    for x in 0..px as u32 {
-                        let mut lo = f32::INFINITY;
-                        let mut hi = f32::NEG_INFINITY;
-                        for cz in 2 * z..(2 * z + 2).min(child.dims[2]) {
-                            for cy in 2 * y..(2 * y + 2).min(child.dims[1]) {
-                                for cx in 2 * x..(2 * x + 2).min(child.dims[0]) {
-                                    let ci = child.idx(cx, cy, cz);
-                                    lo = lo.min(child.min[ci]);
-                                    hi = hi.max(child.max[ci]);
+            let mut nan = vec![false; n];
+            min.par_chunks_mut(px * py)
+                .zip(max.par_chunks_mut(px * py))
+                .zip(nan.par_chunks_mut(px * py))
+                .enumerate()
+                .for_each(|(z, ((mn, mx), na))| {
+                    let z = z as u32;
+                    for y in 0..py as u32 {
+                        for x in 0..px as u32 {
+                            let (mut lo, mut hi, mut any) = (f32::INFINITY, f32::NEG_INFINITY, false);
+                            for cz in 2 * z..(2 * z + 2).min(child.dims[2]) {
+                                for cy in 2 * y..(2 * y + 2).min(child.dims[1]) {
+                                    for cx in 2 * x..(2 * x + 2).min(child.dims[0]) {
+                                        let ci = child.idx(cx, cy, cz);
+                                        lo = lo.min(child.min[ci]);
+                                        hi = hi.max(child.max[ci]);
+                                        any |= child.nan[ci];
+                                    }
                                 }
                             }
+                            let o = y as usize * px + x as usize;
+                            (mn[o], mx[o], na[o]) = (lo, hi, any);
                         }
-                        let o = y as usize * px + x as usize;
-                        mn[o] = lo;
-                        mx[o] = hi;
                     }
-                }
-            });
-            levels.push(Level { dims, min, max });
+                });
+            levels.push(Level { dims, min, max, nan });
         }
         levels.reverse();
 
@@ -271,7 +294,7 @@ impl MinMaxOctree {
 
     /// Host bytes of the stored min/max pyramid (the shared samples not counted).
     pub fn heap_bytes(&self) -> usize {
-        self.levels.iter().map(|l| (l.min.capacity() + l.max.capacity()) * 4).sum()
+        self.levels.iter().map(|l| (l.min.capacity() + l.max.capacity()) * 4 + l.nan.capacity()).sum()
     }
 
     /// The finest depth whose min/max are stored (finer ones are scanned from the samples).
@@ -307,16 +330,28 @@ impl MinMaxOctree {
         let c = [ix, iy, iz];
         let cell_lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as u32);
         let cell_hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as u32);
-        let (min, max) = match self.levels.get(depth as usize) {
+        let (min, max, has_nan) = match self.levels.get(depth as usize) {
             Some(l) => {
                 let i = l.idx(ix, iy, iz);
-                (l.min[i], l.max[i])
+                (l.min[i], l.max[i], l.nan[i])
             }
             // Finer than the stored bricks: at most 5³ samples (cells lo..hi span samples lo..=hi).
             None => scan(&self.values, self.samples, cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
         };
         let pos = |p: [u32; 3]| [0, 1, 2].map(|a| self.origin[a] + p[a] as f64 * self.spacing[a]);
-        NodeInfo { depth, ix, iy, iz, min, max, cell_lo, cell_hi, bbox_min: pos(cell_lo), bbox_max: pos(cell_hi) }
+        NodeInfo {
+            depth,
+            ix,
+            iy,
+            iz,
+            min,
+            max,
+            has_nan,
+            cell_lo,
+            cell_hi,
+            bbox_min: pos(cell_lo),
+            bbox_max: pos(cell_hi),
+        }
     }
 
     /// The node at `depth` with index `(ix,iy,iz)`, if it intersects the volume.
@@ -338,6 +373,39 @@ impl MinMaxOctree {
         (0..dims[2])
             .into_par_iter()
             .flat_map_iter(|z| (0..dims[1]).flat_map(move |y| (0..dims[0]).map(move |x| self.make(depth, x, y, z))))
+            .collect()
+    }
+
+    /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
+    /// materialising the nodes (single-cell depths of a 128³ volume have 2 M of them).
+    pub fn map_at_depth<T: Send>(&self, depth: u32, f: impl Fn(f32, f32, bool) -> T + Sync) -> Vec<T> {
+        let Some(dims) = self.dims_at_depth(depth) else {
+            return Vec::new();
+        };
+        let (dx, dy) = (dims[0] as usize, dims[1] as usize);
+        let s = 1u64 << (self.depth - depth);
+        let level = self.levels.get(depth as usize);
+        (0..dims[2])
+            .into_par_iter()
+            .flat_map_iter(|z| {
+                let f = &f;
+                (0..dy * dx).map(move |k| {
+                    let (x, y) = ((k % dx) as u32, (k / dx) as u32);
+                    match level {
+                        Some(l) => {
+                            let i = l.idx(x, y, z);
+                            f(l.min[i], l.max[i], l.nan[i])
+                        }
+                        None => {
+                            let c = [x, y, z];
+                            let lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as usize);
+                            let hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as usize);
+                            let (mn, mx, nan) = scan(&self.values, self.samples, lo, hi);
+                            f(mn, mx, nan)
+                        }
+                    }
+                })
+            })
             .collect()
     }
 
@@ -402,12 +470,19 @@ mod tests {
     }
 
     fn brute(vol: &Volume, lo: [u32; 3], hi: [u32; 3]) -> (f32, f32) {
+        let (mn, mx, _) = brute_nan(vol, lo, hi);
+        (mn, mx)
+    }
+
+    fn brute_nan(vol: &Volume, lo: [u32; 3], hi: [u32; 3]) -> (f32, f32, bool) {
+        let mut nan = false;
         let mut mn = f32::INFINITY;
         let mut mx = f32::NEG_INFINITY;
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
                     let v = vol.get(i as usize, j as usize, k as usize);
+                    nan |= v.is_nan();
                     if !v.is_nan() {
                         mn = mn.min(v);
                         mx = mx.max(v);
@@ -415,7 +490,7 @@ mod tests {
                 }
             }
         }
-        (mn, mx)
+        (mn, mx, nan)
     }
 
     #[test]
@@ -436,8 +511,11 @@ mod tests {
                 let mut cells = 0u64;
                 for n in &nodes {
                     assert_eq!(n.depth, d);
-                    let (mn, mx) = brute(&vol, n.cell_lo, n.cell_hi);
-                    assert_eq!((n.min, n.max), (mn, mx), "dims {dims:?} node {n:?}");
+                    let (mn, mx, nan) = brute_nan(&vol, n.cell_lo, n.cell_hi);
+                    assert_eq!((n.min, n.max, n.has_nan), (mn, mx, nan), "dims {dims:?} node {n:?}");
+                    if nan {
+                        assert!(!matches!(n.classify(0.0), Class::Below | Class::Above));
+                    }
                     assert_eq!(tree.node(d, (n.ix, n.iy, n.iz)), Some(*n));
                     for a in 0..3 {
                         assert!(n.cell_lo[a] < n.cell_hi[a]);
@@ -463,6 +541,11 @@ mod tests {
                 total_leaf_cells = cells;
             }
             assert!(total_leaf_cells > 0);
+            for d in 0..=tree.max_depth() {
+                let a = tree.map_at_depth(d, |mn, mx, nan| (mn, mx, nan));
+                let b: Vec<_> = tree.nodes_at_depth(d).iter().map(|n| (n.min, n.max, n.has_nan)).collect();
+                assert_eq!(a, b);
+            }
             let root = tree.root();
             assert_eq!(root.bbox_min, vol.origin);
             assert_eq!(root.bbox_max, vol.bounds().1);
@@ -495,6 +578,7 @@ mod tests {
             iz: 0,
             min,
             max,
+            has_nan: false,
             cell_lo: [0; 3],
             cell_hi: [1; 3],
             bbox_min: [0.0; 3],
@@ -507,6 +591,11 @@ mod tests {
         assert_eq!(mk(0.0, 1.0).classify(1.0), Class::Straddles);
         assert_eq!(mk(f32::INFINITY, f32::NEG_INFINITY).classify(0.0), Class::Empty);
         assert_eq!(mk(2.0, 2.0).classify(2.0), Class::Straddles);
+        // a node with a NaN is never an occluder, but may hold surface
+        let nan = |min: f32, max: f32| NodeInfo { has_nan: true, ..mk(min, max) };
+        assert_eq!(nan(0.0, 1.0).classify(2.0), Class::Empty);
+        assert_eq!(nan(0.0, 1.0).classify(-0.5), Class::Empty);
+        assert_eq!(nan(0.0, 1.0).classify(0.5), Class::Straddles);
     }
 
     #[test]

@@ -1,6 +1,7 @@
-//! The isosurface passes: pipelines (iso.wgsl), their targets, and the three steps that record
-//! and submit them: the occlusion map ([`draw_map`]), the node test ([`test_nodes`]) and the lit
-//! surface ([`draw_surface`]). `super::render` decides what goes into them.
+//! The isosurface passes: pipelines (iso.wgsl), their targets, and the two steps that record and
+//! submit them: the occlusion map with the node test ([`march`]: a compute walk per pixel through
+//! the occluder depth's class grid, [`ClassGrid`]) and the lit surface ([`draw_surface`]).
+//! `super::render` decides what goes into them.
 
 use std::sync::Arc;
 
@@ -8,12 +9,9 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::octree::NodeInfo;
-use super::tetra::SurfacePatch;
+use super::march::SurfacePatch;
 use crate::error::{Error, Result};
-pub(super) use crate::gpu::layout::BoxInstance;
-use crate::gpu::passes::box_vertex_layout;
-use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
+use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::gpu::{map_err, GpuContext};
 use glam::DVec3;
 
@@ -30,23 +28,66 @@ pub(super) struct Targets {
     pub(super) height: u32,
     pub(super) color_tex: wgpu::Texture,
     pub(super) color: wgpu::TextureView,
-    pub(super) id: wgpu::TextureView,
     pub(super) depth_tex: wgpu::Texture,
     pub(super) depth: wgpu::TextureView,
-    pub(super) below: wgpu::TextureView,
-    pub(super) above: wgpu::TextureView,
-    pub(super) map_tex: wgpu::Texture,
-    pub(super) map: wgpu::TextureView,
+    /// The occlusion map: reverse-Z depth per pixel (row-major, row 0 = top), 0 = nothing proven.
+    pub(super) map: wgpu::Buffer,
 }
 
-/// Occluder boxes of one (isovalue, occluder depth), on the GPU.
-pub(super) struct Occluders {
-    pub(super) key: (u32, u32, [u64; 4]),
-    pub(super) below: Option<wgpu::Buffer>,
-    pub(super) above: Option<wgpu::Buffer>,
+/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl).
+pub(super) struct ClassGrid {
+    pub(super) key: (u32, u32),
+    pub(super) buffer: wgpu::Buffer,
+    pub(super) dims: [u32; 3],
     pub(super) n_below: u32,
     pub(super) n_above: u32,
+    pub(super) n_nan: u32,
 }
+
+/// Node classes of the map pass (iso.wgsl).
+pub(super) const CLASS_PASS: u32 = 0;
+pub(super) const CLASS_BELOW: u32 = 1;
+pub(super) const CLASS_ABOVE: u32 = 2;
+pub(super) const CLASS_NAN: u32 = 3;
+
+impl ClassGrid {
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word and uploads them.
+    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u32]) -> Self {
+        let mut words = vec![0u32; classes.len().div_ceil(16).max(1)];
+        let (mut n_below, mut n_above, mut n_nan) = (0, 0, 0);
+        for (i, &c) in classes.iter().enumerate() {
+            words[i / 16] |= c << ((i % 16) * 2);
+            match c {
+                CLASS_BELOW => n_below += 1,
+                CLASS_ABOVE => n_above += 1,
+                CLASS_NAN => n_nan += 1,
+                _ => {}
+            }
+        }
+        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_classes"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        Self { key, buffer, dims, n_below, n_above, n_nan }
+    }
+}
+
+/// Uniforms of the map pass and of the node test (iso.wgsl `MapParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(super) struct MapParams {
+    pub(super) inv_view_proj: [[f32; 4]; 4],
+    pub(super) lo: [f32; 4],
+    pub(super) hi: [f32; 4],
+    pub(super) node: [f32; 4],
+    pub(super) dims: [u32; 4],
+    pub(super) size: [u32; 4],
+    pub(super) occ_dims: [u32; 4],
+    pub(super) cull_dims: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<MapParams>() == 176);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 
@@ -61,77 +102,54 @@ impl Space {
         let r = DVec3::from_array(p) - self.origin;
         DVec3::new(r.x, r.y, r.z * self.z_scale)
     }
-    /// Box instance in render space, grown by `grow` (negative shrinks) world units per side.
-    pub(super) fn instance(&self, n: &NodeInfo, id: u32, grow: f64) -> BoxInstance {
-        let lo = self.point(n.bbox_min.map(|v| v - grow));
-        let hi = self.point(n.bbox_max.map(|v| v + grow));
-        let (lo, hi) = (lo.min(hi), lo.max(hi));
-        BoxInstance { lo: lo.as_vec3().to_array(), id, hi: hi.as_vec3().to_array(), _pad: 0 }
-    }
 }
 
 /// Bind-group layouts and pipelines of the isosurface passes.
 pub(super) struct IsoPasses {
     pub(super) globals_layout: wgpu::BindGroupLayout,
-    pub(super) ref_layout: wgpu::BindGroupLayout,
-    pub(super) test_layout: wgpu::BindGroupLayout,
-    pub(super) near_pipeline: wgpu::RenderPipeline,
-    pub(super) beyond_pipeline: wgpu::RenderPipeline,
-    pub(super) test_pipeline: wgpu::RenderPipeline,
+    pub(super) map_layout: wgpu::BindGroupLayout,
+    pub(super) map_pipeline: wgpu::ComputePipeline,
     pub(super) surf_pipeline: wgpu::RenderPipeline,
+}
+
+fn buffer_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BufferBindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
 }
 
 impl IsoPasses {
     pub(super) fn new(d: &wgpu::Device) -> Self {
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
-        let fs = wgpu::ShaderStages::FRAGMENT;
-        // Depth textures read as unfilterable float (see iso.wgsl: GLSL has no depth textureLoad).
-        let depth_tex_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: fs,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let vfc = vf | wgpu::ShaderStages::COMPUTE;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let uniform = wgpu::BufferBindingType::Uniform;
+        let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
         let globals_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("iso_globals"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: vf,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[buffer_entry(0, vfc, uniform)],
         });
-        let ref_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso_ref"),
-            entries: &[depth_tex_entry(0)],
-        });
-        let test_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("iso_test"),
+        let map_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("iso_map"),
             entries: &[
-                depth_tex_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                buffer_entry(0, cs, uniform),
+                buffer_entry(1, cs, ro),
+                buffer_entry(2, cs, rw),
+                buffer_entry(3, cs, rw),
+                buffer_entry(4, cs, rw),
             ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("iso.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(crate::gpu::passes::with_box_wgsl(include_str!("iso.wgsl")).into()),
+            source: wgpu::ShaderSource::Wgsl(include_str!("iso.wgsl").into()),
         });
         let pl = |label: &str, layouts: &[Option<&wgpu::BindGroupLayout>]| {
             d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -141,8 +159,7 @@ impl IsoPasses {
             })
         };
         let pl_globals = pl("iso_globals", &[Some(&globals_layout)]);
-        let pl_ref = pl("iso_ref", &[Some(&globals_layout), Some(&ref_layout)]);
-        let pl_test = pl("iso_test", &[Some(&globals_layout), Some(&test_layout)]);
+        let pl_map = pl("iso_map", &[Some(&globals_layout), Some(&map_layout)]);
         let depth_write = Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(true),
@@ -153,67 +170,19 @@ impl IsoPasses {
         // GL: the `*_gl` entry points use z / w as depth, for reverse-Z precision (iso.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
         let entry = |name: &'static str| if gl { format!("{name}_gl") } else { name.to_string() };
-        let (vs_box, fs_near, fs_beyond, fs_test) =
-            (entry("vs_box"), entry("fs_near"), entry("fs_beyond"), entry("fs_test"));
         let (vs_surf, fs_surf) = (entry("vs_surf"), entry("fs_surf"));
-        let box_vs = wgpu::VertexState {
-            module: &shader,
-            entry_point: Some(&vs_box),
-            compilation_options: Default::default(),
-            buffers: &[Some(box_vertex_layout())],
-        };
         let prim = |cull: Option<wgpu::Face>| wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
             cull_mode: cull,
             front_face: wgpu::FrontFace::Ccw,
             ..Default::default()
         };
-        let near_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_near"),
-            layout: Some(&pl_globals),
-            vertex: box_vs.clone(),
-            primitive: prim(None),
-            depth_stencil: depth_write.clone(),
-            multisample: Default::default(),
-            fragment: gl.then(|| wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_near),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let beyond_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_beyond"),
-            layout: Some(&pl_ref),
-            vertex: box_vs.clone(),
-            primitive: prim(None),
-            depth_stencil: depth_write.clone(),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_beyond),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let test_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("iso_test"),
-            layout: Some(&pl_test),
-            vertex: box_vs,
-            primitive: prim(Some(wgpu::Face::Back)),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some(&fs_test),
-                compilation_options: Default::default(),
-                targets: &[Some(ID_FORMAT.into())],
-            }),
-            multiview_mask: None,
+        let map_pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("iso_map"),
+            layout: Some(&pl_map),
+            module: &shader,
+            entry_point: Some("cs_map"),
+            compilation_options: Default::default(),
             cache: None,
         });
         const SURF_ATTRS: [wgpu::VertexAttribute; 2] = [
@@ -249,50 +218,33 @@ impl IsoPasses {
             multiview_mask: None,
             cache: None,
         });
-        Self { globals_layout, ref_layout, test_layout, near_pipeline, beyond_pipeline, test_pipeline, surf_pipeline }
+        Self { globals_layout, map_layout, map_pipeline, surf_pipeline }
     }
 }
 
 impl Targets {
-    /// Keeps `slot` holding targets of `width` × `height`.
-    pub(super) fn ensure<'a>(slot: &'a mut Option<Targets>, d: &wgpu::Device, width: u32, height: u32) -> &'a Targets {
-        if slot.as_ref().is_none_or(|t| (t.width, t.height) != (width, height)) {
-            let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
-            let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
-            let tb = wgpu::TextureUsages::TEXTURE_BINDING;
-            let cs = wgpu::TextureUsages::COPY_SRC;
-            let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
-            let id = tex("iso_id", ID_FORMAT, ra);
-            // Depth and the map are copied back, or read through a shader where they cannot be.
-            let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
-            let below = tex("iso_below", DEPTH_FORMAT, ra | tb);
-            let above = tex("iso_above", DEPTH_FORMAT, ra | tb);
-            let map_tex = tex("iso_map", DEPTH_FORMAT, ra | tb | cs);
-            let v = |t: &wgpu::Texture| t.create_view(&Default::default());
-            *slot = Some(Targets {
-                width,
-                height,
-                color: v(&color_tex),
-                color_tex,
-                id: v(&id),
-                depth: v(&depth_tex),
-                depth_tex,
-                below: v(&below),
-                above: v(&above),
-                map: v(&map_tex),
-                map_tex,
-            });
+    /// Keeps `slot` holding targets of `width` × `height`; true when it made new ones.
+    pub(super) fn ensure(slot: &mut Option<Targets>, d: &wgpu::Device, width: u32, height: u32) -> bool {
+        if slot.as_ref().is_some_and(|t| (t.width, t.height) == (width, height)) {
+            return false;
         }
-        slot.as_ref().unwrap()
+        let tex = |label: &str, format, usage| texture(d, label, width, height, format, usage);
+        let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let tb = wgpu::TextureUsages::TEXTURE_BINDING;
+        let cs = wgpu::TextureUsages::COPY_SRC;
+        let color_tex = tex("iso_color", COLOR_FORMAT, ra | cs);
+        // Depth is copied back, or read through a shader where it cannot be.
+        let depth_tex = tex("iso_depth", DEPTH_FORMAT, ra | tb | cs);
+        let map = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso_map"),
+            size: 4 * width as u64 * height as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let v = |t: &wgpu::Texture| t.create_view(&Default::default());
+        *slot = Some(Targets { width, height, color: v(&color_tex), color_tex, depth: v(&depth_tex), depth_tex, map });
+        true
     }
-}
-
-fn depth_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
-    Some(wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
-        stencil_ops: None,
-    })
 }
 
 fn pass<'e>(
@@ -313,80 +265,44 @@ fn pass<'e>(
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: if color.is_some() { &colors } else { &[] },
-        depth_stencil_attachment: depth.and_then(depth_attachment),
+        depth_stencil_attachment: depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
         timestamp_writes: None,
         occlusion_query_set: None,
         multiview_mask: None,
     })
 }
 
-/// Passes 1–3 of the occlusion map (see the module docs); waits for the GPU.
-pub(super) fn draw_map(
+/// The occlusion map and the node test (one compute pass, one invocation per pixel, see iso.wgsl):
+/// one submission, one read-back. Returns, per cull node (x fastest, then y, z; `n_nodes` of
+/// them), the pixels on which the node is in front of the map, and with `n_cells` > 0 the bits
+/// of the march cells entered (cell `i` is bit `i % 32` of word `i / 32`).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn march(
     ctx: &GpuContext,
     iso: &IsoPasses,
     tg: &Targets,
     globals_bg: &wgpu::BindGroup,
-    occ: &Occluders,
-) -> Result<()> {
+    grid: &ClassGrid,
+    params: &wgpu::Buffer,
+    n_nodes: usize,
+    n_cells: usize,
+) -> Result<(Vec<u32>, Vec<u32>)> {
     let d = &ctx.device;
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_map") });
-    for (view, buf, n) in [(&tg.below, &occ.below, occ.n_below), (&tg.above, &occ.above, occ.n_above)] {
-        let mut p = pass(&mut enc, "iso_nearest", None, Some(view));
-        if let Some(b) = buf {
-            p.set_pipeline(&iso.near_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            p.set_vertex_buffer(0, b.slice(..));
-            p.draw(0..36, 0..n);
-        }
-    }
-    let ref_bg = |v: &wgpu::TextureView| {
-        d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("iso_ref"),
-            layout: &iso.ref_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(v) }],
-        })
-    };
-    let (bg_below, bg_above) = (ref_bg(&tg.below), ref_bg(&tg.above));
-    {
-        let mut p = pass(&mut enc, "iso_map", None, Some(&tg.map));
-        if occ.n_below > 0 && occ.n_above > 0 {
-            p.set_pipeline(&iso.beyond_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            // Above boxes behind the nearest Below point, then Below boxes behind the nearest Above point.
-            p.set_bind_group(1, &bg_below, &[]);
-            p.set_vertex_buffer(0, occ.above.as_ref().unwrap().slice(..));
-            p.draw(0..36, 0..occ.n_above);
-            p.set_bind_group(1, &bg_above, &[]);
-            p.set_vertex_buffer(0, occ.below.as_ref().unwrap().slice(..));
-            p.draw(0..36, 0..occ.n_below);
-        }
-    }
-    ctx.queue.submit([enc.finish()]);
-    ctx.wait()?;
-    ctx.take_error()
-}
-
-/// Visible-pixel count of every box against the map (one submission and read-back).
-pub(super) fn test_nodes(
-    ctx: &GpuContext,
-    iso: &IsoPasses,
-    tg: &Targets,
-    globals_bg: &wgpu::BindGroup,
-    boxes: &[BoxInstance],
-) -> Result<Vec<u32>> {
-    if boxes.is_empty() {
-        return Ok(Vec::new());
-    }
-    let d = &ctx.device;
-    let size = 4 * boxes.len() as u64;
-    let inst = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("iso_test_boxes"),
-        contents: bytemuck::cast_slice(boxes),
-        usage: wgpu::BufferUsages::VERTEX,
+    let words = n_cells.div_ceil(32);
+    let size = 4 * (n_nodes.max(1) + words) as u64;
+    let cells = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("iso_cells_seen"),
+        size: 4 * words.max(1) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
     });
     let counts = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_counts"),
-        size,
+        size: 4 * n_nodes.max(1) as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -397,44 +313,59 @@ pub(super) fn test_nodes(
         mapped_at_creation: false,
     });
     let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("iso_test"),
-        layout: &iso.test_layout,
+        label: Some("iso_map"),
+        layout: &iso.map_layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&tg.map) },
-            wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: counts.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: cells.as_entire_binding() },
         ],
     });
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_test") });
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
     enc.clear_buffer(&counts, 0, None);
+    enc.clear_buffer(&cells, 0, None);
     {
-        let mut p = pass(&mut enc, "iso_test", Some(&tg.id), None);
-        p.set_pipeline(&iso.test_pipeline);
+        let mut p =
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_march"), timestamp_writes: None });
+        p.set_pipeline(&iso.map_pipeline);
         p.set_bind_group(0, globals_bg, &[]);
         p.set_bind_group(1, &bg, &[]);
-        p.set_vertex_buffer(0, inst.slice(..));
-        p.draw(0..36, 0..boxes.len() as u32);
+        p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
     }
-    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, size);
+    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, 4 * n_nodes.max(1) as u64);
+    if words > 0 {
+        enc.copy_buffer_to_buffer(&cells, 0, &rb, 4 * n_nodes.max(1) as u64, 4 * words as u64);
+    }
     ctx.queue.submit([enc.finish()]);
     rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     ctx.wait()?;
     ctx.take_error()?;
     let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
-    Ok(v)
+    let n = n_nodes.max(1);
+    Ok((v[..n_nodes].to_vec(), v[n..n + words].to_vec()))
 }
 
-/// Uploads the patches (render space, f32) and draws them lit; waits for the GPU.
+/// Uploads the patches (render space, f32) and draws them lit; waits for the GPU. With `ranges`,
+/// only the triangles `[a, b)` of each patch's ranges are drawn (the visible cells').
 pub(super) fn draw_surface(
     ctx: &GpuContext,
     iso: &IsoPasses,
     globals_bg: &wgpu::BindGroup,
     tg: &Targets,
     patches: &[Arc<SurfacePatch>],
+    ranges: Option<&[Vec<[u32; 2]>]>,
     space: &Space,
 ) -> Result<(u64, u64)> {
     let d = &ctx.device;
     let nv: usize = patches.iter().map(|p| p.positions.len()).sum();
-    let nt: usize = patches.iter().map(|p| p.triangles.len()).sum();
+    let tri_count = |i: usize| match ranges {
+        Some(r) => r[i].iter().map(|[a, b]| (b - a) as usize).sum(),
+        None => patches[i].triangles.len(),
+    };
+    let counts: Vec<usize> = (0..patches.len()).map(tri_count).collect();
+    let nt: usize = counts.iter().sum();
     let max = ctx.limits.max_buffer_size;
     if (nv as u64) * 24 > max || (nt as u64) * 12 > max {
         return Err(Error::Device(format!(
@@ -462,23 +393,34 @@ pub(super) fn draw_surface(
         }
         let mut ichunks: Vec<&mut [[u32; 3]]> = Vec::with_capacity(patches.len());
         let mut rest = idx.as_mut_slice();
-        for p in patches {
-            let (h, t) = rest.split_at_mut(p.triangles.len());
+        for &n in &counts {
+            let (h, t) = rest.split_at_mut(n);
             ichunks.push(h);
             rest = t;
         }
-        vchunks.into_par_iter().zip(ichunks).zip(patches.par_iter().zip(&voff)).for_each(|((vc, ic), (p, &base))| {
-            for (k, v) in vc.iter_mut().enumerate() {
-                let q = space.point(p.positions[k]);
-                let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
-                // Normals transform with the inverse transpose of the exaggeration.
-                *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
-            }
-            let base = base as u32;
-            for (t, tri) in ic.iter_mut().zip(&p.triangles) {
-                *t = [tri[0] + base, tri[1] + base, tri[2] + base];
-            }
-        });
+        let work: Vec<(usize, &Arc<SurfacePatch>)> = patches.iter().enumerate().collect();
+        vchunks.into_par_iter().zip(ichunks).zip(work.par_iter().zip(&voff)).for_each(
+            |((vc, ic), (&(i, p), &base))| {
+                for (k, v) in vc.iter_mut().enumerate() {
+                    let q = space.point(p.positions[k]);
+                    let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
+                    // Normals transform with the inverse transpose of the exaggeration.
+                    *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
+                }
+                let base = base as u32;
+                let mut out = ic.iter_mut();
+                let mut put = |tris: &[[u32; 3]]| {
+                    // tris first: zip pulls from its first iterator before it finds the second empty
+                    for (tri, t) in tris.iter().zip(&mut out) {
+                        *t = [tri[0] + base, tri[1] + base, tri[2] + base];
+                    }
+                };
+                match ranges {
+                    Some(r) => r[i].iter().for_each(|&[a, b]| put(&p.triangles[a as usize..b as usize])),
+                    None => put(&p.triangles),
+                }
+            },
+        );
     }
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
     let (vb, ib) = if nt > 0 {

@@ -187,6 +187,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("nodes_straddling", s.nodes_straddling)?;
     st.set_item("occluder_boxes_below", s.occluder_boxes_below)?;
     st.set_item("occluder_boxes_above", s.occluder_boxes_above)?;
+    st.set_item("occluder_nodes_nan", s.occluder_nodes_nan)?;
     st.set_item("occluder_depth", s.occluder_depth)?;
     st.set_item("cull_depth", s.cull_depth)?;
     st.set_item("max_depth", s.max_depth)?;
@@ -199,6 +200,9 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("surface_ms", s.surface_ms)?;
     st.set_item("total_ms", s.total_ms)?;
     st.set_item("readback_ms", s.readback_ms)?;
+    st.set_item("setup_ms", s.setup_ms)?;
+    st.set_item("submissions", s.submissions)?;
+    st.set_item("readbacks", s.readbacks)?;
     st.set_item("cache_bytes", s.cache_bytes)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;

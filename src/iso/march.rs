@@ -1,40 +1,41 @@
-//! Crack-free isosurface extraction by marching tetrahedra.
+//! Crack-free isosurface extraction by marching cubes, per box of cells.
 //!
-//! Variant: every cell is split into the 6 tetrahedra of the Kuhn (Freudenthal)
-//! decomposition, all sharing the main diagonal from corner `(0,0,0)` to
-//! `(1,1,1)`: for each permutation `(a,b,c)` of the axes the tetrahedron is
-//! `0, e_a, e_a+e_b, e_a+e_b+e_c`. Each cube face is then cut along the diagonal
-//! from its lowest to its highest corner, the same cut the neighbouring cell
-//! makes, so the triangulation is consistent across every shared face with no
-//! ambiguity to resolve. A tetrahedron contributes one triangle (1 or 3 corners
-//! above) or a quad split into two (2 corners above).
+//! Each cell is looked up in a generated case table ([`cases`]): its corner signs plus, for every
+//! ambiguous face (diagonal corners of equal sign, the two diagonals opposite), the *face-centre
+//! decider*, the sign of the mean of the face's four samples. The decision depends on the face's
+//! samples alone, so the two cells that share a face draw the same contour segments on it, and
+//! every triangle edge lying in a face is a contour segment: patches of neighbouring cells, of
+//! neighbouring octree nodes, and of parallel chunks meet edge to edge with no crack (a closed
+//! field gives a closed surface; the tests check every edge is shared by exactly two triangles).
+//! One loop of n crossing points gives n - 2 triangles, the classic marching-cubes count.
 //!
-//! Surface vertices lie on the 19 edges of the decomposition (12 cube edges,
-//! 6 face diagonals, 1 main diagonal). Every such edge goes from a sample `p` to
-//! `p + d` with `d` in `{0,1}^3`, so `p` is always the endpoint with the lower
-//! linear index. The vertex is computed from the edge alone, always interpolating
-//! from `p` towards `p + d` in `f64`, so two patches that share an edge produce
-//! bit-identical positions and normals.
+//! Surface vertices lie on the 12 cube edges. Every such edge goes from a sample `p` to `p + e`
+//! with `e` a unit axis step, so `p` is always the endpoint with the lower linear index. The
+//! vertex is computed from the edge alone, always interpolating from `p` towards `p + e` in
+//! `f64`, so two patches that share an edge produce bit-identical positions and normals. A vertex
+//! is the linear interpolation of the isovalue along its edge, where the trilinear interpolant
+//! of the cell equals the edge's linear interpolant: every vertex lies on the trilinear surface
+//! `f = w` (up to rounding; tested).
 //!
 //! Conventions:
 //! * a sample is *above* when `value >= w` (a sample exactly at `w` is above);
-//! * cells touching a NaN sample produce nothing;
+//! * cells touching a NaN sample produce nothing (NaN is outside the domain);
 //! * normals are the normalized gradient (central differences, one-sided at the
 //!   border or next to NaN), interpolated along the edge, so they point towards
 //!   *increasing* values; triangles wind counter-clockwise seen from that side
 //!   (the right-hand normal of `(p0,p1,p2)` points towards increasing values);
 //! * a sample exactly at `w` may give zero-area triangles (several edges meet at
 //!   that sample). They are kept: they draw nothing and keep patches consistent.
-//!
-//! The 256-case cell table is generated at first use (`OnceLock`) from the
-//! tetrahedra above; no table is hand-written.
 
 use std::collections::{HashMap, HashSet};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use super::octree::NodeInfo;
+use cases::{cases, face_centre_above, face_corners, CENTRE, EDGES};
+
+pub(crate) mod cases;
 use super::Volume;
 
 /// Triangles of one box of cells. Positions are grid-frame coordinates (world coordinates of an
@@ -46,6 +47,10 @@ pub struct SurfacePatch {
     pub normals: Vec<[f32; 3]>,
     /// Indices into `positions`/`normals`.
     pub triangles: Vec<[u32; 3]>,
+    /// The triangles of the box's `c`-th cell (x fastest, then y, z) are
+    /// `triangles[cell_starts[c]..cell_starts[c + 1]]` (cells in that order; one entry more than
+    /// cells). Empty for a patch that is no box's (`concat`, `default`).
+    pub cell_starts: Vec<u32>,
 }
 
 impl SurfacePatch {
@@ -75,106 +80,12 @@ impl SurfacePatch {
     }
 }
 
-// ---------------------------------------------------------------------------
-// Generated tables
-
-struct Tables {
-    /// Edge id -> (lower corner, direction bits); corner bit 0 = x, 1 = y, 2 = z.
-    edges: [(u8, u8); 19],
-    /// Triangles of case `m` are `tris[start[m]..start[m+1]]`, as edge ids.
-    start: [u16; 257],
-    tris: Vec<[u8; 3]>,
-}
-
-fn tables() -> &'static Tables {
-    static T: OnceLock<Tables> = OnceLock::new();
-    T.get_or_init(build_tables)
-}
-
-fn corner_pos(c: u8) -> [f64; 3] {
-    [(c & 1) as f64, ((c >> 1) & 1) as f64, ((c >> 2) & 1) as f64]
-}
-
-fn build_tables() -> Tables {
-    // All comparable corner pairs lo ⊂ hi: exactly the 19 Kuhn edges.
-    let mut edges = [(0u8, 0u8); 19];
-    let mut n = 0;
-    for hi in 0u8..8 {
-        for lo in 0u8..8 {
-            if lo != hi && lo & hi == lo {
-                edges[n] = (lo, hi ^ lo);
-                n += 1;
-            }
-        }
-    }
-    assert_eq!(n, 19);
-    let edge_id = |a: u8, b: u8| -> u8 {
-        let (lo, hi) = if a & b == a { (a, b) } else { (b, a) };
-        assert_eq!(lo & hi, lo, "tetrahedron edge must join comparable corners");
-        edges.iter().position(|&e| e == (lo, hi ^ lo)).unwrap() as u8
-    };
-    let mid = |a: u8, b: u8| -> [f64; 3] {
-        let (pa, pb) = (corner_pos(a), corner_pos(b));
-        [0, 1, 2].map(|i| 0.5 * (pa[i] + pb[i]))
-    };
-
-    let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
-    let tets: Vec<[u8; 4]> = perms
-        .iter()
-        .map(|p| {
-            let a = 1u8 << p[0];
-            let b = a | (1u8 << p[1]);
-            [0, a, b, 7]
-        })
-        .collect();
-
-    let mut start = [0u16; 257];
-    let mut tris = Vec::new();
-    for (m, st) in start.iter_mut().enumerate().take(256) {
-        *st = tris.len() as u16;
-        for t in &tets {
-            let above: Vec<u8> = t.iter().copied().filter(|&c| (m >> c) & 1 == 1).collect();
-            let below: Vec<u8> = t.iter().copied().filter(|&c| (m >> c) & 1 == 0).collect();
-            // polygon as a cycle of (corner, corner) edges
-            let poly: Vec<(u8, u8)> = match above.len() {
-                1 => below.iter().map(|&o| (above[0], o)).collect(),
-                3 => above.iter().map(|&o| (below[0], o)).collect(),
-                2 => vec![(above[0], below[0]), (above[0], below[1]), (above[1], below[1]), (above[1], below[0])],
-                _ => continue,
-            };
-            let ca = centroid(&above.iter().map(|&c| corner_pos(c)).collect::<Vec<_>>());
-            for f in 1..poly.len() - 1 {
-                let mut tri = [poly[0], poly[f], poly[f + 1]];
-                let p = tri.map(|(a, b)| mid(a, b));
-                let nrm = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-                let toward_above = sub(ca, centroid(&p));
-                let s = dot(nrm, toward_above);
-                assert!(s.abs() > 1e-9);
-                if s < 0.0 {
-                    tri.swap(1, 2);
-                }
-                tris.push(tri.map(|(a, b)| edge_id(a, b)));
-            }
-        }
-    }
-    start[256] = tris.len() as u16;
-    Tables { edges, start, tris }
-}
-
-fn centroid(p: &[[f64; 3]]) -> [f64; 3] {
-    let n = p.len() as f64;
-    [0, 1, 2].map(|i| p.iter().map(|q| q[i]).sum::<f64>() / n)
-}
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
 // ---------------------------------------------------------------------------
 // Extraction
 
@@ -226,6 +137,19 @@ fn edge_vertex(vol: &Volume, w: f32, p: [usize; 3], q: [usize; 3], ga: [f64; 3],
 
 const NONE: u32 = u32::MAX;
 
+/// Appends the centroid of the vertices `ids` (normal: their normals' normalized mean) and returns
+/// its id.
+fn centroid_vertex(patch: &mut SurfacePatch, ids: &[u32]) -> u32 {
+    let n = ids.len() as f64;
+    let pos = [0, 1, 2].map(|a| ids.iter().map(|&i| patch.positions[i as usize][a]).sum::<f64>() / n);
+    let g = [0, 1, 2].map(|a| ids.iter().map(|&i| patch.normals[i as usize][a] as f64).sum::<f64>());
+    let len = dot(g, g).sqrt();
+    let nrm = if len > 0.0 && len.is_finite() { g.map(|x| (x / len) as f32) } else { patch.normals[ids[0] as usize] };
+    patch.positions.push(pos);
+    patch.normals.push(nrm);
+    (patch.positions.len() - 1) as u32
+}
+
 /// Lazily computed sample gradients of two consecutive sample layers.
 struct GradLayers {
     sx: usize,
@@ -267,13 +191,13 @@ struct SerialOut {
 
 /// Single-threaded extraction of cells `lo..hi` (already clamped, non-empty).
 fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_planes: bool) -> SerialOut {
-    let tb = tables();
+    let tb = cases();
     let sx = hi[0] - lo[0] + 1;
     let sy = hi[1] - lo[1] + 1;
     let plane_len = sx * sy;
-    let mut plane_a = vec![NONE; 3 * plane_len]; // in-plane edges of layer k
-    let mut plane_b = vec![NONE; 3 * plane_len]; // in-plane edges of layer k+1
-    let mut zedges = vec![NONE; 4 * plane_len]; // edges from layer k to k+1
+    let mut plane_a = vec![NONE; 2 * plane_len]; // x and y edges of layer k
+    let mut plane_b = vec![NONE; 2 * plane_len]; // x and y edges of layer k+1
+    let mut zedges = vec![NONE; plane_len]; // z edges from layer k to k+1
     let mut grads = GradLayers::new(sx, sy);
     let mut bottom = Vec::new();
     let mut patch = SurfacePatch::default();
@@ -291,47 +215,65 @@ fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_pla
         for j in lo[1]..hi[1] {
             let row = vol.index(0, j, k);
             for i in lo[0]..hi[0] {
+                patch.cell_starts.push(patch.triangles.len() as u32);
                 let base = row + i;
                 let mut mask = 0usize;
                 let mut nan = false;
-                for (n, o) in offs.iter().enumerate() {
-                    let x = v[base + o];
+                let c = offs.map(|o| v[base + o]);
+                for (n, &x) in c.iter().enumerate() {
                     nan |= x.is_nan();
                     mask |= ((x >= w) as usize) << n;
                 }
                 if nan || mask == 0 || mask == 255 {
                     continue;
                 }
-                let (li, lj) = (i - lo[0], j - lo[1]);
-                for tri in &tb.tris[tb.start[mask] as usize..tb.start[mask + 1] as usize] {
-                    let mut out = [0u32; 3];
-                    for (s, &e) in tri.iter().enumerate() {
-                        let (lc, d) = tb.edges[e as usize];
-                        let px = li + (lc & 1) as usize;
-                        let py = lj + ((lc >> 1) & 1) as usize;
-                        let pz = (lc >> 2) as usize;
-                        let cell = py * sx + px;
-                        let slot = if pz != 0 {
-                            &mut plane_b[3 * cell + d as usize - 1]
-                        } else if d & 4 != 0 {
-                            &mut zedges[4 * cell + d as usize - 4]
-                        } else {
-                            &mut plane_a[3 * cell + d as usize - 1]
-                        };
-                        if *slot == NONE {
-                            let (qx, qy, qz) =
-                                (px + (d & 1) as usize, py + ((d >> 1) & 1) as usize, pz + ((d >> 2) & 1) as usize);
-                            let p = [lo[0] + px, lo[1] + py, k + pz];
-                            let q = [lo[0] + qx, lo[1] + qy, k + qz];
-                            let ga = grads.get(vol, px, py, pz, p);
-                            let gb = grads.get(vol, qx, qy, qz, q);
-                            let (pos, nrm) = edge_vertex(vol, w, p, q, ga, gb);
-                            *slot = patch.positions.len() as u32;
-                            patch.positions.push(pos);
-                            patch.normals.push(nrm);
+                let mut case = mask;
+                let amb = tb.ambiguous[mask];
+                if amb != 0 {
+                    for f in 0..6 {
+                        if (amb >> f) & 1 == 1 && face_centre_above(face_corners(f).map(|q| c[q as usize]), w) {
+                            case |= 1 << (8 + f);
                         }
-                        out[s] = *slot;
                     }
+                }
+                let (li, lj) = (i - lo[0], j - lo[1]);
+                let mut at = |e: u8, patch: &mut SurfacePatch| -> u32 {
+                    let (lc, d) = EDGES[e as usize];
+                    let px = li + (lc & 1) as usize;
+                    let py = lj + ((lc >> 1) & 1) as usize;
+                    let pz = (lc >> 2) as usize;
+                    let cell = py * sx + px;
+                    let slot = if pz != 0 {
+                        &mut plane_b[2 * cell + (d >> 1) as usize]
+                    } else if d == 4 {
+                        &mut zedges[cell]
+                    } else {
+                        &mut plane_a[2 * cell + (d >> 1) as usize]
+                    };
+                    if *slot == NONE {
+                        let (qx, qy, qz) =
+                            (px + (d & 1) as usize, py + ((d >> 1) & 1) as usize, pz + ((d >> 2) & 1) as usize);
+                        let p = [lo[0] + px, lo[1] + py, k + pz];
+                        let q = [lo[0] + qx, lo[1] + qy, k + qz];
+                        let ga = grads.get(vol, px, py, pz, p);
+                        let gb = grads.get(vol, qx, qy, qz, q);
+                        let (pos, nrm) = edge_vertex(vol, w, p, q, ga, gb);
+                        *slot = patch.positions.len() as u32;
+                        patch.positions.push(pos);
+                        patch.normals.push(nrm);
+                    }
+                    *slot
+                };
+                // The rare loops fanned about their centroid: a vertex of this cell alone.
+                let mut centre = [NONE; 4];
+                if tb.has_centre[case] {
+                    for (c, lp) in centre.iter_mut().zip(tb.centres(case)) {
+                        let ids: Vec<u32> = lp.iter().map(|&e| at(e, &mut patch)).collect();
+                        *c = centroid_vertex(&mut patch, &ids);
+                    }
+                }
+                for tri in &tb.tris[tb.start[case] as usize..tb.start[case + 1] as usize] {
+                    let out = tri.map(|e| if e < CENTRE { at(e, &mut patch) } else { centre[(e - CENTRE) as usize] });
                     patch.triangles.push(out);
                 }
             }
@@ -341,6 +283,7 @@ fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_pla
         }
         std::mem::swap(&mut plane_a, &mut plane_b);
     }
+    patch.cell_starts.push(patch.triangles.len() as u32);
     SerialOut { patch, bottom, top: if keep_planes { plane_a } else { Vec::new() } }
 }
 
@@ -435,10 +378,20 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     let own_lens: Vec<usize> = numberings.iter().map(|nb| nb.own).collect();
     let tri_lens: Vec<usize> = parts.iter().map(|p| p.patch.triangles.len()).collect();
 
+    // Cell order is chunk order: each chunk's starts, offset by the triangles before it.
+    let mut cell_starts = Vec::with_capacity((hi[0] - lo[0]) * (hi[1] - lo[1]) * layers + 1);
+    let mut tri_base = 0u32;
+    for p in &parts {
+        let s = &p.patch.cell_starts;
+        cell_starts.extend(s[..s.len() - 1].iter().map(|&v| v + tri_base));
+        tri_base += p.patch.triangles.len() as u32;
+    }
+    cell_starts.push(tri_base);
     let mut out = SurfacePatch {
         positions: vec![[0.0; 3]; total],
         normals: vec![[0.0; 3]; total],
         triangles: vec![[0; 3]; tri_lens.iter().sum()],
+        cell_starts,
     };
     let pos_parts = split_lengths(&mut out.positions, &own_lens);
     let nrm_parts = split_lengths(&mut out.normals, &own_lens);
@@ -495,6 +448,7 @@ pub fn patch_bytes(p: &SurfacePatch) -> usize {
         + p.positions.capacity() * std::mem::size_of::<[f64; 3]>()
         + p.normals.capacity() * std::mem::size_of::<[f32; 3]>()
         + p.triangles.capacity() * std::mem::size_of::<[u32; 3]>()
+        + p.cell_starts.capacity() * 4
 }
 
 struct Entry {
@@ -568,6 +522,7 @@ impl PatchCache {
                 p.positions.shrink_to_fit();
                 p.normals.shrink_to_fit();
                 p.triangles.shrink_to_fit();
+                p.cell_starts.shrink_to_fit();
                 (patch_key(w, n), Arc::new(p))
             })
             .collect();

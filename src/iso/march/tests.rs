@@ -1,4 +1,4 @@
-//! Tests of the marching-tetrahedra extraction and its patch cache.
+//! Tests of the marching-cubes extraction and its patch cache.
 
 use super::super::octree::MinMaxOctree;
 use super::super::{pesco_synthetic, sphere_field};
@@ -7,6 +7,15 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use crate::TestRng as Lcg;
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn centroid(p: &[[f64; 3]]) -> [f64; 3] {
+    let n = p.len() as f64;
+    [0, 1, 2].map(|i| p.iter().map(|q| q[i]).sum::<f64>() / n)
+}
 
 /// Uniform f32 in [0, 1) from the top 24 bits.
 fn unit(rng: &mut Lcg) -> f32 {
@@ -94,39 +103,6 @@ fn area(patch: &SurfacePatch) -> f64 {
 
 fn full(vol: &Volume, w: f32) -> SurfacePatch {
     extract(vol, w, [0; 3], [u32::MAX; 3])
-}
-
-#[test]
-fn table_is_sane() {
-    let t = tables();
-    assert_eq!(t.start[0], t.start[1]);
-    assert_eq!(t.start[255], t.start[256]);
-    // complementary cases cut the same edges, with opposite orientation
-    let area_vec = |m: usize| {
-        let mut e: Vec<u8> = Vec::new();
-        let mut n = [0.0; 3];
-        for tri in &t.tris[t.start[m] as usize..t.start[m + 1] as usize] {
-            e.extend_from_slice(tri);
-            let p = tri.map(|id| {
-                let (lo, d) = t.edges[id as usize];
-                let (a, b) = (corner_pos(lo), corner_pos(lo | d));
-                [0, 1, 2].map(|i| 0.5 * (a[i] + b[i]))
-            });
-            let c = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-            n = [0, 1, 2].map(|i| n[i] + c[i]);
-        }
-        e.sort();
-        e.dedup();
-        (e, n)
-    };
-    for m in 0..256usize {
-        let (ea, na) = area_vec(m);
-        let (eb, nb) = area_vec(255 - m);
-        assert_eq!(ea, eb);
-        assert!((0..3).all(|i| (na[i] + nb[i]).abs() < 1e-12));
-    }
-    // at most 12 triangles per cell (6 tets x 2)
-    assert!((0..256).all(|m| t.start[m + 1] - t.start[m] <= 12));
 }
 
 #[test]
@@ -344,5 +320,95 @@ fn timing_pesco() {
             tree.max_depth().saturating_sub(4),
             t_nodes
         );
+    }
+}
+
+/// A random field (uniform in [-1, 1)) whose border samples are 1: its isosurface at 0 is closed
+/// and full of ambiguous faces.
+fn random_closed(rng: &mut Lcg, n: usize) -> Volume {
+    let v: Vec<f32> = (0..n * n * n)
+        .map(|k| {
+            let (i, j, l) = (k % n, (k / n) % n, k / (n * n));
+            if [i, j, l].iter().any(|&c| c == 0 || c == n - 1) {
+                1.0
+            } else {
+                2.0 * unit(rng) - 1.0
+            }
+        })
+        .collect();
+    Volume::new(v.into(), (n, n, n), [0.0; 3], [1.0, 0.5, 2.0]).unwrap()
+}
+
+#[test]
+fn random_fields_are_watertight_across_nodes_and_chunks() {
+    let mut rng = Lcg(2024);
+    for n in [6usize, 11, 34] {
+        let vol = random_closed(&mut rng, n);
+        let whole = full(&vol, 0.0);
+        assert_closed_oriented(&whole);
+        let tree = MinMaxOctree::build(&vol);
+        for d in 0..=tree.max_depth() {
+            let joined = SurfacePatch::concat(&extract_nodes(&vol, 0.0, &tree.straddling_at_depth(0.0, d)));
+            assert_closed_oriented(&joined);
+            assert_eq!(tri_set(&joined), tri_set(&whole), "n {n} depth {d}");
+        }
+    }
+}
+
+#[test]
+fn vertices_lie_on_the_trilinear_isosurface() {
+    let mut rng = Lcg(5);
+    for vol in [pesco_synthetic(23), random_closed(&mut rng, 12)] {
+        let w = 0.1f32;
+        let p = full(&vol, w);
+        assert!(!p.is_empty());
+        let (mut on_edges, mut scale) = (0, 0.0f64);
+        for x in vol.values.iter() {
+            scale = scale.max((*x as f64 - w as f64).abs());
+        }
+        for q in &p.positions {
+            let g = [0, 1, 2].map(|a| (q[a] - vol.origin[a]) / vol.spacing[a]);
+            let c = [0, 1, 2].map(|a| (g[a].floor() as usize).min(vol.cells()[a] - 1));
+            let t = [0, 1, 2].map(|a| g[a] - c[a] as f64);
+            // only edge vertices (two coordinates on grid lines); loop centroids are not on it
+            if t.iter().filter(|&&x| x.abs() < 1e-9 || (x - 1.0).abs() < 1e-9).count() < 2 {
+                continue;
+            }
+            on_edges += 1;
+            let mut f = 0.0;
+            for corner in 0..8usize {
+                let b = [corner & 1, (corner >> 1) & 1, corner >> 2];
+                let wgt: f64 = (0..3).map(|a| if b[a] == 1 { t[a] } else { 1.0 - t[a] }).product();
+                f += wgt * vol.get(c[0] + b[0], c[1] + b[1], c[2] + b[2]) as f64;
+            }
+            // linear interpolation along the edge in f64 from f32 samples: rounding only
+            assert!((f - w as f64).abs() <= 1e-9 * scale.max(1.0), "{f} at {q:?}");
+        }
+        assert!(on_edges as f64 > 0.99 * p.vertex_count() as f64);
+    }
+}
+
+#[test]
+fn cell_starts_index_each_cells_triangles() {
+    let vol = pesco_synthetic(41);
+    // a small box (serial) and the whole volume (parallel z-chunks)
+    for (lo, hi) in [([3u32, 5, 7], [17u32, 12, 30]), ([0; 3], [40; 3])] {
+        let p = extract(&vol, 0.0, lo, hi);
+        let n = [0, 1, 2].map(|a| (hi[a] - lo[a]) as usize);
+        assert_eq!(p.cell_starts.len(), n[0] * n[1] * n[2] + 1);
+        assert_eq!(*p.cell_starts.last().unwrap() as usize, p.triangle_count());
+        assert!(p.cell_starts.windows(2).all(|w| w[0] <= w[1]));
+        for (c, w) in p.cell_starts.windows(2).enumerate() {
+            let cell = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+            for t in &p.triangles[w[0] as usize..w[1] as usize] {
+                for &v in t {
+                    let q = p.positions[v as usize];
+                    for a in 0..3 {
+                        let g = (q[a] - vol.origin[a]) / vol.spacing[a] - lo[a] as f64 - cell[a] as f64;
+                        assert!((-1e-9..=1.0 + 1e-9).contains(&g), "cell {cell:?} vertex {q:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -1,0 +1,36 @@
+"""``python -m geocull bench --scene iso`` on a tiny configuration: rows side by side, implicit == none."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+
+def test_bench_iso_tiny_json(tmp_path):
+    pytest.importorskip("pyvista")
+    out = tmp_path / "bench_iso.json"
+    env = dict(os.environ, GEOCULL_BENCH_TINY="1", VTK_DEFAULT_OPENGL_WINDOW="vtkEGLRenderWindow")
+    p = subprocess.run(
+        [sys.executable, "-m", "geocull", "bench", "--scene", "iso", "--quick", "--json", str(out)],
+        capture_output=True, text=True, env=env, timeout=300,
+    )
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert "bench[iso]" in p.stderr and "x none" in p.stdout
+    d = json.loads(out.read_text())
+    rows, s = d["rows"], d["summary"]
+    assert s["mode"] == "tiny" and s["views"] == 1 and s["n"] == 24
+    keys = [(r["method"], r["temperature"]) for r in rows]
+    assert sorted(keys) == sorted((m, t) for m in ("none", "implicit", "pyvista") for t in ("cold", "warm"))
+    for r in rows:
+        assert r["total_ms"] > 0 and r["ratio_to_none"] > 0 and r["faces"] > 0
+        if r["method"] == "implicit":
+            assert r["differing_pixel_fraction"] == 0.0  # conservative
+            assert r["faces"] <= rows[keys.index(("none", r["temperature"]))]["faces"]
+            assert r["readbacks"] == 1
+        if r["method"] == "pyvista":  # VTK flying edges: the same surface within 2 %
+            assert abs(r["faces_ratio"] - 1.0) < 0.02
+    assert s["per_method"]["pesco/none_cold"]["ratio_to_none"] == 1.0
