@@ -22,6 +22,10 @@ adapter. ``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
 ``--scene iso``: isosurfaces instead (:mod:`geocull.bench_iso`): geocull none / implicit, cold and
 warm, against PyVista flying edges + render, on the Pesco field and real volumes from PyVista's wheel.
 
+``--scene grid``: a faulted reservoir grid (:mod:`geocull.bench_grid`): build time and memory, the
+cell-merging levels, and each ``grid_lod`` mode against level 0 and PyVista. ``--scene seismic``: the
+scene with three slices and a lens (:mod:`geocull.bench_seismic`).
+
 ``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
 ``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
 """
@@ -77,8 +81,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--size", type=int, help="samples per horizon side (default 418; quick 120)")
     p.add_argument("--no-pyvista", action="store_true", help="skip the PyVista rows")
     p.add_argument("--no-horizon", action="store_true", help="skip CPU horizon culling")
-    p.add_argument("--scene", choices=("gullfaks", "iso"), default="gullfaks",
-                   help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso)")
+    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic"), default="gullfaks",
+                   help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso); grid: a "
+                   "faulted reservoir grid (geocull.bench_grid); seismic: the gullfaks scene with slices and a lens "
+                   "(geocull.bench_seismic)")
+    p.add_argument("--grid-n", type=int, help="grid: cells along i and j (default 100; quick 30)")
+    p.add_argument("--grid-nk", type=int, help="grid: layers (default 100; quick 20)")
     p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
                    "(default all; quick: pesco)")
     p.add_argument("--iso-n", type=int, help="iso: samples per axis of the Pesco field (default 128; quick 32)")
@@ -120,6 +128,15 @@ def _config(a: argparse.Namespace) -> dict[str, Any]:
                    iso_volumes=[v.strip() for v in a.iso_volumes.split(",")] if a.iso_volumes else
                    (["pesco"] if small else list(VOLUMES)),
                    occluder_depth=a.occluder_depth, cull_depth=a.cull_depth)
+    elif a.scene == "grid":
+        small = mode != "full"
+        cfg.update(grid_n=a.grid_n or (12 if mode == "tiny" else 30 if small else 100),
+                   grid_nk=a.grid_nk or (6 if mode == "tiny" else 20 if small else 100),
+                   blocks=(8, 8) if small else (16, 16))
+    elif a.scene == "seismic":
+        small = mode != "full"
+        cfg.update(cube=(24, 24, 16) if mode == "tiny" else (60, 60, 40) if small else (200, 200, 120),
+                   views=1 if mode == "tiny" else 3 if small else 7)
     return cfg
 
 
@@ -470,6 +487,12 @@ def main(argv: list[str] | None = None) -> int:
 
         result = bench_iso.run(cfg)
         print(bench_iso.format_table(result), flush=True)
+    elif cfg["scene"] in ("grid", "seismic"):
+        import importlib
+
+        mod = importlib.import_module(f".bench_{cfg['scene']}", __package__)
+        result = mod.run(cfg)
+        print(mod.format_table(result), flush=True)
     else:
         result = run(cfg)
         print(format_table(result), flush=True)
