@@ -160,3 +160,26 @@ def test_a_slice_matches_pyvista_slice_orthogonal(renderer_small):
             want = np.array(lut(min(int(t * 256), 255))[:3]) * shade[row, col]
             got = ours.image[row, col, :3] / 255
             assert np.abs(got - want).max() <= 3 / 255, (j, k, got, want)
+
+
+def test_a_salt_body_under_a_horizon_is_culled_by_three_pass(renderer_small):
+    # A ball of radius 30 m (distance field) centred at (50, 50, -60), under a horizon at z = -10.
+    x, y, z = np.meshgrid(np.linspace(0, 100, 21), np.linspace(0, 100, 21), np.linspace(-120, 0, 25), indexing="ij")
+    d = np.sqrt((x - 50) ** 2 + (y - 50) ** 2 + (z + 60) ** 2).astype(np.float32)
+    vol = gc.Volume(d, origin=(0, 0, -120), spacing=(5, 5, 5), order="xyz")
+    s = gc.Scene()
+    salt = s.add_isosurface(vol, 30.0, tiles=4, color=(0.9, 0.8, 0.5))
+    assert s.object_info(salt)["kind"] == "isosurface"
+    v, f = s.geometry(salt)
+    r = np.linalg.norm(v - [50, 50, -60], axis=1)
+    assert abs(r.mean() - 30) < 0.5 and len(f) == len(gc.iso.extract_isosurface(vol, 30.0)[1])
+    s.add_heightfield(np.full((11, 11), -10.0), origin=(-50, -50), spacing=(20, 20), tiles=(2, 2))
+    top = gc.Camera.look_at((50, 40, 300), (50, 50, -60))
+    rr = renderer_small(64, 48)
+    none = rr.render(s, top, culling="none")
+    tp = rr.render(s, top, culling="three_pass", pixel_threshold=0)
+    np.testing.assert_array_equal(tp.image, none.image)
+    assert not tp.tile_drawn[s.tile_table()["object"] == salt].any()
+    # Seen from the side, below the horizon, it is drawn.
+    side = rr.render(s, gc.Camera.look_at((50, -200, -60), (50, 50, -60)), culling="three_pass", pixel_threshold=0)
+    assert side.tile_drawn[s.tile_table()["object"] == salt].any()

@@ -170,6 +170,16 @@ class Scene:
         coloring: _Coloring,
         replace: int | None = None,
     ) -> int: ...
+    def add_isosurface(
+        self,
+        volume: Volume,
+        isovalue: float,
+        tiles: int | None,
+        coarse_factor: float,
+        name: str | None,
+        color: tuple[float, float, float] | None,
+        coloring: _Coloring | None = None,
+    ) -> int: ...
     def add_lens(
         self,
         volume: Volume,

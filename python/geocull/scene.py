@@ -274,6 +274,33 @@ class Scene:
         self._slices[id] = (volume, ax, name, c)
         return id
 
+    def add_isosurface(
+        self,
+        volume: Volume,
+        isovalue: float,
+        tiles: int | None = None,
+        coarse_factor: float = 25.0,
+        name: str | None = None,
+        color: ArrayLike | None = None,
+        cmap: Any = None,
+        clim: ArrayLike | None = None,
+    ) -> int:
+        """Add the isosurface ``volume == isovalue`` (a salt body, in the volume's units) as an
+        object of the scene (kind "isosurface"): the welded, crack-free marching-cubes surface of
+        :func:`geocull.iso.extract_isosurface` (NaN samples are outside the domain), cut into
+        ``tiles`` spatially coherent tiles (default one per ~4096 triangles) with coarse proxies, drawn
+        with the other objects and culled by them like any mesh (three_pass hides a salt body under a
+        horizon). ``color`` a flat colour, or ``cmap`` / ``clim`` to colour it by z (default: the
+        palette colour). :meth:`Renderer.render_isosurface` stays the single-object path with the
+        volume's own implicit occluders. Returns the object id."""
+        from .volume import Volume
+
+        cv.expect_instance(volume, Volume, "volume")
+        c = None if cmap is None and clim is None else cv.coloring("z", None, cmap, clim, None, 1)
+        k = None if tiles is None else cv.integer(tiles, "tiles")
+        return self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
+                                      cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), c)
+
     def add_lens(
         self,
         volume: Volume,

@@ -23,7 +23,7 @@ pub struct PyVolume {
 }
 
 impl PyVolume {
-    fn tree(&self, py: Python<'_>) -> PyResult<Arc<MinMaxOctree>> {
+    pub(crate) fn tree(&self, py: Python<'_>) -> PyResult<Arc<MinMaxOctree>> {
         if let Some(t) = self.tree.get() {
             return Ok(t.clone());
         }

@@ -237,6 +237,39 @@ impl PyScene {
         })
     }
 
+    /// The isosurface `volume == isovalue` as a scene mesh (kind "isosurface") of about `tiles`
+    /// spatially coherent tiles, culled like any object (three_pass: by the other objects).
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (volume, isovalue, tiles, coarse_factor, name, color, coloring=None))]
+    fn add_isosurface(
+        &self,
+        py: Python<'_>,
+        volume: PyRef<'_, super::iso::PyVolume>,
+        isovalue: f64,
+        tiles: Option<i64>,
+        coarse_factor: f64,
+        name: Option<String>,
+        color: Option<(f64, f64, f64)>,
+        coloring: Option<ColoringArgs<'_>>,
+    ) -> PyResult<u32> {
+        let color_by = self::coloring(coloring, &[], "none (an isosurface is coloured by z)")?;
+        let tree = volume.tree(py)?;
+        let vol = &volume.inner;
+        let color = color.map(|c| [c.0, c.1, c.2]);
+        let scene = &self.inner;
+        run_interruptible(py, move |interrupt| {
+            let m = crate::iso::mesh::isosurface_mesh(vol, &tree, isovalue)?;
+            let faces: Vec<[i64; 3]> = m.faces.iter().map(|f| f.map(|k| k as i64)).collect();
+            let n = faces.len();
+            let tiles = match tiles {
+                Some(t) => Some(int_in(t, "tiles", 1, MAX_INT)?),
+                None => Some(n.div_ceil(4096).max(1)),
+            };
+            let opts = AddOptions { coarse_factor, name, color, color_by, interrupt };
+            lock(scene).add_mesh(&m.vertices, &faces, "isosurface", tiles, opts)
+        })
+    }
+
     /// A volume lens: the sub-volume of `volume` over the inclusive sample ranges `bx`
     /// ((i0, i1), (j0, j1), (k0, k1)), as stacks of slices along each axis, blended with `opacity`.
     #[pyo3(signature = (volume, bx, opacity, name, coloring))]
