@@ -31,8 +31,8 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import bench as bench
     from . import compare as compare
     from . import data as data
-    from . import grid as grid
     from . import distributed as distributed
+    from . import grid as grid
     from . import io as io
     from . import iso as iso
     from . import pyvista as pyvista
