@@ -74,6 +74,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="small scene (120x120 samples, 6 faults), 320x256, 3 views")
     p.add_argument("--tiny", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--json", metavar="PATH", help="write rows and summary as JSON")
+    p.add_argument("--plot", metavar="PATH", help="gullfaks: write the speed-against-error plot (x none against "
+                   "differing pixels, one marker per method over the views; needs matplotlib)")
     p.add_argument("--width", type=int, help="image width (default 1280; quick 320)")
     p.add_argument("--height", type=int, help="image height (default 1024; quick 256)")
     p.add_argument("--views", help="number of standard views to use (first N), or comma-separated view names")
@@ -496,6 +498,12 @@ def main(argv: list[str] | None = None) -> int:
     else:
         result = run(cfg)
         print(format_table(result), flush=True)
+    if a.plot and cfg["scene"] == "gullfaks":
+        from .report import plot
+
+        rows = [r for r in result["rows"] if r.get("differing_pixel_fraction") is not None]
+        plot(rows, a.plot, title=f"geocull bench ({cfg['mode']}): speed against error, {cfg['width']}x{cfg['height']}")
+        _say(f"bench: wrote {a.plot}")
     if a.json:
         from .report import write_json
 
