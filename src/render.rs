@@ -737,7 +737,7 @@ fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Option<Le
         if !o.visible || o.opacity >= 1.0 || o.tiles.is_empty() {
             continue;
         }
-        // The stack (tile ix = axis) whose slices face the eye most squarely.
+        // A lens's stack (tile ix = axis) whose slices face the eye most squarely.
         let normal = |t: &crate::lod::TileMesh| -> DVec3 {
             let p = |k: usize| DVec3::from_array(t.positions[t.fine[k] as usize].map(f64::from)) * zs;
             (p(1) - p(0)).cross(p(2) - p(0)).normalize_or_zero()
@@ -748,9 +748,11 @@ fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Option<Le
             best[a] = best[a].max(normal(t).dot(f.fc.forward).abs());
         }
         let axis = (0..3).max_by(|&a, &b| best[a].total_cmp(&best[b])).unwrap_or(2) as u32;
+        // A lens draws one of its three stacks; any other translucent object (a slice) all its tiles.
+        let lens = o.kind_name() == "lens";
         let off = o.placement(f.origin);
         for (ti, t) in range.zip(&o.tiles) {
-            if t.ix == axis && !t.fine.is_empty() {
+            if (!lens || t.ix == axis) && !t.fine.is_empty() {
                 let (lo, hi) = g.bbox[ti];
                 let c = ((lo + hi) * 0.5 + off) * zs;
                 chosen.push(((c - f.fc.eye).length(), ti, oi));

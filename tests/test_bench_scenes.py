@@ -14,8 +14,10 @@ from geocull import bench_grid, bench_seismic
 def test_bench_grid_tiny():
     pytest.importorskip("pyvista")
     res = bench_grid.run(dict(grid_n=12, grid_nk=6, width=64, height=48, repeats=1, blocks=(4, 4)))
-    modes = [(r["view"], r["mode"]) for r in res["rows"]]
-    assert modes == [(v, m) for v in ("near", "distant") for m in ("full", "distance", "screen_error", "pyvista")]
+    modes = [(r["view"], r["mode"], r["colour"]) for r in res["rows"]]
+    assert modes == [(v, m, c) for v in ("near", "distant")
+                     for m, c in [(m, c) for c in ("values", "flat") for m in ("full", "distance", "screen_error")]
+                     + [("pyvista", "flat")]]
     full = [r for r in res["rows"] if r["mode"] == "full"]
     assert all(r["differing_pct"] == 0 and r["x_full"] == 1 for r in full)
     assert res["levels"][0]["faces_pct"] == 100 and all(abs(lv["volume_change_pct"]) < 3 for lv in res["levels"])

@@ -74,7 +74,7 @@ def test_set_slice_index_moves_the_slice_and_keeps_its_id(renderer_small):
     with pytest.raises(gc.InputError, match="^axis"):
         s.add_slice(vol, "diagonal", 0)
     with pytest.raises(gc.InputError, match="^opacity"):
-        s.add_slice(vol, 0, 0, opacity=0.5)
+        s.add_slice(vol, 0, 0, opacity=1.5)
     with pytest.raises(gc.InputError, match="^volume"):
         s.add_slice(np.zeros((3, 3, 3)), 0, 0)  # type: ignore[arg-type]
 
@@ -183,3 +183,12 @@ def test_a_salt_body_under_a_horizon_is_culled_by_three_pass(renderer_small):
     # Seen from the side, below the horizon, it is drawn.
     side = rr.render(s, gc.Camera.look_at((50, -200, -60), (50, 50, -60)), culling="three_pass", pixel_threshold=0)
     assert side.tile_drawn[s.tile_table()["object"] == salt].any()
+
+
+def test_a_translucent_slice_blends_and_never_occludes(renderer_small):
+    s = gc.Scene()
+    s.add_slice(uniform_volume(), "crossline", 1, cmap=[[0.2, 0.6, 1.0], [0.2, 0.6, 1.0]], clim=(0, 2), opacity=0.5)
+    cam = gc.Camera.look_at((20, -100, -20), (20, 0, -20), projection="orthographic", ortho_height=60)
+    res = renderer_small(60, 60).render(s, cam, culling="three_pass", pixel_threshold=0)
+    np.testing.assert_allclose(res.image[30, 30, :3], np.array([0.2, 0.6, 1.0]) * 0.5 * 255, atol=2)
+    assert not res.coverage.any() and res.stats["lens_slices_drawn"] >= 1

@@ -168,6 +168,7 @@ class Scene:
         index: int,
         name: str | None,
         coloring: _Coloring,
+        opacity: float = 1.0,
         replace: int | None = None,
     ) -> int: ...
     def add_isosurface(

@@ -65,7 +65,7 @@ class Scene:
     def __init__(self) -> None:
         self._s = _geocull.Scene()
         # Slices' sources, for set_slice_index: id -> (volume, axis, name, colouring).
-        self._slices: dict[int, tuple[Any, int, str | None, cv.Coloring]] = {}
+        self._slices: dict[int, tuple[Any, int, str | None, cv.Coloring, float]] = {}
 
     @classmethod
     def _wrap(cls, inner: _geocull.Scene) -> Scene:
@@ -260,18 +260,18 @@ class Scene:
         sample's value coloured through ``cmap`` (default "seismic") over ``clim`` (default the whole
         volume's finite range, so every slice of a volume shares its colours) and interpolated
         across each triangle; NaN samples get ``nan_color``. Slices are opaque occluders (object kind
-        "slice") culled like any object; :meth:`set_slice_index` moves one. ``opacity`` must be 1:
-        semi-transparent slices are not drawn yet. Returns the object id."""
+        "slice") culled like any object; :meth:`set_slice_index` moves one. ``opacity`` in (0, 1]:
+        below 1 the slice is translucent, drawn as volume lenses are (blended after the opaque
+        image, unlit, never occluding, skipped where hidden). Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
-        if cv.number(opacity, "opacity") != 1.0:
-            raise InputError(f"opacity: {opacity}; only opaque slices (1.0) are drawn so far")
+        op = cv.number(opacity, "opacity")
         ax = self._axis(axis)
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
-        id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c)
-        self._slices[id] = (volume, ax, name, c)
+        id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, op)
+        self._slices[id] = (volume, ax, name, c, op)
         return id
 
     def add_isosurface(
@@ -405,8 +405,8 @@ class Scene:
         if i not in self._slices:
             raise InputError(f"id: object {i} is not a slice added to this scene object (copies and "
                              "unpickled scenes do not keep the volumes of their slices)")
-        volume, ax, name, c = self._slices[i]
-        self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, i)
+        volume, ax, name, c, op = self._slices[i]
+        self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, op, i)
 
     @staticmethod
     def _axis(axis: Any) -> int:

@@ -180,7 +180,7 @@ impl PyScene {
     /// "crossline"; 2: constant k, "sample"), coloured by its samples; `replace` = the id of a
     /// slice to move there instead of adding one.
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (volume, axis, index, name, coloring, replace=None))]
+    #[pyo3(signature = (volume, axis, index, name, coloring, opacity=1.0, replace=None))]
     fn add_slice(
         &self,
         py: Python<'_>,
@@ -189,6 +189,7 @@ impl PyScene {
         index: i64,
         name: Option<String>,
         coloring: ColoringArgs<'_>,
+        opacity: f64,
         replace: Option<i64>,
     ) -> PyResult<u32> {
         let mut color_by =
@@ -223,6 +224,10 @@ impl PyScene {
             let opts = AddOptions { coarse_factor: 16.0, name, color: None, color_by: Some(color_by), interrupt };
             let mut s = lock(scene);
             let id = s.add_lattice(&pos, vals, (nu, nv), "slice", opts)?;
+            if let Err(e) = s.set_slice_opacity(id, opacity) {
+                s.remove(id)?;
+                return Err(e);
+            }
             match replace {
                 None => Ok(id),
                 Some(old) => {

@@ -51,6 +51,16 @@ impl Scene {
         self.add_mesh(positions, &lattice_faces(nu, nv), kind, Some(tiles), opts)
     }
 
+    /// Sets the opacity of slice `id`: 1 = opaque (an occluder), (0, 1) = translucent (drawn
+    /// blended after the opaque image, unlit, never occluding, as lenses are).
+    pub fn set_slice_opacity(&mut self, id: u32, opacity: f64) -> Result<()> {
+        ensure(opacity.is_finite() && opacity > 0.0 && opacity <= 1.0, "opacity", || {
+            format!("opacity is {opacity}; expected a number in (0, 1]")
+        })?;
+        self.object_mut(id)?.opacity = opacity as f32;
+        Ok(())
+    }
+
     /// Replaces object `id`'s geometry by that of object `with` (just added, e.g. by
     /// [`Scene::add_lattice`]), which is removed: `id` keeps its id, name, place in the scene,
     /// visibility and offset, and takes `with`'s tiles and colouring.
@@ -65,6 +75,7 @@ impl Scene {
         o.tiles = new.tiles;
         o.origin = new.origin;
         o.color_by = new.color_by;
+        o.opacity = new.opacity;
         self.geometry_version += 1;
         Ok(())
     }
