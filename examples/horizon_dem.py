@@ -43,14 +43,19 @@ from geocull.compare import image_error
 from geocull.data import jacksboro_dem
 
 # (row label, culling mode, pixel threshold, conservative)
-METHODS: list[tuple[str, gc.CullingMode, float, bool]] = [
-    ("none", "none", 10, True),
-    ("horizon", "horizon", 10, True),
-    ("three_pass approx t=0", "three_pass", 0, False),
-    ("three_pass approx t=10", "three_pass", 10, False),
-    ("three_pass cons t=0", "three_pass", 0, True),
-    ("three_pass cons t=10", "three_pass", 10, True),
-    ("oracle", "oracle", 10, True),
+# (label, culling, pixel threshold, conservative, max_pixel_error of lod="screen_error" or None = lod="full")
+METHODS: list[tuple[str, gc.CullingMode, float, bool, float | None]] = [
+    ("none", "none", 10, True, None),
+    ("horizon", "horizon", 10, True, None),
+    ("three_pass approx t=0", "three_pass", 0, False, None),
+    ("three_pass approx t=10", "three_pass", 10, False, None),
+    ("three_pass cons t=0", "three_pass", 0, True, None),
+    ("three_pass cons t=10", "three_pass", 10, True, None),
+    ("oracle", "oracle", 10, True, None),
+    ("none lod 0.5 px", "none", 10, True, 0.5),
+    ("horizon lod 0.5 px", "horizon", 10, True, 0.5),
+    ("three_pass cons t=0 lod 0.5 px", "three_pass", 0, True, 0.5),
+    ("three_pass cons t=0 lod 1 px", "three_pass", 0, True, 1.0),
 ]
 
 Pair = tuple[float, float]
@@ -199,22 +204,23 @@ def main(argv: Sequence[str] | None = None) -> str:
         "| differing pixels vs none | missed tiles |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    summary: dict[str, list[float]] = {m: [] for m, _, _, _ in METHODS}
+    summary: dict[str, list[float]] = {m: [] for m, _, _, _, _ in METHODS}
     for name, eye, az, cam in views:
         res: dict[str, gc.RenderResult[gc.RenderStats]] = {}
         median_total: dict[str, float] = {}
         median_cull: dict[str, float] = {}
-        for m, culling, threshold, conservative in METHODS:
-            # warm-up (uploads, pipeline caches), then the timed renders
-            r.render(scene, cam, culling=culling, pixel_threshold=threshold, conservative=conservative)
-            runs = [r.render(scene, cam, culling=culling, pixel_threshold=threshold, conservative=conservative)
-                    for _ in range(args.repeat)]
+        for m, culling, threshold, conservative, err in METHODS:
+            lod: gc.LodMode = "full" if err is None else "screen_error"
+            kw = dict(culling=culling, pixel_threshold=threshold, conservative=conservative, lod=lod,
+                      max_pixel_error=err or 0.5)
+            r.render(scene, cam, **kw)  # type: ignore[arg-type]  # warm-up (uploads, pipeline caches)
+            runs = [r.render(scene, cam, **kw) for _ in range(args.repeat)]  # type: ignore[arg-type]
             res[m] = runs[-1]
             median_total[m] = statistics.median(x.stats["total_ms"] for x in runs)
             median_cull[m] = statistics.median(cull_ms(x.stats) for x in runs)
         ref, oracle = res["none"], res["oracle"]
         visible = oracle.tile_pixels > 0
-        for m, _, _, _ in METHODS:
+        for m, _, _, _, _ in METHODS:
             x = res[m]
             ratio = median_total[m] / median_total["none"]
             summary[m].append(ratio)
