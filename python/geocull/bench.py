@@ -185,6 +185,7 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
     spec = gullfaks_like(nx=cfg["size"], ny=cfg["size"], n_faults=cfg["n_faults"],
                          fault_triangles=cfg["fault_triangles"])
     gen_s = time.perf_counter() - t0
+    rss_before = _rss_mb()  # the process with the scene's numpy data, before any geocull object
     task.total = 2 + len(_select_views(cfg["views"], (spec, 45.0, 1.0, w / h)))  # two builds, then the views
     _say(f"bench: building tiles + LOD (tiles {TILES[0]}x{TILES[1]}, coarse factor {COARSE_FACTOR})")
     t0 = time.perf_counter()
@@ -393,6 +394,10 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         gpu_bytes=gpu_bytes,
         bytes_per_triangle=(host + (gpu_bytes or 0)) / n_tri if n_tri else None,
         peak_rss_geocull_mb=rss_geocull,
+        rss_before_geocull_mb=rss_before,
+        # Both scenes (two coarse factors) and their renderers count: the growth of the peak over
+        # the process before geocull, per fine triangle of the two scenes.
+        rss_bytes_per_triangle=((rss_geocull - rss_before) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
         peak_rss_mb=_rss_mb(),
         pyvista_setup_s_mean=(sum(pv_setup_s) / len(pv_setup_s)) if pv_setup_s else None,
         adapter=renderer.adapter_info,
@@ -469,7 +474,10 @@ def format_table(result: dict[str, Any]) -> str:
     lines.append(f"memory: host {s['host_bytes'] / 2**20:.1f} MiB + GPU {(s['gpu_bytes'] or 0) / 2**20:.1f} MiB = "
                  f"{_f(bpt, '.1f')} bytes per fine triangle (target <= 40); "
                  f"peak RSS {s['peak_rss_geocull_mb']:.0f} MiB "
-                 f"after geocull's first view, {s['peak_rss_mb']:.0f} MiB at the end (PyVista included)")
+                 f"after geocull's first view, {s['peak_rss_mb']:.0f} MiB at the end (PyVista included); "
+                 f"attributable to geocull (peak growth over {s['rss_before_geocull_mb']:.0f} MiB before its first "
+                 f"object, two scenes and their renderers): {_f(s.get('rss_bytes_per_triangle'), '.0f')} bytes per "
+                 f"fine triangle (target <= 60)")
     pv = f"; PyVista {s['pyvista']}, VTK {s['vtk']}" if "pyvista" in s else ""
     lines.append(f"adapter: {s['adapter']}{pv}; {s['cpu_count']} CPU(s); wall {s['wall_s']:.0f} s")
     lines.append("columns: ms = best frame time (geocull stats total_ms: call -> GPU done; PyVista: Render + "
