@@ -831,7 +831,7 @@ fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[u8]>) {
         any = true;
         for b in &info.block_levels {
             if out.tile_drawn.get(t).copied().unwrap_or(false) {
-                let l = level.map_or(0, |l| l[t] as usize);
+                let l = level.and_then(|l| l.get(t)).map_or(0, |&l| l as usize).min(GRID_STATS.len() - 1);
                 if let Some(s) = b.get(l.min(b.len().saturating_sub(1))) {
                     sums[l][0] += s.cells;
                     sums[l][1] += s.faces;

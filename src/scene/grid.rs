@@ -118,3 +118,39 @@ impl Scene {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box grid of nk x nj x ni cells 10 m wide, k = 0 at the top.
+    fn box_corners(nk: usize, nj: usize, ni: usize) -> Vec<f64> {
+        let mut c = Vec::with_capacity(nk * nj * ni * 24);
+        for k in 0..nk {
+            for j in 0..nj {
+                for i in 0..ni {
+                    for q in 0..8 {
+                        let (di, dj, dk) = (q & 1, (q >> 1) & 1, (q >> 2) & 1);
+                        c.extend([((i + di) * 10) as f64, ((j + dj) * 10) as f64, -(((k + dk) * 10) as f64)]);
+                    }
+                }
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn a_grid_round_trips_through_bytes_with_its_block_tables() {
+        let mut s = Scene::new();
+        let id = s.add_grid((2, 4, 4), &box_corners(2, 4, 4), None, None, (2, 2), AddOptions::new(1.0)).unwrap();
+        assert_eq!(s.object(id).unwrap().tiles.len(), 4);
+        let levels = s.grid_levels(id).unwrap().to_vec();
+        assert_eq!(levels[0].faces, 2 * (16 + 8 + 8));
+        let t = Scene::from_bytes(&s.to_bytes()).unwrap();
+        assert_eq!(t.grid_levels(id).unwrap(), &levels[..]);
+        assert_eq!(format!("{:?}", t.object(id).unwrap().kind), format!("{:?}", s.object(id).unwrap().kind));
+        let e = s.add_grid((1, 1, 1), &box_corners(1, 1, 1), None, None, (40, 1), AddOptions::new(1.0)).unwrap_err();
+        assert!(e.to_string().starts_with("blocks"), "{e}");
+        assert!(s.grid_levels(99).is_err());
+    }
+}

@@ -398,6 +398,12 @@ impl Scene {
                 let (fine, coarse) = (r.u32s()?, r.u32s()?);
                 let proxy_error = r.f32()?;
                 let nl = r.u32()? as usize;
+                if nl > crate::lod::levels::MAX_LEVELS {
+                    return Err(r.err(format!(
+                        "object {id}: a tile has {nl} LOD levels; at most {}",
+                        crate::lod::levels::MAX_LEVELS
+                    )));
+                }
                 let mut levels = Vec::with_capacity(nl.min(64));
                 for _ in 0..nl {
                     let error = r.f32()?;
@@ -420,6 +426,13 @@ impl Scene {
                     proxy_error,
                     levels,
                 });
+            }
+            if let ObjectKind::Grid(g) = &kind {
+                if g.cell_size.len() != tiles.len() || g.block_levels.len() != tiles.len() {
+                    return Err(
+                        r.err(format!("object {id}: a grid's block tables do not match its {} tiles", tiles.len()))
+                    );
+                }
             }
             if color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values)
                 && tiles.iter().all(|t: &TileMesh| t.values.is_empty())
