@@ -767,24 +767,9 @@ fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Option<Le
     let m = chosen.len();
     let mut boxes = Vec::with_capacity(m);
     let mut init = vec![0u32; m];
-    for (p, &(_, ti, oi)) in chosen.iter().enumerate() {
-        let off = objects[oi].placement(f.origin);
-        let (lo, hi) = g.bbox[ti];
-        let (a, b) = ((lo + off) * zs, (hi + off) * zs);
-        let (lo, hi) = (a.min(b), a.max(b));
-        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
-        let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
-        let nearest = (0..8)
-            .map(|c| {
-                let q = DVec3::new(
-                    if c & 1 == 0 { lo.x } else { hi.x },
-                    if c & 2 == 0 { lo.y } else { hi.y },
-                    if c & 4 == 0 { lo.z } else { hi.z },
-                );
-                (q - f.fc.eye).dot(f.fc.forward)
-            })
-            .fold(f64::INFINITY, f64::min);
-        if nearest <= f.fc.near * 1.001 + 1e-9 {
+    for (p, &(_, ti, _)) in chosen.iter().enumerate() {
+        let (lo, hi, near) = f.tile_box(ti);
+        if near {
             init[p] = 1;
         }
         boxes.push(crate::gpu::layout::BoxInstance {

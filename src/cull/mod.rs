@@ -116,6 +116,32 @@ impl FrameInputs<'_> {
     pub fn placement(&self, oi: usize) -> glam::DVec3 {
         self.scene.objects()[oi].placement(self.origin)
     }
+
+    /// Tile `i`'s box in render space (its object's placement and z_scale applied), grown against
+    /// f32 round-off, as the box passes draw it, and whether it reaches the near plane (then its
+    /// front faces may be clipped and a box test cannot be trusted to see it).
+    pub fn tile_box(&self, i: usize) -> (glam::DVec3, glam::DVec3, bool) {
+        use glam::DVec3;
+        let g = self.geometry;
+        let zs = DVec3::new(1.0, 1.0, self.camera.z_scale);
+        let off = self.placement(g.tile_object_cpu[i] as usize);
+        let (lo, hi) = g.bbox[i];
+        let (a, b) = ((lo + off) * zs, (hi + off) * zs);
+        let (lo, hi) = (a.min(b), a.max(b));
+        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
+        let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
+        let nearest = (0..8)
+            .map(|c| {
+                let p = DVec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                );
+                (p - self.fc.eye).dot(self.fc.forward)
+            })
+            .fold(f64::INFINITY, f64::min);
+        (lo, hi, nearest <= self.fc.near * 1.001 + 1e-9)
+    }
 }
 
 /// Which fine tiles the final pass draws.

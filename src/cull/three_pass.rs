@@ -55,7 +55,6 @@ use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible}
 use crate::error::Result;
 use crate::gpu::layout::BoxInstance;
 use crate::gpu::{passes, Targets};
-use glam::DVec3;
 
 /// Initial box count of tiles drawn untested (their box reaches the near plane).
 const FORCED: u32 = 1 << 30;
@@ -77,32 +76,16 @@ pub fn make() -> Box<dyn CullStrategy> {
 /// Render-space boxes of the visible, non-empty tiles (instance id = tile index), grown against
 /// f32 round-off, and for each the initial count (FORCED when the box reaches the near plane).
 fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
-    let zs = DVec3::new(1.0, 1.0, f.camera.z_scale);
-    let objects = f.scene.objects();
     let g = f.geometry;
     let mut init = vec![0u32; g.n_tiles()];
     let mut boxes = Vec::new();
-    for (i, ((lo, hi), &oi)) in g.bbox.iter().zip(&g.tile_object_cpu).enumerate() {
+    for (i, first) in init.iter_mut().enumerate() {
         if !f.object_visible[i] || g.fine[i].index_count == 0 {
             continue;
         }
-        let off = objects[oi as usize].placement(f.origin);
-        let (a, b) = ((*lo + off) * zs, (*hi + off) * zs);
-        let (lo, hi) = (a.min(b), a.max(b));
-        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
-        let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
-        let nearest = (0..8)
-            .map(|c| {
-                let p = DVec3::new(
-                    if c & 1 == 0 { lo.x } else { hi.x },
-                    if c & 2 == 0 { lo.y } else { hi.y },
-                    if c & 4 == 0 { lo.z } else { hi.z },
-                );
-                (p - f.fc.eye).dot(f.fc.forward)
-            })
-            .fold(f64::INFINITY, f64::min);
-        if nearest <= f.fc.near * 1.001 + 1e-9 {
-            init[i] = FORCED;
+        let (lo, hi, near) = f.tile_box(i);
+        if near {
+            *first = FORCED;
         }
         boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
     }

@@ -406,7 +406,7 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "prepass", targets, false, false, false, ts.and_then(|t| t.render("prepass_ms")));
-        self.draw_into(&mut pass, &self.prepass, false, scene_bg, geom, args);
+        self.draw_into(&mut pass, &self.prepass, false, scene_bg, geom, args, geom.n_tiles());
     }
 
     /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
@@ -423,7 +423,7 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
-        self.draw_into(&mut pass, &self.draw, true, scene_bg, geom, args);
+        self.draw_into(&mut pass, &self.draw, true, scene_bg, geom, args, geom.n_tiles());
     }
 
     /// Pass: `args` (`n` draws, in their order) blended over `targets`' colour with their objects'
@@ -439,16 +439,11 @@ impl Passes {
         n: usize,
     ) {
         let mut pass = begin(enc, "draw_blend", targets, true, true, true, None);
-        if let (Some(vb), Some(sb), Some(ib)) = (&geom.vertices, &geom.values, &geom.indices) {
-            pass.set_pipeline(&self.draw_blend);
-            pass.set_bind_group(0, scene_bg, &[]);
-            pass.set_vertex_buffer(0, vb.slice(..));
-            pass.set_vertex_buffer(1, sb.slice(..));
-            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.multi_draw_indexed_indirect(args, 0, n as u32);
-        }
+        self.draw_into(&mut pass, &self.draw_blend, true, scene_bg, geom, args, n);
     }
 
+    /// `n` draws of `args` with `pipeline`; the scalar stream bound when `with_values`.
+    #[allow(clippy::too_many_arguments)]
     fn draw_into(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -457,6 +452,7 @@ impl Passes {
         scene_bg: &wgpu::BindGroup,
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
+        n: usize,
     ) {
         if let (Some(vb), Some(sb), Some(ib)) = (&geom.vertices, &geom.values, &geom.indices) {
             pass.set_pipeline(pipeline);
@@ -466,7 +462,7 @@ impl Passes {
                 pass.set_vertex_buffer(1, sb.slice(..));
             }
             pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.multi_draw_indexed_indirect(args, 0, geom.n_tiles() as u32);
+            pass.multi_draw_indexed_indirect(args, 0, n as u32);
         }
     }
 

@@ -372,6 +372,40 @@ impl Volume {
         (self.origin, self.sample_position(self.nx - 1, self.ny - 1, self.nz - 1))
     }
 
+    /// The samples of the plane `axis` = `index` (0: constant i, 1: constant j, 2: constant k)
+    /// within the inclusive sample ranges `range` of the other two axes (`range[axis]` is not
+    /// read), as a lattice along those axes in order (u the lower axis, v the higher): world
+    /// positions (rotation applied) and values in the volume's units, row-major `v * nu + u`, and
+    /// (nu, nv). Indices must be in range (the caller checks them).
+    pub fn plane(
+        &self,
+        axis: usize,
+        index: usize,
+        range: [(usize, usize); 3],
+    ) -> (Vec<[f64; 3]>, Vec<f64>, (usize, usize)) {
+        let (ua, va) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        let (nu, nv) = (range[ua].1 - range[ua].0 + 1, range[va].1 - range[va].0 + 1);
+        let (mut pos, mut vals) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
+        for v in 0..nv {
+            for u in 0..nu {
+                let mut ijk = [0; 3];
+                (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
+                pos.push(self.to_world(self.sample_position(ijk[0], ijk[1], ijk[2])));
+                vals.push(self.value(self.get(ijk[0], ijk[1], ijk[2])));
+            }
+        }
+        (pos, vals, (nu, nv))
+    }
+
+    /// Every sample's value, in the volume's units (NaN = no data).
+    pub fn sample_values(&self) -> impl Iterator<Item = f64> + '_ {
+        self.values.iter().map(|&x| self.value(x))
+    }
+
     /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).
     pub fn from_fn<F>(dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3], f: F) -> Result<Self>
     where

@@ -64,6 +64,15 @@ fn coloring(c: Option<ColoringArgs<'_>>, shape: &[usize], what: &str) -> PyResul
     }))
 }
 
+/// `clim`, when not given, as the whole volume's finite range (slices and lenses of one volume
+/// then share their colours).
+fn volume_clim(c: &mut ColorByArg, vol: &crate::iso::Volume) -> crate::Result<()> {
+    if c.clim.is_none() {
+        c.clim = Some(crate::scene::color::resolve_clim(None, vol.sample_values())?);
+    }
+    Ok(())
+}
+
 #[pyclass(name = "Scene", module = "geocull._geocull", frozen)]
 pub struct PyScene {
     /// Locked by every method (see `super::with_lock`); renderers lock it after themselves.
@@ -200,27 +209,10 @@ impl PyScene {
             let axis = int_in(axis, "axis", 0, 2)?;
             let dims = [vol.nx, vol.ny, vol.nz];
             let index = int_in(index, "index", 0, dims[axis] as i64 - 1)?;
-            // (u, v) axes of the slice's lattice: the other two, in order.
-            let (ua, va) = match axis {
-                0 => (1, 2),
-                1 => (0, 2),
-                _ => (0, 1),
-            };
-            let (nu, nv) = (dims[ua], dims[va]);
-            let (mut pos, mut vals) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
-            for v in 0..nv {
-                for u in 0..nu {
-                    let mut ijk = [0; 3];
-                    (ijk[axis], ijk[ua], ijk[va]) = (index, u, v);
-                    pos.push(vol.to_world(vol.sample_position(ijk[0], ijk[1], ijk[2])));
-                    vals.push(vol.value(vol.get(ijk[0], ijk[1], ijk[2])));
-                }
-            }
-            if color_by.clim.is_none() {
-                // The volume's range, so that every slice of it uses the same colours.
-                let r = crate::scene::color::resolve_clim(None, vol.values.iter().map(|&x| vol.value(x)))?;
-                color_by.clim = Some(r);
-            }
+            let whole = [(0, vol.nx - 1), (0, vol.ny - 1), (0, vol.nz - 1)];
+            let (pos, vals, (nu, nv)) = vol.plane(axis, index, whole);
+            // The volume's range, so that every slice of it uses the same colours.
+            volume_clim(&mut color_by, vol)?;
             let opts = AddOptions { coarse_factor: 16.0, name, color: None, color_by: Some(color_by), interrupt };
             let mut s = lock(scene);
             let id = s.add_lattice(&pos, vals, (nu, nv), "slice", opts)?;
@@ -305,36 +297,13 @@ impl PyScene {
             }
             let mut slices = Vec::new();
             for axis in 0..3 {
-                let (ua, va) = match axis {
-                    0 => (1, 2),
-                    1 => (0, 2),
-                    _ => (0, 1),
-                };
-                let (nu, nv) = (r[ua].1 - r[ua].0 + 1, r[va].1 - r[va].0 + 1);
                 for index in r[axis].0..=r[axis].1 {
-                    let (mut positions, mut values) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
-                    for v in 0..nv {
-                        for u in 0..nu {
-                            let mut ijk = [0; 3];
-                            (ijk[axis], ijk[ua], ijk[va]) = (index, r[ua].0 + u, r[va].0 + v);
-                            positions.push(vol.to_world(vol.sample_position(ijk[0], ijk[1], ijk[2])));
-                            values.push(vol.value(vol.get(ijk[0], ijk[1], ijk[2])));
-                        }
-                    }
-                    slices.push(crate::scene::lens::LensSlice {
-                        axis: axis as u32,
-                        index: index as u32,
-                        positions,
-                        values,
-                        nu,
-                        nv,
-                    });
+                    let (positions, values, (nu, nv)) = vol.plane(axis, index, r);
+                    let (axis, index) = (axis as u32, index as u32);
+                    slices.push(crate::scene::lens::LensSlice { axis, index, positions, values, nu, nv });
                 }
             }
-            if color_by.clim.is_none() {
-                let rng = crate::scene::color::resolve_clim(None, vol.values.iter().map(|&x| vol.value(x)))?;
-                color_by.clim = Some(rng);
-            }
+            volume_clim(&mut color_by, vol)?;
             let opts = AddOptions { coarse_factor: 1.0, name, color: None, color_by: Some(color_by), interrupt };
             lock(scene).add_lens(slices, opacity, opts)
         })

@@ -3,7 +3,7 @@
 //! strategy applies to grid blocks as to horizon tiles, and the renderer picks each block's level
 //! by view distance or screen-space error (`render::GridLod`).
 
-use super::{check_color, AddOptions, ColorSource, ObjectKind, Scene};
+use super::{check_color, AddOptions, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
 use crate::grid::{self, CornerGrid, LevelStats};
@@ -84,13 +84,7 @@ impl Scene {
         }
         let o = self.origin_for(lo, hi);
         let build = opts.interrupt.run_parallel(|stop| grid::build_grid(&g, o, blocks, stop))??;
-        let color_by = match &color_by {
-            None => None,
-            Some(c) if c.source == ColorSource::Z => {
-                Some(c.resolve(build.tiles.iter().flat_map(|t| t.positions.iter().map(|p| p[2] as f64 + o.z)))?)
-            }
-            Some(c) => Some(c.resolve(build.tiles.iter().flat_map(|t| t.values.iter().map(|&v| v as f64)))?),
-        };
+        let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&build.tiles, o.z, &c.source))).transpose()?;
         let info = GridInfo {
             dims,
             blocks,

@@ -63,16 +63,7 @@ impl Scene {
         let values = color_by.as_ref().and_then(|c| c.values.as_deref());
         let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, values, &f32faces, o, k, cf, stop))?;
         // The range of what is drawn: the vertices the faces use.
-        let color_by = match &color_by {
-            None => None,
-            Some(c) => Some(c.resolve(tiles.iter().flat_map(|t| -> Box<dyn Iterator<Item = f64>> {
-                if values.is_some() {
-                    Box::new(t.values.iter().map(|&v| v as f64))
-                } else {
-                    Box::new(t.positions.iter().map(|p| p[2] as f64 + o.z))
-                }
-            }))?),
-        };
+        let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&tiles, o.z, &c.source))).transpose()?;
         Ok(self.push(o, opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, color_by, tiles))
     }
 }

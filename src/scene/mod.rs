@@ -81,12 +81,7 @@ impl Object {
 
     /// The scalars colour by `source` reads, in world units for z (every vertex of every tile).
     pub fn scalars<'a>(&'a self, source: &ColorSource) -> Box<dyn Iterator<Item = f64> + 'a> {
-        match source {
-            ColorSource::Z => {
-                Box::new(self.tiles.iter().flat_map(|t| t.positions.iter().map(|p| p[2] as f64 + self.origin.z)))
-            }
-            ColorSource::Values => Box::new(self.tiles.iter().flat_map(|t| t.values.iter().map(|&v| v as f64))),
-        }
+        tile_scalars(&self.tiles, self.origin.z, source)
     }
 
     /// Object-origin-relative bounds of the object's geometry without its offset, or None when empty.
@@ -98,6 +93,21 @@ impl Object {
             hi = hi.max(DVec3::from_array(t.bbox_max.map(f64::from)));
         }
         (lo.x <= hi.x).then_some((lo, hi))
+    }
+}
+
+/// The scalars colour by `source` reads in `tiles` (every vertex), z in world units with the
+/// tiles' `origin_z`: what `clim = None` takes its range from.
+pub(super) fn tile_scalars<'a>(
+    tiles: &'a [TileMesh],
+    origin_z: f64,
+    source: &ColorSource,
+) -> Box<dyn Iterator<Item = f64> + 'a> {
+    match source {
+        ColorSource::Z => {
+            Box::new(tiles.iter().flat_map(move |t| t.positions.iter().map(move |p| p[2] as f64 + origin_z)))
+        }
+        ColorSource::Values => Box::new(tiles.iter().flat_map(|t| t.values.iter().map(|&v| v as f64))),
     }
 }
 
@@ -181,14 +191,7 @@ const PALETTE: [[f32; 3]; 8] = [
 pub(super) fn check_color(c: Option<[f64; 3]>, id: u32) -> Result<[f32; 3]> {
     match c {
         None => Ok(PALETTE[id as usize % PALETTE.len()]),
-        Some(c) => {
-            for (i, v) in c.iter().enumerate() {
-                ensure(v.is_finite() && (0.0..=1.0).contains(v), "color", || {
-                    format!("component {i} is {v}; colours are (r, g, b) in [0, 1]")
-                })?;
-            }
-            Ok(c.map(|v| v as f32))
-        }
+        Some(c) => color::check_rgb(c, "color"),
     }
 }
 
