@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from .report import best_frame
+
 __all__ = ["run", "format_table", "level_table"]
 
 
@@ -45,15 +47,6 @@ def level_table(levels: Sequence[Mapping[str, Any]]) -> list[dict[str, float]]:
              vertices_pct=100.0 * lv["vertices"] / v0, volume_change_pct=100.0 * lv["volume_change"])
         for h, lv in enumerate(levels)
     ]
-
-
-def _best(fn: Any, repeats: int) -> tuple[Any, float]:
-    fn()  # warm-up (upload, pipelines)
-    best, out = float("inf"), None
-    for _ in range(max(1, repeats)):
-        out = fn()
-        best = min(best, out.stats["total_ms"])
-    return out, best
 
 
 def _pyvista_surface(g: dict[str, np.ndarray]) -> tuple[Any, float]:
@@ -107,7 +100,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     bounds = scene.bounds
     assert bounds is not None
     for view, cam in _views(bounds).items():
-        full, t_full = _best(lambda cam=cam: r.render(scene, cam, grid_lod="full"), rep)
+        full, t_full = best_frame(lambda cam=cam: r.render(scene, cam, grid_lod="full"), rep)
         pv_ms = None
         if surf is not None:
             ref = gc.Scene()
@@ -118,9 +111,9 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
         for colour in ("values", "flat"):
             if colour == "flat":
                 scene.set_color(gid, (0.8, 0.8, 0.8))
-                full, t_full = _best(lambda cam=cam: r.render(scene, cam, grid_lod="full"), rep)
+                full, t_full = best_frame(lambda cam=cam: r.render(scene, cam, grid_lod="full"), rep)
             for mode in ("full", "distance", "screen_error"):
-                res, ms = (full, t_full) if mode == "full" else _best(
+                res, ms = (full, t_full) if mode == "full" else best_frame(
                     lambda cam=cam, mode=mode: r.render(scene, cam, grid_lod=mode), rep)
                 err = compare.image_error(res.image, full.image)
                 faces = sum(v for k, v in res.stats.items() if k.startswith("grid_faces_level"))

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .report import best_frame
+
 __all__ = ["run", "format_table", "amplitude_cube"]
 
 
@@ -32,15 +34,6 @@ def amplitude_cube(
     v = (v + 0.3 * rng.standard_normal(v.shape)).astype(np.float32)
     spacing = ((x1 - x0) / (nx - 1), (y1 - y0) / (ny - 1), (z1 - z0) / (nz - 1))
     return v, (x0, y0, z0), spacing
-
-
-def _best(fn: Any, repeats: int) -> tuple[Any, float]:
-    fn()
-    out, best = None, float("inf")
-    for _ in range(max(1, repeats)):
-        out = fn()
-        best = min(best, out.stats["total_ms"])
-    return out, best
 
 
 def run(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -66,7 +59,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     scene.add_lens(vol, lens_box, cmap="plasma", opacity=0.25)
     views = [(name, gc.Camera.look_at(**kw)) for name, kw in standard_views(spec)][: int(cfg.get("views", 7))]
     r_plain, r_scene = gc.Renderer(w, h), gc.Renderer(w, h)
-    _, frame_ms = _best(lambda: r_scene.render(scene, views[0][1], culling="none"), 1)
+    _, frame_ms = best_frame(lambda: r_scene.render(scene, views[0][1], culling="none"), 1)
     t = time.perf_counter()
     scene.set_slice_index(ids[0], n[0] // 3 + 1)
     move_ms = (time.perf_counter() - t) * 1e3
@@ -80,10 +73,12 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     # The horizons' and faults' tiles (the slices' and the lens's are counted apart).
     base_tiles = np.isin(scene.tile_table()["object"], plain.object_ids())
     for name, cam in views:
-        base_none, t_none = _best(lambda cam=cam: r_plain.render(plain, cam, culling="none"), rep)
-        base_tp, t_tp = _best(lambda cam=cam: r_plain.render(plain, cam, culling="three_pass", pixel_threshold=0), rep)
-        with_none, t_wnone = _best(lambda cam=cam: r_scene.render(scene, cam, culling="none"), rep)
-        with_tp, t_wtp = _best(lambda cam=cam: r_scene.render(scene, cam, culling="three_pass", pixel_threshold=0), rep)
+        base_none, t_none = best_frame(lambda cam=cam: r_plain.render(plain, cam, culling="none"), rep)
+        base_tp, t_tp = best_frame(
+            lambda cam=cam: r_plain.render(plain, cam, culling="three_pass", pixel_threshold=0), rep)
+        with_none, t_wnone = best_frame(lambda cam=cam: r_scene.render(scene, cam, culling="none"), rep)
+        with_tp, t_wtp = best_frame(
+            lambda cam=cam: r_scene.render(scene, cam, culling="three_pass", pixel_threshold=0), rep)
         st = with_tp.stats
         out["rows"].append(dict(
             view=name, none_ms=t_none, tp_ms=t_tp, none_slices_ms=t_wnone, tp_slices_ms=t_wtp,
