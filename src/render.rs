@@ -20,6 +20,7 @@ use crate::gpu::{
 };
 use crate::iso::render::{IsoOptions, IsoOutput, IsoRenderer};
 use crate::iso::{MinMaxOctree, Volume};
+use crate::lod::cos_sin_deg;
 use crate::scene::{ColorSource, ObjectKind, Scene};
 use glam::{DVec3, Mat4};
 use rayon::prelude::*;
@@ -574,7 +575,8 @@ fn frame_state(
     let mut lut: Vec<[f32; 4]> = Vec::new();
     let gpu_objects: Vec<GpuObject> = objects
         .iter()
-        .map(|o| {
+        .enumerate()
+        .map(|(oi, o)| {
             let p = o.placement(origin);
             let cmap = match &o.color_by {
                 None => [0.0; 4],
@@ -589,10 +591,22 @@ fn frame_state(
                     [lo as f32, (1.0 / (c.clim[1] - c.clim[0])) as f32, mode, base]
                 }
             };
+            let (mut grid, mut grid_rows, mut normal_map) = ([0.0; 4], [0.0; 4], [0; 4]);
+            if let (ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. }, Some(base)) =
+                (&o.kind, geom.shading_base[oi])
+            {
+                let (c, s) = cos_sin_deg(*rotation);
+                grid = [*x0 as f32, *y0 as f32, (c / dx) as f32, (s / dx) as f32];
+                grid_rows = [(-s / dy) as f32, (c / dy) as f32, *nx as f32, *ny as f32];
+                normal_map[0] = base + 1;
+            }
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
                 color: [o.color[0], o.color[1], o.color[2], o.opacity],
                 cmap,
+                grid,
+                grid_rows,
+                normal_map,
             }
         })
         .collect();

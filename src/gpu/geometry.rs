@@ -29,6 +29,14 @@ pub struct SceneGeometry {
     pub levels: Vec<Vec<(DrawArgs, f32)>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
+    /// The fine surfaces of the height fields as the lit pass samples them
+    /// (`Object::shading_samples`), object after object, two words per sample: the gradient as
+    /// two f16 (x in the low half) and the object-relative height's f32 bits.
+    pub shading: wgpu::Buffer,
+    /// Per object (scene order), the first sample of its gradients in `shading`; None for objects
+    /// without (meshes, grids; height fields past the device's storage-binding limit), which the
+    /// lit pass shades with their facets' normals.
+    pub shading_base: Vec<Option<u32>>,
     pub bytes: u64,
 }
 
@@ -36,6 +44,39 @@ pub struct SceneGeometry {
 /// travels as the most negative f32, which the lit pass tests for (`s < -1e37`) and which any
 /// interpolation with it keeps below that (a triangle touching no data is no data).
 pub const NO_DATA: f32 = -f32::MAX;
+
+/// The normal map of the lit pass: every height field's shading samples, as long as they fit one
+/// storage binding (later height fields fall back to facet normals and vertex heights).
+fn upload_shading(ctx: &GpuContext, scene: &Scene) -> (wgpu::Buffer, Vec<Option<u32>>) {
+    let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
+    let pack = |[gx, gy, z]: [f32; 3]| {
+        let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
+        [h(gx) | (h(gy) << 16), z.to_bits()]
+    };
+    let mut words: Vec<u32> = Vec::new();
+    let base = scene
+        .objects()
+        .iter()
+        .map(|o| {
+            let g = o.shading_samples()?;
+            if (words.len() + 2 * g.len()) as u64 > max_words {
+                return None;
+            }
+            let first = (words.len() / 2) as u32;
+            words.extend(g.into_iter().flat_map(pack));
+            Some(first)
+        })
+        .collect();
+    if words.is_empty() {
+        words.extend([0, 0]);
+    }
+    let buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("shading"),
+        contents: bytemuck::cast_slice(&words),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    (buf, base)
+}
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
 /// at most `max` bytes, with u32 indices and offsets: a clear error rather than a wrong image.
@@ -191,6 +232,7 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
+        let (shading, shading_base) = upload_shading(ctx, scene);
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -198,7 +240,7 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&to),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bytes = nv * 16 + ni * 4 + to.len() as u64 * 4;
+        let bytes = nv * 16 + ni * 4 + to.len() as u64 * 4 + shading.size();
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -211,6 +253,8 @@ impl SceneGeometry {
             coarse,
             levels,
             bbox,
+            shading,
+            shading_base,
             bytes,
         })
     }

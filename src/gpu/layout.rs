@@ -52,6 +52,15 @@ pub struct GpuObject {
     pub offset: [f32; 4],
     pub color: [f32; 4],
     pub cmap: [f32; 4],
+    /// A height field's grid for its normal map (`SceneGeometry::shading`): the object-relative
+    /// (x, y) of sample (0, 0), then the row of the inverse grid transform giving the column
+    /// (`cos / dx, sin / dx`).
+    pub grid: [f32; 4],
+    /// The row giving the grid row (`-sin / dy, cos / dy`), then `nx, ny`.
+    pub grid_rows: [f32; 4],
+    /// `x`: 1 + the first sample of the object's gradients in the normal map, 0 for none (facet
+    /// normals); the rest unused.
+    pub normal_map: [u32; 4],
 }
 
 /// Uniforms of the selection pass (`Params` in select.wgsl).
@@ -78,5 +87,5 @@ pub struct BoxInstance {
 const _: () = assert!(std::mem::size_of::<DrawArgs>() == 20);
 const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
-const _: () = assert!(std::mem::size_of::<GpuObject>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuObject>() == 96);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);

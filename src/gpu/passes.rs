@@ -172,6 +172,7 @@ impl Passes {
                 storage_entry(1, true, vf),
                 storage_entry(2, true, vf),
                 storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
+                storage_entry(4, true, wgpu::ShaderStages::FRAGMENT),
             ],
         });
         let cs = wgpu::ShaderStages::COMPUTE;
@@ -684,8 +685,9 @@ impl GpuContext {
 }
 
 impl Passes {
-    /// The scene bind group of one frame: uniforms, per-object state, the tile → object table, and
-    /// the colour-map rows the objects' `cmap.w` point into (RGBA).
+    /// The scene bind group of one frame: uniforms, per-object state, the tile → object table,
+    /// the colour-map rows the objects' `cmap.w` point into (RGBA), and the height fields' normal
+    /// map (`SceneGeometry::shading`).
     pub fn scene_bind_group(
         &self,
         d: &wgpu::Device,
@@ -721,6 +723,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 1, resource: objects_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: geom.tile_object.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: lut_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: geom.shading.as_entire_binding() },
             ],
         })
     }

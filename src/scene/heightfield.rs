@@ -219,3 +219,66 @@ impl Object {
         Some(z)
     }
 }
+
+impl Object {
+    /// The fine surface of a height field as the lit pass samples it: at every sample the
+    /// gradient `(dz/dx, dz/dy)` in the world's (unexaggerated, unrotated) x and y, and the height
+    /// relative to the object's origin; a row-major (ny, nx) grid, None for other kinds.
+    ///
+    /// The lit pass shades a height field with the normal `(-dz/dx z_scale, -dz/dy z_scale, 1)`
+    /// and colours it by z (when it is coloured by z) from these samples, interpolated bilinearly
+    /// at the pixel's (x, y), whatever level of detail its tile is drawn at: coarser levels then
+    /// shade and colour as the fine surface does, and differ from it only where the pixel's
+    /// surface point moves (issue 13). Gradients are central differences where both neighbours are
+    /// defined, one-sided where one is, 0 where neither is; a sample no triangle uses (a hole)
+    /// takes the mean of its defined 4-neighbours, so that interpolation next to a hole stays
+    /// smooth (its own triangles are never drawn).
+    pub fn shading_samples(&self) -> Option<Vec<[f32; 3]>> {
+        let ObjectKind::Heightfield { nx, ny, dx, dy, rotation, .. } = self.kind else { return None };
+        let z = self.height_grid()?;
+        let at = |i: usize, j: usize| z[j * nx + i];
+        // One axis' derivative per sample step, from the neighbours before and after.
+        let diff = |prev: Option<f32>, here: f32, next: Option<f32>| -> f64 {
+            match (prev.filter(|v| v.is_finite()), next.filter(|v| v.is_finite())) {
+                (Some(a), Some(b)) => (b as f64 - a as f64) / 2.0,
+                (Some(a), None) => here as f64 - a as f64,
+                (None, Some(b)) => b as f64 - here as f64,
+                (None, None) => 0.0,
+            }
+        };
+        let (c, s) = cos_sin_deg(rotation);
+        let mut g = vec![[f32::NAN; 3]; nx * ny];
+        for j in 0..ny {
+            for i in 0..nx {
+                let h = at(i, j);
+                if !h.is_finite() {
+                    continue;
+                }
+                let gi = diff((i > 0).then(|| at(i - 1, j)), h, (i + 1 < nx).then(|| at(i + 1, j))) / dx;
+                let gj = diff((j > 0).then(|| at(i, j - 1)), h, (j + 1 < ny).then(|| at(i, j + 1))) / dy;
+                // Grid frame -> world: the gradient turns with the grid (dy < 0 flips rows).
+                g[j * nx + i] = [(c * gi - s * gj) as f32, (s * gi + c * gj) as f32, h];
+            }
+        }
+        // Holes from the defined samples only (not from holes filled before them).
+        let defined = g.clone();
+        for j in 0..ny {
+            for i in 0..nx {
+                if g[j * nx + i][2].is_finite() {
+                    continue;
+                }
+                let near = [(i.wrapping_sub(1), j), (i + 1, j), (i, j.wrapping_sub(1)), (i, j + 1)];
+                let (mut sum, mut n) = ([0.0f32; 3], 0.0f32);
+                for (a, b) in near.into_iter().filter(|&(a, b)| a < nx && b < ny) {
+                    let v = defined[b * nx + a];
+                    if v[2].is_finite() {
+                        sum = [sum[0] + v[0], sum[1] + v[1], sum[2] + v[2]];
+                        n += 1.0;
+                    }
+                }
+                g[j * nx + i] = if n > 0.0 { sum.map(|x| x / n) } else { [0.0; 3] };
+            }
+        }
+        Some(g)
+    }
+}

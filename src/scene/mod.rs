@@ -451,6 +451,43 @@ mod tests {
         assert!((a[0][2] - b[0][2] - 0.5).abs() < 1e-6);
     }
 
+    /// The normal map's gradients are the world gradient of a plane z = a x + b y, whatever the
+    /// grid's rotation and row direction, and its heights the plane's, holes included (filled
+    /// from their neighbours).
+    #[test]
+    fn shading_samples_of_a_plane_in_every_grid_frame() {
+        let (a, b) = (0.3, -0.7);
+        for (rotation, yflip) in [(0.0, false), (30.0, false), (-112.5, true), (90.0, true)] {
+            let frame = GridFrame::new([1000.0, 2000.0], [5.0, 8.0]).rotated(rotation, yflip);
+            let (c, s) = crate::lod::cos_sin_deg(rotation);
+            let (nx, ny) = (7, 6);
+            let mut plane = Vec::new();
+            for j in 0..ny {
+                for i in 0..nx {
+                    let (u, v) = (i as f64 * 5.0, j as f64 * 8.0 * if yflip { -1.0 } else { 1.0 });
+                    let (x, y) = (c * u - s * v, s * u + c * v);
+                    plane.push(a * x + b * y);
+                }
+            }
+            let mut z = plane.clone();
+            z[2 * nx + 3] = f64::NAN;
+            let mut sc = Scene::new();
+            let id = sc.add_heightfield(&z, ny, nx, frame, (2, 2), None, opts()).unwrap();
+            let o = sc.object(id).unwrap();
+            let g = o.shading_samples().unwrap();
+            assert_eq!(g.len(), nx * ny);
+            for (k, gk) in g.iter().enumerate() {
+                assert!((gk[0] as f64 - a).abs() < 1e-4 && (gk[1] as f64 - b).abs() < 1e-4, "{rotation} {k} {gk:?}");
+                // The hole (3, 2) gets its neighbours' mean: the plane's height there too.
+                assert!((gk[2] as f64 + o.origin.z - plane[k]).abs() < 1e-3, "{rotation} {k} {gk:?}");
+            }
+        }
+        let mut sc = Scene::new();
+        let id =
+            sc.add_mesh(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[0, 1, 2]], "fault", None, opts()).unwrap();
+        assert!(sc.object(id).unwrap().shading_samples().is_none());
+    }
+
     #[test]
     fn errors_name_arguments() {
         let mut s = Scene::new();

@@ -18,6 +18,12 @@ struct Object {
     color: vec4<f32>,
     // Colour map (draw.wgsl): lo, 1 / (hi - lo), mode (0 flat, 1 vertex scalar, 2 z), first row.
     cmap: vec4<f32>,
+    // A height field's normal map (draw.wgsl): object-relative (x, y) of sample (0, 0), then
+    // (cos, sin) / dx: the column of a point; (-sin, cos) / dy: its row, then nx, ny.
+    grid: vec4<f32>,
+    grid_rows: vec4<f32>,
+    // x: 1 + the object's first sample in the normal map; 0: none (facet normals).
+    normal_map: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> g: Globals;

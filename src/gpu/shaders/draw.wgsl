@@ -4,6 +4,45 @@
 
 // Colour maps of this frame's objects: 256 rows each, then the object's NaN colour.
 @group(0) @binding(3) var<storage, read> lut: array<vec4<f32>>;
+// Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
+// sample: the gradient (dz/dx, dz/dy) as two f16, and the object-relative height's f32 bits.
+@group(0) @binding(4) var<storage, read> surface: array<vec2<u32>>;
+
+// The fine surface under render-space point `w` of a height field with a normal map:
+// (dz/dx, dz/dy, z) interpolated bilinearly at the point's (x, y), so that every level of detail
+// of a tile shades and colours by z as the fine surface does.
+fn fine_surface(o: Object, w: vec3<f32>) -> vec3<f32> {
+    let d = w.xy - o.offset.xy - o.grid.xy;
+    let n = o.grid_rows.zw;
+    let q = clamp(vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d)), vec2<f32>(0.0), n - 1.0);
+    let c = min(floor(q), n - 2.0);
+    let f = q - c;
+    let nx = u32(n.x);
+    let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
+    let s00 = surface[k];
+    let s10 = surface[k + 1u];
+    let s01 = surface[k + nx];
+    let s11 = surface[k + nx + 1u];
+    let a = vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y));
+    let b = vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y));
+    let e = vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y));
+    let h = vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y));
+    return mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
+}
+
+// The shading normal and colouring scalar at render-space point `w`: from the fine surface for a
+// height field with a normal map (the scalar replaced when colouring by z), else the facet's
+// normal from screen-space derivatives (no per-vertex normals to store) and the vertex scalar.
+fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, s: f32) -> vec4<f32> {
+    if (o.normal_map.x == 0u) {
+        if (dot(facet, facet) > 0.0) {
+            return vec4<f32>(normalize(facet), s);
+        }
+        return vec4<f32>(0.0, 0.0, 1.0, s);
+    }
+    let fs = fine_surface(o, w);
+    return vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
+}
 
 struct VOutDraw {
     @builtin(position) @invariant clip: vec4<f32>,
@@ -48,14 +87,10 @@ struct FOut {
 
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
-    // Flat normal from screen-space derivatives: no per-vertex normals to store.
-    let n0 = cross(dpdx(v.world), dpdy(v.world));
-    var n = vec3<f32>(0.0, 0.0, 1.0);
-    if (dot(n0, n0) > 0.0) {
-        n = normalize(n0);
-    }
     let o = objects[tile_object[v.tile]];
-    let c = base_color(o, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.s);
+    let n = ns.xyz;
+    let c = base_color(o, ns.w);
     // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
     // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
@@ -94,13 +129,10 @@ struct FOutGl {
 // frag_depth written (see VOutGl in common.wgsl).
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
-    let n0 = cross(dpdx(v.world), dpdy(v.world));
-    var n = vec3<f32>(0.0, 0.0, 1.0);
-    if (dot(n0, n0) > 0.0) {
-        n = normalize(n0);
-    }
     let o = objects[tile_object[v.tile]];
-    let c = base_color(o, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.s);
+    let n = ns.xyz;
+    let c = base_color(o, ns.w);
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
     let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
     return FOutGl(vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a), v.tile + 1u, v.zw.x / v.zw.y);
