@@ -600,6 +600,7 @@ fn frame_state(
                 grid_rows = [(-s / dy) as f32, (c / dy) as f32, *nx as f32, *ny as f32];
                 normal_map[0] = base + 1;
             }
+            normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
                 color: [o.color[0], o.color[1], o.color[2], o.opacity],

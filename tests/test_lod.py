@@ -153,3 +153,44 @@ def test_coarse_levels_shade_as_the_fine_surface(renderer_small, rotation):
     assert lod.stats["triangles_drawn"] < 0.6 * full.stats["triangles_drawn"]
     diff = np.abs(lod.image.astype(int) - full.image.astype(int)).max(axis=2)
     assert (diff > 2).mean() < 0.002, (diff > 2).mean()
+
+
+def curved_sheet(n: int = 120) -> tuple[np.ndarray, np.ndarray]:
+    """A steep, gently curved fault-like sheet (n x n vertices, 400 m a side)."""
+    u, v = np.meshgrid(np.linspace(0.0, 400.0, n), np.linspace(0.0, 400.0, n))
+    x = u + 30.0 * np.sin(v / 80.0)
+    y = 0.35 * v
+    z = -0.94 * v + 20.0 * np.cos(u / 60.0)
+    verts = np.stack([x, y, z], axis=-1).reshape(-1, 3)
+    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    faces = np.concatenate([np.stack([k, k + 1, k + n + 1], 1), np.stack([k, k + n + 1, k + n], 1)])
+    return verts, faces
+
+
+def test_a_smooth_mesh_shades_alike_at_coarse_levels(renderer_small):
+    """Meshes whose surface is smooth carry smooth vertex normals, which every level interpolates:
+    a fault drawn at coarse levels shades within a level or two of the fine one (facet shading of
+    the coarser triangles differed visibly)."""
+    v, f = curved_sheet()
+    s = gc.Scene()
+    s.add_mesh(v, f, kind="fault", tiles=8, color=(0.8, 0.5, 0.4))
+    r = renderer_small(160, 120)
+    cam = gc.Camera.fit(s, azimuth=160.0, elevation=25.0, aspect=160 / 120)
+    full = r.render(s, cam)
+    lod = r.render(s, cam, lod="screen_error", max_pixel_error=0.5)
+    assert lod.stats["triangles_drawn"] < 0.6 * full.stats["triangles_drawn"]
+    diff = np.abs(lod.image.astype(int) - full.image.astype(int)).max(axis=2)
+    assert (diff > 2).mean() < 0.002, (diff > 2).mean()
+
+
+def test_a_box_keeps_facet_shading(renderer_small):
+    """A mesh with creases (a cube) is not smoothed: each face seen is one flat colour."""
+    c = np.array([[(i & 1), (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], float) * 100.0
+    quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    faces = np.array([t for q in quads for t in ([q[0], q[1], q[2]], [q[0], q[2], q[3]])])
+    s = gc.Scene()
+    s.add_mesh(c, faces, color=(0.6, 0.6, 0.6))
+    r = renderer_small(160, 120)
+    res = r.render(s, gc.Camera.look_at((260.0, -180.0, 240.0), (50.0, 50.0, 50.0)))
+    colours = {tuple(p) for p in res.image[res.coverage][:, :3]}
+    assert len(colours) <= 3, colours  # three faces seen, one colour each

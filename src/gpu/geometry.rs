@@ -13,8 +13,9 @@ use wgpu::util::DeviceExt;
 pub struct SceneGeometry {
     pub key: (u64, u64),
     pub vertices: Option<wgpu::Buffer>,
-    /// One f32 scalar per vertex, in `vertices`' order (the tiles' `values` for colour by data;
-    /// 0 for tiles without; no data as [`NO_DATA`]): the lit pass's second vertex stream.
+    /// Per vertex, in `vertices`' order, the lit pass's second vertex stream: an f32 scalar (the
+    /// tiles' `values` for colour by data; 0 for tiles without; no data as [`NO_DATA`]) and the
+    /// packed smooth normal (`TileMesh::normals`; `lod::normals::NONE` for tiles without).
     pub values: Option<wgpu::Buffer>,
     pub indices: Option<wgpu::Buffer>,
     /// Object index (position in `scene.objects()`) of every tile.
@@ -132,7 +133,7 @@ impl SceneGeometry {
             wgpu::BufferUsages::empty()
         };
         let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | direct);
-        let sb = mapped("values", nv * 4, wgpu::BufferUsages::VERTEX | direct);
+        let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | direct);
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut levels = Vec::new();
@@ -145,17 +146,16 @@ impl SceneGeometry {
             let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
             // Mapped memory is write-only: append whole runs, counting in vertices and indices.
             let (mut v, mut i) = (0usize, 0usize);
-            // Positions and their scalars (zeros when the tile has none), run for run.
-            let mut scratch: Vec<f32> = Vec::new();
-            let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32]| {
+            // Positions and their (scalar, normal) pairs (zeros when the tile has none), run for run.
+            let mut scratch: Vec<[u32; 2]> = Vec::new();
+            let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32], normals: &[u32]| {
                 vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
                 scratch.clear();
-                if vals.is_empty() {
-                    scratch.resize(data.len(), 0.0);
-                } else {
-                    scratch.extend(vals.iter().map(|&x| if x.is_nan() { NO_DATA } else { x }));
-                }
-                smap.slice(*v * 4..(*v + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(&scratch));
+                scratch.extend((0..data.len()).map(|k| {
+                    let x = vals.get(k).map_or(0.0, |&x| if x.is_nan() { NO_DATA } else { x });
+                    [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE)]
+                }));
+                smap.slice(*v * 8..(*v + data.len()) * 8).copy_from_slice(bytemuck::cast_slice(&scratch));
                 *v += data.len();
             };
             let mut put_i = |i: &mut usize, data: &[u32]| {
@@ -165,6 +165,7 @@ impl SceneGeometry {
             let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) =
                 (Vec::new(), Vec::new(), Vec::new());
             let mut cvals: Vec<f32> = Vec::new();
+            let mut cnormals: Vec<u32> = Vec::new();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
                     let tile = fine.len() as u32;
@@ -175,7 +176,7 @@ impl SceneGeometry {
                         base_vertex: v as i32,
                         first_instance: tile,
                     });
-                    put_v(&mut v, &t.positions, &t.values);
+                    put_v(&mut v, &t.positions, &t.values, &t.normals);
                     put_i(&mut i, &t.fine);
                     // The coarse proxy and each LOD level get their own compact copy of the
                     // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -186,6 +187,7 @@ impl SceneGeometry {
                         remap.resize(t.positions.len(), u32::MAX);
                         cverts.clear();
                         cvals.clear();
+                        cnormals.clear();
                         cidx.clear();
                         for &k in indices {
                             let slot = &mut remap[k as usize];
@@ -194,6 +196,9 @@ impl SceneGeometry {
                                 cverts.push(t.positions[k as usize]);
                                 if !t.values.is_empty() {
                                     cvals.push(t.values[k as usize]);
+                                }
+                                if !t.normals.is_empty() {
+                                    cnormals.push(t.normals[k as usize]);
                                 }
                             }
                             cidx.push(*slot);
@@ -205,7 +210,7 @@ impl SceneGeometry {
                             base_vertex: *v as i32,
                             first_instance: tile,
                         };
-                        put_v(v, &cverts, &cvals);
+                        put_v(v, &cverts, &cvals, &cnormals);
                         put_i(i, &cidx);
                         args
                     };
@@ -240,7 +245,7 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&to),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bytes = nv * 16 + ni * 4 + to.len() as u64 * 4 + shading.size();
+        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + shading.size();
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),

@@ -58,8 +58,9 @@ pub struct GpuObject {
     pub grid: [f32; 4],
     /// The row giving the grid row (`-sin / dy, cos / dy`), then `nx, ny`.
     pub grid_rows: [f32; 4],
-    /// `x`: 1 + the first sample of the object's gradients in the normal map, 0 for none (facet
-    /// normals); the rest unused.
+    /// `x`: 1 + the first sample of the object's gradients in the normal map, 0 for none; `y`: 1
+    /// when the object's vertices carry smooth normals (`TileMesh::normals`); with neither, the
+    /// lit pass shades by facets. `zw` unused.
     pub normal_map: [u32; 4],
 }
 

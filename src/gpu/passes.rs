@@ -225,11 +225,15 @@ impl Passes {
         };
         // GL writes frag_depth from `*_gl` entry points, for reverse-Z precision (common.wgsl).
         let gl = d.adapter_info().backend == wgpu::Backend::Gl;
-        // The lit pass's second vertex stream: one f32 scalar per vertex (colour by data).
+        // The lit pass's second vertex stream: per vertex an f32 scalar (colour by data) and a
+        // packed smooth normal (`lod::normals`).
         let value_layout = wgpu::VertexBufferLayout {
-            array_stride: 4,
+            array_stride: 8,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 0, shader_location: 1 }],
+            attributes: &[
+                wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 0, shader_location: 1 },
+                wgpu::VertexAttribute { format: wgpu::VertexFormat::Uint32, offset: 4, shader_location: 2 },
+            ],
         };
         let scene_pipeline = |label: &str,
                               file: &str,

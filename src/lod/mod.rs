@@ -14,6 +14,7 @@
 //! of the grid's own (i, j) frame either way, only the vertex positions are turned.
 
 pub mod levels;
+pub mod normals;
 pub mod simplify;
 
 use crate::error::Work;
@@ -32,6 +33,10 @@ pub struct TileMesh {
     /// property): empty when the object has none, else one per entry of `positions`. NaN = no
     /// data (drawn in the colour map's NaN colour).
     pub values: Vec<f32>,
+    /// Per-vertex smooth normals for the lit pass ([`normals`]: packed, `normals::NONE` for none):
+    /// empty when the object shades by its facets (height fields take theirs from the fine
+    /// surface instead, grids are flat), else one per entry of `positions`.
+    pub normals: Vec<u32>,
     /// Fine (level 0) triangle list into `positions`.
     pub fine: Vec<u32>,
     /// Coarse proxy triangle list into `positions`.
@@ -268,6 +273,7 @@ pub fn tile_heightfield(
 pub fn tile_mesh(
     vertices: &[[f64; 3]],
     values: Option<&[f64]>,
+    normals: Option<&[u32]>,
     faces: &[[u32; 3]],
     origin: DVec3,
     clusters: usize,
@@ -309,6 +315,9 @@ pub fn tile_mesh(
                         ]);
                         if let Some(vals) = values {
                             tile.values.push(vals[v as usize] as f32);
+                        }
+                        if let Some(ns) = normals {
+                            tile.normals.push(ns[v as usize]);
                         }
                     }
                     tile.fine.push(slot);

@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 4 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 5 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -20,6 +20,7 @@
 //!   (256 rows), clim f64 x 2, nan_color f32 x 3; opacity f32 (version 4); n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
+//!             normals [u32] (version 5: packed smooth normals, empty or one per position),
 //!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, indices [u32]
 //! ```
@@ -35,7 +36,7 @@ use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 4;
+const VERSION: u32 = 5;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -258,6 +259,7 @@ impl Scene {
                 }
                 w.f32s(bytemuck::cast_slice(&t.positions));
                 w.f32s(&t.values);
+                w.u32s(&t.normals);
                 w.u32s(&t.fine);
                 w.u32s(&t.coarse);
                 w.f32(t.proxy_error);
@@ -395,6 +397,14 @@ impl Scene {
                         positions.len()
                     )));
                 }
+                let normals = if version >= 5 { r.u32s()? } else { Vec::new() };
+                if !normals.is_empty() && normals.len() != positions.len() {
+                    return Err(r.err(format!(
+                        "object {id}: a tile has {} normals for {} vertices",
+                        normals.len(),
+                        positions.len()
+                    )));
+                }
                 let (fine, coarse) = (r.u32s()?, r.u32s()?);
                 let proxy_error = r.f32()?;
                 let nl = r.u32()? as usize;
@@ -419,6 +429,7 @@ impl Scene {
                     iy,
                     positions,
                     values,
+                    normals,
                     fine,
                     coarse,
                     bbox_min,
@@ -532,12 +543,13 @@ mod tests {
         // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
         // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
         // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
-        // byte and opacity after it (flat, 1), and no tile values (an empty array after the tile's n_tiles 4,
-        // ix iy 8, bbox 24 and 4 positions 8 + 48)
+        // byte and opacity after it (flat, 1), and no tile values nor normals (two empty arrays after
+        // the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
         let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
         let origin_at = at + 8 + 16 + 12 + 1 + 24;
         let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
-        let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 8..]].concat();
+        let mut v1 =
+            [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 16..]].concat();
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);

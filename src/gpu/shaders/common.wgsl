@@ -22,7 +22,8 @@ struct Object {
     // (cos, sin) / dx: the column of a point; (-sin, cos) / dy: its row, then nx, ny.
     grid: vec4<f32>,
     grid_rows: vec4<f32>,
-    // x: 1 + the object's first sample in the normal map; 0: none (facet normals).
+    // x: 1 + the object's first sample in the normal map, 0: none; y: 1 when its vertices carry
+    // smooth normals; with neither, facet normals.
     normal_map: vec4<u32>,
 }
 

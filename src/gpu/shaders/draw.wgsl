@@ -31,10 +31,14 @@ fn fine_surface(o: Object, w: vec3<f32>) -> vec3<f32> {
 }
 
 // The shading normal and colouring scalar at render-space point `w`: from the fine surface for a
-// height field with a normal map (the scalar replaced when colouring by z), else the facet's
-// normal from screen-space derivatives (no per-vertex normals to store) and the vertex scalar.
-fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, s: f32) -> vec4<f32> {
+// height field with a normal map (the scalar replaced when colouring by z); the interpolated
+// vertex normal `vn` for a mesh with smooth normals (normal_map.y = 1); else the facet's normal
+// from screen-space derivatives; with the vertex scalar `s`.
+fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
     if (o.normal_map.x == 0u) {
+        if (o.normal_map.y == 1u && dot(vn, vn) > 1e-12) {
+            return vec4<f32>(normalize(vn), s);
+        }
         if (dot(facet, facet) > 0.0) {
             return vec4<f32>(normalize(facet), s);
         }
@@ -50,10 +54,27 @@ struct VOutDraw {
     @location(1) @interpolate(flat) tile: u32,
     // The colouring scalar: the vertex's value (mode 1) or its object-relative z (mode 2).
     @location(2) s: f32,
+    // The vertex's smooth normal, exaggerated (0 where it has none).
+    @location(3) n: vec3<f32>,
+}
+
+// A packed smooth normal (lod::normals: octahedral, two snorm16; 0 = none) in render space,
+// where z is exaggerated by z_scale (normals scale by its inverse).
+fn vertex_normal(p: u32) -> vec3<f32> {
+    if (p == 0u) {
+        return vec3<f32>(0.0);
+    }
+    let e = unpack2x16snorm(p);
+    var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(vec3<f32>(n.xy, n.z / g.z_scale));
 }
 
 @vertex
-fn vs_draw(@location(0) pos: vec3<f32>, @location(1) value: f32, @builtin(instance_index) tile: u32) -> VOutDraw {
+fn vs_draw(@location(0) pos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+           @builtin(instance_index) tile: u32) -> VOutDraw {
     let o = objects[tile_object[tile]];
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
@@ -61,6 +82,7 @@ fn vs_draw(@location(0) pos: vec3<f32>, @location(1) value: f32, @builtin(instan
     out.world = p;
     out.tile = tile;
     out.s = select(value, pos.z, o.cmap.z > 1.5);
+    out.n = vertex_normal(nrm);
     return out;
 }
 
@@ -88,7 +110,7 @@ struct FOut {
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
@@ -109,14 +131,16 @@ struct VOutDrawGl {
     @location(1) @interpolate(flat) tile: u32,
     @location(2) zw: vec2<f32>,
     @location(3) s: f32,
+    @location(4) n: vec3<f32>,
 }
 
 @vertex
-fn vs_draw_gl(@location(0) pos: vec3<f32>, @location(1) value: f32, @builtin(instance_index) tile: u32) -> VOutDrawGl {
+fn vs_draw_gl(@location(0) pos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+              @builtin(instance_index) tile: u32) -> VOutDrawGl {
     let o = objects[tile_object[tile]];
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
-    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5));
+    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), vertex_normal(nrm));
 }
 
 struct FOutGl {
@@ -130,7 +154,7 @@ struct FOutGl {
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
