@@ -266,14 +266,22 @@ pub fn tile_heightfield(
         .collect()
 }
 
+/// Optional per-vertex attributes of a mesh, one per vertex each.
+#[derive(Clone, Copy, Default)]
+pub struct VertexAttributes<'a> {
+    /// Scalars for colour by data.
+    pub values: Option<&'a [f64]>,
+    /// Packed smooth normals ([`normals::smooth_normals`]).
+    pub normals: Option<&'a [u32]>,
+}
+
 /// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
-/// `vertices` are world coordinates, `values` optional per-vertex scalars (colour by data);
-/// `faces` index into them (validated by the caller). Once
+/// `vertices` are world coordinates, `attrs` optional per-vertex scalars (colour by data) and
+/// normals; `faces` index into them (validated by the caller). Once
 /// `stop` is set, tiles not yet started are left empty (as in [`tile_heightfield`]).
 pub fn tile_mesh(
     vertices: &[[f64; 3]],
-    values: Option<&[f64]>,
-    normals: Option<&[u32]>,
+    attrs: VertexAttributes<'_>,
     faces: &[[u32; 3]],
     origin: DVec3,
     clusters: usize,
@@ -313,10 +321,10 @@ pub fn tile_mesh(
                             (p[1] - origin.y) as f32,
                             (p[2] - origin.z) as f32,
                         ]);
-                        if let Some(vals) = values {
+                        if let Some(vals) = attrs.values {
                             tile.values.push(vals[v as usize] as f32);
                         }
-                        if let Some(ns) = normals {
+                        if let Some(ns) = attrs.normals {
                             tile.normals.push(ns[v as usize]);
                         }
                     }

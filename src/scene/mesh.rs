@@ -63,9 +63,8 @@ impl Scene {
         let values = color_by.as_ref().and_then(|c| c.values.as_deref());
         // Smooth shading where the surface is smooth (faults, isosurfaces), facets elsewhere.
         let normals = lod::normals::smooth_normals(vertices, &f32faces);
-        let tiles = opts
-            .interrupt
-            .run_parallel(|stop| lod::tile_mesh(vertices, values, normals.as_deref(), &f32faces, o, k, cf, stop))?;
+        let attrs = lod::VertexAttributes { values, normals: normals.as_deref() };
+        let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, attrs, &f32faces, o, k, cf, stop))?;
         // The range of what is drawn: the vertices the faces use.
         let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&tiles, o.z, &c.source))).transpose()?;
         Ok(self.push(o, opts.name, ObjectKind::Mesh { kind: kind.to_string() }, color, color_by, tiles))
