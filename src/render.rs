@@ -216,7 +216,8 @@ impl Renderer {
         crate::error::ensure(width >= 1, "width", || format!("width is {width}; expected >= 1"))?;
         crate::error::ensure(height >= 1, "height", || format!("height is {height}; expected >= 1"))?;
         let strategies: Vec<Box<dyn CullStrategy>> = cull::REGISTRY.iter().map(|make| make()).collect();
-        let wanted = strategies.iter().fold(wgpu::Features::empty(), |f, s| f | s.required_features());
+        // SHADER_EARLY_DEPTH_TEST: the box test's cheaper variant (gpu::box_early), where available.
+        let wanted = strategies.iter().fold(wgpu::Features::SHADER_EARLY_DEPTH_TEST, |f, s| f | s.required_features());
         let ctx = GpuContext::new(backend, wanted)?;
         ctx.check_image_size(width, height)?;
         let passes = Passes::new(&ctx.device);

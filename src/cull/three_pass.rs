@@ -20,7 +20,9 @@
 //! Then every other visible tile's bounding box is tested against the depth of that image, at
 //! full resolution: a render pass rasterises the front faces of each box and counts,
 //! per tile, the pixels where the box is at or in front of the stored depth (the comparison is
-//! done in the fragment shader against the depth texture, so hidden fragments are never counted).
+//! done in the fragment shader against the depth texture, so hidden fragments are never counted;
+//! where the device has an exact early depth test, by the rasteriser against the depth bound
+//! read-only, the same comparison at half the cost: `gpu::box_early`).
 //! Tiles whose count exceeds the threshold are drawn too (into the same image, depth-tested), in a
 //! second indirect draw built on the GPU. Why nothing visible is lost:
 //!

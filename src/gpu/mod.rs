@@ -5,6 +5,7 @@
 //! copy depth textures into buffers). Which tiles a pass draws is decided in `crate::cull`;
 //! the order of a frame lives in `crate::render`.
 
+mod box_early;
 mod context;
 pub mod depth_read;
 pub mod geometry;

@@ -7,7 +7,8 @@
 //!   (select.wgsl), so the next draw needs no read-back;
 //! - [`Passes::record_draw`]: the lit draw of a set of draws, colour + tile id (draw.wgsl);
 //! - [`Passes::record_box_test`]: per tile, the pixels where its box is at or in front of a
-//!   depth image (box_test.wgsl, with box.wgsl);
+//!   depth image (box_test.wgsl, with box.wgsl; box_test_early.wgsl on the hardware's early depth
+//!   test where the device allows it exactly, `box_early.rs`);
 //! - [`Passes::record_select_rest`]: the draws not yet made whose count is above a threshold.
 //!
 //! Sets of draws are indirect buffers of [`DrawArgs`], one per tile, drawn with one
@@ -58,6 +59,8 @@ pub struct Passes {
     select_rest: wgpu::ComputePipeline,
     box_layout: wgpu::BindGroupLayout,
     box_test: wgpu::RenderPipeline,
+    /// The box test on the hardware's early depth test, where the device allows it exactly.
+    box_early: Option<super::box_early::EarlyBoxTest>,
 }
 
 pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
@@ -383,6 +386,7 @@ impl Passes {
             multiview_mask: None,
             cache: None,
         });
+        let box_early = super::box_early::EarlyBoxTest::new(d, &scene_layout);
         Self {
             scene_layout,
             hist_layout,
@@ -394,6 +398,7 @@ impl Passes {
             select,
             rest_layout,
             select_rest,
+            box_early,
             box_layout,
             box_test,
         }
@@ -533,6 +538,9 @@ impl Passes {
         counts: &wgpu::Buffer,
         ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        if let Some(early) = &self.box_early {
+            return early.record(d, enc, scene_bg, targets, boxes, n, skip, counts, ts);
+        }
         let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("box_test"),
             layout: &self.box_layout,
