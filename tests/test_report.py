@@ -145,8 +145,8 @@ def test_bench_tiny_json(tmp_path):
     methods = [r["method"] for r in rows]
     assert methods == ["none", "three_pass(s=1)", "three_pass(s=0.5)", "three_pass(cf=100,s=0.5)",
                        "three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)", "none(lod=0.5)",
-                       "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)", "three_pass(cons,lod=2)", "oracle",
-                       "horizon", "pyvista", "pyvista_msaa"]
+                       "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)", "three_pass(cons,lod=2)",
+                       "temporal(t=0)", "temporal(lod=0.5)", "oracle", "horizon", "pyvista", "pyvista_msaa"]
     for r in rows:
         assert BENCH_KEYS <= set(r), BENCH_KEYS - set(r)
         assert r["total_ms"] > 0 and r["ratio_to_none"] > 0 and r["triangles_drawn"] > 0
@@ -160,8 +160,12 @@ def test_bench_tiny_json(tmp_path):
     assert none["ratio_to_none"] == 1.0 and none["differing_pixel_fraction"] == 0.0
     oracle = rows[methods.index("oracle")]
     assert oracle["missing_tiles"] == 0 and oracle["differing_pixel_fraction"] == 0.0
-    for m in ("three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)"):  # conservative: nothing lost
+    for m in ("three_pass(cons,t=0)", "three_pass(cons,t=0,cf=100,s=0.5)", "temporal(t=0)"):  # nothing lost
         assert rows[methods.index(m)]["missing_tiles"] == 0, m
+        assert rows[methods.index(m)]["differing_pixel_fraction"] == 0.0, m
+    orbit = s["orbit"]
+    assert set(orbit["methods"]) == {"none", "three_pass(cons,t=0,cf=100,s=0.5)", "temporal(t=0)", "oracle"}
+    assert orbit["temporal_frames_differing"] == 0
 
 
 def test_bench_views_by_name_without_pyvista(tmp_path):
@@ -179,7 +183,8 @@ def test_bench_views_by_name_without_pyvista(tmp_path):
                                                 "three_pass(cf=100,s=0.5)", "three_pass(cons,t=0)",
                                                 "three_pass(cons,t=0,cf=100,s=0.5)", "none(lod=0.5)",
                                                 "three_pass(cons,lod=0.5)", "three_pass(cons,lod=1)",
-                                                "three_pass(cons,lod=2)", "oracle"}
+                                                "three_pass(cons,lod=2)", "temporal(t=0)", "temporal(lod=0.5)",
+                                                "oracle"}
     assert np.isclose(d["summary"]["per_method"]["none"]["ratio_to_none"], 1.0)
 
 

@@ -222,6 +222,10 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         *[(f"three_pass(cons,lod={e:g})",
            dict(culling="three_pass", pixel_threshold=0, lod="screen_error", max_pixel_error=e))
           for e in (0.5, 1.0, 2.0)],
+        # History = its own last frame of the same view (the rounds repeat each view): the static-
+        # camera case; the orbit section below measures a moving camera.
+        ("temporal(t=0)", dict(culling="temporal", pixel_threshold=0)),
+        ("temporal(lod=0.5)", dict(culling="temporal", pixel_threshold=0, lod="screen_error", max_pixel_error=0.5)),
         ("oracle", dict(culling="oracle")),
     ]
     if cfg["horizon"]:
@@ -355,6 +359,8 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
         task.advance(1)
 
+    orbit = _orbit(render, views, cfg)
+
     # geometric means over views, per method
     per_method: dict[str, dict[str, Any]] = {}
     for name in dict.fromkeys(r["method"] for r in rows):
@@ -407,8 +413,58 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         **pv_versions,
         wall_s=time.perf_counter() - t_start,
         per_method=per_method,
+        orbit=orbit,
     )
     return dict(summary=summary, rows=rows)
+
+
+ORBIT_METHODS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("none", dict(culling="none")),
+    (f"three_pass(cons,t=0,cf={COARSE_ALT},s=0.5)",
+     dict(culling="three_pass", pixel_threshold=0, prepass_scale=0.5, coarse_factor=COARSE_ALT)),
+    ("temporal(t=0)", dict(culling="temporal", pixel_threshold=0)),
+    ("oracle", dict(culling="oracle")),
+)
+
+
+def _orbit(render, views, cfg: dict[str, Any]) -> dict[str, Any]:
+    """A moving camera: from each of the first views, ``orbit_frames`` frames turning the azimuth by
+    ``orbit_step`` degrees each (a user dragging the view), every method over the whole sequence,
+    the methods interleaved over two rounds. temporal's history is the previous frame of the
+    sequence (its first frame follows one untimed frame of the view itself). Returns per method the
+    best round's mean frame time, its ratios to none and oracle, and the frames whose temporal
+    image differs from none's."""
+    import geocull as gc
+
+    frames, step = int(cfg.get("orbit_frames", 8)), float(cfg.get("orbit_step", 2.0))
+    n_views = 1 if cfg["mode"] != "full" else 4
+    seqs = []
+    for _, kw in views[:n_views]:
+        cam = gc.Camera.look_at(**kw)
+        seqs.append([cam.rotated(k * step, 0.0) for k in range(frames + 1)])
+    best: dict[str, float] = {name: math.inf for name, _ in ORBIT_METHODS}
+    differing = 0
+    for rnd in range(2):
+        for name, rk in ORBIT_METHODS:
+            total = 0.0
+            for seq in seqs:
+                render(seq[0], rk)  # the frame before the drag (temporal's history)
+                for cam in seq[1:]:
+                    res = render(cam, rk)
+                    total += res.stats["total_ms"]
+                    if rnd == 0 and rk["culling"] == "temporal":
+                        ref = render(cam, dict(culling="none"))
+                        differing += int(not np.array_equal(res.image, ref.image))
+            best[name] = min(best[name], total / (frames * len(seqs)))
+    t_none, t_oracle = best["none"], best["oracle"]
+    return dict(
+        views=n_views,
+        frames=frames,
+        step_deg=step,
+        methods={name: dict(mean_ms=t, ratio_to_none=t / t_none, ratio_to_oracle=t / t_oracle)
+                 for name, t in best.items()},
+        temporal_frames_differing=differing,
+    )
 
 
 def _gmean(xs) -> float | None:
@@ -466,6 +522,15 @@ def format_table(result: dict[str, Any]) -> str:
             f"beyond 4/255 {_f(None if dt is None else 100 * dt, '.4f')} %  "
             f"missing tiles {_f(m['missing_tiles'], 'd')}"
         )
+    o = s.get("orbit")
+    if o:
+        lines.append("")
+        lines.append(f"moving camera: {o['views']} view(s) x {o['frames']} frames, azimuth +{o['step_deg']:g} deg per "
+                     f"frame; mean frame time (best of 2 rounds); temporal frames differing from none: "
+                     f"{o['temporal_frames_differing']}")
+        for name, m in o["methods"].items():
+            lines.append(f"  {name:<32} {m['mean_ms']:>8.1f} ms  x none {m['ratio_to_none']:.3f}  "
+                         f"x oracle {m['ratio_to_oracle']:.3f}")
     lines.append("")
     bpt = s["bytes_per_triangle"]
     lines.append(f"scene: {s['n_triangles']:,} triangles in {s['n_tiles']:,} tiles; "

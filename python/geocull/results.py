@@ -41,10 +41,11 @@ class RenderStats(TypedDict):
     trees_built: NotRequired[int]  # horizon: quadtrees built this frame (0 when all were cached)
     cache_bytes: NotRequired[int]  # horizon: bytes of quadtrees cached after this frame (<= Renderer.cache_budget)
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
-    tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors: boxes submitted to the test
+    tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes submitted to the test
+    tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
     tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test
-    test_ms: NotRequired[float]  # three_pass conservative / predict_errors with GPU timestamps: ms, box test
+    test_ms: NotRequired[float]  # three_pass conservative / predict_errors, temporal with GPU timestamps: ms, box test
     tiles_at_risk: NotRequired[int]  # three_pass predict_errors: culled tiles whose box shows in front
     predicted_max_missing_pixels: NotRequired[int]  # three_pass predict_errors: upper bound of missed pixels
     triangles_level0: NotRequired[int]  # lod="screen_error": triangles drawn at level 0 (fine)
@@ -139,12 +140,12 @@ class RenderResult(Generic[StatsT]):
     image: (H, W, 4) uint8 RGBA, row 0 at the top.  depth: (H, W) float32 distance along the view
     axis in (exaggerated) world units, +inf where empty.  tile_pixels: (n_tiles,) uint32 visible
     pixels per tile, in :meth:`geocull.Scene.tile_table` order (three_pass: the pass-2 counts in
-    full-image pixels; none/oracle: in the final image).  tile_drawn: (n_tiles,) bool.
+    full-image pixels; none/oracle/temporal: in the final image).  tile_drawn: (n_tiles,) bool.
     stats: :class:`RenderStats` (triangles, tiles and per-pass milliseconds).  near, far: the clip
     distances used (exaggerated world units).  culling: the mode rendered.  horizon: for
     culling="horizon", (W,) float32 per image column, the pixel rows from the bottom known hidden
     (-inf where none); else None.  box_pixels: for three_pass with conservative=True or
-    predict_errors=True, (n_tiles,) uint32 pixels where each tile's box shows in front of the
+    predict_errors=True and for temporal, (n_tiles,) uint32 pixels where each tile's box shows in front of the
     first phase's image (0 for tiles drawn in that phase); else None.  proxy_error_px: for
     three_pass, (n_tiles,) float32 each tile's proxy error (``tile_table()["proxy_error"]``,
     exaggerated) projected to pixels at the tile's nearest point; else None.  tile_level,

@@ -13,6 +13,8 @@ pub mod frustum;
 pub mod horizon;
 pub mod none;
 pub mod oracle;
+pub mod phase2;
+pub mod temporal;
 pub mod three_pass;
 
 #[cfg(test)]
@@ -25,7 +27,7 @@ use crate::scene::Scene;
 
 /// Every strategy, in the order Python lists them. Adding a strategy: its file, one line here.
 pub const REGISTRY: &[fn() -> Box<dyn CullStrategy>] =
-    &[none::make, three_pass::make, oracle::make, horizon::make, frustum::make];
+    &[none::make, three_pass::make, oracle::make, horizon::make, frustum::make, temporal::make];
 
 /// Names of the registered strategies (what `culling=` accepts).
 pub fn names() -> Vec<&'static str> {

@@ -53,13 +53,10 @@
 //! tile's proxy error (`TileMesh::proxy_error`, metres, from the build) projected to pixels at the
 //! tile's nearest point (array `proxy_error_px`): how far the proxy the prepass drew may be off.
 
+use super::phase2::draw_and_test_the_rest;
 use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
-use crate::gpu::layout::BoxInstance;
 use crate::gpu::{passes, Targets};
-
-/// Initial box count of tiles drawn untested (their box reaches the near plane).
-const FORCED: u32 = 1 << 30;
 
 #[derive(Default)]
 pub struct ThreePass {
@@ -73,25 +70,6 @@ pub struct ThreePass {
 
 pub fn make() -> Box<dyn CullStrategy> {
     Box::new(ThreePass::default())
-}
-
-/// Render-space boxes of the visible, non-empty tiles (instance id = tile index), grown against
-/// f32 round-off, and for each the initial count (FORCED when the box reaches the near plane).
-fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
-    let g = f.geometry;
-    let mut init = vec![0u32; g.n_tiles()];
-    let mut boxes = Vec::new();
-    for (i, first) in init.iter_mut().enumerate() {
-        if !f.object_visible[i] || g.fine[i].index_count == 0 {
-            continue;
-        }
-        let (lo, hi, near) = f.tile_box(i);
-        if near {
-            *first = FORCED;
-        }
-        boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
-    }
-    (boxes, init)
 }
 
 /// Each tile's proxy error (`TileMesh::proxy_error`, exaggerated by z_scale where that enlarges
@@ -172,35 +150,14 @@ impl CullStrategy for ThreePass {
 
         // Conservative second phase (or the predictor): draw the first set now, test every other
         // tile's box against its depth at full resolution, draw (or report) those that show.
-        f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &first, false, f.timestamps);
-        let (boxes, init) = tile_boxes(f);
-        let box_counts = passes::counts_buffer_init(d, &init);
-        let boxes_buf = passes::boxes_buffer(d, &boxes);
-        let ts_test = f.timestamps.and_then(|t| t.render("test_ms"));
-        f.passes.record_box_test(
-            d,
-            enc,
-            f.scene_bg,
-            f.main_targets,
-            &boxes_buf,
-            boxes.len(),
-            &first,
-            &box_counts,
-            ts_test,
-        );
-        let draw = if self.predicting {
-            Draw::Mask(vec![false; n])
-        } else {
-            let rest = passes::empty_args_buffer(d, "rest_args", n);
-            f.passes.record_select_rest(d, enc, &box_counts, &fine, &first, &rest, n, threshold as f32, ts("count_ms"));
-            Draw::Gpu(rest)
-        };
+        let rest = draw_and_test_the_rest(f, enc, &first, &fine, threshold as f32, !self.predicting);
+        let (draw, box_counts) = (rest.draw, rest.box_counts);
         let mut v = Visible::new(draw, pixels);
         v.arrays.push(error_px);
         v.predrawn = Some(first);
         v.tile_counts.push(("box_pixels", box_counts));
         v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
-        v.stats.push(("tiles_box_tested", Stat::Count(boxes.len() as u64)));
+        v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
         Ok(v)
     }
 

@@ -1,0 +1,77 @@
+//! The conservative second phase that `three_pass` and `temporal` share: after a first set of
+//! tiles A has been drawn into the final targets, every other visible tile's box is tested
+//! against that image's depth at full resolution (`Passes::record_box_test`), and the tiles whose
+//! count exceeds the threshold are drawn too, selected on the GPU (`record_select_rest`).
+//!
+//! Why nothing visible is lost, whatever A is: the depth D(p) after drawing A is that of a subset
+//! of the scene's fine triangles, so at every pixel it is at or behind the nearest fine surface
+//! F(p); a tile T with a visible fragment at p lies at F(p) there, inside T's box, so the box's
+//! entry point on p's ray is at or in front of D(p): T's count is at least its number of visible
+//! pixels. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
+//! f32 round-off and ties count as visible (`FrameInputs::tile_box`).
+
+use super::{Draw, FrameInputs};
+use crate::gpu::layout::BoxInstance;
+use crate::gpu::passes;
+
+/// Initial box count of tiles drawn untested (their box reaches the near plane).
+pub const FORCED: u32 = 1 << 30;
+
+/// Render-space boxes of the visible, non-empty tiles (instance id = tile index), grown against
+/// f32 round-off, and for each tile the initial count (FORCED when the box reaches the near plane).
+pub fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
+    let g = f.geometry;
+    let mut init = vec![0u32; g.n_tiles()];
+    let mut boxes = Vec::new();
+    for (i, first) in init.iter_mut().enumerate() {
+        if !f.object_visible[i] || g.fine[i].index_count == 0 {
+            continue;
+        }
+        let (lo, hi, near) = f.tile_box(i);
+        if near {
+            *first = FORCED;
+        }
+        boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
+    }
+    (boxes, init)
+}
+
+/// What the second phase recorded.
+pub struct Rest {
+    /// The draws it adds (Gpu), or nothing (a Mask of false) when it only tests.
+    pub draw: Draw,
+    /// Per tile, the box pixels counted (FORCED + count for untested tiles).
+    pub box_counts: wgpu::Buffer,
+    /// Boxes tested.
+    pub tested: usize,
+}
+
+/// Draws `first` (the set A, as indirect args, one per tile) into the final targets, tests every
+/// other visible tile's box against the result, and selects from `fine` (the frame's draws, one per
+/// tile) those whose count exceeds `threshold` (full-image pixels) when `add` is true.
+pub fn draw_and_test_the_rest(
+    f: &FrameInputs<'_>,
+    enc: &mut wgpu::CommandEncoder,
+    first: &wgpu::Buffer,
+    fine: &wgpu::Buffer,
+    threshold: f32,
+    add: bool,
+) -> Rest {
+    let d = &f.ctx.device;
+    let n = f.n_tiles();
+    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, first, false, f.timestamps);
+    let (boxes, init) = tile_boxes(f);
+    let box_counts = passes::counts_buffer_init(d, &init);
+    let boxes_buf = passes::boxes_buffer(d, &boxes);
+    let ts_test = f.timestamps.and_then(|t| t.render("test_ms"));
+    f.passes.record_box_test(d, enc, f.scene_bg, f.main_targets, &boxes_buf, boxes.len(), first, &box_counts, ts_test);
+    let draw = if add {
+        let rest = passes::empty_args_buffer(d, "rest_args", n);
+        let ts = f.timestamps.and_then(|t| t.compute("count_ms"));
+        f.passes.record_select_rest(d, enc, &box_counts, fine, first, &rest, n, threshold, ts);
+        Draw::Gpu(rest)
+    } else {
+        Draw::Mask(vec![false; n])
+    };
+    Rest { draw, box_counts, tested: boxes.len() }
+}
