@@ -41,7 +41,7 @@ class RenderStats(TypedDict):
     trees_built: NotRequired[int]  # horizon: quadtrees built this frame (0 when all were cached)
     cache_bytes: NotRequired[int]  # horizon: bytes of quadtrees cached after this frame (<= Renderer.cache_budget)
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
-    tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes submitted to the test
+    tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes tested
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
     tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test
