@@ -162,6 +162,16 @@ impl Camera {
             if let Some(n) = near {
                 ensure(f > n, "far", || format!("far ({f}) must be greater than near ({n})"))?;
             }
+            // A perspective near plane is never below MIN_NEAR: a far plane at or before twice that
+            // could only give an empty image (and a projection with near > far).
+            ensure(projection != Projection::Perspective || f > 2.0 * MIN_NEAR, "far", || {
+                format!(
+                    "far is {}; a perspective camera needs far > {} (its near plane is at least {})",
+                    num(f),
+                    num(2.0 * MIN_NEAR),
+                    num(MIN_NEAR)
+                )
+            })?;
         }
         if let Some(h) = ortho_height {
             ensure(h.is_finite() && h > 0.0, "ortho_height", || {

@@ -131,6 +131,7 @@ BAD = [
     ("near underflow", lambda: cam(near=1e-40), "near", "1e-40"),
     ("far < near", lambda: cam(near=10.0, far=5.0), "far", "near"),
     ("far nan", lambda: cam(far=np.nan), "far", "NaN"),
+    ("far below the near floor", lambda: cam(far=1e-320), "far", "perspective"),
     ("projection", lambda: cam(projection="fisheye"), "projection", "fisheye"),
     ("projection int", lambda: cam(projection=1), "projection", "1"),
     ("ortho_height 0", lambda: cam(projection="orthographic", ortho_height=0.0), "ortho_height", "0"),
