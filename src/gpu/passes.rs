@@ -30,6 +30,52 @@ pub fn with_box_wgsl(source: &str) -> String {
     format!("{BOX_WGSL}\n{source}")
 }
 
+/// The box test's shader (box.wgsl is prepended): vertex stage and the hand-compared fragment.
+pub const BOX_TEST_WGSL: &str = include_str!("shaders/box_test.wgsl");
+
+/// A box-test pipeline of `layout` (scene bind group, then the box test's: depth texture, counts,
+/// skip): front faces of the box instances, fragment entry `fs` of `module` writing nothing to the
+/// id target it needs as an attachment; `depth`: the depth attachment's state, if any.
+pub fn box_pipeline(
+    d: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    depth: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(fs),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_box"),
+            compilation_options: Default::default(),
+            buffers: &[Some(box_vertex_layout())],
+        },
+        // Front faces only: one fragment per pixel of a convex box.
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: Some(wgpu::Face::Back),
+            front_face: wgpu::FrontFace::Ccw,
+            ..Default::default()
+        },
+        depth_stencil: depth,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: ID_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::empty(),
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// Vertex layout of [`BoxInstance`](super::layout::BoxInstance) instances (two vec4s).
 pub fn box_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     const ATTRS: [wgpu::VertexAttribute; 2] = [
@@ -353,40 +399,9 @@ impl Passes {
             bind_group_layouts: &[Some(&scene_layout), Some(&box_layout)],
             immediate_size: 0,
         });
-        let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(include_str!("shaders/box_test.wgsl")));
-        let box_test = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("box_test"),
-            layout: Some(&box_pl),
-            vertex: wgpu::VertexState {
-                module: &box_shader,
-                entry_point: Some("vs_box"),
-                compilation_options: Default::default(),
-                buffers: &[Some(box_vertex_layout())],
-            },
-            // Front faces only: one fragment per pixel of a convex box.
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: Some(wgpu::Face::Back),
-                front_face: wgpu::FrontFace::Ccw,
-                ..Default::default()
-            },
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &box_shader,
-                entry_point: Some(if gl { "fs_box_gl" } else { "fs_box" }),
-                compilation_options: Default::default(),
-                // A render pass needs an attachment: the id target, never written.
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ID_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::empty(),
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let box_early = super::box_early::EarlyBoxTest::new(d, &scene_layout);
+        let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(BOX_TEST_WGSL));
+        let box_test = box_pipeline(d, &box_pl, &box_shader, if gl { "fs_box_gl" } else { "fs_box" }, None);
+        let box_early = super::box_early::EarlyBoxTest::new(d, &box_pl);
         Self {
             scene_layout,
             hist_layout,
@@ -538,9 +553,6 @@ impl Passes {
         counts: &wgpu::Buffer,
         ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        if let Some(early) = &self.box_early {
-            return early.record(d, enc, scene_bg, targets, boxes, n, skip, counts, ts);
-        }
         let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("box_test"),
             layout: &self.box_layout,
@@ -550,6 +562,9 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
             ],
         });
+        if let Some(early) = &self.box_early {
+            return early.record(enc, scene_bg, &bg, targets, boxes, n, ts);
+        }
         // No depth attachment: the fragment shader reads the depth texture and counts by hand.
         let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
