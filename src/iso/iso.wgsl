@@ -38,6 +38,9 @@ struct MapParams {
     occ_dims: vec4<u32>,
     // xyz: cull nodes per axis; w: unused.
     cull_dims: vec4<u32>,
+    // Skip bricks (iso/bricks.rs): x, y: log2 of the fine and the coarse bricks' size in occluder
+    // nodes (x = 0: no skipping); z, w: the first word of their 2-bit classes in `classes`.
+    bricks: vec4<u32>,
 }
 
 @group(1) @binding(0) var<uniform> mp: MapParams;
@@ -62,6 +65,22 @@ fn node_class(c: vec3<i32>) -> u32 {
     let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
     let i = (u.z * mp.occ_dims.y + u.y) * mp.occ_dims.x + u.x;
     return (classes[i >> 4u] >> ((i & 15u) * 2u)) & 3u;
+}
+
+// The class of the skip brick of `2^s` occluder nodes per axis that holds march cell `c`: 1 / 2
+// when it and its one-node ring are all Below / Above, else 0.
+fn brick_class(c: vec3<i32>, s: u32, off: u32) -> u32 {
+    let u = vec3<u32>(c) >> vec3<u32>(mp.size.y + s);
+    let bd = (mp.occ_dims.xyz + vec3<u32>((1u << s) - 1u)) >> vec3<u32>(s);
+    let i = (u.z * bd.y + u.y) * bd.x + u.x;
+    return (classes[off + (i >> 4u)] >> ((i & 15u) * 2u)) & 3u;
+}
+
+// Where the ray `o + t d` (`inv` = 1 / d) leaves cell `c` across each axis (the DDA's next
+// crossings): a function of the cell alone, so a brick jump lands in the state the cell-by-cell
+// walk would reach, bit for bit.
+fn exits(c: vec3<i32>, o: vec3<f32>, inv: vec3<f32>, ahead: vec3<f32>) -> vec3<f32> {
+    return (mp.lo.xyz + (vec3<f32>(c) + ahead) * mp.node.xyz - o) * inv;
 }
 
 fn cull_node(c: vec3<i32>) -> u32 {
@@ -123,8 +142,11 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
     var d = unproject(vec3<f32>(ndc, 0.5)) - o;
     d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
     let inv = 1.0 / d;
-    let ta = (mp.lo.xyz - o) * inv;
-    let tb = (mp.hi.xyz - o) * inv;
+    // The box widened by the counting margin: a ray that passes just outside it still marks the
+    // border cells (the rasteriser's snapping may cover its pixel with their triangles).
+    let margin = mp.hi.w * mp.node.xyz;
+    let ta = (mp.lo.xyz - margin - o) * inv;
+    let tb = (mp.hi.xyz + margin - o) * inv;
     let tmin = min(ta, tb);
     let tmax = max(ta, tb);
     let t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
@@ -136,8 +158,7 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         var c = vec3<i32>(clamp(floor((p - mp.lo.xyz) / mp.node.xyz), vec3<f32>(0.0), vec3<f32>(dims - 1)));
         let stp = select(vec3<i32>(-1), vec3<i32>(1), d > vec3<f32>(0.0));
         let ahead = select(vec3<f32>(0.0), vec3<f32>(1.0), d > vec3<f32>(0.0));
-        var tnext = (mp.lo.xyz + (vec3<f32>(c) + ahead) * mp.node.xyz - o) * inv;
-        let tdelta = abs(mp.node.xyz * inv);
+        var tnext = exits(c, o, inv, ahead);
         var last = 0u;
         var t_enter = t0;
         var counted = 0xffffffffu;
@@ -165,6 +186,56 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
                 last = k;
             }
+            // Space skipping: in a brick of class `last` (it and its ring all of that class) the
+            // walk would mark nothing and never stop, so it jumps to where it leaves the brick.
+            var s = 0u;
+            if (mp.bricks.x != 0u) {
+                if (brick_class(c, mp.bricks.y, mp.bricks.w) != 0u) {
+                    s = mp.size.y + mp.bricks.y;
+                } else if (brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
+                    s = mp.size.y + mp.bricks.x;
+                }
+            }
+            if (s != 0u) {
+                // The brick's last cell along the ray on each axis, and where the ray leaves it
+                // (ties to the lower axis, as the steps below).
+                let blo = (c >> vec3<u32>(s)) << vec3<u32>(s);
+                let e = select(blo, min(blo + vec3<i32>((1 << s) - 1), dims - 1), stp > vec3<i32>(0));
+                let x = exits(e, o, inv, ahead);
+                var a = 0;
+                if (x.y < x[a]) {
+                    a = 1;
+                }
+                if (x.z < x[a]) {
+                    a = 2;
+                }
+                let tx = x[a];
+                if (tx >= t1) {
+                    break;
+                }
+                // The other axes advance while their crossing comes first (a tie goes to the
+                // lower axis).
+                for (var b = 0; b < 3; b++) {
+                    if (b == a) {
+                        c[b] = e[b] + stp[b];
+                        continue;
+                    }
+                    loop {
+                        let tc = exits(c, o, inv, ahead)[b];
+                        if (c[b] == e[b] || tc > tx || (b > a && tc == tx)) {
+                            break;
+                        }
+                        c[b] += stp[b];
+                    }
+                }
+                tnext = exits(c, o, inv, ahead);
+                t_enter = tx;
+                crossed = a;
+                if (any(c < vec3<i32>(0)) || any(c >= dims)) {
+                    break;
+                }
+                continue;
+            }
             let tm = min(min(tnext.x, tnext.y), tnext.z);
             if (tm >= t1) {
                 break;
@@ -173,17 +244,15 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             // One axis at a time: a ray through an edge or corner visits the cells beside it too.
             if (tnext.x <= tm) {
                 c.x += stp.x;
-                tnext.x += tdelta.x;
                 crossed = 0;
             } else if (tnext.y <= tm) {
                 c.y += stp.y;
-                tnext.y += tdelta.y;
                 crossed = 1;
             } else {
                 c.z += stp.z;
-                tnext.z += tdelta.z;
                 crossed = 2;
             }
+            tnext = exits(c, o, inv, ahead);
             if (any(c < vec3<i32>(0)) || any(c >= dims)) {
                 break;
             }

@@ -9,6 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+use super::bricks::{brick_classes, pack2, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -34,42 +35,38 @@ pub(super) struct Targets {
     pub(super) map: wgpu::Buffer,
 }
 
-/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl).
+/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl),
+/// followed in the same buffer by its two levels of skip bricks ([`super::bricks`]), 2 bits each.
 pub(super) struct ClassGrid {
     pub(super) key: (u32, u32),
     pub(super) buffer: wgpu::Buffer,
     pub(super) dims: [u32; 3],
+    /// `[fine shift, coarse shift, fine word offset, coarse word offset]` (iso.wgsl `bricks`).
+    pub(super) bricks: [u32; 4],
     pub(super) n_below: u32,
     pub(super) n_above: u32,
     pub(super) n_nan: u32,
 }
 
-/// Node classes of the map pass (iso.wgsl).
-pub(super) const CLASS_PASS: u32 = 0;
-pub(super) const CLASS_BELOW: u32 = 1;
-pub(super) const CLASS_ABOVE: u32 = 2;
-pub(super) const CLASS_NAN: u32 = 3;
-
 impl ClassGrid {
-    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word and uploads them.
-    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u32]) -> Self {
-        let mut words = vec![0u32; classes.len().div_ceil(16).max(1)];
-        let (mut n_below, mut n_above, mut n_nan) = (0, 0, 0);
-        for (i, &c) in classes.iter().enumerate() {
-            words[i / 16] |= c << ((i % 16) * 2);
-            match c {
-                CLASS_BELOW => n_below += 1,
-                CLASS_ABOVE => n_above += 1,
-                CLASS_NAN => n_nan += 1,
-                _ => {}
-            }
-        }
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word, builds their skip
+    /// bricks and uploads both.
+    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8]) -> Self {
+        let count = |k: u8| classes.par_iter().filter(|&&c| c == k).count() as u32;
+        let (n_below, n_above, n_nan) = (count(CLASS_BELOW), count(CLASS_ABOVE), count(CLASS_NAN));
+        let [(fine, _), (coarse, _)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
+        let mut words = pack2(classes);
+        let fine_off = words.len() as u32;
+        words.extend(pack2(&fine));
+        let coarse_off = words.len() as u32;
+        words.extend(pack2(&coarse));
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
             contents: bytemuck::cast_slice(&words),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        Self { key, buffer, dims, n_below, n_above, n_nan }
+        let bricks = [FINE_SHIFT, COARSE_SHIFT, fine_off, coarse_off];
+        Self { key, buffer, dims, bricks, n_below, n_above, n_nan }
     }
 }
 
@@ -85,9 +82,10 @@ pub(super) struct MapParams {
     pub(super) size: [u32; 4],
     pub(super) occ_dims: [u32; 4],
     pub(super) cull_dims: [u32; 4],
+    pub(super) bricks: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<MapParams>() == 176);
+const _: () = assert!(std::mem::size_of::<MapParams>() == 192);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 

@@ -61,12 +61,10 @@ use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+pub use super::bricks::node_classes;
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{Class, MinMaxOctree, NodeInfo};
-use super::passes::{
-    draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN,
-    CLASS_PASS,
-};
+use super::passes::{draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
 use super::Volume;
 use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -115,6 +113,9 @@ pub struct IsoOptions {
     /// Memory budget of the renderer's isosurface caches in bytes (patches, and at most a quarter
     /// of it for the straddling-node lists); least recently used entries are dropped beyond it.
     pub cache_budget: usize,
+    /// Let the walk jump whole skip bricks of one class (see the module docs); `false` walks cell
+    /// by cell. Both give the same map, counts of drawn cells and image.
+    pub space_skipping: bool,
     /// Polled between the stages of the frame (map, each level of node tests, extraction); when
     /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
     pub interrupt: Interrupt,
@@ -130,6 +131,7 @@ impl Default for IsoOptions {
             use_cache: true,
             return_map: false,
             cache_budget: DEFAULT_CACHE_BUDGET,
+            space_skipping: true,
             interrupt: Interrupt::default(),
         }
     }
@@ -328,17 +330,6 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
     (below, above)
 }
 
-/// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
-/// (NaN-free by [`NodeInfo::classify`]), NaN (any NaN sample: outside the domain), else passable.
-pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
-    tree.map_at_depth(depth, |min, max, nan| match super::octree::classify_range(min, max, w) {
-        _ if nan => CLASS_NAN,
-        Class::Below => CLASS_BELOW,
-        Class::Above => CLASS_ABOVE,
-        _ => CLASS_PASS,
-    })
-}
-
 /// The triangle ranges of `p` (the patch of node `n`) that lie in march cells set in `bits`
 /// (grid `mdims`, a volume cell `c` is march cell `c >> shift`), consecutive cells merged.
 fn visible_ranges(p: &SurfacePatch, n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> Vec<[u32; 2]> {
@@ -511,6 +502,7 @@ impl IsoRenderer {
                 size: [height, md_march - occ_depth, md_march - cull_depth, 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
                 cull_dims: [cull_dims[0], cull_dims[1], cull_dims[2], 0],
+                bricks: if opts.space_skipping { grid.bricks } else { [0; 4] },
             };
             let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("iso_map_params"),
