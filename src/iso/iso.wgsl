@@ -1,4 +1,4 @@
-// Implicit occluders (Pesco et al.): the occlusion map and the per-node visible-pixel counts,
+// Implicit occluders (Pesco et al.): the occlusion map and the march cells seen in front of it,
 // marched per pixel through the occluder classes, and the lit isosurface.
 // Depth is reverse-Z everywhere (1 = near, 0 = far): "nearer" means a larger depth value.
 
@@ -16,27 +16,28 @@ struct Globals {
 // near to far (3-D DDA) and stops in the first occluder node of one class (Below / Above) met after
 // an occluder node of the other class with no NaN node in between; the map is the depth of that
 // node's entry point, pushed farther by `lo.w` (render units), 0 (= far, nothing proven) where no
-// such pair exists. Every cull node the walk enters up to and including that cell is seen on this
-// pixel: `counts[node] += 1` (the pixels where the node's box is in front of the map); a node the
-// ray passes within `hi.w` (grid units) of is counted too, so rounding never skips one.
+// such pair exists. Every march cell that may hold surface (passable or NaN) the walk enters up to
+// and including that cell is seen: its bit in `cells_seen` is set; a cell the ray passes within
+// `hi.w` (grid units) of is marked too, so rounding never skips one. A cull node is visible when
+// one of its cells is seen (counted on the CPU).
 // Classes: 2 bits per occluder node, 16 per word: 0 = may hold surface (passable), 1 = Below,
 // 2 = Above, 3 = has a NaN sample (outside the domain: resets the walk).
 struct MapParams {
     inv_view_proj: mat4x4<f32>,
     // xyz: the volume's box (render space); lo.w: the map's margin (render units); hi.w: the
-    // margin for counting a neighbouring node (fraction of a march cell).
+    // margin for marking a neighbouring cell (fraction of a march cell).
     lo: vec4<f32>,
     hi: vec4<f32>,
     // xyz: a march cell's size (render space); the last one per axis may end earlier, at `hi`.
     node: vec4<f32>,
     // xyz: march cells per axis; w: image width.
     dims: vec4<u32>,
-    // x: image height; y: march depth - occluder depth; z: march depth - cull depth; w: 1 = also
-    // mark every march cell entered in `cells_seen` (1 bit each).
+    // x: image height; y: march depth - occluder depth; z: unused; w: 1 = mark the march cells
+    // seen in `cells_seen` (1 bit each).
     size: vec4<u32>,
     // xyz: occluder nodes per axis; w: unused.
     occ_dims: vec4<u32>,
-    // xyz: cull nodes per axis; w: unused.
+    // Unused (the cull nodes are counted on the CPU).
     cull_dims: vec4<u32>,
     // Skip bricks (iso/bricks.rs): x, y: log2 of the fine and the coarse bricks' size in occluder
     // nodes (x = 0: no skipping); z, w: the first word of their 2-bit classes in `classes`.
@@ -46,8 +47,7 @@ struct MapParams {
 @group(1) @binding(0) var<uniform> mp: MapParams;
 @group(1) @binding(1) var<storage, read> classes: array<u32>;
 @group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
-@group(1) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
-@group(1) @binding(4) var<storage, read_write> cells_seen: array<atomic<u32>>;
+@group(1) @binding(3) var<storage, read_write> cells_seen: array<atomic<u32>>;
 
 fn mark_cell(c: vec3<i32>) {
     if (mp.size.w == 1u) {
@@ -83,21 +83,16 @@ fn exits(c: vec3<i32>, o: vec3<f32>, inv: vec3<f32>, ahead: vec3<f32>) -> vec3<f
     return (mp.lo.xyz + (vec3<f32>(c) + ahead) * mp.node.xyz - o) * inv;
 }
 
-fn cull_node(c: vec3<i32>) -> u32 {
-    let u = vec3<u32>(c) >> vec3<u32>(mp.size.z);
-    return (u.z * mp.cull_dims.y + u.y) * mp.cull_dims.x + u.x;
-}
-
 fn unproject(ndc: vec3<f32>) -> vec3<f32> {
     let p = mp.inv_view_proj * vec4<f32>(ndc, 1.0);
     return p.xyz / p.w;
 }
 
 // At the entry point `g` (march-cell units) of cell `c`: every cell that touches `g` within `hi.w`
-// along each axis (across a face, an edge or a corner) is marked and its cull node counted (once:
-// not `own`); the ray may have skipped it by rounding. The axis just crossed (`crossed`) has its
-// other side marked already.
-fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i32) {
+// along each axis (across a face, an edge or a corner) is marked when it may hold surface; the ray
+// may have skipped it by rounding. The axis just crossed (`crossed`) has its other side marked
+// already.
+fn mark_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, crossed: i32) {
     var off = vec3<i32>(0);
     var any_near = false;
     for (var a = 0; a < 3; a++) {
@@ -121,10 +116,6 @@ fn count_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, own: u32, crossed: i3
             if (kn == 0u || kn == 3u) {
                 mark_cell(n);
             }
-            let id = cull_node(n);
-            if (id != own) {
-                atomicAdd(&counts[id], 1u);
-            }
         }
     }
 }
@@ -142,7 +133,7 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
     var d = unproject(vec3<f32>(ndc, 0.5)) - o;
     d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
     let inv = 1.0 / d;
-    // The box widened by the counting margin: a ray that passes just outside it still marks the
+    // The box widened by the marking margin: a ray that passes just outside it still marks the
     // border cells (the rasteriser's snapping may cover its pixel with their triangles).
     let margin = mp.hi.w * mp.node.xyz;
     let ta = (mp.lo.xyz - margin - o) * inv;
@@ -161,7 +152,6 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         var tnext = exits(c, o, inv, ahead);
         var last = 0u;
         var t_enter = t0;
-        var counted = 0xffffffffu;
         var crossed = -1;
         loop {
             let k = node_class(c);
@@ -169,12 +159,7 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (k == 0u || k == 3u) {
                 mark_cell(c);
             }
-            let own = cull_node(c);
-            if (own != counted) {
-                atomicAdd(&counts[own], 1u);
-                counted = own;
-            }
-            count_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, own, crossed);
+            mark_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, crossed);
             if (k == 3u) {
                 last = 0u;
             } else if (k != 0u) {
@@ -188,12 +173,12 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             // Space skipping: in a brick of class `last` (it and its ring all of that class) the
             // walk would mark nothing and never stop, so it jumps to where it leaves the brick.
+            // A coarse brick is skippable only if its fine bricks are.
             var s = 0u;
-            if (mp.bricks.x != 0u) {
+            if (mp.bricks.x != 0u && (k == 1u || k == 2u) && brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
+                s = mp.size.y + mp.bricks.x;
                 if (brick_class(c, mp.bricks.y, mp.bricks.w) != 0u) {
                     s = mp.size.y + mp.bricks.y;
-                } else if (brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
-                    s = mp.size.y + mp.bricks.x;
                 }
             }
             if (s != 0u) {

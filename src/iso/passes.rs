@@ -142,7 +142,6 @@ impl IsoPasses {
                 buffer_entry(1, cs, ro),
                 buffer_entry(2, cs, rw),
                 buffer_entry(3, cs, rw),
-                buffer_entry(4, cs, rw),
             ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -274,11 +273,9 @@ fn pass<'e>(
     })
 }
 
-/// The occlusion map and the node test (one compute pass, one invocation per pixel, see iso.wgsl):
-/// one submission, one read-back. Returns, per cull node (x fastest, then y, z; `n_nodes` of
-/// them), the pixels on which the node is in front of the map, and with `n_cells` > 0 the bits
-/// of the march cells entered (cell `i` is bit `i % 32` of word `i / 32`).
-#[allow(clippy::too_many_arguments)]
+/// The occlusion map and the cells seen in front of it (one compute pass, one invocation per
+/// pixel, see iso.wgsl): one submission, one read-back. Returns the bits of the `n_cells` march
+/// cells seen (cell `i` is bit `i % 32` of word `i / 32`).
 pub(super) fn march(
     ctx: &GpuContext,
     iso: &IsoPasses,
@@ -286,26 +283,19 @@ pub(super) fn march(
     globals_bg: &wgpu::BindGroup,
     grid: &ClassGrid,
     params: &wgpu::Buffer,
-    n_nodes: usize,
     n_cells: usize,
-) -> Result<(Vec<u32>, Vec<u32>)> {
+) -> Result<Vec<u32>> {
     let d = &ctx.device;
-    let words = n_cells.div_ceil(32);
-    let size = 4 * (n_nodes.max(1) + words) as u64;
+    let words = n_cells.div_ceil(32).max(1);
+    let size = 4 * words as u64;
     let cells = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_cells_seen"),
-        size: 4 * words.max(1) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let counts = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("iso_counts"),
-        size: 4 * n_nodes.max(1) as u64,
+        size,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
     let rb = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("iso_counts_rb"),
+        label: Some("iso_cells_rb"),
         size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
@@ -317,12 +307,10 @@ pub(super) fn march(
             wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: counts.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 4, resource: cells.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: cells.as_entire_binding() },
         ],
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
-    enc.clear_buffer(&counts, 0, None);
     enc.clear_buffer(&cells, 0, None);
     {
         let mut p =
@@ -332,17 +320,13 @@ pub(super) fn march(
         p.set_bind_group(1, &bg, &[]);
         p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
     }
-    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, 4 * n_nodes.max(1) as u64);
-    if words > 0 {
-        enc.copy_buffer_to_buffer(&cells, 0, &rb, 4 * n_nodes.max(1) as u64, 4 * words as u64);
-    }
+    enc.copy_buffer_to_buffer(&cells, 0, &rb, 0, size);
     ctx.queue.submit([enc.finish()]);
     rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     ctx.wait()?;
     ctx.take_error()?;
     let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
-    let n = n_nodes.max(1);
-    Ok((v[..n_nodes].to_vec(), v[n..n + words].to_vec()))
+    Ok(v)
 }
 
 /// Uploads the patches (render space, f32) and draws them lit; waits for the GPU. With `ranges`,

@@ -330,6 +330,22 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
     (below, above)
 }
 
+/// How many march cells of node `n` are set in `bits` (grid `mdims`, a volume cell `c` is march
+/// cell `c >> shift`; `n` is at the march depth or coarser).
+fn cells_seen(n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> u32 {
+    let r = |a: usize| (n.cell_lo[a] >> shift)..((n.cell_hi[a] + (1 << shift) - 1) >> shift);
+    let mut seen = 0;
+    for k in r(2) {
+        for j in r(1) {
+            for i in r(0) {
+                let m = ((k * mdims[1] + j) * mdims[0] + i) as usize;
+                seen += bits[m / 32] >> (m % 32) & 1;
+            }
+        }
+    }
+    seen
+}
+
 /// The triangle ranges of `p` (the patch of node `n`) that lie in march cells set in `bits`
 /// (grid `mdims`, a volume cell `c` is march cell `c >> shift`), consecutive cells merged.
 fn visible_ranges(p: &SurfacePatch, n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> Vec<[u32; 2]> {
@@ -490,7 +506,6 @@ impl IsoRenderer {
             let cell = (1u64 << (maxd - md_march)) as f64;
             let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
             let march_dims = tree.dims_at_depth(md_march).expect("depth checked");
-            let cull_dims = tree.dims_at_depth(cull_depth).expect("depth checked");
             let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
             let inv = view_proj.inverse();
             let p = MapParams {
@@ -499,9 +514,9 @@ impl IsoRenderer {
                 hi: f4(phi, 1e-2),
                 node: f4(size, 0.0),
                 dims: [march_dims[0], march_dims[1], march_dims[2], width],
-                size: [height, md_march - occ_depth, md_march - cull_depth, 1],
+                size: [height, md_march - occ_depth, 0, 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
-                cull_dims: [cull_dims[0], cull_dims[1], cull_dims[2], 0],
+                cull_dims: [0; 4],
                 bricks: if opts.space_skipping { grid.bricks } else { [0; 4] },
             };
             let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -511,21 +526,20 @@ impl IsoRenderer {
             });
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
-            let n_cull = cull_dims.iter().map(|&v| v as usize).product();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
-            let (counts, bits) = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cull, n_cells)?;
-            seen = Some((bits, march_dims, maxd - md_march));
+            let bits = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
+            let shift = maxd - md_march;
+            let counts: Vec<u32> = candidates.par_iter().map(|n| cells_seen(n, &bits, march_dims, shift)).collect();
+            seen = Some((bits, march_dims, shift));
             stats.submissions += 1;
             stats.readbacks += 1;
             opts.interrupt.check()?;
             stats.nodes_tested = candidates.len() as u32;
             stats.nodes_tested_cull_depth = candidates.len() as u32;
-            let at = |n: &NodeInfo| counts[((n.iz * cull_dims[1] + n.iy) * cull_dims[0] + n.ix) as usize];
-            for (px, n) in node_pixels.iter_mut().zip(candidates.iter()) {
-                *px = at(n);
-            }
             stats.cull_ms = t_cull.elapsed().as_secs_f64() * 1e3;
-            candidates.iter().filter(|n| at(n) > 0).copied().collect()
+            let visible = candidates.iter().zip(&counts).filter(|(_, &c)| c > 0).map(|(n, _)| *n).collect();
+            node_pixels = counts;
+            visible
         };
         stats.nodes_visible = visible.len() as u32;
         let node_drawn: Vec<bool> = if implicit {
