@@ -56,30 +56,39 @@ pub fn leaf_classes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
     // Per sample: bit 0 below, bit 1 above, bit 2 NaN.
     let code = |v: f32| (v < w) as u8 | ((v > w) as u8) << 1 | (v.is_nan() as u8) << 2;
     let mut out = vec![0u8; cx * cy * cz];
-    out.par_chunks_mut(cx * cy).enumerate().for_each(|(k, slab)| {
-        let (mut and4, mut or4) = (vec![0u8; nx], vec![0u8; nx]);
-        for (j, row_out) in slab.chunks_mut(cx).enumerate() {
-            let rows = [(k, j), (k, j + 1), (k + 1, j), (k + 1, j + 1)].map(|(z, y)| (z * ny + y) * nx);
-            for x in 0..nx {
-                let c = rows.map(|r| code(values[r + x]));
-                and4[x] = c[0] & c[1] & c[2] & c[3];
-                or4[x] = c[0] | c[1] | c[2] | c[3];
-            }
-            for (x, o) in row_out.iter_mut().enumerate() {
-                let (a, r) = (and4[x] & and4[x + 1], or4[x] | or4[x + 1]);
-                *o = if r & 4 != 0 {
-                    CLASS_NAN
-                } else if a & 1 != 0 {
-                    CLASS_BELOW
-                } else if a & 2 != 0 {
-                    CLASS_ABOVE
-                } else {
-                    CLASS_PASS
-                };
-            }
+    out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
+        let (k, j) = (r / cy, r % cy);
+        let row = |z: usize, y: usize| &values[(z * ny + y) * nx..][..nx];
+        let (r0, r1, r2, r3) = (row(k, j), row(k, j + 1), row(k + 1, j), row(k + 1, j + 1));
+        // Per column of 4 samples: the AND and the OR of their codes (vectorisable).
+        let mut and4 = vec![0u8; nx];
+        let mut or4 = vec![0u8; nx];
+        for x in 0..nx {
+            let c = [code(r0[x]), code(r1[x]), code(r2[x]), code(r3[x])];
+            and4[x] = c[0] & c[1] & c[2] & c[3];
+            or4[x] = c[0] | c[1] | c[2] | c[3];
+        }
+        for (x, o) in row_out.iter_mut().enumerate() {
+            let (a, r) = (and4[x] & and4[x + 1], or4[x] | or4[x + 1]);
+            *o = if r & 4 != 0 {
+                CLASS_NAN
+            } else if a & 1 != 0 {
+                CLASS_BELOW
+            } else if a & 2 != 0 {
+                CLASS_ABOVE
+            } else {
+                CLASS_PASS
+            };
         }
     });
     out
+}
+
+/// `dst[i]` stays where it equals `src[i]`, else becomes [`MIXED`].
+fn common(dst: &mut [u8], src: &[u8]) {
+    for (a, &b) in dst.iter_mut().zip(src) {
+        *a = if *a == b { *a } else { MIXED };
+    }
 }
 
 /// Reduces `v` (dims `d`, x fastest) along `axis` to blocks of `b` entries, each widened by
@@ -87,27 +96,33 @@ pub fn leaf_classes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
 fn reduce_axis(v: &[u8], d: [usize; 3], axis: usize, b: usize, ring: usize) -> (Vec<u8>, [usize; 3]) {
     let mut od = d;
     od[axis] = d[axis].div_ceil(b);
-    let stride = [1, d[0], d[0] * d[1]][axis];
-    let n = od[0] * od[1] * od[2];
-    let out = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|o| {
-            let mut c = [o % od[0], o / od[0] % od[1], o / (od[0] * od[1])];
-            let bi = c[axis];
-            c[axis] = 0;
-            // The input index of the same element with coordinate 0 on `axis`.
-            let base = (c[2] * d[1] + c[1]) * d[0] + c[0];
-            let lo = (bi * b).saturating_sub(ring);
-            let hi = (bi * b + b + ring).min(d[axis]);
-            let first = v[base + lo * stride];
-            if (lo + 1..hi).all(|i| v[base + i * stride] == first) {
-                first
-            } else {
-                MIXED
+    let range = |bi: usize| (bi * b).saturating_sub(ring)..(bi * b + b + ring).min(d[axis]);
+    let mut out = vec![0u8; od[0] * od[1] * od[2]];
+    let row = |y: usize, z: usize| &v[(z * d[1] + y) * d[0]..][..d[0]];
+    // One output row (along x) at a time.
+    out.par_chunks_mut(od[0]).enumerate().for_each(|(i, o)| {
+        let (y, z) = (i % od[1], i / od[1]);
+        match axis {
+            0 => {
+                let r = row(y, z);
+                for (bi, o) in o.iter_mut().enumerate() {
+                    let mut x = range(bi);
+                    let first = r[x.next().unwrap()];
+                    *o = if x.all(|x| r[x] == first) { first } else { MIXED };
+                }
             }
-        })
-        .collect();
+            1 => {
+                let mut ys = range(y);
+                o.copy_from_slice(row(ys.next().unwrap(), z));
+                ys.for_each(|y| common(o, row(y, z)));
+            }
+            _ => {
+                let mut zs = range(z);
+                o.copy_from_slice(row(y, zs.next().unwrap()));
+                zs.for_each(|z| common(o, row(y, z)));
+            }
+        }
+    });
     (out, od)
 }
 
