@@ -1,6 +1,7 @@
 //! The walk's view-independent inputs, computed on the CPU once per (isovalue, occluder depth):
 //! the class of every occluder node ([`node_classes`], [`leaf_classes`] for single cells) and the
-//! skip bricks built over them ([`brick_classes`]).
+//! skip bricks built over them ([`brick_classes`]); and the occluder boxes themselves
+//! ([`occluder_nodes`], for inspection: the walk reads the classes).
 //!
 //! **Skip bricks.** A brick is a block of `2^s` occluder nodes per axis. Its class is Below (or
 //! Above) when every node of the brick *and of the one-node ring around it* (clipped to the grid)
@@ -13,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use super::octree::{classify_range, Class, MinMaxOctree};
+use super::octree::{classify_range, Class, MinMaxOctree, NodeInfo};
 
 /// Node classes of the map pass (iso.wgsl).
 pub(super) const CLASS_PASS: u8 = 0;
@@ -45,6 +46,43 @@ pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u8> {
         Class::Above => CLASS_ABOVE,
         _ => CLASS_PASS,
     })
+}
+
+/// The occluders of depth `depth`: maximal Below and Above nodes of depth <= `depth` (see
+/// `super::render`'s module docs). Returned in octree order (deterministic).
+pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>, Vec<NodeInfo>) {
+    let depth = depth.min(tree.max_depth());
+    let (mut below, mut above) = (Vec::new(), Vec::new());
+    let mut frontier = vec![tree.root()];
+    for d in 0..=depth {
+        let (b, a, next): (Vec<NodeInfo>, Vec<NodeInfo>, Vec<NodeInfo>) = frontier
+            .par_iter()
+            .fold(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut b, mut a, mut nx), n| {
+                    match n.classify(w) {
+                        Class::Below => b.push(*n),
+                        Class::Above => a.push(*n),
+                        Class::Straddles if d < depth => nx.extend(tree.children(n)),
+                        _ => {}
+                    }
+                    (b, a, nx)
+                },
+            )
+            .reduce(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut b0, mut a0, mut n0), (b1, a1, n1)| {
+                    b0.extend(b1);
+                    a0.extend(a1);
+                    n0.extend(n1);
+                    (b0, a0, n0)
+                },
+            );
+        below.extend(b);
+        above.extend(a);
+        frontier = next;
+    }
+    (below, above)
 }
 
 /// The class of every cell of a volume with `samples` samples per axis (x fastest), from its 8
@@ -226,6 +264,19 @@ mod tests {
             assert_eq!(leaf_classes(&vol.values, [vol.nx, vol.ny, vol.nz], w), slow);
             assert_eq!(node_classes(&tree, w, md), slow);
         }
+    }
+
+    #[test]
+    fn occluders_partition_the_classified_volume() {
+        let vol = super::super::sphere_field(17, 0.5);
+        let tree = MinMaxOctree::build(&vol);
+        let (b, a) = occluder_nodes(&tree, 0.0, tree.max_depth());
+        assert!(b.iter().all(|n| n.max < 0.0) && a.iter().all(|n| n.min > 0.0));
+        let cells = |v: &[NodeInfo]| v.iter().map(|n| n.cell_count()).sum::<u64>();
+        let leaves = tree.nodes_at_depth(tree.max_depth());
+        let nb = leaves.iter().filter(|n| n.max < 0.0).count() as u64;
+        let na = leaves.iter().filter(|n| n.min > 0.0).count() as u64;
+        assert_eq!((cells(&b), cells(&a)), (nb, na));
     }
 
     #[test]

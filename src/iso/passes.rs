@@ -1,5 +1,5 @@
 //! The isosurface passes: pipelines (iso.wgsl), their targets, and the two steps that record and
-//! submit them: the occlusion map with the node test ([`march`]: a compute walk per pixel through
+//! submit them: the occlusion map with the cells seen ([`march`]: a compute walk per pixel through
 //! the occluder depth's class grid, [`ClassGrid`]) and the lit surface ([`draw_surface`]).
 //! `super::render` decides what goes into them.
 
@@ -74,7 +74,7 @@ impl ClassGrid {
     }
 }
 
-/// Uniforms of the map pass and of the node test (iso.wgsl `MapParams`).
+/// Uniforms of the map pass (iso.wgsl `MapParams`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub(super) struct MapParams {

@@ -14,6 +14,7 @@
 //!    them, or the other way round) without drawing a box: the earlier version rasterised
 //!    every Below / Above box three times (~500k boxes, 6 M triangles for the Pesco field 128³)
 //!    where a pixel's walk visits a few dozen nodes and usually stops at the second class change.
+//!    The classes come with their skip bricks (step 3), built on the CPU ([`super::bricks`]).
 //!
 //!    **Why it is conservative.** The rendered surface is the marching-cubes surface
 //!    ([`super::march`]): crack free, it is closed except where NaN cells stop it, and inside every
@@ -32,23 +33,39 @@
 //!    conservative: the proof only uses segments inside NaN-free nodes at `occluder_depth` (the
 //!    volume's box is convex, so the segment never leaves it); a coarse occluder depth with a few
 //!    NaN samples loses occluders (whole nodes count as NaN), never correctness.
-//! 3. **Node test**, in the same walk: every node at `cull_depth` that the pixel's ray enters before
-//!    it stops (the stopping cell included; also a node the ray passes within a thousandth of a
-//!    cell of, so rounding never skips one) is counted on that pixel. A node is visible when its
-//!    count is > 0: exactly the pixels where its box is nearer than the map, i.e. what rasterising
-//!    the boxes and comparing with the map gave (the earlier version: three levels of box draws,
-//!    three submissions and read-backs; the same visible sets on the Pesco field), in one
-//!    read-back. The surface inside a node lies inside its box, so on every pixel where the node's
-//!    surface is the first hit, the ray enters the node before `M(p)`: the culled image equals the
-//!    unculled one. Nodes in front of the near plane are walked from the near plane, as drawn.
+//! 3. **Cells and nodes seen**, in the same walk: every march cell (cells of the finer of the
+//!    occluder and cull depths) that may hold surface (passable or NaN class) and that the pixel's
+//!    ray enters before it stops (the stopping cell included; also a cell the ray passes within a
+//!    thousandth of a cell of, so rounding never skips one; the walk's box is widened by the same
+//!    margin) sets one bit; Below / Above cells hold no triangle and set none. The surface lies in
+//!    those cells, so on every pixel where a cell's surface is the first hit, the ray enters the
+//!    cell before `M(p)`: drawing only the marked cells' triangles gives the unculled image. A
+//!    node at `cull_depth` is visible (extracted) when one of its cells is marked, counted on the
+//!    CPU from the bits (`node_pixels` = its marked cells): no atomic counter per node in the walk
+//!    (they cost ~40 % of the walk on the Pesco field on lavapipe), and a node whose only cells
+//!    entered could hold no surface is not extracted. Nodes in front of the near plane are walked
+//!    from the near plane, as drawn.
+//!
+//!    **Space skipping** ([`super::bricks`]): the walk steps cell by cell, but where the cell it
+//!    enters has class `k` (Below or Above) and lies in a *skip brick* of class `k` (4³ or 16³
+//!    occluder nodes that, *with the one-node ring around them*, are all of class `k`), it jumps
+//!    to where the ray leaves the brick. Nothing is lost: inside the brick every cell the ray would
+//!    enter is of class `k`, so it would mark none, and its state (last class `k`) would not change
+//!    (no class change, no NaN reset) — the map's stop is at the first cell of the *other* class,
+//!    outside the brick, at the entry point the cell-by-cell walk computes; the ring covers the
+//!    neighbours the rounding margin would mark (the walk marks them only within one cell). The
+//!    jump lands in the very state the cell-by-cell walk reaches: the DDA's crossings are a
+//!    function of the cell alone (`exits` in iso.wgsl), the exit axis is the first crossing out of
+//!    the brick (ties to the lower axis, as the steps), and each other axis advances while its
+//!    crossing comes first. So the map and the marked cells are bit for bit those of the walk
+//!    without skipping (`bricks::walk_tests`). On the frog tissues (500×470×136) this takes the
+//!    walk from ~110 to ~13 steps per pixel.
 //! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
-//!    Of each patch only the triangles of the cells some ray entered before the map are drawn
-//!    (the walk also sets one bit per cell of the march grid; patches index their triangles by
-//!    cell, `SurfacePatch::cell_starts`): the same argument per cell as per node, at the
-//!    granularity of single cells when the occluders are cells (the default), so the patches stay
-//!    per node (cacheable) and the drawn triangles are per cell. On the Pesco field 128³ this
-//!    takes the face ratio from 0.43-0.49 (nodes of 2³-4³ cells) to 0.39.
+//!    Of each patch only the triangles of the marked cells are drawn (patches index their
+//!    triangles by cell, `SurfacePatch::cell_starts`), so the patches stay per node (cacheable)
+//!    and the drawn triangles are per cell. On the Pesco field 128³ this takes the face ratio from
+//!    0.43-0.49 (nodes of 2³-4³ cells) to 0.39.
 //!
 //! Depths count from the root (0) as in the octree; the leaves (single cells) are at
 //! `tree.max_depth()`. A volume of 256³ samples has 255 cells per axis and max depth 8, matching
@@ -61,9 +78,9 @@ use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-pub use super::bricks::node_classes;
+pub use super::bricks::{node_classes, occluder_nodes};
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
-use super::octree::{Class, MinMaxOctree, NodeInfo};
+use super::octree::{MinMaxOctree, NodeInfo};
 use super::passes::{draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
 use super::Volume;
 use crate::camera::Camera;
@@ -179,7 +196,7 @@ pub struct IsoStats {
     /// creation and the case table (the renderer's first isosurface frame), targets (first frame
     /// at a size). 0 on other frames.
     pub setup_ms: f64,
-    /// Queue submissions and GPU-to-host read-backs inside the frame (the node tests' counts; the
+    /// Queue submissions and GPU-to-host read-backs inside the frame (the walk's marked cells; the
     /// image read-back after the frame is not counted).
     pub submissions: u32,
     pub readbacks: u32,
@@ -200,8 +217,8 @@ pub struct IsoOutput {
     pub depth: Vec<f32>,
     /// The straddling nodes at the cull depth, `[depth, ix, iy, iz]`, in octree order.
     pub nodes: Vec<[u32; 4]>,
-    /// Per node of `nodes`: pixels where its box is in front of the occlusion map (0 when a coarser
-    /// ancestor was already hidden, or for culling = none).
+    /// Per node of `nodes`: its march cells that may hold surface and that some pixel's ray
+    /// entered before the occlusion map (0 when hidden, and for culling = none).
     pub node_pixels: Vec<u32>,
     /// Per node of `nodes`: extracted and drawn.
     pub node_drawn: Vec<bool>,
@@ -291,43 +308,6 @@ impl IsoRenderer {
 
 fn norm_bits(w: f32) -> u32 {
     if w == 0.0 { 0.0f32 } else { w }.to_bits()
-}
-
-/// The occluders of depth `depth`: maximal Below and Above nodes of depth <= `depth` (see the
-/// module docs). Returned in octree order (deterministic).
-pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>, Vec<NodeInfo>) {
-    let depth = depth.min(tree.max_depth());
-    let (mut below, mut above) = (Vec::new(), Vec::new());
-    let mut frontier = vec![tree.root()];
-    for d in 0..=depth {
-        let (b, a, next): (Vec<NodeInfo>, Vec<NodeInfo>, Vec<NodeInfo>) = frontier
-            .par_iter()
-            .fold(
-                || (Vec::new(), Vec::new(), Vec::new()),
-                |(mut b, mut a, mut nx), n| {
-                    match n.classify(w) {
-                        Class::Below => b.push(*n),
-                        Class::Above => a.push(*n),
-                        Class::Straddles if d < depth => nx.extend(tree.children(n)),
-                        _ => {}
-                    }
-                    (b, a, nx)
-                },
-            )
-            .reduce(
-                || (Vec::new(), Vec::new(), Vec::new()),
-                |(mut b0, mut a0, mut n0), (b1, a1, n1)| {
-                    b0.extend(b1);
-                    a0.extend(a1);
-                    n0.extend(n1);
-                    (b0, a0, n0)
-                },
-            );
-        below.extend(b);
-        above.extend(a);
-        frontier = next;
-    }
-    (below, above)
 }
 
 /// How many march cells of node `n` are set in `bits` (grid `mdims`, a volume cell `c` is march
@@ -639,19 +619,6 @@ mod tests {
 
     fn device() -> Option<GpuContext> {
         GpuContext::new("auto", wgpu::Features::empty()).ok()
-    }
-
-    #[test]
-    fn occluders_partition_the_classified_volume() {
-        let vol = super::super::sphere_field(17, 0.5);
-        let tree = MinMaxOctree::build(&vol);
-        let (b, a) = occluder_nodes(&tree, 0.0, tree.max_depth());
-        assert!(b.iter().all(|n| n.max < 0.0) && a.iter().all(|n| n.min > 0.0));
-        let cells = |v: &[NodeInfo]| v.iter().map(|n| n.cell_count()).sum::<u64>();
-        let leaves = tree.nodes_at_depth(tree.max_depth());
-        let nb = leaves.iter().filter(|n| n.max < 0.0).count() as u64;
-        let na = leaves.iter().filter(|n| n.min > 0.0).count() as u64;
-        assert_eq!((cells(&b), cells(&a)), (nb, na));
     }
 
     #[test]
