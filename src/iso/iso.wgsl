@@ -133,13 +133,16 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
     var d = unproject(vec3<f32>(ndc, 0.5)) - o;
     d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
     let inv = 1.0 / d;
-    // The box widened by the marking margin: a ray that passes just outside it still marks the
-    // border cells (the rasteriser's snapping may cover its pixel with their triangles).
+    // The walk covers the box widened by the marking margin: a ray that passes just outside it
+    // still marks the border cells (the rasteriser's snapping may cover its pixel with their
+    // triangles). Proofs use only cells the ray meets inside the box itself, `[in0, in1]`.
     let margin = mp.hi.w * mp.node.xyz;
-    let ta = (mp.lo.xyz - margin - o) * inv;
-    let tb = (mp.hi.xyz + margin - o) * inv;
-    let tmin = min(ta, tb);
-    let tmax = max(ta, tb);
+    let ta = (mp.lo.xyz - o) * inv;
+    let tb = (mp.hi.xyz - o) * inv;
+    let in0 = max(max(min(ta.x, tb.x), min(ta.y, tb.y)), max(min(ta.z, tb.z), 0.0));
+    let in1 = min(min(max(ta.x, tb.x), max(ta.y, tb.y)), max(ta.z, tb.z));
+    let tmin = min(ta, tb) - abs(margin * inv);
+    let tmax = max(ta, tb) + abs(margin * inv);
     let t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
     let t1 = min(min(tmax.x, tmax.y), tmax.z);
     var result = 0.0;
@@ -160,7 +163,9 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 mark_cell(c);
             }
             mark_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, crossed);
-            if (k == 3u) {
+            let tm = min(min(tnext.x, tnext.y), tnext.z);
+            // A NaN cell, or a cell met only in the margin outside the box, breaks every pair.
+            if (k == 3u || tm <= in0 || t_enter >= in1) {
                 last = 0u;
             } else if (k != 0u) {
                 if (last != 0u && last != k) {
@@ -172,10 +177,11 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 last = k;
             }
             // Space skipping: in a brick of class `last` (it and its ring all of that class) the
-            // walk would mark nothing and never stop, so it jumps to where it leaves the brick.
+            // walk would mark nothing and never stop, so it jumps to where it leaves the brick
+            // (`last == k`: the cell counted; `k` is then Below or Above).
             // A coarse brick is skippable only if its fine bricks are.
             var s = 0u;
-            if (mp.bricks.x != 0u && (k == 1u || k == 2u) && brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
+            if (mp.bricks.x != 0u && last == k && k != 0u && brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
                 s = mp.size.y + mp.bricks.x;
                 if (brick_class(c, mp.bricks.y, mp.bricks.w) != 0u) {
                     s = mp.size.y + mp.bricks.y;
@@ -221,7 +227,6 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
                 continue;
             }
-            let tm = min(min(tnext.x, tnext.y), tnext.z);
             if (tm >= t1) {
                 break;
             }
