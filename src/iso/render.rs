@@ -37,7 +37,8 @@
 //!    occluder and cull depths) that may hold surface (passable or NaN class) and that the pixel's
 //!    ray enters before it stops (the stopping cell included; also a cell the ray passes within a
 //!    thousandth of a cell of, so rounding never skips one; the walk's box is widened by the same
-//!    margin) sets one bit; Below / Above cells hold no triangle and set none. The surface lies in
+//!    margin, but a cell met only in that band outside the box breaks every pair as a NaN cell
+//!    does: a proof needs its segment inside the volume) sets one bit; Below / Above cells hold no triangle and set none. The surface lies in
 //!    those cells, so on every pixel where a cell's surface is the first hit, the ray enters the
 //!    cell before `M(p)`: drawing only the marked cells' triangles gives the unculled image. A
 //!    node at `cull_depth` is visible (extracted) when one of its cells is marked, counted on the
