@@ -324,6 +324,36 @@ def test_nan_borders_implicit_equals_none(renderer, border):
     assert (verts >= lo - 1e-9).all() and (verts <= hi + 1e-9).all()
 
 
+def bricky_volume():
+    """Wholly below under a plane, wholly above over it (the walk's skip bricks of 4³ and 16³ cells),
+    a NaN slab, and small blobs of the other class centred on brick corners, edges and faces."""
+    z, y, x = np.meshgrid(np.arange(40.0), np.arange(36.0), np.arange(48.0), indexing="ij")
+    base = np.where(z > 20.5, 1.0, -1.0)
+    blobs = ((16, 16, 16), (32, 20, 12), (4, 30.5, 8), (16, 16, 32), (33.5, 8, 28), (44, 32, 24.5))
+    bump = sum(np.exp(-((x - bx) ** 2 + (y - by) ** 2 + (z - bz) ** 2) / 2.0) for bx, by, bz in blobs)
+    vals = (base * (1.0 - 2.5 * bump)).astype(np.float32)
+    vals[:18, :, 40:44] = np.nan
+    return gc.Volume(vals, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.0, 1.0))
+
+
+@pytest.mark.parametrize("projection", ["perspective", "orthographic"])
+def test_space_skipping_keeps_implicit_equal_to_none(renderer, projection):
+    v = bricky_volume()
+    md = v.max_depth()
+    c = (23.5, 17.5, 19.5)
+    views = [(c[0] + 70, c[1] + 50, c[2] + 40), (c[0] - 40, c[1] + 10, c[2] - 50), (c[0] + 0.5, c[1], c[2] + 90)]
+    culled = 0
+    for eye in views:
+        cam = gc.Camera.look_at(eye, c, up=(0, 1, 0.3), fov_y=45.0, projection=projection, ortho_height=60.0)
+        ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+        for cd in (None, md, md - 3):
+            res = renderer.render_isosurface(v, 0.0, cam, cull_depth=cd)
+            np.testing.assert_array_equal(res.image, ref.image)
+            np.testing.assert_array_equal(res.depth, ref.depth)
+            culled += res.stats["surface_triangles"] < ref.stats["surface_triangles"]
+    assert culled >= 6
+
+
 # ---- Marching cubes: closed, on the isovalue, VTK's triangle count
 
 

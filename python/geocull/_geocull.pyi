@@ -103,7 +103,7 @@ class IsoOutput(TypedDict):
     image: npt.NDArray[np.uint8]  # (H, W, 4) RGBA, row 0 at the top
     depth: npt.NDArray[np.float32]  # (H, W) distance along the view axis, +inf where empty
     nodes: npt.NDArray[np.uint32]  # (n, 4) [depth, ix, iy, iz] of the straddling nodes at cull_depth
-    tile_pixels: npt.NDArray[np.uint32]  # (n,) per node of `nodes`
+    tile_pixels: npt.NDArray[np.uint32]  # (n,) per node of `nodes`: its cells seen
     tile_drawn: npt.NDArray[np.bool_]  # (n,) per node of `nodes`
     occlusion_map: NotRequired[npt.NDArray[np.float32]]  # (H, W), only with return_map=True
     near: float

@@ -12,10 +12,11 @@ every node at ``occluder_depth`` as wholly below, wholly above, NaN (any NaN sam
 holding surface. One GPU pass walks each pixel's ray through those classes and stops at the first
 node of one class met after a node of the other with no NaN node between (a ray that goes from
 "below" to "above" inside the domain must cross the surface before that point): the occlusion map.
-The same walk counts, per node at ``cull_depth``, the pixels whose ray enters it before stopping;
-marching cubes run only inside the nodes with a count > 0. The method is conservative: the culled
-image equals the unculled one, NaN samples (no data) included: they lie outside the domain, never
-occlude, and a proof never crosses them.
+The same walk marks the cells that may hold surface its ray enters before stopping (it jumps whole
+blocks of wholly-below or wholly-above cells, which change nothing); marching cubes run only inside
+the nodes at ``cull_depth`` with a marked cell, and only marked cells' triangles are drawn. The
+method is conservative: the culled image equals the unculled one, NaN samples (no data) included:
+they lie outside the domain, never occlude, and a proof never crosses them.
 
 Depths count from the root (0). Leaves are single cells at ``volume.max_depth()``: a 128³ volume has
 max depth 7; defaults: occluder_depth = max depth (single cells), cull_depth = max depth - 2.

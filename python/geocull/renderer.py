@@ -247,7 +247,8 @@ class Renderer:
 
         The result's ``tile_pixels`` / ``tile_drawn`` are per *node*: one entry per node at
         ``cull_depth`` that may hold surface (``result.nodes``: (n, 4) [depth, ix, iy, iz]) — the
-        pixels whose ray enters it before the occlusion map (0 when hidden, and for culling="none") and
+        cells of the node that may hold surface and that some pixel's ray entered before the occlusion
+        map (0 when hidden, and for culling="none") and
         whether it was extracted and drawn. ``stats``: :class:`IsoStats`
         (surface_triangles, nodes_tested, nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms

@@ -210,8 +210,8 @@ class IsoResult(RenderResult[IsoStats]):
 
     nodes: (n, 4) uint32 [depth, ix, iy, iz], the nodes at ``cull_depth`` that may hold surface, in
     octree order (ix along x, iy along y, iz along z, in units of the node's size).  tile_pixels: (n,)
-    uint32 pixels whose ray enters the node before the occlusion map (0 when hidden, and for
-    culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
+    uint32 cells of the node that may hold surface and that some pixel's ray entered before the
+    occlusion map (0 when hidden, and for culling="none").  tile_drawn: (n,) bool, extracted and drawn.  stats:
     :class:`IsoStats`.  occlusion_map: (H, W) float32 distance along the view axis (exaggerated world
     units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
     """

@@ -29,6 +29,7 @@ use crate::scene::serial::{Reader, Writer};
 
 const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
+mod bricks;
 pub mod layout;
 pub mod march;
 pub mod mesh;

@@ -1,5 +1,5 @@
 //! The isosurface passes: pipelines (iso.wgsl), their targets, and the two steps that record and
-//! submit them: the occlusion map with the node test ([`march`]: a compute walk per pixel through
+//! submit them: the occlusion map with the cells seen ([`march`]: a compute walk per pixel through
 //! the occluder depth's class grid, [`ClassGrid`]) and the lit surface ([`draw_surface`]).
 //! `super::render` decides what goes into them.
 
@@ -9,6 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+use super::bricks::{brick_classes, pack2, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -34,46 +35,46 @@ pub(super) struct Targets {
     pub(super) map: wgpu::Buffer,
 }
 
-/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl).
+/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl),
+/// followed in the same buffer by its two levels of skip bricks ([`super::bricks`]), 2 bits each.
 pub(super) struct ClassGrid {
     pub(super) key: (u32, u32),
     pub(super) buffer: wgpu::Buffer,
     pub(super) dims: [u32; 3],
+    /// `[fine shift, coarse shift, fine word offset, coarse word offset]` (iso.wgsl `bricks`).
+    pub(super) bricks: [u32; 4],
     pub(super) n_below: u32,
     pub(super) n_above: u32,
     pub(super) n_nan: u32,
 }
 
-/// Node classes of the map pass (iso.wgsl).
-pub(super) const CLASS_PASS: u32 = 0;
-pub(super) const CLASS_BELOW: u32 = 1;
-pub(super) const CLASS_ABOVE: u32 = 2;
-pub(super) const CLASS_NAN: u32 = 3;
-
 impl ClassGrid {
-    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word and uploads them.
-    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u32]) -> Self {
-        let mut words = vec![0u32; classes.len().div_ceil(16).max(1)];
-        let (mut n_below, mut n_above, mut n_nan) = (0, 0, 0);
-        for (i, &c) in classes.iter().enumerate() {
-            words[i / 16] |= c << ((i % 16) * 2);
-            match c {
-                CLASS_BELOW => n_below += 1,
-                CLASS_ABOVE => n_above += 1,
-                CLASS_NAN => n_nan += 1,
-                _ => {}
-            }
-        }
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word, builds their skip
+    /// bricks and uploads both.
+    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8]) -> Self {
+        // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
+        let n = classes
+            .par_chunks(1 << 16)
+            .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v == k) as u32).sum::<u32>()))
+            .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
+        let [n_below, n_above, n_nan] = n;
+        let [(fine, _), (coarse, _)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
+        let mut words = pack2(classes);
+        let fine_off = words.len() as u32;
+        words.extend(pack2(&fine));
+        let coarse_off = words.len() as u32;
+        words.extend(pack2(&coarse));
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
             contents: bytemuck::cast_slice(&words),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        Self { key, buffer, dims, n_below, n_above, n_nan }
+        let bricks = [FINE_SHIFT, COARSE_SHIFT, fine_off, coarse_off];
+        Self { key, buffer, dims, bricks, n_below, n_above, n_nan }
     }
 }
 
-/// Uniforms of the map pass and of the node test (iso.wgsl `MapParams`).
+/// Uniforms of the map pass (iso.wgsl `MapParams`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub(super) struct MapParams {
@@ -85,9 +86,10 @@ pub(super) struct MapParams {
     pub(super) size: [u32; 4],
     pub(super) occ_dims: [u32; 4],
     pub(super) cull_dims: [u32; 4],
+    pub(super) bricks: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<MapParams>() == 176);
+const _: () = assert!(std::mem::size_of::<MapParams>() == 192);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 
@@ -144,7 +146,6 @@ impl IsoPasses {
                 buffer_entry(1, cs, ro),
                 buffer_entry(2, cs, rw),
                 buffer_entry(3, cs, rw),
-                buffer_entry(4, cs, rw),
             ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -276,11 +277,9 @@ fn pass<'e>(
     })
 }
 
-/// The occlusion map and the node test (one compute pass, one invocation per pixel, see iso.wgsl):
-/// one submission, one read-back. Returns, per cull node (x fastest, then y, z; `n_nodes` of
-/// them), the pixels on which the node is in front of the map, and with `n_cells` > 0 the bits
-/// of the march cells entered (cell `i` is bit `i % 32` of word `i / 32`).
-#[allow(clippy::too_many_arguments)]
+/// The occlusion map and the cells seen in front of it (one compute pass, one invocation per
+/// pixel, see iso.wgsl): one submission, one read-back. Returns the bits of the `n_cells` march
+/// cells seen (cell `i` is bit `i % 32` of word `i / 32`).
 pub(super) fn march(
     ctx: &GpuContext,
     iso: &IsoPasses,
@@ -288,26 +287,19 @@ pub(super) fn march(
     globals_bg: &wgpu::BindGroup,
     grid: &ClassGrid,
     params: &wgpu::Buffer,
-    n_nodes: usize,
     n_cells: usize,
-) -> Result<(Vec<u32>, Vec<u32>)> {
+) -> Result<Vec<u32>> {
     let d = &ctx.device;
-    let words = n_cells.div_ceil(32);
-    let size = 4 * (n_nodes.max(1) + words) as u64;
+    let words = n_cells.div_ceil(32).max(1);
+    let size = 4 * words as u64;
     let cells = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_cells_seen"),
-        size: 4 * words.max(1) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let counts = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("iso_counts"),
-        size: 4 * n_nodes.max(1) as u64,
+        size,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
     let rb = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("iso_counts_rb"),
+        label: Some("iso_cells_rb"),
         size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
@@ -319,12 +311,10 @@ pub(super) fn march(
             wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: counts.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 4, resource: cells.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: cells.as_entire_binding() },
         ],
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
-    enc.clear_buffer(&counts, 0, None);
     enc.clear_buffer(&cells, 0, None);
     {
         let mut p =
@@ -334,17 +324,13 @@ pub(super) fn march(
         p.set_bind_group(1, &bg, &[]);
         p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);
     }
-    enc.copy_buffer_to_buffer(&counts, 0, &rb, 0, 4 * n_nodes.max(1) as u64);
-    if words > 0 {
-        enc.copy_buffer_to_buffer(&cells, 0, &rb, 4 * n_nodes.max(1) as u64, 4 * words as u64);
-    }
+    enc.copy_buffer_to_buffer(&cells, 0, &rb, 0, size);
     ctx.queue.submit([enc.finish()]);
     rb.slice(..).map_async(wgpu::MapMode::Read, |_| {});
     ctx.wait()?;
     ctx.take_error()?;
     let v: Vec<u32> = bytemuck::cast_slice(&rb.slice(..).get_mapped_range().map_err(map_err)?).to_vec();
-    let n = n_nodes.max(1);
-    Ok((v[..n_nodes].to_vec(), v[n..n + words].to_vec()))
+    Ok(v)
 }
 
 /// Uploads the patches (render space, f32) and draws them lit; waits for the GPU. With `ranges`,

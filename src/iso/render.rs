@@ -14,6 +14,7 @@
 //!    them, or the other way round) without drawing a box: the earlier version rasterised
 //!    every Below / Above box three times (~500k boxes, 6 M triangles for the Pesco field 128³)
 //!    where a pixel's walk visits a few dozen nodes and usually stops at the second class change.
+//!    The classes come with their skip bricks (step 3), built on the CPU ([`super::bricks`]).
 //!
 //!    **Why it is conservative.** The rendered surface is the marching-cubes surface
 //!    ([`super::march`]): crack free, it is closed except where NaN cells stop it, and inside every
@@ -32,23 +33,40 @@
 //!    conservative: the proof only uses segments inside NaN-free nodes at `occluder_depth` (the
 //!    volume's box is convex, so the segment never leaves it); a coarse occluder depth with a few
 //!    NaN samples loses occluders (whole nodes count as NaN), never correctness.
-//! 3. **Node test**, in the same walk: every node at `cull_depth` that the pixel's ray enters before
-//!    it stops (the stopping cell included; also a node the ray passes within a thousandth of a
-//!    cell of, so rounding never skips one) is counted on that pixel. A node is visible when its
-//!    count is > 0: exactly the pixels where its box is nearer than the map, i.e. what rasterising
-//!    the boxes and comparing with the map gave (the earlier version: three levels of box draws,
-//!    three submissions and read-backs; the same visible sets on the Pesco field), in one
-//!    read-back. The surface inside a node lies inside its box, so on every pixel where the node's
-//!    surface is the first hit, the ray enters the node before `M(p)`: the culled image equals the
-//!    unculled one. Nodes in front of the near plane are walked from the near plane, as drawn.
+//! 3. **Cells and nodes seen**, in the same walk: every march cell (cells of the finer of the
+//!    occluder and cull depths) that may hold surface (passable or NaN class) and that the pixel's
+//!    ray enters before it stops (the stopping cell included; also a cell the ray passes within a
+//!    thousandth of a cell of, so rounding never skips one; the walk's box is widened by the same
+//!    margin, but a cell met only in that band outside the box breaks every pair as a NaN cell
+//!    does: a proof needs its segment inside the volume) sets one bit; Below / Above cells hold no triangle and set none. The surface lies in
+//!    those cells, so on every pixel where a cell's surface is the first hit, the ray enters the
+//!    cell before `M(p)`: drawing only the marked cells' triangles gives the unculled image. A
+//!    node at `cull_depth` is visible (extracted) when one of its cells is marked, counted on the
+//!    CPU from the bits (`node_pixels` = its marked cells): no atomic counter per node in the walk
+//!    (they cost ~40 % of the walk on the Pesco field on lavapipe), and a node whose only cells
+//!    entered could hold no surface is not extracted. Nodes in front of the near plane are walked
+//!    from the near plane, as drawn.
+//!
+//!    **Space skipping** ([`super::bricks`]): the walk steps cell by cell, but where the cell it
+//!    enters has class `k` (Below or Above) and lies in a *skip brick* of class `k` (4³ or 16³
+//!    occluder nodes that, *with the one-node ring around them*, are all of class `k`), it jumps
+//!    to where the ray leaves the brick. Nothing is lost: inside the brick every cell the ray would
+//!    enter is of class `k`, so it would mark none, and its state (last class `k`) would not change
+//!    (no class change, no NaN reset) — the map's stop is at the first cell of the *other* class,
+//!    outside the brick, at the entry point the cell-by-cell walk computes; the ring covers the
+//!    neighbours the rounding margin would mark (the walk marks them only within one cell). The
+//!    jump lands in the very state the cell-by-cell walk reaches: the DDA's crossings are a
+//!    function of the cell alone (`exits` in iso.wgsl), the exit axis is the first crossing out of
+//!    the brick (ties to the lower axis, as the steps), and each other axis advances while its
+//!    crossing comes first. So the map and the marked cells are bit for bit those of the walk
+//!    without skipping (`bricks::walk_tests`). On the frog tissues (500×470×136) this takes the
+//!    walk from ~110 to ~13 steps per pixel.
 //! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
-//!    Of each patch only the triangles of the cells some ray entered before the map are drawn
-//!    (the walk also sets one bit per cell of the march grid; patches index their triangles by
-//!    cell, `SurfacePatch::cell_starts`): the same argument per cell as per node, at the
-//!    granularity of single cells when the occluders are cells (the default), so the patches stay
-//!    per node (cacheable) and the drawn triangles are per cell. On the Pesco field 128³ this
-//!    takes the face ratio from 0.43-0.49 (nodes of 2³-4³ cells) to 0.39.
+//!    Of each patch only the triangles of the marked cells are drawn (patches index their
+//!    triangles by cell, `SurfacePatch::cell_starts`), so the patches stay per node (cacheable)
+//!    and the drawn triangles are per cell. On the Pesco field 128³ this takes the face ratio from
+//!    0.43-0.49 (nodes of 2³-4³ cells) to 0.39.
 //!
 //! Depths count from the root (0) as in the octree; the leaves (single cells) are at
 //! `tree.max_depth()`. A volume of 256³ samples has 255 cells per axis and max depth 8, matching
@@ -61,12 +79,10 @@ use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
+pub use super::bricks::{node_classes, occluder_nodes};
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
-use super::octree::{Class, MinMaxOctree, NodeInfo};
-use super::passes::{
-    draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN,
-    CLASS_PASS,
-};
+use super::octree::{MinMaxOctree, NodeInfo};
+use super::passes::{draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
 use super::Volume;
 use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -115,6 +131,9 @@ pub struct IsoOptions {
     /// Memory budget of the renderer's isosurface caches in bytes (patches, and at most a quarter
     /// of it for the straddling-node lists); least recently used entries are dropped beyond it.
     pub cache_budget: usize,
+    /// Let the walk jump whole skip bricks of one class (see the module docs); `false` walks cell
+    /// by cell. Both give the same map, counts of drawn cells and image.
+    pub space_skipping: bool,
     /// Polled between the stages of the frame (map, each level of node tests, extraction); when
     /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
     pub interrupt: Interrupt,
@@ -130,6 +149,7 @@ impl Default for IsoOptions {
             use_cache: true,
             return_map: false,
             cache_budget: DEFAULT_CACHE_BUDGET,
+            space_skipping: true,
             interrupt: Interrupt::default(),
         }
     }
@@ -177,7 +197,7 @@ pub struct IsoStats {
     /// creation and the case table (the renderer's first isosurface frame), targets (first frame
     /// at a size). 0 on other frames.
     pub setup_ms: f64,
-    /// Queue submissions and GPU-to-host read-backs inside the frame (the node tests' counts; the
+    /// Queue submissions and GPU-to-host read-backs inside the frame (the walk's marked cells; the
     /// image read-back after the frame is not counted).
     pub submissions: u32,
     pub readbacks: u32,
@@ -198,8 +218,8 @@ pub struct IsoOutput {
     pub depth: Vec<f32>,
     /// The straddling nodes at the cull depth, `[depth, ix, iy, iz]`, in octree order.
     pub nodes: Vec<[u32; 4]>,
-    /// Per node of `nodes`: pixels where its box is in front of the occlusion map (0 when a coarser
-    /// ancestor was already hidden, or for culling = none).
+    /// Per node of `nodes`: its march cells that may hold surface and that some pixel's ray
+    /// entered before the occlusion map (0 when hidden, and for culling = none).
     pub node_pixels: Vec<u32>,
     /// Per node of `nodes`: extracted and drawn.
     pub node_drawn: Vec<bool>,
@@ -291,52 +311,20 @@ fn norm_bits(w: f32) -> u32 {
     if w == 0.0 { 0.0f32 } else { w }.to_bits()
 }
 
-/// The occluders of depth `depth`: maximal Below and Above nodes of depth <= `depth` (see the
-/// module docs). Returned in octree order (deterministic).
-pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>, Vec<NodeInfo>) {
-    let depth = depth.min(tree.max_depth());
-    let (mut below, mut above) = (Vec::new(), Vec::new());
-    let mut frontier = vec![tree.root()];
-    for d in 0..=depth {
-        let (b, a, next): (Vec<NodeInfo>, Vec<NodeInfo>, Vec<NodeInfo>) = frontier
-            .par_iter()
-            .fold(
-                || (Vec::new(), Vec::new(), Vec::new()),
-                |(mut b, mut a, mut nx), n| {
-                    match n.classify(w) {
-                        Class::Below => b.push(*n),
-                        Class::Above => a.push(*n),
-                        Class::Straddles if d < depth => nx.extend(tree.children(n)),
-                        _ => {}
-                    }
-                    (b, a, nx)
-                },
-            )
-            .reduce(
-                || (Vec::new(), Vec::new(), Vec::new()),
-                |(mut b0, mut a0, mut n0), (b1, a1, n1)| {
-                    b0.extend(b1);
-                    a0.extend(a1);
-                    n0.extend(n1);
-                    (b0, a0, n0)
-                },
-            );
-        below.extend(b);
-        above.extend(a);
-        frontier = next;
+/// How many march cells of node `n` are set in `bits` (grid `mdims`, a volume cell `c` is march
+/// cell `c >> shift`; `n` is at the march depth or coarser).
+fn cells_seen(n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> u32 {
+    let r = |a: usize| (n.cell_lo[a] >> shift)..((n.cell_hi[a] + (1 << shift) - 1) >> shift);
+    let mut seen = 0;
+    for k in r(2) {
+        for j in r(1) {
+            for i in r(0) {
+                let m = ((k * mdims[1] + j) * mdims[0] + i) as usize;
+                seen += bits[m / 32] >> (m % 32) & 1;
+            }
+        }
     }
-    (below, above)
-}
-
-/// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
-/// (NaN-free by [`NodeInfo::classify`]), NaN (any NaN sample: outside the domain), else passable.
-pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u32> {
-    tree.map_at_depth(depth, |min, max, nan| match super::octree::classify_range(min, max, w) {
-        _ if nan => CLASS_NAN,
-        Class::Below => CLASS_BELOW,
-        Class::Above => CLASS_ABOVE,
-        _ => CLASS_PASS,
-    })
+    seen
 }
 
 /// The triangle ranges of `p` (the patch of node `n`) that lie in march cells set in `bits`
@@ -499,7 +487,6 @@ impl IsoRenderer {
             let cell = (1u64 << (maxd - md_march)) as f64;
             let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
             let march_dims = tree.dims_at_depth(md_march).expect("depth checked");
-            let cull_dims = tree.dims_at_depth(cull_depth).expect("depth checked");
             let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
             let inv = view_proj.inverse();
             let p = MapParams {
@@ -508,9 +495,10 @@ impl IsoRenderer {
                 hi: f4(phi, 1e-2),
                 node: f4(size, 0.0),
                 dims: [march_dims[0], march_dims[1], march_dims[2], width],
-                size: [height, md_march - occ_depth, md_march - cull_depth, 1],
+                size: [height, md_march - occ_depth, 0, 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
-                cull_dims: [cull_dims[0], cull_dims[1], cull_dims[2], 0],
+                cull_dims: [0; 4],
+                bricks: if opts.space_skipping { grid.bricks } else { [0; 4] },
             };
             let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("iso_map_params"),
@@ -519,21 +507,20 @@ impl IsoRenderer {
             });
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
-            let n_cull = cull_dims.iter().map(|&v| v as usize).product();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
-            let (counts, bits) = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cull, n_cells)?;
-            seen = Some((bits, march_dims, maxd - md_march));
+            let bits = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
+            let shift = maxd - md_march;
+            let counts: Vec<u32> = candidates.par_iter().map(|n| cells_seen(n, &bits, march_dims, shift)).collect();
+            seen = Some((bits, march_dims, shift));
             stats.submissions += 1;
             stats.readbacks += 1;
             opts.interrupt.check()?;
             stats.nodes_tested = candidates.len() as u32;
             stats.nodes_tested_cull_depth = candidates.len() as u32;
-            let at = |n: &NodeInfo| counts[((n.iz * cull_dims[1] + n.iy) * cull_dims[0] + n.ix) as usize];
-            for (px, n) in node_pixels.iter_mut().zip(candidates.iter()) {
-                *px = at(n);
-            }
             stats.cull_ms = t_cull.elapsed().as_secs_f64() * 1e3;
-            candidates.iter().filter(|n| at(n) > 0).copied().collect()
+            let visible = candidates.iter().zip(&counts).filter(|(_, &c)| c > 0).map(|(n, _)| *n).collect();
+            node_pixels = counts;
+            visible
         };
         stats.nodes_visible = visible.len() as u32;
         let node_drawn: Vec<bool> = if implicit {
@@ -633,19 +620,6 @@ mod tests {
 
     fn device() -> Option<GpuContext> {
         GpuContext::new("auto", wgpu::Features::empty()).ok()
-    }
-
-    #[test]
-    fn occluders_partition_the_classified_volume() {
-        let vol = super::super::sphere_field(17, 0.5);
-        let tree = MinMaxOctree::build(&vol);
-        let (b, a) = occluder_nodes(&tree, 0.0, tree.max_depth());
-        assert!(b.iter().all(|n| n.max < 0.0) && a.iter().all(|n| n.min > 0.0));
-        let cells = |v: &[NodeInfo]| v.iter().map(|n| n.cell_count()).sum::<u64>();
-        let leaves = tree.nodes_at_depth(tree.max_depth());
-        let nb = leaves.iter().filter(|n| n.max < 0.0).count() as u64;
-        let na = leaves.iter().filter(|n| n.min > 0.0).count() as u64;
-        assert_eq!((cells(&b), cells(&a)), (nb, na));
     }
 
     #[test]

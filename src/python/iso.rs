@@ -244,6 +244,7 @@ fn render_isosurface<'py>(
             use_cache: cache,
             return_map,
             cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
+            space_skipping: true,
             interrupt,
         };
         lock(r).render_isosurface(v, &tree, isovalue, c, &opts)

@@ -1,0 +1,379 @@
+//! The walk's view-independent inputs, computed on the CPU once per (isovalue, occluder depth):
+//! the class of every occluder node ([`node_classes`], [`leaf_classes`] for single cells) and the
+//! skip bricks built over them ([`brick_classes`]); and the occluder boxes themselves
+//! ([`occluder_nodes`], for inspection: the walk reads the classes).
+//!
+//! **Skip bricks.** A brick is a block of `2^s` occluder nodes per axis. Its class is Below (or
+//! Above) when every node of the brick *and of the one-node ring around it* (clipped to the grid)
+//! is Below (Above), else 0 (not skippable). The walk (iso.wgsl) jumps a skippable brick whole
+//! once it has entered it in that class: inside, every cell it would visit and every neighbour
+//! its rounding margin would visit is of that class, so it would mark no cell, meet no class
+//! change and no NaN (see the argument in `super::render`). NaN nodes never make a brick
+//! skippable (the walk marks NaN cells: they may hold surface when occluders are coarser than
+//! the march cells).
+
+use rayon::prelude::*;
+
+use super::octree::{classify_range, Class, MinMaxOctree, NodeInfo};
+
+/// Node classes of the map pass (iso.wgsl).
+pub(super) const CLASS_PASS: u8 = 0;
+pub(super) const CLASS_BELOW: u8 = 1;
+pub(super) const CLASS_ABOVE: u8 = 2;
+pub(super) const CLASS_NAN: u8 = 3;
+
+/// A brick reduction's mark for "not all of one class".
+const MIXED: u8 = u8::MAX;
+
+/// Bricks of the fine skip level: `2^FINE_SHIFT` occluder nodes per axis.
+pub(super) const FINE_SHIFT: u32 = 2;
+/// Bricks of the coarse skip level: `2^COARSE_SHIFT` occluder nodes per axis.
+pub(super) const COARSE_SHIFT: u32 = 4;
+
+/// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
+/// (NaN-free by [`classify_range`]), NaN (any NaN sample: outside the domain), else passable.
+/// Single cells (`depth == tree.max_depth()`) go through [`leaf_classes`], the same classes
+/// straight from the samples.
+pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u8> {
+    if depth == tree.max_depth() {
+        if let Some(c) = tree.leaf_classes(w) {
+            return c;
+        }
+    }
+    tree.map_at_depth(depth, |min, max, nan| match classify_range(min, max, w) {
+        _ if nan => CLASS_NAN,
+        Class::Below => CLASS_BELOW,
+        Class::Above => CLASS_ABOVE,
+        _ => CLASS_PASS,
+    })
+}
+
+/// The occluders of depth `depth`: maximal Below and Above nodes of depth <= `depth` (see
+/// `super::render`'s module docs). Returned in octree order (deterministic).
+pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>, Vec<NodeInfo>) {
+    let depth = depth.min(tree.max_depth());
+    let (mut below, mut above) = (Vec::new(), Vec::new());
+    let mut frontier = vec![tree.root()];
+    for d in 0..=depth {
+        let (b, a, next): (Vec<NodeInfo>, Vec<NodeInfo>, Vec<NodeInfo>) = frontier
+            .par_iter()
+            .fold(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut b, mut a, mut nx), n| {
+                    match n.classify(w) {
+                        Class::Below => b.push(*n),
+                        Class::Above => a.push(*n),
+                        Class::Straddles if d < depth => nx.extend(tree.children(n)),
+                        _ => {}
+                    }
+                    (b, a, nx)
+                },
+            )
+            .reduce(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(mut b0, mut a0, mut n0), (b1, a1, n1)| {
+                    b0.extend(b1);
+                    a0.extend(a1);
+                    n0.extend(n1);
+                    (b0, a0, n0)
+                },
+            );
+        below.extend(b);
+        above.extend(a);
+        frontier = next;
+    }
+    (below, above)
+}
+
+/// The class of every cell of a volume with `samples` samples per axis (x fastest), from its 8
+/// corners: NaN when one is NaN, Below when all are `< w`, Above when all are `> w`, else
+/// passable (what [`node_classes`] gives at the leaves, row by row instead of cell by cell).
+pub fn leaf_classes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
+    let [nx, ny, nz] = samples;
+    let (cx, cy, cz) = (nx - 1, ny - 1, nz - 1);
+    // Per sample: bit 0 below, bit 1 above, bit 2 NaN.
+    let code = |v: f32| (v < w) as u8 | ((v > w) as u8) << 1 | (v.is_nan() as u8) << 2;
+    let mut out = vec![0u8; cx * cy * cz];
+    out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
+        let (k, j) = (r / cy, r % cy);
+        let row = |z: usize, y: usize| &values[(z * ny + y) * nx..][..nx];
+        let (r0, r1, r2, r3) = (row(k, j), row(k, j + 1), row(k + 1, j), row(k + 1, j + 1));
+        // Per column of 4 samples: the AND and the OR of their codes (vectorisable).
+        let mut and4 = vec![0u8; nx];
+        let mut or4 = vec![0u8; nx];
+        for x in 0..nx {
+            let c = [code(r0[x]), code(r1[x]), code(r2[x]), code(r3[x])];
+            and4[x] = c[0] & c[1] & c[2] & c[3];
+            or4[x] = c[0] | c[1] | c[2] | c[3];
+        }
+        for (x, o) in row_out.iter_mut().enumerate() {
+            let (a, r) = (and4[x] & and4[x + 1], or4[x] | or4[x + 1]);
+            *o = if r & 4 != 0 {
+                CLASS_NAN
+            } else if a & 1 != 0 {
+                CLASS_BELOW
+            } else if a & 2 != 0 {
+                CLASS_ABOVE
+            } else {
+                CLASS_PASS
+            };
+        }
+    });
+    out
+}
+
+/// `dst[i]` stays where it equals `src[i]`, else becomes [`MIXED`].
+fn common(dst: &mut [u8], src: &[u8]) {
+    for (a, &b) in dst.iter_mut().zip(src) {
+        *a = if *a == b { *a } else { MIXED };
+    }
+}
+
+/// Reduces `v` (dims `d`, x fastest) along `axis` to blocks of `b` entries, each widened by
+/// `ring` entries on both sides (clipped): the common value of the block, or [`MIXED`].
+fn reduce_axis(v: &[u8], d: [usize; 3], axis: usize, b: usize, ring: usize) -> (Vec<u8>, [usize; 3]) {
+    let mut od = d;
+    od[axis] = d[axis].div_ceil(b);
+    let range = |bi: usize| (bi * b).saturating_sub(ring)..(bi * b + b + ring).min(d[axis]);
+    let mut out = vec![0u8; od[0] * od[1] * od[2]];
+    let row = |y: usize, z: usize| &v[(z * d[1] + y) * d[0]..][..d[0]];
+    // One output row (along x) at a time.
+    out.par_chunks_mut(od[0]).enumerate().for_each(|(i, o)| {
+        let (y, z) = (i % od[1], i / od[1]);
+        match axis {
+            0 => {
+                let r = row(y, z);
+                for (bi, o) in o.iter_mut().enumerate() {
+                    let mut x = range(bi);
+                    let first = r[x.next().unwrap()];
+                    *o = if x.all(|x| r[x] == first) { first } else { MIXED };
+                }
+            }
+            1 => {
+                let mut ys = range(y);
+                o.copy_from_slice(row(ys.next().unwrap(), z));
+                ys.for_each(|y| common(o, row(y, z)));
+            }
+            _ => {
+                let mut zs = range(z);
+                o.copy_from_slice(row(y, zs.next().unwrap()));
+                zs.for_each(|z| common(o, row(y, z)));
+            }
+        }
+    });
+    (out, od)
+}
+
+/// Reduces `v` (dims `d`) to blocks of `b`³ widened by `ring` (see [`reduce_axis`]).
+fn reduce(v: &[u8], d: [usize; 3], b: usize, ring: usize) -> (Vec<u8>, [usize; 3]) {
+    let (x, dx) = reduce_axis(v, d, 0, b, ring);
+    let (y, dy) = reduce_axis(&x, dx, 1, b, ring);
+    reduce_axis(&y, dy, 2, b, ring)
+}
+
+/// The skip bricks of the class grid `classes` (dims `dims`) at two levels: bricks of
+/// `2^fine` and `2^coarse` nodes per axis (`coarse > fine`), each Below / Above when it and its
+/// one-node ring are all of that class, else 0. Returns the two grids (x fastest) and their dims.
+pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> [(Vec<u8>, [u32; 3]); 2] {
+    let d = dims.map(|v| v as usize);
+    let (f, fd) = reduce(classes, d, 1 << fine, 1);
+    // A coarse brick's ring is the union of its fine bricks' rings: reduce without widening.
+    let (c, cd) = reduce(&f, fd, 1 << (coarse - fine), 0);
+    let clean = |v: Vec<u8>| -> Vec<u8> {
+        v.into_iter().map(|k| if k == CLASS_BELOW || k == CLASS_ABOVE { k } else { 0 }).collect()
+    };
+    [(clean(f), fd.map(|v| v as u32)), (clean(c), cd.map(|v| v as u32))]
+}
+
+/// Packs 2-bit values 16 to a little-endian u32 word (value `i` in bits `2 (i % 16)` of word `i / 16`).
+pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
+    v.par_chunks(16).map(|c| c.iter().enumerate().fold(0u32, |w, (i, &k)| w | (k as u32 & 3) << (2 * i))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The definition, brick by brick.
+    fn brute(classes: &[u8], d: [usize; 3], s: u32) -> Vec<u8> {
+        let b = 1usize << s;
+        let bd = d.map(|v| v.div_ceil(b));
+        let mut out = Vec::new();
+        for bz in 0..bd[2] {
+            for by in 0..bd[1] {
+                for bx in 0..bd[0] {
+                    let bb = [bx, by, bz];
+                    let lo = bb.map(|v| (v * b).saturating_sub(1));
+                    let hi: Vec<usize> = (0..3).map(|a| (bb[a] * b + b + 1).min(d[a])).collect();
+                    let mut seen = std::collections::HashSet::new();
+                    for z in lo[2]..hi[2] {
+                        for y in lo[1]..hi[1] {
+                            for x in lo[0]..hi[0] {
+                                seen.insert(classes[(z * d[1] + y) * d[0] + x]);
+                            }
+                        }
+                    }
+                    let k = *seen.iter().next().unwrap();
+                    out.push(if seen.len() == 1 && (k == CLASS_BELOW || k == CLASS_ABOVE) { k } else { 0 });
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn bricks_match_their_definition() {
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) as usize
+        };
+        for d in [[23usize, 17, 9], [16, 16, 16], [5, 40, 33], [1, 1, 70]] {
+            // Large uniform regions with a few other nodes sprinkled in.
+            let n = d[0] * d[1] * d[2];
+            let mut cls: Vec<u8> = (0..n).map(|i| if (i / d[0] / d[1]) < d[2] / 2 { 1 } else { 2 }).collect();
+            for _ in 0..n / 97 + 1 {
+                cls[rnd() % n] = (rnd() % 4) as u8;
+            }
+            let dims = d.map(|v| v as u32);
+            let [(f, fd), (c, cd)] = brick_classes(&cls, dims, 1, 3);
+            assert_eq!(f, brute(&cls, d, 1), "{d:?}");
+            assert_eq!(c, brute(&cls, d, 3), "{d:?}");
+            assert_eq!(fd, d.map(|v| v.div_ceil(2) as u32));
+            assert_eq!(cd, d.map(|v| v.div_ceil(8) as u32));
+        }
+    }
+
+    #[test]
+    fn leaf_classes_match_the_octree() {
+        let mut vol = super::super::sphere_field(13, 0.5);
+        let mut v: Vec<f32> = vol.values.to_vec();
+        for i in (0..v.len()).step_by(211) {
+            v[i] = f32::NAN;
+        }
+        vol.values = v.into();
+        let tree = MinMaxOctree::build(&vol);
+        for w in [0.0, 0.3, -0.2] {
+            let md = tree.max_depth();
+            let slow = tree.map_at_depth(md, |min, max, nan| match classify_range(min, max, w) {
+                _ if nan => CLASS_NAN,
+                Class::Below => CLASS_BELOW,
+                Class::Above => CLASS_ABOVE,
+                _ => CLASS_PASS,
+            });
+            assert_eq!(leaf_classes(&vol.values, [vol.nx, vol.ny, vol.nz], w), slow);
+            assert_eq!(node_classes(&tree, w, md), slow);
+        }
+    }
+
+    #[test]
+    fn occluders_partition_the_classified_volume() {
+        let vol = super::super::sphere_field(17, 0.5);
+        let tree = MinMaxOctree::build(&vol);
+        let (b, a) = occluder_nodes(&tree, 0.0, tree.max_depth());
+        assert!(b.iter().all(|n| n.max < 0.0) && a.iter().all(|n| n.min > 0.0));
+        let cells = |v: &[NodeInfo]| v.iter().map(|n| n.cell_count()).sum::<u64>();
+        let leaves = tree.nodes_at_depth(tree.max_depth());
+        let nb = leaves.iter().filter(|n| n.max < 0.0).count() as u64;
+        let na = leaves.iter().filter(|n| n.min > 0.0).count() as u64;
+        assert_eq!((cells(&b), cells(&a)), (nb, na));
+    }
+
+    #[test]
+    fn pack2_packs_16_per_word() {
+        let v: Vec<u8> = (0..37).map(|i| (i % 4) as u8).collect();
+        let p = pack2(&v);
+        assert_eq!(p.len(), 3);
+        for (i, &k) in v.iter().enumerate() {
+            assert_eq!((p[i / 16] >> (2 * (i % 16))) & 3, k as u32);
+        }
+    }
+}
+
+/// The walk with skip bricks against the walk cell by cell and against no culling, on the GPU.
+#[cfg(test)]
+mod walk_tests {
+    use super::*;
+    use crate::camera::{Camera, Projection};
+    use crate::gpu::GpuContext;
+    use crate::iso::render::{IsoCulling, IsoOptions, IsoRenderer};
+    use crate::iso::Volume;
+
+    /// Large uniform regions (Below under a plane, Above over it, a NaN slab) with small blobs of
+    /// the other class centred on brick corners, edges and faces of both skip levels.
+    fn bricky_volume() -> Volume {
+        let blobs: Vec<[f64; 3]> = vec![
+            [16.0, 16.0, 16.0],
+            [32.0, 20.0, 12.0],
+            [4.0, 30.5, 8.0],
+            [48.0, 48.0, 36.0],
+            [20.0, 8.0, 40.0],
+            [36.5, 44.0, 44.0],
+            [12.0, 52.0, 24.5],
+            // Its cells reach x = 44, y = 44: a fine brick's ring but not the brick.
+            [45.5, 45.5, 40.0],
+        ];
+        Volume::from_fn((66, 58, 50), [0.0; 3], [1.0; 3], move |x, y, z| {
+            if (56.0..60.0).contains(&x) && z < 30.0 {
+                return f32::NAN;
+            }
+            let base = if z > 32.5 { 1.0 } else { -1.0 };
+            let bump: f64 = blobs
+                .iter()
+                .map(|b| (-((x - b[0]).powi(2) + (y - b[1]).powi(2) + (z - b[2]).powi(2)) / 2.0).exp())
+                .sum();
+            (base * (1.0 - 2.5 * bump)) as f32
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn skipping_changes_nothing_drawn() {
+        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
+        let mut r = IsoRenderer::new(&ctx.device);
+        let vol = bricky_volume();
+        let tree = crate::iso::MinMaxOctree::build(&vol);
+        let md = tree.max_depth();
+        let cls = node_classes(&tree, 0.0, md);
+        let [(f, _), (c, _)] = brick_classes(&cls, tree.dims_at_depth(md).unwrap(), FINE_SHIFT, COARSE_SHIFT);
+        for (k, v) in [(CLASS_BELOW, &f), (CLASS_ABOVE, &f), (CLASS_BELOW, &c), (CLASS_ABOVE, &c)] {
+            assert!(v.contains(&k), "the volume has skippable bricks of class {k} at both levels");
+        }
+        let (c, up, p, o) = ([32.5, 28.5, 24.5], [0.0, 1.0, 0.3], Projection::Perspective, Projection::Orthographic);
+        let views = [
+            ([140.0, 90.0, 80.0], c, up, p),
+            ([-60.0, 20.0, -40.0], c, up, p),
+            ([32.0, 28.5, 160.0], c, up, p),
+            ([200.0, 16.0, 16.0], c, up, o),
+            ([-80.0, 150.0, 90.0], c, up, o),
+            // One unit per pixel, pixel centres on integers: every ray runs along cell edges.
+            ([32.5, 28.5, 200.0], c, [0.0, 1.0, 0.0], o),
+            ([-120.0, 28.5, 20.5], [32.5, 28.5, 20.5], [0.0, 0.0, 1.0], o),
+            // Four units per pixel, pixel centres 0.005 short of multiples of 4: rays run inside
+            // brick faces, cells beyond them are seen only through the walk's rounding margin.
+            ([29.995, 25.995, 200.0], [29.995, 25.995, 24.5], [0.0, 1.0, 0.0], o),
+        ];
+        let mut proven = 0;
+        for (eye, target, up, proj) in views {
+            let h = if eye[0] == 29.995 { 320.0 } else { 80.0 };
+            let cam = Camera::look_at(eye, target, up, 45.0, None, None, proj, Some(h), 1.0).unwrap();
+            let mut frame = |culling, space_skipping, cull_depth| {
+                let opts = IsoOptions { culling, space_skipping, cull_depth, return_map: true, ..Default::default() };
+                r.render(&ctx, 96, 80, &vol, &tree, 0.0, &cam, &opts).unwrap()
+            };
+            for cull_depth in [None, Some(md), Some(md - 3)] {
+                let none = frame(IsoCulling::None, true, cull_depth);
+                let walk = frame(IsoCulling::Implicit, false, cull_depth);
+                let skip = frame(IsoCulling::Implicit, true, cull_depth);
+                assert_eq!(skip.map, walk.map, "{eye:?} {proj:?} {cull_depth:?}");
+                assert_eq!(skip.stats.surface_triangles, walk.stats.surface_triangles);
+                assert_eq!(skip.image, walk.image);
+                assert_eq!(skip.image, none.image, "{eye:?} {proj:?} {cull_depth:?}");
+                assert_eq!(skip.depth, none.depth);
+                assert!(skip.stats.surface_triangles <= none.stats.surface_triangles);
+                proven += skip.map.as_ref().unwrap().iter().any(|v| v.is_finite()) as u32;
+            }
+        }
+        assert!(proven >= 12, "the map proves something in most frames ({proven})");
+    }
+}
