@@ -164,7 +164,8 @@ def test_bench_tiny_json(tmp_path):
         assert rows[methods.index(m)]["missing_tiles"] == 0, m
         assert rows[methods.index(m)]["differing_pixel_fraction"] == 0.0, m
     orbit = s["orbit"]
-    assert set(orbit["methods"]) == {"none", "three_pass(cons,t=0,cf=100,s=0.5)", "temporal(t=0)", "oracle"}
+    assert set(orbit["methods"]) == {"none", "three_pass(cons,t=0,cf=100,s=0.5)", "temporal(t=0)", "oracle",
+                                     "none(lod=0.5)", "temporal(lod=0.5)"}
     assert orbit["temporal_frames_differing"] == 0
 
 

@@ -426,6 +426,8 @@ ORBIT_METHODS: tuple[tuple[str, dict[str, Any]], ...] = (
      dict(culling="three_pass", pixel_threshold=0, prepass_scale=0.5, coarse_factor=COARSE_ALT)),
     ("temporal(t=0)", dict(culling="temporal", pixel_threshold=0)),
     ("oracle", dict(culling="oracle")),
+    ("none(lod=0.5)", dict(culling="none", lod="screen_error", max_pixel_error=0.5)),
+    ("temporal(lod=0.5)", dict(culling="temporal", pixel_threshold=0, lod="screen_error", max_pixel_error=0.5)),
 )
 
 
@@ -435,7 +437,7 @@ def _orbit(render, views, cfg: dict[str, Any]) -> dict[str, Any]:
     the methods interleaved over two rounds. temporal's history is the previous frame of the
     sequence (its first frame follows one untimed frame of the view itself). Returns per method the
     best round's mean frame time, its ratios to none and oracle, and the frames whose temporal
-    image differs from none's."""
+    image differs from none's at the same level of detail."""
     import geocull as gc
 
     frames, step = int(cfg.get("orbit_frames", 8)), float(cfg.get("orbit_step", 2.0))
@@ -455,7 +457,8 @@ def _orbit(render, views, cfg: dict[str, Any]) -> dict[str, Any]:
                     res = render(cam, rk)
                     total += res.stats["total_ms"]
                     if rnd == 0 and rk["culling"] == "temporal":
-                        ref = render(cam, dict(culling="none"))
+                        same_lod = {k: v for k, v in rk.items() if k != "pixel_threshold"}
+                        ref = render(cam, same_lod | dict(culling="none"))
                         differing += int(not np.array_equal(res.image, ref.image))
             best[name] = min(best[name], total / (frames * len(seqs)))
     t_none, t_oracle = best["none"], best["oracle"]
