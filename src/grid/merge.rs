@@ -223,6 +223,7 @@ pub(crate) fn next_level(
                 value: face.value,
                 whole: face.whole,
                 tol: face.tol,
+                kind: face.kind,
             });
         }
     }
@@ -257,6 +258,7 @@ pub(crate) fn next_level(
             value,
             whole: true,
             tol,
+            kind: first.kind,
         });
     }
     LevelFaces { faces, nodes, error: prev.error + err }

@@ -65,6 +65,9 @@ pub struct GridBuild {
     /// Per block (tile order), per level 0..: the block's own counts (as `levels`; a block stops
     /// at its coarsest level).
     pub block_levels: Vec<Vec<LevelStats>>,
+    /// Per level 0..=max over the whole grid (a block with fewer levels counts with its coarsest
+    /// one): faces and triangles by what lies across them (diagnostics).
+    pub kinds: Vec<KindCounts>,
 }
 
 /// One level's counts over the whole grid.
@@ -81,6 +84,9 @@ pub struct LevelStats {
     /// surface, summed), m^3.
     pub volume: f64,
 }
+
+/// Faces and triangles of one level by what lies across them (`faces::kind`, index = kind).
+pub type KindCounts = [[u64; faces::kind::NAMES.len()]; 2];
 
 /// What the face builders need of the grid.
 pub(crate) struct Ctx<'g> {
@@ -220,12 +226,17 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
     let ctx = Ctx { g, up: if sum_up < 0.0 { -1.0 } else { 1.0 }, flip: sum_hand < 0.0, origin };
     let (bi, bj) = blocks;
     let (nbx, nby) = (g.ni.div_ceil(bi), g.nj.div_ceil(bj));
-    let out: Vec<(TileMesh, Vec<LevelStats>, (f64, f64))> = (0..nbx * nby)
+    let out: Vec<BlockOut> = (0..nbx * nby)
         .into_par_iter()
         .map(|t| {
             let (bx, by) = (t % nbx, t / nbx);
             if stop.stop_flag().load(Ordering::Relaxed) {
-                return (TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() }, Vec::new(), (0.0, 0.0));
+                return (
+                    TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() },
+                    Vec::new(),
+                    (0.0, 0.0),
+                    Vec::new(),
+                );
             }
             let b = Block { i0: bx * bi, i1: ((bx + 1) * bi).min(g.ni), j0: by * bj, j1: ((by + 1) * bj).min(g.nj) };
             let out = build_block(&ctx, b, (bx, by));
@@ -235,9 +246,16 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
         .collect();
     let nlev = out.iter().map(|o| o.1.len()).max().unwrap_or(0);
     let mut levels = vec![LevelStats::default(); nlev];
-    for (_, st, _) in &out {
+    let mut kinds = vec![KindCounts::default(); nlev];
+    for (_, st, _, kc) in &out {
         if st.is_empty() {
             continue;
+        }
+        for (h, k) in kinds.iter_mut().enumerate() {
+            let s = &kc[h.min(kc.len() - 1)];
+            for (a, b) in k.iter_mut().flatten().zip(s.iter().flatten()) {
+                *a += b;
+            }
         }
         for (h, l) in levels.iter_mut().enumerate() {
             let s = &st[h.min(st.len() - 1)];
@@ -251,7 +269,7 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
     let cell_size = out.iter().map(|o| o.2).collect();
     let block_levels = out.iter().map(|o| o.1.clone()).collect();
     let tiles = out.into_iter().map(|o| o.0).collect();
-    Ok(GridBuild { tiles, levels, cell_size, block_levels })
+    Ok(GridBuild { tiles, levels, cell_size, block_levels, kinds })
 }
 
 /// Number of merged levels a block of w x h columns allows: until one node covers the block.
@@ -260,7 +278,18 @@ fn block_levels(w: usize, h: usize) -> u32 {
     usize::BITS - (m - 1).leading_zeros()
 }
 
-fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<LevelStats>, (f64, f64)) {
+type BlockOut = (TileMesh, Vec<LevelStats>, (f64, f64), Vec<KindCounts>);
+
+fn kind_counts(lev: &merge::LevelFaces) -> KindCounts {
+    let mut k = KindCounts::default();
+    for f in &lev.faces {
+        k[0][f.kind as usize] += 1;
+        k[1][f.kind as usize] += f.tris.len() as u64;
+    }
+    k
+}
+
+fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     let g = ctx.g;
     let (bw, bh) = (b.i1 - b.i0, b.j1 - b.j0);
     // Drawn cells per column and layer, and the mean cell size.
@@ -287,6 +316,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
     let has_values = g.values.is_some();
     let mut out_map: poly::FastMap<(u32, u64), u32> = poly::FastMap::default();
     let mut stats = Vec::new();
+    let mut kinds = Vec::new();
     let mut seen: Vec<u32> = Vec::new();
     let mut emit =
         |lev: &merge::LevelFaces, verts: &Verts0, tile: &mut TileMesh, stamp: u32| -> (Vec<u32>, LevelStats) {
@@ -325,6 +355,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
     st.cells = present.iter().filter(|&&p| p).count() as u64;
     tile.fine = fine;
     stats.push(st);
+    kinds.push(kind_counts(&lev));
     for h in 1..=block_levels(bw, bh) {
         lev = merge::next_level(&lev, h, b, (g.ni, g.nj), &mut verts);
         let (idx, mut st) = emit(&lev, &verts, &mut tile, h + 1);
@@ -340,6 +371,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
             }
         }
         stats.push(st);
+        kinds.push(kind_counts(&lev));
         tile.levels.push(Level { indices: idx, error: lev.error as f32 });
     }
     match tile.levels.last() {
@@ -361,7 +393,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
         (lo, hi) = ([0.0; 3], [0.0; 3]);
     }
     (tile.bbox_min, tile.bbox_max) = (lo, hi);
-    (tile, stats, cell_size)
+    (tile, stats, cell_size, kinds)
 }
 
 /// `alpha` in [8, 15] and `lam` in [2, 3], the paper's ranges.

@@ -556,6 +556,12 @@ fn perf_table(g: &CornerGrid) {
                 100.0 * (l.volume - l0.volume) / l0.volume
             );
         }
+        println!("faces / triangles by kind:");
+        for (h, l) in b.kinds.iter().enumerate() {
+            let row: Vec<String> =
+                (0..l[0].len()).map(|x| format!("{} {}/{}", super::faces::kind::NAMES[x], l[0][x], l[1][x])).collect();
+            println!("{h:>5} {}", row.join(", "));
+        }
     }
 }
 
