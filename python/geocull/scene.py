@@ -391,8 +391,10 @@ class Scene:
     def grid_levels(self, id: int) -> list[GridLevel]:
         """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):
         cells (merged cells holding a drawn cell), faces (polygons before triangulation),
-        triangles, vertices, volume (m^3 enclosed by the level's surface) and volume_change
-        (relative to level 0; blocks with fewer levels count with their coarsest)."""
+        triangles (interior_triangles of them: faces between regions and of cavities, which frames
+        leave out while the eye is outside the grid), vertices, volume (m^3 enclosed by the
+        level's surface) and volume_change (relative to level 0; blocks with fewer levels count
+        with their coarsest)."""
         levels = self._s.grid_levels(cv.integer(id, "id"))
         v0 = levels[0]["volume"] if levels else 0.0
         return [GridLevel(**lv, volume_change=(lv["volume"] - v0) / v0 if v0 else 0.0) for lv in levels]

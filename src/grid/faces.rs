@@ -65,10 +65,22 @@ pub(crate) struct Face {
 }
 
 /// What lies across a face.
+///
+/// Interior ([`kind::interior`]) are the faces between two regions (a region boundary, or a fault
+/// piece over a cell of another region: each region's surface is closed, so both regions draw the
+/// face, back to back) and the faces of a *cavity*: an inactive cell whose six neighbours are
+/// present cells of one region that share its corners (so the void is enclosed by that region).
+/// From any point outside every cell, a ray to such a face crosses the boundary of the union of
+/// the cells first, and that boundary is drawn (faces facing nothing, holes open to the outside,
+/// fault pieces over gaps): a level's index list draws its interior faces last, and frames leave
+/// them out while the eye is outside the grid's box. At level 0 this is exact; merged levels move
+/// the regions' surfaces apart by at most the level's error, so a sliver between two regions may
+/// show what lies behind instead of the interior face. A merged face is interior only when all
+/// its faces are of one interior kind.
 pub(crate) mod kind {
     /// Nothing: the grid's outline.
     pub const OUTER: u8 = 0;
-    /// An inactive or collapsed cell inside the grid.
+    /// An inactive or collapsed cell inside the grid (not a cavity).
     pub const HOLE: u8 = 1;
     /// A cell of another region with the same corners (an unfaulted region boundary).
     pub const REGION: u8 = 2;
@@ -78,7 +90,17 @@ pub(crate) mod kind {
     pub const FAULT_GAP: u8 = 4;
     /// A top or bottom face whose neighbour in the column (same region) has other corners.
     pub const MISMATCH: u8 = 5;
-    pub const NAMES: [&str; 6] = ["outer", "hole", "region", "fault-region", "fault-gap", "mismatch"];
+    /// An inactive cell enclosed by one region (see the module).
+    pub const CAVITY: u8 = 6;
+    /// A merged face of faces of different kinds.
+    pub const MIXED: u8 = 7;
+    pub const NAMES: [&str; 8] =
+        ["outer", "hole", "region", "fault-region", "fault-gap", "mismatch", "cavity", "mixed"];
+
+    /// Hidden from any point outside the grid's cells (see the module).
+    pub fn interior(kind: u8) -> bool {
+        matches!(kind, REGION | FAULT_REGION | CAVITY)
+    }
 }
 
 /// A block's columns `i0..i1` x `j0..j1`.
@@ -384,6 +406,7 @@ impl<'c, 'a> Level0<'c, 'a> {
                     let fk = match across {
                         None => kind::OUTER,
                         Some(c) if ctx.present(c) => kind::REGION,
+                        Some(c) if ctx.enclosed(c) => kind::CAVITY,
                         Some(_) => kind::HOLE,
                     };
                     // Counter-clockwise in (t, s): bottom t0 -> bottom t1 -> top t1 -> top t0.
@@ -577,6 +600,7 @@ impl<'c, 'a> Level0<'c, 'a> {
                 }
                 let fk = match nb {
                     None => kind::OUTER,
+                    Some(c) if !ctx.present(c) && ctx.enclosed(c) => kind::CAVITY,
                     Some(c) if !ctx.present(c) => kind::HOLE,
                     Some(c) if ctx.region(c) != region => kind::REGION,
                     Some(_) => kind::MISMATCH,

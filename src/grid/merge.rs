@@ -27,8 +27,8 @@
 //! it): it is then triangulated by ear clipping. A union with a hole (an inactive cell inside
 //! the rows) stays as the strips of the level below.
 
-use super::faces::{Block, Face};
-use super::poly::{convex, ear_clip, newell, triangulate, FastMap, Verts};
+use super::faces::{kind, Block, Face};
+use super::poly::{convex, ear_clip, newell, triangulate, FastMap, Verts, STRAIGHT};
 
 /// Node key at some height: (node i, node j, layer, direction).
 type Key = (u32, u32, u32, u8);
@@ -174,6 +174,14 @@ pub(crate) fn next_level(
                     continue;
                 }
                 let (u, x) = (grp.outline[(w + n - 1) % n], grp.outline[(w + 1) % n]);
+                // A strip removes only vertices on straight stretches of its outline (its corners,
+                // where the pieces' lines meet, are no node's corners).
+                if grp.fault {
+                    let (e1, e2) = (verts.p(v) - verts.p(u), verts.p(x) - verts.p(v));
+                    if e1.cross(e2).length() > STRAIGHT * e1.length() * e2.length() {
+                        continue;
+                    }
+                }
                 claims[vi] = claims[vi].saturating_add(1);
                 match nb.get(&v) {
                     None => {
@@ -275,7 +283,11 @@ pub(crate) fn next_level(
             value,
             whole: !grp.fault,
             tol,
-            kind: first.kind,
+            kind: if grp.members.iter().all(|&m| prev.faces[m as usize].kind == first.kind) {
+                first.kind
+            } else {
+                kind::MIXED
+            },
         });
     }
     LevelFaces { faces, nodes, error: prev.error + err }
@@ -384,7 +396,9 @@ fn fault_groups(
             _ => (face.cj + 1, face.ci - b.i0 as u32, b.seam_j(face.cj as usize + 1, nj)),
         };
         if !seam {
-            sets.entry((face.dir, line, face.region, row >> h)).or_default().push(f as u32);
+            // Pieces over gaps (seen from outside) and over cells (interior) merge apart.
+            let dir = face.dir | (((face.kind == kind::FAULT_GAP) as u8) << 4);
+            sets.entry((dir, line, face.region, row >> h)).or_default().push(f as u32);
         }
     }
     let mut keys: Vec<_> = sets.keys().copied().collect();
@@ -428,7 +442,7 @@ fn fault_groups(
         for members in comps {
             if let Some((outline, inner)) = outline_of(&members, &prev.faces) {
                 if free(&members, &inner, &prev.faces, use_count, verts) {
-                    let key = (key.1, key.3, 0, key.0);
+                    let key = (key.1, key.3, 0, key.0 & 15);
                     groups.push(Group { key, members, outline, inner, corner_pillars: Vec::new(), fault: true });
                 }
             }

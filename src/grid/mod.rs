@@ -83,6 +83,9 @@ pub struct LevelStats {
     /// The volume the level's surface encloses (divergence theorem over every region's closed
     /// surface, summed), m^3.
     pub volume: f64,
+    /// The last triangles of the level's index list that cannot be seen from outside the grid's
+    /// cells (`faces::kind::interior`): faces between regions and of cavities.
+    pub interior_triangles: u64,
 }
 
 /// Faces and triangles of one level by what lies across them (`faces::kind`, index = kind).
@@ -135,6 +138,48 @@ impl Ctx<'_> {
     pub fn present(&self, cell: usize) -> bool {
         self.active(cell) && !self.collapsed(cell)
     }
+    /// An inactive cell (not collapsed) enclosed by one region: its four neighbours in the layer
+    /// and the next cells above and below that are not collapsed are present, of one region, and
+    /// share its corners (`faces::kind::CAVITY`).
+    pub fn enclosed(&self, cell: usize) -> bool {
+        if self.present(cell) || self.collapsed(cell) {
+            return false;
+        }
+        let g = self.g;
+        let (i, j, k) = (cell % g.ni, (cell / g.ni) % g.nj, cell / (g.ni * g.nj));
+        // (neighbour, its corners, this cell's corners that must equal them)
+        let mut nbs: Vec<(usize, [usize; 4], [usize; 4])> = Vec::with_capacity(6);
+        let lateral = [
+            (i > 0, [1, 3, 5, 7], [0, 2, 4, 6], -1isize, 0isize),
+            (i + 1 < g.ni, [0, 2, 4, 6], [1, 3, 5, 7], 1, 0),
+            (j > 0, [2, 3, 6, 7], [0, 1, 4, 5], 0, -1),
+            (j + 1 < g.nj, [0, 1, 4, 5], [2, 3, 6, 7], 0, 1),
+        ];
+        for (ok, theirs, mine, di, dj) in lateral {
+            if !ok {
+                return false;
+            }
+            let c = self.cell(k, (j as isize + dj) as usize, (i as isize + di) as usize);
+            nbs.push((c, theirs, mine));
+        }
+        // The next cells above and below that are not collapsed.
+        let above = (0..k).rev().map(|kk| self.cell(kk, j, i)).find(|&c| !self.collapsed(c));
+        let below = (k + 1..g.nk).map(|kk| self.cell(kk, j, i)).find(|&c| !self.collapsed(c));
+        match (above, below) {
+            (Some(a), Some(b)) => {
+                nbs.push((a, [4, 5, 6, 7], [0, 1, 2, 3]));
+                nbs.push((b, [0, 1, 2, 3], [4, 5, 6, 7]));
+            }
+            _ => return false,
+        }
+        let region = self.region(nbs[0].0);
+        nbs.iter().all(|&(c, theirs, mine)| {
+            self.present(c)
+                && self.region(c) == region
+                && (0..4).all(|x| self.corner(c, theirs[x]) == self.corner(cell, mine[x]))
+        })
+    }
+
     /// Mean height of the cell along its four pillars.
     pub fn thickness(&self, cell: usize) -> f64 {
         (0..4).map(|c| self.s(self.corner(cell, c)) - self.s(self.corner(cell, c + 4))).sum::<f64>() / 4.0
@@ -264,6 +309,7 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
             l.triangles += s.triangles;
             l.vertices += s.vertices;
             l.volume += s.volume;
+            l.interior_triangles += s.interior_triangles;
         }
     }
     let cell_size = out.iter().map(|o| o.2).collect();
@@ -323,7 +369,11 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
             let mut idx = Vec::new();
             let mut st = LevelStats { faces: lev.faces.len() as u64, ..Default::default() };
             let o = ctx.origin;
-            for f in &lev.faces {
+            // Faces seen from outside first, then the interior ones (`faces::kind::interior`).
+            let inner: Vec<bool> = lev.faces.iter().map(|f| faces::kind::interior(f.kind)).collect();
+            let order = (0..lev.faces.len()).filter(|&f| !inner[f]).chain((0..lev.faces.len()).filter(|&f| inner[f]));
+            for f in order {
+                let f = &lev.faces[f];
                 let vb = if has_values { f.value.to_bits() } else { 0 };
                 for t in &f.tris {
                     let p = t.map(|v| DVec3::from_array(verts.pos[v as usize]) - o);
@@ -347,6 +397,8 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
                 }
             }
             st.triangles = (idx.len() / 3) as u64;
+            st.interior_triangles =
+                lev.faces.iter().zip(&inner).filter(|(_, &i)| i).map(|(f, _)| f.tris.len() as u64).sum();
             (idx, st)
         };
     type Verts0 = poly::Verts;

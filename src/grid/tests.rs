@@ -5,6 +5,9 @@
 use super::*;
 use std::collections::HashMap;
 
+#[path = "tests_strips.rs"]
+mod strips;
+
 /// Corners of a grid whose corner (k, j, i, c) lies at `f(i + ibit, j + jbit, k + kbit)` for the
 /// cell's column (i, j) (the function sees the cell's column, so columns can differ: faults).
 fn grid_from(
@@ -343,44 +346,6 @@ fn faults_alone_throw_not_a_layer_multiple() {
     }
 }
 
-/// Fault pieces (faces split on a fault that is also a region boundary) merge into one strip
-/// per side at the coarsest level of a single block: layers of thickness 1, the columns i >= 2
-/// of a 4 x 4 x 4 grid thrown down 0.4 (each side's pieces over the two cells across and the
-/// gap beyond them); closed and of the same volume at every level. On a seam between blocks
-/// the pieces stay. An inactive cell beside the fault notches the strips (non-convex: ear
-/// clipping), still closed.
-#[test]
-fn fault_pieces_merge_into_strips() {
-    use super::faces::kind;
-    let (ni, nj, nk) = (4, 4, 4);
-    let c = faulted(ni, nj, nk, 0.4, 2);
-    let region: Vec<i32> = (0..ni * nj * nk).map(|x| (x % ni >= 2) as i32).collect();
-    let values: Vec<f64> = region.iter().map(|&r| r as f64).collect();
-    let fault = |k: &KindCounts, x: usize| k[x][kind::FAULT_REGION as usize] + k[x][kind::FAULT_GAP as usize];
-    let mut active = vec![true; ni * nj * nk];
-    for (notch, blocks, strips) in [(false, (4, 4), Some(2)), (false, (2, 4), None), (true, (4, 4), None)] {
-        if notch {
-            active[(2 * nj + 1) * ni + 1] = false; // cell (k 2, j 1, i 1), beside the fault
-        }
-        let g =
-            CornerGrid { nk, nj, ni, corners: &c, active: Some(&active), region: Some(&region), values: Some(&values) };
-        let b = build(&g, blocks);
-        let top = b.levels.len() - 1;
-        // Level 0: the 2 x 4 x 4 faces on the fault in pieces.
-        assert!(fault(&b.kinds[0], 0) > 2 * 4 * 4, "{:?}", b.kinds[0]);
-        match strips {
-            Some(n) => assert_eq!(fault(&b.kinds[top], 0), n, "{blocks:?}: {:?}", b.kinds[top]),
-            None if notch => assert!(fault(&b.kinds[top], 0) < fault(&b.kinds[0], 0) / 4, "{:?}", b.kinds[top]),
-            None => assert_eq!(fault(&b.kinds[top], 0), fault(&b.kinds[0], 0), "seam: {:?}", b.kinds[top]),
-        }
-        for h in 0..=top {
-            watertight(&b.tiles, |_| h).unwrap_or_else(|e| panic!("{blocks:?} notch {notch}, level {h}: {e}"));
-            let l0 = b.levels[0].volume;
-            assert!((b.levels[h].volume - l0).abs() < 1e-9 * l0, "level {h}: {} vs {l0}", b.levels[h].volume);
-        }
-    }
-}
-
 #[test]
 fn bad_input_is_named() {
     let (ni, nj, nk) = (3, 2, 2);
@@ -598,7 +563,7 @@ fn perf_table(g: &CornerGrid) {
         for (h, l) in b.kinds.iter().enumerate() {
             let row: Vec<String> =
                 (0..l[0].len()).map(|x| format!("{} {}/{}", super::faces::kind::NAMES[x], l[0][x], l[1][x])).collect();
-            println!("{h:>5} {}", row.join(", "));
+            println!("{h:>5} {}; interior triangles {}", row.join(", "), b.levels[h].interior_triangles);
         }
     }
 }
