@@ -69,7 +69,7 @@ pub(crate) struct Face {
 /// Interior ([`kind::interior`]) are the faces between two regions (a region boundary, or a fault
 /// piece over a cell of another region: each region's surface is closed, so both regions draw the
 /// face, back to back) and the faces of a *cavity*: an inactive cell whose six neighbours are
-/// present cells of one region that share its corners (so the void is enclosed by that region).
+/// present cells (of any regions) that share its corners (so the void is enclosed by them).
 /// From any point outside every cell, a ray to such a face crosses the boundary of the union of
 /// the cells first, and that boundary is drawn (faces facing nothing, holes open to the outside,
 /// fault pieces over gaps): a level's index list draws its interior faces last, and frames leave
@@ -90,7 +90,7 @@ pub(crate) mod kind {
     pub const FAULT_GAP: u8 = 4;
     /// A top or bottom face whose neighbour in the column (same region) has other corners.
     pub const MISMATCH: u8 = 5;
-    /// An inactive cell enclosed by one region (see the module).
+    /// An inactive cell enclosed by present cells (see the module).
     pub const CAVITY: u8 = 6;
     /// A merged face of faces of different kinds.
     pub const MIXED: u8 = 7;

@@ -138,9 +138,9 @@ impl Ctx<'_> {
     pub fn present(&self, cell: usize) -> bool {
         self.active(cell) && !self.collapsed(cell)
     }
-    /// An inactive cell (not collapsed) enclosed by one region: its four neighbours in the layer
-    /// and the next cells above and below that are not collapsed are present, of one region, and
-    /// share its corners (`faces::kind::CAVITY`).
+    /// An inactive cell (not collapsed) enclosed by present cells: its four neighbours in the
+    /// layer and the next cells above and below that are not collapsed are present (of any
+    /// regions) and share its corners (`faces::kind::CAVITY`).
     pub fn enclosed(&self, cell: usize) -> bool {
         if self.present(cell) || self.collapsed(cell) {
             return false;
@@ -172,11 +172,8 @@ impl Ctx<'_> {
             }
             _ => return false,
         }
-        let region = self.region(nbs[0].0);
         nbs.iter().all(|&(c, theirs, mine)| {
-            self.present(c)
-                && self.region(c) == region
-                && (0..4).all(|x| self.corner(c, theirs[x]) == self.corner(cell, mine[x]))
+            self.present(c) && (0..4).all(|x| self.corner(c, theirs[x]) == self.corner(cell, mine[x]))
         })
     }
 
