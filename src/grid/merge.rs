@@ -151,6 +151,9 @@ pub(crate) fn next_level(
     // and within tolerance.
     let mut accepted = vec![true; groups.len()];
     let mut drop = vec![false; nv];
+    // Per group: the reduced outline last checked (a fingerprint) and whether its shape passed
+    // (ear clipping a long strip is the costly part; most outlines do not change between rounds).
+    let mut shape_seen: Vec<Option<(u64, bool)>> = vec![None; groups.len()];
     loop {
         let mut claims = vec![0u8; nv];
         let mut nb: FastMap<u32, (u32, u32)> = FastMap::default();
@@ -201,8 +204,18 @@ pub(crate) fn next_level(
             }
             let reduced: Vec<u32> = grp.outline.iter().copied().filter(|&v| !drop[v as usize]).collect();
             let tol = grp.members.iter().map(|&m| prev.faces[m as usize].tol).fold(f64::INFINITY, f64::min);
-            let shape_ok =
-                reduced.len() >= 3 && (convex(&reduced, verts) || (grp.fault && ear_clip(&reduced, verts).is_some()));
+            let print = reduced
+                .iter()
+                .fold(reduced.len() as u64, |h, &v| (h.rotate_left(7) ^ v as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let shape_ok = match shape_seen[g] {
+                Some((p, ok)) if p == print => ok,
+                _ => {
+                    let ok = reduced.len() >= 3
+                        && (convex(&reduced, verts) || (grp.fault && ear_clip(&reduced, verts).is_some()));
+                    shape_seen[g] = Some((print, ok));
+                    ok
+                }
+            };
             let ok = shape_ok && removal_error(grp, &reduced, &drop, verts) <= tol;
             if !ok {
                 accepted[g] = false;
