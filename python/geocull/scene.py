@@ -353,9 +353,11 @@ class Scene:
             j-bit ``(c >> 1) & 1``, k-bit ``(c >> 2) & 1`` (k-bit 0 = the cell's top), k = 0 the top
             layer. Collapsed corners (pinch-outs, zero-thickness cells) are legal; a non-finite corner
             of an active cell is an InputError naming it (inactive cells may hold anything).
-        active: (nk, nj, ni) bool (default all active): inactive cells are holes.
-        region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): faces
-            between regions are drawn and never merged.
+        active: (nk, nj, ni) bool (default all active): inactive cells are holes (one enclosed by
+            active cells is a cavity, not drawn while the eye is outside the grid).
+        region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): cells never
+            merge across regions; faces between regions are built for both (each region's surface
+            is closed) and not drawn while the eye is outside the grid.
         values: (nk, nj, ni) float cell property, coloured through ``cmap`` / ``clim`` /
             ``nan_color`` as for :meth:`add_heightfield` (flat per cell; a merged face takes the mean
             of its cells' values). Without values or ``color`` the grid gets its palette colour.
