@@ -313,8 +313,9 @@ impl Renderer {
         let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
         let (mut draw_args, chosen) =
             choose_levels(geometry, scene, camera, &fc, &tile_dist2, *height, (opts.lod, opts.grid_lod), origin);
-        // Grid blocks' interior faces (drawn last in each level) are left out from outside the grid.
-        let interior = scene.grid_interior_indices(origin, fc.eye, camera.z_scale, |t| {
+        // Grid blocks' interior faces (drawn last in each level) are left out when the grid lies
+        // wholly beyond the near plane.
+        let interior = scene.grid_interior_indices(origin, (fc.eye, fc.forward, fc.near), camera.z_scale, |t| {
             chosen.as_ref().and_then(|c| c.0.get(t)).map_or(0, |&l| l as usize)
         });
         for (a, &n) in draw_args.iter_mut().zip(&interior) {

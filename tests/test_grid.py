@@ -128,7 +128,7 @@ def test_a_faulted_grid_matches_pyvista_hexahedra(renderer_small):
 
 def test_interior_faces_are_left_out_from_outside(renderer_small):
     """Faces between regions and of a cavity (an inactive cell enclosed by present cells) are drawn last
-    and left out while the eye is outside the grid's box: the image is that of the same cells
+    and left out while the grid lies beyond the near plane: the image is that of the same cells
     without regions and hole; from inside the grid nothing is left out."""
     c = box_corners(5, 6, 6)
     region = np.zeros((5, 6, 6), np.int32)

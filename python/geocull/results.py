@@ -71,7 +71,8 @@ class RenderStats(TypedDict):
     grid_cells_level5: NotRequired[int]
     grid_faces_level5: NotRequired[int]
     # scenes with a grid: interior triangles of the drawn blocks left out (faces between regions and of
-    # cavities, hidden from outside the grid's cells; left out while the eye is outside the grid's box)
+    # cavities, hidden from outside the grid's cells; left out while the grid's box lies wholly beyond
+    # the near plane)
     grid_interior_triangles_skipped: NotRequired[int]
 
 

@@ -73,7 +73,7 @@ pub(crate) struct Face {
 /// From any point outside every cell, a ray to such a face crosses the boundary of the union of
 /// the cells first, and that boundary is drawn (faces facing nothing, holes open to the outside,
 /// fault pieces over gaps): a level's index list draws its interior faces last, and frames leave
-/// them out while the eye is outside the grid's box. At level 0 this is exact; merged levels move
+/// them out while the grid's box lies wholly beyond the near plane. At level 0 this is exact; merged levels move
 /// the regions' surfaces apart by at most the level's error, so a sliver between two regions may
 /// show what lies behind instead of the interior face. A merged face is interior only when all
 /// its faces are of one interior kind.

@@ -105,14 +105,15 @@ impl Scene {
     }
 
     /// Per tile (scene tile order): how many indices at the end of the tile's level `level(t)`
-    /// a frame leaves out: a grid block's interior triangles (`grid::interior`: faces between
-    /// regions and of cavities, ordered last, hidden from any point outside the grid's cells)
-    /// while `eye` (render space: relative to `origin`, z times `z_scale`) lies outside the
-    /// grid's box; 0 for other tiles and eyes.
+    /// a frame leaves out: a grid block's interior triangles (`grid::faces::kind::interior`:
+    /// faces between regions and of cavities, ordered last, hidden from any point outside the
+    /// grid's cells) while the grid's box lies wholly beyond the near plane (`eye`, unit
+    /// `forward` and `near` in render space: relative to `origin`, z times `z_scale`), so the eye
+    /// is outside it and the near plane cuts nothing open; 0 for other tiles and views.
     pub fn grid_interior_indices(
         &self,
         origin: DVec3,
-        eye: DVec3,
+        (eye, forward, near): (DVec3, DVec3, f64),
         z_scale: f64,
         level: impl Fn(usize) -> usize,
     ) -> Vec<u32> {
@@ -129,9 +130,13 @@ impl Scene {
                 lo = lo.min((DVec3::from_array(t.bbox_min.map(f64::from)) + off) * zs);
                 hi = hi.max((DVec3::from_array(t.bbox_max.map(f64::from)) + off) * zs);
             }
-            // Outside by a margin (f32 positions).
+            // The box's least depth along the view, beyond the near plane by a margin (f32 positions).
             let m = 1e-5 * (hi - lo).max_element().max(1.0);
-            let outside = lo.x <= hi.x && (eye.cmplt(lo - m).any() || eye.cmpgt(hi + m).any());
+            let depth = (0..8)
+                .map(|c| DVec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), hi, lo))
+                .map(|p| (p - eye).dot(forward))
+                .fold(f64::INFINITY, f64::min);
+            let outside = lo.x <= hi.x && depth > near + m;
             for levels in &info.block_levels {
                 let t = out.len();
                 let n = match levels.get(level(t).min(levels.len().saturating_sub(1))) {
@@ -206,9 +211,14 @@ mod tests {
         let levels = s.grid_levels(id).unwrap().to_vec();
         assert_eq!(levels[0].interior_triangles, 2 * 16 * 2);
         // Render space relative to the world origin: the grid spans (0..40, 0..40, -20..0).
-        let at = |p: [f64; 3]| s.grid_interior_indices(DVec3::ZERO, DVec3::from_array(p), 1.0, |_| 0);
-        assert_eq!(at([20.0, 20.0, 50.0]), vec![3 * 64]);
-        assert_eq!(at([20.0, 20.0, -10.0]), vec![0]);
-        assert_eq!(at([-1.0, 20.0, -10.0]), vec![3 * 64]);
+        let at = |p: [f64; 3], f: [f64; 3], near: f64| {
+            s.grid_interior_indices(DVec3::ZERO, (DVec3::from_array(p), DVec3::from_array(f), near), 1.0, |_| 0)
+        };
+        let down = [0.0, 0.0, -1.0];
+        assert_eq!(at([20.0, 20.0, 50.0], down, 1.0), vec![3 * 64]);
+        assert_eq!(at([20.0, 20.0, -10.0], down, 1.0), vec![0]); // inside
+        assert_eq!(at([20.0, 20.0, 50.0], down, 60.0), vec![0]); // the near plane cuts the grid open
+        assert_eq!(at([-1.0, 20.0, -10.0], [1.0, 0.0, 0.0], 0.1), vec![3 * 64]);
+        assert_eq!(at([-1.0, 20.0, -10.0], [0.0, 1.0, 0.0], 0.1), vec![0]); // beside it, not beyond
     }
 }
