@@ -313,8 +313,16 @@ impl Renderer {
         let geometry = geometry.as_ref().expect("uploaded above");
         let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
         let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
-        let (draw_args, chosen) =
+        let (mut draw_args, chosen) =
             choose_levels(geometry, scene, camera, &fc, &tile_dist2, *height, (opts.lod, opts.grid_lod), origin);
+        // Grid blocks' interior faces (drawn last in each level) are left out when the grid lies
+        // wholly beyond the near plane.
+        let interior = scene.grid_interior_indices(origin, (fc.eye, fc.forward, fc.near), camera.z_scale, |t| {
+            chosen.as_ref().and_then(|c| c.0.get(t)).map_or(0, |&l| l as usize)
+        });
+        for (a, &n) in draw_args.iter_mut().zip(&interior) {
+            a.index_count -= n.min(a.index_count);
+        }
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -361,7 +369,7 @@ impl Renderer {
         };
         let extra = self.strategies[si].report(&report);
         out.stats.extra.extend(extra);
-        grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]));
+        grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]), &interior);
         out.stats.extra.extend(lens_stats.unwrap_or_default());
         if let Some((level, err_px)) = chosen {
             self.lod_stats(&mut out, &level, &err_px);
@@ -820,9 +828,12 @@ const GRID_STATS: [[&str; 2]; 1 + crate::lod::levels::MAX_LEVELS] = [
 ];
 
 /// Grids' merged cells and faces drawn per level, over the drawn blocks (only when the scene has
-/// a grid). `level`: each tile's level (None = all 0).
-fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[u8]>) {
+/// a grid), and `grid_interior_triangles_skipped`: the interior triangles of drawn blocks left out
+/// (`interior`: indices per tile). `level`: each tile's level (None = all 0).
+fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[u8]>, interior: &[u32]) {
     let mut sums = [[0u64; 2]; GRID_STATS.len()];
+    let skipped: u64 =
+        (interior.iter().zip(&out.tile_drawn).filter(|(_, &d)| d).map(|(&n, _)| n as u64).sum::<u64>()) / 3;
     let (mut any, mut t) = (false, 0usize);
     for o in scene.objects() {
         let ObjectKind::Grid(info) = &o.kind else {
@@ -846,6 +857,7 @@ fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[u8]>) {
             out.stats.extra.push((names[0], Stat::Count(v[0])));
             out.stats.extra.push((names[1], Stat::Count(v[1])));
         }
+        out.stats.extra.push(("grid_interior_triangles_skipped", Stat::Count(skipped)));
     }
 }
 

@@ -1,6 +1,7 @@
 """Reservoir grids in the scene: a box grid renders like its box, inactive cells are holes, the
-level chosen per block follows grid_lod, three_pass culls a grid hidden behind a horizon, and
-level 0 matches PyVista's surface of the same cells as VTK hexahedra."""
+level chosen per block follows grid_lod, three_pass culls a grid hidden behind a horizon,
+level 0 matches PyVista's surface of the same cells as VTK hexahedra, and interior faces are left
+out from outside."""
 
 from __future__ import annotations
 
@@ -123,6 +124,30 @@ def test_a_faulted_grid_matches_pyvista_hexahedra(renderer_small):
     both = ours.coverage & np.isfinite(vtk["depth"])
     rel = np.abs(ours.depth[both] - vtk["depth"][both]) / vtk["depth"][both]
     assert np.median(rel) < 1e-3
+
+
+def test_interior_faces_are_left_out_from_outside(renderer_small):
+    """Faces between regions and of a cavity (an inactive cell enclosed by present cells) are drawn last
+    and left out while the grid lies beyond the near plane: the image is that of the same cells
+    without regions and hole; from inside the grid nothing is left out."""
+    c = box_corners(5, 6, 6)
+    region = np.zeros((5, 6, 6), np.int32)
+    region[3:] = 1
+    active = np.ones((5, 6, 6), bool)
+    active[1, 2, 2] = False
+    s = gc.Scene()
+    g = s.add_grid(c, active=active, region=region, blocks=(3, 3), color=(1, 1, 1))
+    plain = gc.Scene()
+    plain.add_grid(c, blocks=(3, 3), color=(1, 1, 1))
+    lv = s.grid_levels(g)[0]
+    assert lv["interior_triangles"] == 2 * 36 * 2 + 6 * 2  # both regions' boundary faces, the cavity
+    r = renderer_small(W, H)
+    a, b = r.render(s, cam()), r.render(plain, cam())
+    assert a.stats["grid_interior_triangles_skipped"] == lv["interior_triangles"]
+    assert a.stats["triangles_drawn"] == lv["triangles"] - lv["interior_triangles"]
+    np.testing.assert_array_equal(a.image, b.image)
+    inside = gc.Camera.look_at((25, 25, -15), (60, 60, -15))
+    assert r.render(s, inside).stats["grid_interior_triangles_skipped"] == 0
 
 
 def test_grids_survive_pickling(renderer_small):

@@ -61,6 +61,7 @@ class _GridLevelRaw(TypedDict):
     cells: int
     faces: int
     triangles: int
+    interior_triangles: int
     vertices: int
     volume: float
 

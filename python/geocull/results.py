@@ -71,6 +71,10 @@ class RenderStats(TypedDict):
     grid_faces_level4: NotRequired[int]
     grid_cells_level5: NotRequired[int]
     grid_faces_level5: NotRequired[int]
+    # scenes with a grid: interior triangles of the drawn blocks left out (faces between regions and of
+    # cavities, hidden from outside the grid's cells; left out while the grid's box lies wholly beyond
+    # the near plane)
+    grid_interior_triangles_skipped: NotRequired[int]
 
 
 class GridLevel(TypedDict):
@@ -79,6 +83,7 @@ class GridLevel(TypedDict):
     cells: int  # merged cells holding at least one drawn cell (level 0: drawn cells)
     faces: int  # polygons before triangulation
     triangles: int
+    interior_triangles: int  # of which faces between regions and of cavities (not drawn from outside the grid)
     vertices: int  # distinct vertices (one per cell value: flat colours)
     volume: float  # m^3 enclosed by the level's surface, every region summed
     volume_change: float  # (volume - level 0's volume) / level 0's volume

@@ -353,9 +353,11 @@ class Scene:
             j-bit ``(c >> 1) & 1``, k-bit ``(c >> 2) & 1`` (k-bit 0 = the cell's top), k = 0 the top
             layer. Collapsed corners (pinch-outs, zero-thickness cells) are legal; a non-finite corner
             of an active cell is an InputError naming it (inactive cells may hold anything).
-        active: (nk, nj, ni) bool (default all active): inactive cells are holes.
-        region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): faces
-            between regions are drawn and never merged.
+        active: (nk, nj, ni) bool (default all active): inactive cells are holes (one enclosed by
+            active cells is a cavity, not drawn while the eye is outside the grid).
+        region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): cells never
+            merge across regions; faces between regions are built for both (each region's surface
+            is closed) and not drawn while the eye is outside the grid.
         values: (nk, nj, ni) float cell property, coloured through ``cmap`` / ``clim`` /
             ``nan_color`` as for :meth:`add_heightfield` (flat per cell; a merged face takes the mean
             of its cells' values). Without values or ``color`` the grid gets its palette colour.
@@ -391,8 +393,10 @@ class Scene:
     def grid_levels(self, id: int) -> list[GridLevel]:
         """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):
         cells (merged cells holding a drawn cell), faces (polygons before triangulation),
-        triangles, vertices, volume (m^3 enclosed by the level's surface) and volume_change
-        (relative to level 0; blocks with fewer levels count with their coarsest)."""
+        triangles (interior_triangles of them: faces between regions and of cavities, which frames
+        leave out while the eye is outside the grid), vertices, volume (m^3 enclosed by the
+        level's surface) and volume_change (relative to level 0; blocks with fewer levels count
+        with their coarsest)."""
         levels = self._s.grid_levels(cv.integer(id, "id"))
         v0 = levels[0]["volume"] if levels else 0.0
         return [GridLevel(**lv, volume_change=(lv["volume"] - v0) / v0 if v0 else 0.0) for lv in levels]

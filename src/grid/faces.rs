@@ -60,6 +60,47 @@ pub(crate) struct Face {
     /// Half the cell's size across the face (thickness for top/bottom, length along i or j for
     /// lateral faces): merging may move the surface by at most this.
     pub tol: f64,
+    /// What lies across the face ([`kind`]); a merged face has its first member's.
+    pub kind: u8,
+}
+
+/// What lies across a face.
+///
+/// Interior ([`kind::interior`]) are the faces between two regions (a region boundary, or a fault
+/// piece over a cell of another region: each region's surface is closed, so both regions draw the
+/// face, back to back) and the faces of a *cavity*: an inactive cell whose six neighbours are
+/// present cells (of any regions) that share its corners (so the void is enclosed by them).
+/// From any point outside every cell, a ray to such a face crosses the boundary of the union of
+/// the cells first, and that boundary is drawn (faces facing nothing, holes open to the outside,
+/// fault pieces over gaps): a level's index list draws its interior faces last, and frames leave
+/// them out while the grid's box lies wholly beyond the near plane. At level 0 this is exact; merged levels move
+/// the regions' surfaces apart by at most the level's error, so a sliver between two regions may
+/// show what lies behind instead of the interior face. A merged face is interior only when all
+/// its faces are of one interior kind.
+pub(crate) mod kind {
+    /// Nothing: the grid's outline.
+    pub const OUTER: u8 = 0;
+    /// An inactive or collapsed cell inside the grid (not a cavity).
+    pub const HOLE: u8 = 1;
+    /// A cell of another region with the same corners (an unfaulted region boundary).
+    pub const REGION: u8 = 2;
+    /// A piece of a faulted face over a cell of another region.
+    pub const FAULT_REGION: u8 = 3;
+    /// A piece of a faulted face over a gap between the cells across (or beyond them).
+    pub const FAULT_GAP: u8 = 4;
+    /// A top or bottom face whose neighbour in the column (same region) has other corners.
+    pub const MISMATCH: u8 = 5;
+    /// An inactive cell enclosed by present cells (see the module).
+    pub const CAVITY: u8 = 6;
+    /// A merged face of faces of different kinds.
+    pub const MIXED: u8 = 7;
+    pub const NAMES: [&str; 8] =
+        ["outer", "hole", "region", "fault-region", "fault-gap", "mismatch", "cavity", "mixed"];
+
+    /// Hidden from any point outside the grid's cells (see the module).
+    pub fn interior(kind: u8) -> bool {
+        matches!(kind, REGION | FAULT_REGION | CAVITY)
+    }
 }
 
 /// A block's columns `i0..i1` x `j0..j1`.
@@ -225,7 +266,16 @@ impl<'c, 'a> Level0<'c, 'a> {
 
     /// Pushes a face (dropping zero-area ones); `poly` in outward order.
     #[allow(clippy::too_many_arguments)]
-    fn push(&mut self, poly: &[u32], dir: u8, k: usize, cell_col: (usize, usize), cell: usize, whole: bool, tol: f64) {
+    fn push(
+        &mut self,
+        poly: &[u32],
+        (dir, kind): (u8, u8),
+        k: usize,
+        cell_col: (usize, usize),
+        cell: usize,
+        whole: bool,
+        tol: f64,
+    ) {
         let Some(poly) = clean(poly) else { return };
         if zero_area(&poly, &self.verts) {
             return;
@@ -244,6 +294,7 @@ impl<'c, 'a> Level0<'c, 'a> {
             value: self.ctx.value(cell),
             whole,
             tol,
+            kind,
         });
     }
 
@@ -352,6 +403,12 @@ impl<'c, 'a> Level0<'c, 'a> {
                     if interior {
                         continue;
                     }
+                    let fk = match across {
+                        None => kind::OUTER,
+                        Some(c) if ctx.present(c) => kind::REGION,
+                        Some(c) if ctx.enclosed(c) => kind::CAVITY,
+                        Some(_) => kind::HOLE,
+                    };
                     // Counter-clockwise in (t, s): bottom t0 -> bottom t1 -> top t1 -> top t0.
                     let mut poly = Vec::with_capacity(4);
                     let bp = |s: &mut Self, p: [f64; 3], pil: (usize, usize)| {
@@ -367,7 +424,7 @@ impl<'c, 'a> Level0<'c, 'a> {
                     if rev {
                         poly.reverse();
                     }
-                    self.push(&poly, dir, a.k, col, a.cell, true, tol);
+                    self.push(&poly, (dir, fk), a.k, col, a.cell, true, tol);
                     continue;
                 }
                 // Faulted: the crossings of this cell's top and bottom with the other side's lines
@@ -396,21 +453,34 @@ impl<'c, 'a> Level0<'c, 'a> {
                     if olo < ahi && ohi > alo {
                         let drawn = ctx.region(o.cell) != region;
                         if drawn {
-                            self.piece(a, Some(o.bot), Some(o.top), (p0, p1), on_border, (dir, rev, col, tol, false));
+                            self.piece(
+                                a,
+                                Some(o.bot),
+                                Some(o.top),
+                                (p0, p1),
+                                on_border,
+                                (dir, rev, col, tol, false, kind::FAULT_REGION),
+                            );
                         }
                     }
                     // The gap above o (below prev).
-                    self.piece(a, Some(o.top), prev.map(|p| p.bot), (p0, p1), on_border, (dir, rev, col, tol, false));
+                    let how = (dir, rev, col, tol, false, kind::FAULT_GAP);
+                    self.piece(a, Some(o.top), prev.map(|p| p.bot), (p0, p1), on_border, how);
                     prev = Some(o);
                 }
                 let whole = other.is_empty();
-                self.piece(a, None, prev.map(|p| p.bot), (p0, p1), on_border, (dir, rev, col, tol, whole));
+                let fk = match (whole, other_col) {
+                    (false, _) => kind::FAULT_GAP,
+                    (true, None) => kind::OUTER,
+                    (true, Some(_)) => kind::HOLE,
+                };
+                self.piece(a, None, prev.map(|p| p.bot), (p0, p1), on_border, (dir, rev, col, tol, whole, fk));
             }
         }
     }
 
     /// The piece of cell `a`'s face between lines `lo` and `hi` (None = unbounded), if it has an
-    /// area; `how` = (dir, reverse, column, tol, whole).
+    /// area; `how` = (dir, reverse, column, tol, whole, kind).
     #[allow(clippy::too_many_arguments)]
     fn piece(
         &mut self,
@@ -419,9 +489,9 @@ impl<'c, 'a> Level0<'c, 'a> {
         hi: Option<Line>,
         pil: ((usize, usize), (usize, usize)),
         on_border: bool,
-        how: (u8, bool, (usize, usize), f64, bool),
+        how: (u8, bool, (usize, usize), f64, bool, u8),
     ) {
-        let (dir, rev, col, tol, whole) = how;
+        let (dir, rev, col, tol, whole, fk) = how;
         if let (Some(l), Some(h)) = (lo, hi) {
             if l.same(&h) || (h.s0 <= l.s0 && h.s1 <= l.s1) {
                 return;
@@ -483,7 +553,7 @@ impl<'c, 'a> Level0<'c, 'a> {
         if rev {
             poly.reverse();
         }
-        self.push(&poly, dir, a.k, col, a.cell, whole, tol);
+        self.push(&poly, (dir, fk), a.k, col, a.cell, whole, tol);
     }
 
     /// Top and bottom faces of column (j, i).
@@ -528,6 +598,13 @@ impl<'c, 'a> Level0<'c, 'a> {
                 if interior {
                     continue;
                 }
+                let fk = match nb {
+                    None => kind::OUTER,
+                    Some(c) if !ctx.present(c) && ctx.enclosed(c) => kind::CAVITY,
+                    Some(c) if !ctx.present(c) => kind::HOLE,
+                    Some(c) if ctx.region(c) != region => kind::REGION,
+                    Some(_) => kind::MISMATCH,
+                };
                 // Outline: top c0 -(-j)-> c1 -(+i)-> c3 -(+j)-> c2 -(-i)-> c0;
                 // bottom c4 -(-i)-> c6 -(+j)-> c7 -(+i)-> c5 -(-j)-> c4. (side, forward in t?)
                 let ring: [(usize, u8, bool); 4] = if up {
@@ -552,7 +629,7 @@ impl<'c, 'a> Level0<'c, 'a> {
                 if ctx.flip {
                     poly.reverse();
                 }
-                self.push(&poly, 4 + tb, k, (j, i), cell, true, tol);
+                self.push(&poly, (4 + tb, fk), k, (j, i), cell, true, tol);
             }
         }
     }

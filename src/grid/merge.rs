@@ -18,9 +18,17 @@
 //! The level's error is the previous level's plus the largest distance of a removed vertex from
 //! the merged face (from the segment that replaced it, for outline vertices; from the face's
 //! plane, for inner ones).
+//!
+//! Faults: the pieces a fault cuts faces into are no node's side, but they lie in the fault's
+//! interfaces, so they merge by their own groups ([`fault_groups`]): per interface, side, region
+//! and 2^h rows along it, each connected set of pieces whose union is one ring becomes one
+//! *strip* (all the layers of a region over whatever lies across, at once), taking part in the
+//! same vertex removals. A strip need not be convex (an inactive cell beside the fault notches
+//! it): it is then triangulated by ear clipping. A union with a hole (an inactive cell inside
+//! the rows) stays as the strips of the level below.
 
-use super::faces::{Block, Face};
-use super::poly::{convex, newell, triangulate, FastMap, Verts};
+use super::faces::{kind, Block, Face};
+use super::poly::{convex, ear_clip, newell, triangulate, FastMap, Verts, STRAIGHT};
 
 /// Node key at some height: (node i, node j, layer, direction).
 type Key = (u32, u32, u32, u8);
@@ -53,6 +61,8 @@ struct Group {
     inner: Vec<u32>,
     /// Pillar ids that are the parent side's corners.
     corner_pillars: Vec<u32>,
+    /// A strip of fault pieces (see [`fault_groups`]): not a node side.
+    fault: bool,
 }
 
 /// Level h (>= 1) from level h - 1.
@@ -131,20 +141,19 @@ pub(crate) fn next_level(
             continue;
         }
         if let Some((outline, inner)) = outline_of(&members, &prev.faces) {
-            // Inner vertices must be used by the group's faces only.
-            let free = inner.iter().all(|&v| {
-                let in_group = members.iter().filter(|&&m| prev.faces[m as usize].verts.contains(&v)).count() as u32;
-                use_count[v as usize] == in_group
-            });
-            if free {
-                groups.push(Group { key, members, outline, inner, corner_pillars });
+            if free(&members, &inner, &prev.faces, &use_count, verts) {
+                groups.push(Group { key, members, outline, inner, corner_pillars, fault: false });
             }
         }
     }
+    fault_groups(prev, h, b, (ni, nj), &use_count, verts, &mut groups);
     // Accept groups until the vertex removals are consistent and every reduced face is convex
     // and within tolerance.
     let mut accepted = vec![true; groups.len()];
     let mut drop = vec![false; nv];
+    // Per group: the reduced outline last checked (a fingerprint) and whether its shape passed
+    // (ear clipping a long strip is the costly part; most outlines do not change between rounds).
+    let mut shape_seen: Vec<Option<(u64, bool)>> = vec![None; groups.len()];
     loop {
         let mut claims = vec![0u8; nv];
         let mut nb: FastMap<u32, (u32, u32)> = FastMap::default();
@@ -168,6 +177,14 @@ pub(crate) fn next_level(
                     continue;
                 }
                 let (u, x) = (grp.outline[(w + n - 1) % n], grp.outline[(w + 1) % n]);
+                // A strip removes only vertices on straight stretches of its outline (its corners,
+                // where the pieces' lines meet, are no node's corners).
+                if grp.fault {
+                    let (e1, e2) = (verts.p(v) - verts.p(u), verts.p(x) - verts.p(v));
+                    if e1.cross(e2).length() > STRAIGHT * e1.length() * e2.length() {
+                        continue;
+                    }
+                }
                 claims[vi] = claims[vi].saturating_add(1);
                 match nb.get(&v) {
                     None => {
@@ -187,7 +204,19 @@ pub(crate) fn next_level(
             }
             let reduced: Vec<u32> = grp.outline.iter().copied().filter(|&v| !drop[v as usize]).collect();
             let tol = grp.members.iter().map(|&m| prev.faces[m as usize].tol).fold(f64::INFINITY, f64::min);
-            let ok = reduced.len() >= 3 && convex(&reduced, verts) && removal_error(grp, &reduced, &drop, verts) <= tol;
+            let print = reduced
+                .iter()
+                .fold(reduced.len() as u64, |h, &v| (h.rotate_left(7) ^ v as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let shape_ok = match shape_seen[g] {
+                Some((p, ok)) if p == print => ok,
+                _ => {
+                    let ok = reduced.len() >= 3
+                        && (convex(&reduced, verts) || (grp.fault && ear_clip(&reduced, verts).is_some()));
+                    shape_seen[g] = Some((print, ok));
+                    ok
+                }
+            };
+            let ok = shape_ok && removal_error(grp, &reduced, &drop, verts) <= tol;
             if !ok {
                 accepted[g] = false;
                 changed = true;
@@ -223,6 +252,7 @@ pub(crate) fn next_level(
                 value: face.value,
                 whole: face.whole,
                 tol: face.tol,
+                kind: face.kind,
             });
         }
     }
@@ -244,74 +274,193 @@ pub(crate) fn next_level(
         let value = if vals.is_empty() { f64::NAN } else { vals.iter().sum::<f64>() / vals.len() as f64 };
         let tol = grp.members.iter().map(|&m| prev.faces[m as usize].tol).fold(f64::INFINITY, f64::min);
         let mut tris = Vec::with_capacity(reduced.len());
-        triangulate(&reduced, verts, first.region, &mut tris);
-        nodes.insert(grp.key, faces.len() as u32);
+        match (convex(&reduced, verts), ear_clip(&reduced, verts)) {
+            (false, Some(t)) => tris = t,
+            _ => triangulate(&reduced, verts, first.region, &mut tris),
+        }
+        let (ci, cj, k) = if grp.fault {
+            let m = |f: fn(&Face) -> u32| grp.members.iter().map(|&x| f(&prev.faces[x as usize])).min().unwrap_or(0);
+            (m(|f| f.ci), m(|f| f.cj), m(|f| f.k))
+        } else {
+            nodes.insert(grp.key, faces.len() as u32);
+            (b.i0 as u32 + (grp.key.0 << h), b.j0 as u32 + (grp.key.1 << h), first.k)
+        };
         faces.push(Face {
             verts: reduced,
             tris,
             dir: first.dir,
-            k: first.k,
-            ci: b.i0 as u32 + (grp.key.0 << h),
-            cj: b.j0 as u32 + (grp.key.1 << h),
+            k,
+            ci,
+            cj,
             region: first.region,
             value,
-            whole: true,
+            whole: !grp.fault,
             tol,
+            kind: if grp.members.iter().all(|&m| prev.faces[m as usize].kind == first.kind) {
+                first.kind
+            } else {
+                kind::MIXED
+            },
         });
     }
     LevelFaces { faces, nodes, error: prev.error + err }
 }
 
+/// Inner vertices (of a group's faces, not on its outline) must be used by the group's faces
+/// only, and none may lie on a seam.
+fn free(members: &[u32], inner: &[u32], faces: &[Face], use_count: &[u32], verts: &Verts) -> bool {
+    if inner.iter().any(|&v| verts.border[v as usize]) {
+        return false;
+    }
+    let mut uses: FastMap<u32, u32> = FastMap::default();
+    for &m in members {
+        for &v in &faces[m as usize].verts {
+            *uses.entry(v).or_insert(0) += 1;
+        }
+    }
+    inner.iter().all(|&v| uses.get(&v).copied() == Some(use_count[v as usize]))
+}
+
 /// The outline of a group of faces (their union's boundary: edges not shared within the group)
 /// as one ring, and the vertices inside it; None unless the union is one simple ring.
 fn outline_of(members: &[u32], faces: &[Face]) -> Option<(Vec<u32>, Vec<u32>)> {
-    let mut edges: Vec<(u32, u32)> = Vec::new();
+    // Directed edges with their multiplicity; an edge and its reverse cancel.
+    let mut edges: FastMap<(u32, u32), i32> = FastMap::default();
     for &m in members {
         let p = &faces[m as usize].verts;
         for w in 0..p.len() {
-            edges.push((p[w], p[(w + 1) % p.len()]));
+            let (a, c) = (p[w], p[(w + 1) % p.len()]);
+            match edges.get_mut(&(c, a)) {
+                Some(n) if *n > 0 => *n -= 1,
+                _ => *edges.entry((a, c)).or_insert(0) += 1,
+            }
         }
     }
-    let mut keep = vec![true; edges.len()];
-    for a in 0..edges.len() {
-        if !keep[a] {
-            continue;
-        }
-        if let Some(b) = (0..edges.len()).find(|&b| keep[b] && edges[b] == (edges[a].1, edges[a].0)) {
-            keep[a] = false;
-            keep[b] = false;
+    let mut rest: Vec<(u32, u32)> = Vec::new();
+    for (&e, &n) in &edges {
+        for _ in 0..n {
+            rest.push(e);
         }
     }
-    let rest: Vec<(u32, u32)> = edges.iter().zip(&keep).filter(|(_, &k)| k).map(|(e, _)| *e).collect();
     if rest.len() < 3 {
         return None;
     }
-    let mut ring = vec![rest[0].0];
-    let mut cur = rest[0].1;
-    while cur != rest[0].0 {
+    rest.sort_unstable();
+    let mut next: FastMap<u32, u32> = FastMap::default();
+    for &(a, c) in &rest {
+        if next.insert(a, c).is_some() {
+            return None;
+        }
+    }
+    let start = rest[0].0;
+    let mut ring = vec![start];
+    let mut cur = *next.get(&start)?;
+    while cur != start {
         if ring.len() > rest.len() {
             return None;
         }
-        let mut next = rest.iter().filter(|e| e.0 == cur);
-        let e = next.next()?;
-        if next.next().is_some() {
-            return None;
-        }
         ring.push(cur);
-        cur = e.1;
+        cur = *next.get(&cur)?;
     }
     if ring.len() != rest.len() {
         return None;
     }
+    let on_ring: FastMap<u32, ()> = ring.iter().map(|&v| (v, ())).collect();
     let mut inner: Vec<u32> = Vec::new();
+    let mut seen: FastMap<u32, ()> = FastMap::default();
     for &m in members {
         for &v in &faces[m as usize].verts {
-            if !ring.contains(&v) && !inner.contains(&v) {
+            if !on_ring.contains_key(&v) && seen.insert(v, ()).is_none() {
                 inner.push(v);
             }
         }
     }
     Some((ring, inner))
+}
+
+/// Groups of fault pieces (faces that are not whole: pieces of a face across a fault, or strips
+/// of them merged at a lower level). On one interface and one side of it (the same direction and
+/// column line), of one region, and within one node's rows along the interface (2^h rows), each
+/// connected set of pieces (sharing edges) whose union is one ring merges into one strip: the
+/// pieces of a layer over the different cells across, the layers of a region above each other
+/// and neighbouring rows. They lie in the interface (a ruled surface between two pillars, a
+/// plane where the pillars are parallel), so the strip moves the surface only where that bends.
+/// Interfaces on a seam with another block never merge (the pieces there meet faces of the
+/// other block). The strips take part in the vertex removals like the node groups.
+fn fault_groups(
+    prev: &LevelFaces,
+    h: u32,
+    b: Block,
+    (ni, nj): (usize, usize),
+    use_count: &[u32],
+    verts: &Verts,
+    groups: &mut Vec<Group>,
+) {
+    // (direction, interface line, region, row node) -> pieces.
+    let mut sets: FastMap<(u8, u32, i32, u32), Vec<u32>> = FastMap::default();
+    for (f, face) in prev.faces.iter().enumerate() {
+        if face.whole || face.dir >= 4 {
+            continue;
+        }
+        let (line, row, seam) = match face.dir {
+            0 => (face.ci, face.cj - b.j0 as u32, b.seam_i(face.ci as usize, ni)),
+            1 => (face.ci + 1, face.cj - b.j0 as u32, b.seam_i(face.ci as usize + 1, ni)),
+            2 => (face.cj, face.ci - b.i0 as u32, b.seam_j(face.cj as usize, nj)),
+            _ => (face.cj + 1, face.ci - b.i0 as u32, b.seam_j(face.cj as usize + 1, nj)),
+        };
+        if !seam {
+            // Pieces over gaps (seen from outside) and over cells (interior) merge apart.
+            let dir = face.dir | (((face.kind == kind::FAULT_GAP) as u8) << 4);
+            sets.entry((dir, line, face.region, row >> h)).or_default().push(f as u32);
+        }
+    }
+    let mut keys: Vec<_> = sets.keys().copied().collect();
+    keys.sort_unstable();
+    for key in keys {
+        let set = &sets[&key];
+        if set.len() < 2 {
+            continue;
+        }
+        // Connected components over shared edges (union-find).
+        let mut parent: Vec<usize> = (0..set.len()).collect();
+        fn root(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        let mut by_edge: FastMap<(u32, u32), usize> = FastMap::default();
+        for (x, &f) in set.iter().enumerate() {
+            let p = &prev.faces[f as usize].verts;
+            for w in 0..p.len() {
+                let (a, c) = (p[w], p[(w + 1) % p.len()]);
+                match by_edge.get(&(c, a)) {
+                    Some(&y) => {
+                        let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
+                        parent[rx] = ry;
+                    }
+                    None => {
+                        by_edge.insert((a, c), x);
+                    }
+                }
+            }
+        }
+        let mut comps: FastMap<usize, Vec<u32>> = FastMap::default();
+        for (x, &f) in set.iter().enumerate() {
+            comps.entry(root(&mut parent, x)).or_default().push(f);
+        }
+        let mut comps: Vec<Vec<u32>> = comps.into_values().filter(|c| c.len() >= 2).collect();
+        comps.sort_unstable();
+        for members in comps {
+            if let Some((outline, inner)) = outline_of(&members, &prev.faces) {
+                if free(&members, &inner, &prev.faces, use_count, verts) {
+                    let key = (key.1, key.3, 0, key.0 & 15);
+                    groups.push(Group { key, members, outline, inner, corner_pillars: Vec::new(), fault: true });
+                }
+            }
+        }
+    }
 }
 
 /// The largest distance of a vertex the merge removes from the merged face: outline vertices

@@ -65,6 +65,9 @@ pub struct GridBuild {
     /// Per block (tile order), per level 0..: the block's own counts (as `levels`; a block stops
     /// at its coarsest level).
     pub block_levels: Vec<Vec<LevelStats>>,
+    /// Per level 0..=max over the whole grid (a block with fewer levels counts with its coarsest
+    /// one): faces and triangles by what lies across them (diagnostics).
+    pub kinds: Vec<KindCounts>,
 }
 
 /// One level's counts over the whole grid.
@@ -80,7 +83,13 @@ pub struct LevelStats {
     /// The volume the level's surface encloses (divergence theorem over every region's closed
     /// surface, summed), m^3.
     pub volume: f64,
+    /// The last triangles of the level's index list that cannot be seen from outside the grid's
+    /// cells (`faces::kind::interior`): faces between regions and of cavities.
+    pub interior_triangles: u64,
 }
+
+/// Faces and triangles of one level by what lies across them (`faces::kind`, index = kind).
+pub type KindCounts = [[u64; faces::kind::NAMES.len()]; 2];
 
 /// What the face builders need of the grid.
 pub(crate) struct Ctx<'g> {
@@ -129,6 +138,45 @@ impl Ctx<'_> {
     pub fn present(&self, cell: usize) -> bool {
         self.active(cell) && !self.collapsed(cell)
     }
+    /// An inactive cell (not collapsed) enclosed by present cells: its four neighbours in the
+    /// layer and the next cells above and below that are not collapsed are present (of any
+    /// regions) and share its corners (`faces::kind::CAVITY`).
+    pub fn enclosed(&self, cell: usize) -> bool {
+        if self.present(cell) || self.collapsed(cell) {
+            return false;
+        }
+        let g = self.g;
+        let (i, j, k) = (cell % g.ni, (cell / g.ni) % g.nj, cell / (g.ni * g.nj));
+        // (neighbour, its corners, this cell's corners that must equal them)
+        let mut nbs: Vec<(usize, [usize; 4], [usize; 4])> = Vec::with_capacity(6);
+        let lateral = [
+            (i > 0, [1, 3, 5, 7], [0, 2, 4, 6], -1isize, 0isize),
+            (i + 1 < g.ni, [0, 2, 4, 6], [1, 3, 5, 7], 1, 0),
+            (j > 0, [2, 3, 6, 7], [0, 1, 4, 5], 0, -1),
+            (j + 1 < g.nj, [0, 1, 4, 5], [2, 3, 6, 7], 0, 1),
+        ];
+        for (ok, theirs, mine, di, dj) in lateral {
+            if !ok {
+                return false;
+            }
+            let c = self.cell(k, (j as isize + dj) as usize, (i as isize + di) as usize);
+            nbs.push((c, theirs, mine));
+        }
+        // The next cells above and below that are not collapsed.
+        let above = (0..k).rev().map(|kk| self.cell(kk, j, i)).find(|&c| !self.collapsed(c));
+        let below = (k + 1..g.nk).map(|kk| self.cell(kk, j, i)).find(|&c| !self.collapsed(c));
+        match (above, below) {
+            (Some(a), Some(b)) => {
+                nbs.push((a, [4, 5, 6, 7], [0, 1, 2, 3]));
+                nbs.push((b, [0, 1, 2, 3], [4, 5, 6, 7]));
+            }
+            _ => return false,
+        }
+        nbs.iter().all(|&(c, theirs, mine)| {
+            self.present(c) && (0..4).all(|x| self.corner(c, theirs[x]) == self.corner(cell, mine[x]))
+        })
+    }
+
     /// Mean height of the cell along its four pillars.
     pub fn thickness(&self, cell: usize) -> f64 {
         (0..4).map(|c| self.s(self.corner(cell, c)) - self.s(self.corner(cell, c + 4))).sum::<f64>() / 4.0
@@ -220,12 +268,17 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
     let ctx = Ctx { g, up: if sum_up < 0.0 { -1.0 } else { 1.0 }, flip: sum_hand < 0.0, origin };
     let (bi, bj) = blocks;
     let (nbx, nby) = (g.ni.div_ceil(bi), g.nj.div_ceil(bj));
-    let out: Vec<(TileMesh, Vec<LevelStats>, (f64, f64))> = (0..nbx * nby)
+    let out: Vec<BlockOut> = (0..nbx * nby)
         .into_par_iter()
         .map(|t| {
             let (bx, by) = (t % nbx, t / nbx);
             if stop.stop_flag().load(Ordering::Relaxed) {
-                return (TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() }, Vec::new(), (0.0, 0.0));
+                return (
+                    TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() },
+                    Vec::new(),
+                    (0.0, 0.0),
+                    Vec::new(),
+                );
             }
             let b = Block { i0: bx * bi, i1: ((bx + 1) * bi).min(g.ni), j0: by * bj, j1: ((by + 1) * bj).min(g.nj) };
             let out = build_block(&ctx, b, (bx, by));
@@ -235,9 +288,16 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
         .collect();
     let nlev = out.iter().map(|o| o.1.len()).max().unwrap_or(0);
     let mut levels = vec![LevelStats::default(); nlev];
-    for (_, st, _) in &out {
+    let mut kinds = vec![KindCounts::default(); nlev];
+    for (_, st, _, kc) in &out {
         if st.is_empty() {
             continue;
+        }
+        for (h, k) in kinds.iter_mut().enumerate() {
+            let s = &kc[h.min(kc.len() - 1)];
+            for (a, b) in k.iter_mut().flatten().zip(s.iter().flatten()) {
+                *a += b;
+            }
         }
         for (h, l) in levels.iter_mut().enumerate() {
             let s = &st[h.min(st.len() - 1)];
@@ -246,12 +306,13 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
             l.triangles += s.triangles;
             l.vertices += s.vertices;
             l.volume += s.volume;
+            l.interior_triangles += s.interior_triangles;
         }
     }
     let cell_size = out.iter().map(|o| o.2).collect();
     let block_levels = out.iter().map(|o| o.1.clone()).collect();
     let tiles = out.into_iter().map(|o| o.0).collect();
-    Ok(GridBuild { tiles, levels, cell_size, block_levels })
+    Ok(GridBuild { tiles, levels, cell_size, block_levels, kinds })
 }
 
 /// Number of merged levels a block of w x h columns allows: until one node covers the block.
@@ -260,7 +321,18 @@ fn block_levels(w: usize, h: usize) -> u32 {
     usize::BITS - (m - 1).leading_zeros()
 }
 
-fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<LevelStats>, (f64, f64)) {
+type BlockOut = (TileMesh, Vec<LevelStats>, (f64, f64), Vec<KindCounts>);
+
+fn kind_counts(lev: &merge::LevelFaces) -> KindCounts {
+    let mut k = KindCounts::default();
+    for f in &lev.faces {
+        k[0][f.kind as usize] += 1;
+        k[1][f.kind as usize] += f.tris.len() as u64;
+    }
+    k
+}
+
+fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     let g = ctx.g;
     let (bw, bh) = (b.i1 - b.i0, b.j1 - b.j0);
     // Drawn cells per column and layer, and the mean cell size.
@@ -287,13 +359,18 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
     let has_values = g.values.is_some();
     let mut out_map: poly::FastMap<(u32, u64), u32> = poly::FastMap::default();
     let mut stats = Vec::new();
+    let mut kinds = Vec::new();
     let mut seen: Vec<u32> = Vec::new();
     let mut emit =
         |lev: &merge::LevelFaces, verts: &Verts0, tile: &mut TileMesh, stamp: u32| -> (Vec<u32>, LevelStats) {
             let mut idx = Vec::new();
             let mut st = LevelStats { faces: lev.faces.len() as u64, ..Default::default() };
             let o = ctx.origin;
-            for f in &lev.faces {
+            // Faces seen from outside first, then the interior ones (`faces::kind::interior`).
+            let inner: Vec<bool> = lev.faces.iter().map(|f| faces::kind::interior(f.kind)).collect();
+            let order = (0..lev.faces.len()).filter(|&f| !inner[f]).chain((0..lev.faces.len()).filter(|&f| inner[f]));
+            for f in order {
+                let f = &lev.faces[f];
                 let vb = if has_values { f.value.to_bits() } else { 0 };
                 for t in &f.tris {
                     let p = t.map(|v| DVec3::from_array(verts.pos[v as usize]) - o);
@@ -317,6 +394,8 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
                 }
             }
             st.triangles = (idx.len() / 3) as u64;
+            st.interior_triangles =
+                lev.faces.iter().zip(&inner).filter(|(_, &i)| i).map(|(f, _)| f.tris.len() as u64).sum();
             (idx, st)
         };
     type Verts0 = poly::Verts;
@@ -325,6 +404,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
     st.cells = present.iter().filter(|&&p| p).count() as u64;
     tile.fine = fine;
     stats.push(st);
+    kinds.push(kind_counts(&lev));
     for h in 1..=block_levels(bw, bh) {
         lev = merge::next_level(&lev, h, b, (g.ni, g.nj), &mut verts);
         let (idx, mut st) = emit(&lev, &verts, &mut tile, h + 1);
@@ -340,6 +420,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
             }
         }
         stats.push(st);
+        kinds.push(kind_counts(&lev));
         tile.levels.push(Level { indices: idx, error: lev.error as f32 });
     }
     match tile.levels.last() {
@@ -361,7 +442,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> (TileMesh, Vec<
         (lo, hi) = ([0.0; 3], [0.0; 3]);
     }
     (tile.bbox_min, tile.bbox_max) = (lo, hi);
-    (tile, stats, cell_size)
+    (tile, stats, cell_size, kinds)
 }
 
 /// `alpha` in [8, 15] and `lam` in [2, 3], the paper's ranges.

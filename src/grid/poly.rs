@@ -270,3 +270,89 @@ pub(crate) fn hull(mut pts: Vec<(f64, f64, u32)>) -> Vec<(f64, f64, u32)> {
     h.pop();
     h
 }
+
+/// Triangles of a simple polygon that need not be convex (vertex ids in outward order, planar up
+/// to the surface's bend), wound like it, by ear clipping in the plane of its Newell normal: an
+/// ear is a strictly convex corner (turning by more than [`EAR_MIN`]) whose triangle holds no
+/// other vertex of the polygon that is not strictly convex, not even on its sides (so no
+/// triangle is of zero area and no vertex lies on another triangle's side). None when no such
+/// triangulation is found this way (a polygon that is not simple, or one whose straight sides
+/// leave only flat ears) or when the triangles' area differs from the polygon's.
+pub(crate) fn ear_clip(poly: &[u32], verts: &Verts) -> Option<Vec<[u32; 3]>> {
+    let n = newell(poly, verts);
+    let area = n.length() / 2.0;
+    if poly.len() < 3 || area <= 0.0 {
+        return None;
+    }
+    let nz = n / (2.0 * area);
+    let u = nz.any_orthonormal_vector();
+    let v = nz.cross(u);
+    let o = verts.p(poly[0]);
+    let pts: Vec<(f64, f64)> = poly.iter().map(|&x| verts.p(x) - o).map(|d| (d.dot(u), d.dot(v))).collect();
+    let cross = |a: usize, b: usize, c: usize| {
+        let (pa, pb, pc) = (pts[a], pts[b], pts[c]);
+        (pb.0 - pa.0) * (pc.1 - pb.1) - (pb.1 - pa.1) * (pc.0 - pb.0)
+    };
+    let len = |a: usize, b: usize| ((pts[b].0 - pts[a].0).powi(2) + (pts[b].1 - pts[a].1).powi(2)).sqrt();
+    let strictly_convex = |a: usize, b: usize, c: usize| cross(a, b, c) > EAR_MIN * len(a, b) * len(b, c);
+    let mut ring: Vec<usize> = (0..poly.len()).collect();
+    let mut out = Vec::with_capacity(poly.len() - 2);
+    let mut at = 0;
+    let mut misses = 0;
+    while ring.len() > 3 {
+        let m = ring.len();
+        let (a, b, c) = (ring[(at + m - 1) % m], ring[at % m], ring[(at + 1) % m]);
+        let mut ear = strictly_convex(a, b, c);
+        if ear {
+            let tol = 1e-12 * (len(a, b) + len(b, c)).powi(2);
+            for w in 0..m {
+                let p = ring[w];
+                if p == a || p == b || p == c || pts[p] == pts[a] || pts[p] == pts[b] || pts[p] == pts[c] {
+                    continue;
+                }
+                let (pp, pn) = (ring[(w + m - 1) % m], ring[(w + 1) % m]);
+                if strictly_convex(pp, p, pn) {
+                    continue;
+                }
+                // Inside or on the triangle (a, b, c), which turns counter-clockwise.
+                let side = |x: usize, y: usize| {
+                    let (px, py, q) = (pts[x], pts[y], pts[p]);
+                    (py.0 - px.0) * (q.1 - px.1) - (py.1 - px.1) * (q.0 - px.0)
+                };
+                if side(a, b) >= -tol && side(b, c) >= -tol && side(c, a) >= -tol {
+                    ear = false;
+                    break;
+                }
+            }
+        }
+        if ear {
+            out.push([poly[a], poly[b], poly[c]]);
+            ring.remove(at % m);
+            at %= ring.len();
+            misses = 0;
+        } else {
+            at = (at + 1) % m;
+            misses += 1;
+            if misses > m {
+                return None;
+            }
+        }
+    }
+    let (a, b, c) = (ring[0], ring[1], ring[2]);
+    if !strictly_convex(a, b, c) {
+        return None;
+    }
+    out.push([poly[a], poly[b], poly[c]]);
+    // Simple and consistently wound: the triangles' areas add up to the polygon's.
+    let sum: f64 = out
+        .iter()
+        .map(|t| {
+            let p = t.map(|x| verts.p(x));
+            (p[1] - p[0]).cross(p[2] - p[0]).dot(nz) / 2.0
+        })
+        .sum();
+    ((sum - area).abs() <= 1e-6 * area).then_some(out)
+}
+
+/// The least turn (sine of the angle) of an ear's corner in [`ear_clip`].
+pub(crate) const EAR_MIN: f64 = 1e-6;

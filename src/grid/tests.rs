@@ -5,6 +5,9 @@
 use super::*;
 use std::collections::HashMap;
 
+#[path = "tests_strips.rs"]
+mod strips;
+
 /// Corners of a grid whose corner (k, j, i, c) lies at `f(i + ibit, j + jbit, k + kbit)` for the
 /// cell's column (i, j) (the function sees the cell's column, so columns can differ: faults).
 fn grid_from(
@@ -555,6 +558,12 @@ fn perf_table(g: &CornerGrid) {
                 l.triangles,
                 100.0 * (l.volume - l0.volume) / l0.volume
             );
+        }
+        println!("faces / triangles by kind:");
+        for (h, l) in b.kinds.iter().enumerate() {
+            let row: Vec<String> =
+                (0..l[0].len()).map(|x| format!("{} {}/{}", super::faces::kind::NAMES[x], l[0][x], l[1][x])).collect();
+            println!("{h:>5} {}; interior triangles {}", row.join(", "), b.levels[h].interior_triangles);
         }
     }
 }

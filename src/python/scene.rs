@@ -354,7 +354,8 @@ impl PyScene {
         })
     }
 
-    /// Per level of grid `id`: a dict of cells, faces, triangles, vertices, volume (m^3).
+    /// Per level of grid `id`: a dict of cells, faces, triangles, interior_triangles, vertices,
+    /// volume (m^3).
     fn grid_levels<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Vec<Bound<'py, PyDict>>> {
         let levels = with_lock(py, &self.inner, move |s| Ok(s.grid_levels(object_id(id)?)?.to_vec()))?;
         levels
@@ -364,6 +365,7 @@ impl PyScene {
                 d.set_item("cells", l.cells)?;
                 d.set_item("faces", l.faces)?;
                 d.set_item("triangles", l.triangles)?;
+                d.set_item("interior_triangles", l.interior_triangles)?;
                 d.set_item("vertices", l.vertices)?;
                 d.set_item("volume", l.volume)?;
                 Ok(d)

@@ -104,12 +104,65 @@ impl Scene {
         Ok(id)
     }
 
+    /// Per tile (scene tile order): how many indices at the end of the tile's level `level(t)`
+    /// a frame leaves out: a grid block's interior triangles (`grid::faces::kind::interior`:
+    /// faces between regions and of cavities, ordered last, hidden from any point outside the
+    /// grid's cells) while the grid's box lies wholly beyond the near plane (`eye`, unit
+    /// `forward` and `near` in render space: relative to `origin`, z times `z_scale`), so the eye
+    /// is outside it and the near plane cuts nothing open; 0 for other tiles and views.
+    pub fn grid_interior_indices(
+        &self,
+        origin: DVec3,
+        (eye, forward, near): (DVec3, DVec3, f64),
+        z_scale: f64,
+        level: impl Fn(usize) -> usize,
+    ) -> Vec<u32> {
+        let zs = DVec3::new(1.0, 1.0, z_scale);
+        let mut out = Vec::new();
+        for o in self.objects() {
+            let (ObjectKind::Grid(info), true) = (&o.kind, o.tiles.len() == info_len(&o.kind)) else {
+                out.extend(std::iter::repeat_n(0, o.tiles.len()));
+                continue;
+            };
+            let off = o.placement(origin);
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for t in o.tiles.iter().filter(|t| !t.fine.is_empty()) {
+                lo = lo.min((DVec3::from_array(t.bbox_min.map(f64::from)) + off) * zs);
+                hi = hi.max((DVec3::from_array(t.bbox_max.map(f64::from)) + off) * zs);
+            }
+            // The box's least depth along the view, beyond the near plane by a margin (f32 positions).
+            let m = 1e-5 * (hi - lo).max_element().max(1.0);
+            let depth = (0..8)
+                .map(|c| DVec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), hi, lo))
+                .map(|p| (p - eye).dot(forward))
+                .fold(f64::INFINITY, f64::min);
+            let outside = lo.x <= hi.x && depth > near + m;
+            for levels in &info.block_levels {
+                let t = out.len();
+                let n = match levels.get(level(t).min(levels.len().saturating_sub(1))) {
+                    Some(l) if outside => 3 * l.interior_triangles.min(l.triangles),
+                    _ => 0,
+                };
+                out.push(n.min(u32::MAX as u64) as u32);
+            }
+        }
+        out
+    }
+
     /// The grid's per-level counts (`grid::LevelStats`), level 0 first.
     pub fn grid_levels(&self, id: u32) -> Result<&[LevelStats]> {
         match &self.object(id)?.kind {
             ObjectKind::Grid(g) => Ok(&g.levels),
             _ => Err(crate::error::input_err("id", format!("object {id} is not a grid"))),
         }
+    }
+}
+
+/// A grid's number of blocks (its tile count), 0 for other kinds.
+fn info_len(kind: &ObjectKind) -> usize {
+    match kind {
+        ObjectKind::Grid(g) => g.block_levels.len(),
+        _ => 0,
     }
 }
 
@@ -146,5 +199,26 @@ mod tests {
         let e = s.add_grid((1, 1, 1), &box_corners(1, 1, 1), None, None, (40, 1), AddOptions::new(1.0)).unwrap_err();
         assert!(e.to_string().starts_with("blocks"), "{e}");
         assert!(s.grid_levels(99).is_err());
+    }
+
+    /// Interior triangles are left out only while the eye is outside the grid's box.
+    #[test]
+    fn interior_indices_only_from_outside() {
+        let mut s = Scene::new();
+        let region: Vec<i32> = (0..2 * 4 * 4).map(|x| (x >= 16) as i32).collect();
+        let id =
+            s.add_grid((2, 4, 4), &box_corners(2, 4, 4), None, Some(&region), (4, 4), AddOptions::new(1.0)).unwrap();
+        let levels = s.grid_levels(id).unwrap().to_vec();
+        assert_eq!(levels[0].interior_triangles, 2 * 16 * 2);
+        // Render space relative to the world origin: the grid spans (0..40, 0..40, -20..0).
+        let at = |p: [f64; 3], f: [f64; 3], near: f64| {
+            s.grid_interior_indices(DVec3::ZERO, (DVec3::from_array(p), DVec3::from_array(f), near), 1.0, |_| 0)
+        };
+        let down = [0.0, 0.0, -1.0];
+        assert_eq!(at([20.0, 20.0, 50.0], down, 1.0), vec![3 * 64]);
+        assert_eq!(at([20.0, 20.0, -10.0], down, 1.0), vec![0]); // inside
+        assert_eq!(at([20.0, 20.0, 50.0], down, 60.0), vec![0]); // the near plane cuts the grid open
+        assert_eq!(at([-1.0, 20.0, -10.0], [1.0, 0.0, 0.0], 0.1), vec![3 * 64]);
+        assert_eq!(at([-1.0, 20.0, -10.0], [0.0, 1.0, 0.0], 0.1), vec![0]); // beside it, not beyond
     }
 }

@@ -13,7 +13,7 @@
 //!                 (degrees; absent in version 1, read as 0), tx u64, ty u64 | mesh: label str |
 //!   grid: nk, nj, ni, bi, bj u64, block cell sizes [f32 x 2], levels, then n_blocks u32 and
 //!         each block's levels (levels = n u32, per level cells, faces, triangles, vertices u64,
-//!         volume f64)
+//!         volume f64, interior_triangles u64 (version 5; read as 0 before))
 //!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
 //!   version 3, read as the scene's),
 //!   color_by u8 (0 = flat, 1 = z, 2 = values; version 4), if not flat: cmap str, lut [f32 x 3]
@@ -217,6 +217,7 @@ impl Scene {
                                 w.u64(v);
                             }
                             w.f64(l.volume);
+                            w.u64(l.interior_triangles);
                         }
                     };
                     put(&mut w, &g.levels);
@@ -316,7 +317,17 @@ impl Scene {
                         let mut v = Vec::with_capacity(n.min(64));
                         for _ in 0..n {
                             let (cells, faces, triangles, vertices) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
-                            v.push(crate::grid::LevelStats { cells, faces, triangles, vertices, volume: r.f64()? });
+                            let volume = r.f64()?;
+                            // Version 4 did not order interior faces last: none is left out.
+                            let interior_triangles = if version >= 5 { r.u64()?.min(triangles) } else { 0 };
+                            v.push(crate::grid::LevelStats {
+                                cells,
+                                faces,
+                                triangles,
+                                vertices,
+                                volume,
+                                interior_triangles,
+                            });
                         }
                         Ok(v)
                     };
