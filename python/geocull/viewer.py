@@ -44,14 +44,16 @@ class ViewerState:
     scene: the :class:`geocull.Scene`; renderer: a :class:`geocull.Renderer` (its size is the
     image's), default a new one of ``width`` x ``height``; camera: the starting view (default
     :meth:`Camera.fit` of the scene from azimuth 210, elevation 30); culling, pixel_threshold and
-    ``render_options`` go to :meth:`Renderer.render`."""
+    ``render_options`` go to :meth:`Renderer.render`. The default culling, "temporal", suits a view
+    that moves a little from frame to frame: each frame starts from the tiles the last one showed.
+    """
 
     def __init__(
         self,
         scene: Scene,
         width: int = 640,
         height: int = 480,
-        culling: CullingMode = "three_pass",
+        culling: CullingMode = "temporal",
         pixel_threshold: float = 10,
         camera: Camera | None = None,
         renderer: Renderer | None = None,
@@ -196,7 +198,7 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     scene: Scene,
     width: int = 640,
     height: int = 480,
-    culling: CullingMode = "three_pass",
+    culling: CullingMode = "temporal",
     pixel_threshold: float = 10,
     camera: Camera | None = None,
     renderer: Renderer | None = None,
