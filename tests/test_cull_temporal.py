@@ -24,16 +24,18 @@ def test_temporal_is_registered():
 
 
 def test_first_frame_then_the_same_view_reuses_the_visible_set(renderer_small):
-    """The pit scene from above: the first frame (no history) tests every box against a cleared
-    depth, so it draws every tile in view; the second draws first exactly the tiles seen, tests the
-    others, finds the lower plane's tile through the pit, and draws nothing hidden."""
+    """The pit scene from above: the first frame (no history) takes its first set from three_pass's
+    prepass (whose proxy misses the pit; the box test finds it); the second draws first exactly
+    the tiles seen, tests the others, finds the lower plane's tile through the pit, and draws
+    nothing hidden."""
     r = gc.Renderer(96, 96)  # a renderer of its own: no history from other tests
     s, top, low = pit_scene()
     cam = top_down()
     none = r.render(s, cam, culling="none")
     first = r.render(s, cam, culling="temporal", pixel_threshold=0)
     np.testing.assert_array_equal(first.image, none.image)
-    assert first.stats["tiles_reused"] == 0
+    assert first.stats["tiles_reused"] == 0 and first.stats["triangles_prepass"] > 0
+    assert first.tile_drawn.sum() < s.n_tiles  # the hidden lower tiles are not drawn
     second = r.render(s, cam, culling="temporal", pixel_threshold=0)
     np.testing.assert_array_equal(second.image, none.image)
     np.testing.assert_array_equal(second.depth, none.depth)

@@ -156,7 +156,8 @@ class Renderer:
         "frustum" (CPU view-frustum culling of the tiles' boxes), "temporal" (the tiles visible in
         this renderer's last frame of the same scene drawn first, then every other tile's box tested
         against that image at full resolution and drawn when it shows: about the oracle's cost for a
-        coherent camera, exact like conservative three_pass; stats ``tiles_reused``).
+        coherent camera, exact like conservative three_pass; a scene's first frame starts from
+        three_pass's prepass; stats ``tiles_reused``).
         pixel_threshold: >= 0, in full-image pixels: tiles with at most this many visible pixels
         are not drawn.  prepass_scale: (0, 1], prepass resolution as a fraction of the image's
         width and height.

@@ -13,7 +13,7 @@ pub mod frustum;
 pub mod horizon;
 pub mod none;
 pub mod oracle;
-pub mod phase2;
+pub mod phases;
 pub mod temporal;
 pub mod three_pass;
 

@@ -53,10 +53,10 @@
 //! tile's proxy error (`TileMesh::proxy_error`, metres, from the build) projected to pixels at the
 //! tile's nearest point (array `proxy_error_px`): how far the proxy the prepass drew may be off.
 
-use super::phase2::draw_and_test_the_rest;
+use super::phases::{draw_and_test_the_rest, prepass_first_set, FirstSet};
 use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
-use crate::gpu::{passes, Targets};
+use crate::gpu::Targets;
 
 #[derive(Default)]
 pub struct ThreePass {
@@ -106,37 +106,9 @@ impl CullStrategy for ThreePass {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        let d = &f.ctx.device;
-        let n = f.n_tiles();
-        let scale = f.options.prepass_scale;
-        let pw = ((f.width as f64 * scale).round() as u32).max(1);
-        let ph = ((f.height as f64 * scale).round() as u32).max(1);
-        let pt = Targets::ensure(&mut self.targets, d, pw, ph);
-
-        // Pass 1: coarse proxies, front to back.
-        let mut coarse = f.pick(&f.geometry.coarse, |_| true);
-        let dist = f.tile_dist2;
-        coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
-        let prepass_tris: u64 = coarse.iter().map(|a| a.triangles()).sum();
-        let coarse_buf = passes::args_buffer(d, "coarse_args", &coarse);
-        f.passes.record_prepass(enc, pt, f.scene_bg, f.geometry, &coarse_buf, f.timestamps);
-
-        // Pass 2: exact visible pixels per tile.
-        let counts = passes::counts_buffer(d, n);
-        enc.clear_buffer(&counts, 0, None);
-        let ts = |name| f.timestamps.and_then(|t| t.compute(name));
-        f.passes.record_histogram(d, enc, &pt.id, (pw, ph), &counts, ts("count_ms"));
-
-        // Pass 3a: the first set of fine draws, selected on the GPU.
-        let fine = passes::args_buffer(d, "fine_args", &f.pick(f.draw_args, |_| true));
-        let first = passes::empty_args_buffer(d, "draw_args", n);
+        let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc, &mut self.targets);
         let threshold = f.options.pixel_threshold;
-        let scaled = (threshold * (pw as f64 * ph as f64) / (f.width as f64 * f.height as f64)) as f32;
-        f.passes.record_select(d, enc, &counts, &fine, &first, n, scaled, ts("count_ms"));
-
-        // Full-image pixels per prepass pixel: the real size ratio (rounding and the 1-pixel floor
-        // make it differ from 1 / scale² for small images).
-        let ratio = (f.width as f64 * f.height as f64) / (pw as f64 * ph as f64);
+        let dist = f.tile_dist2;
         let pixels = Pixels::Gpu { counts, scale: ratio };
         self.predicting = !f.options.conservative && f.options.predict_errors;
         self.tested = f.options.conservative || self.predicting;

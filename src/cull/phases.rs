@@ -1,5 +1,11 @@
-//! The conservative second phase that `three_pass` and `temporal` share: after a first set of
-//! tiles A has been drawn into the final targets, every other visible tile's box is tested
+//! The phases `three_pass` and `temporal` share.
+//!
+//! [`prepass_first_set`] is three_pass's passes 1–3 (Plate et al.): a depth + tile-id prepass of
+//! the coarse proxies, front to back, at `prepass_scale`; the exact pixels per tile of its id
+//! image; the tiles above the threshold selected on the GPU as the first set A.
+//!
+//! [`draw_and_test_the_rest`] is the conservative second phase: after A has been drawn into the
+//! final targets, every other visible tile's box is tested
 //! against that image's depth at full resolution (`Passes::record_box_test`), and the tiles whose
 //! count exceeds the threshold are drawn too, selected on the GPU (`record_select_rest`).
 //!
@@ -12,7 +18,61 @@
 
 use super::{Draw, FrameInputs};
 use crate::gpu::layout::BoxInstance;
-use crate::gpu::passes;
+use crate::gpu::{passes, Targets};
+
+/// What the prepass phase recorded.
+pub struct FirstSet {
+    /// The first set's draws (one per tile, switched off where not selected), written on the GPU.
+    pub first: wgpu::Buffer,
+    /// The frame's draws of every visible tile (`FrameInputs::draw_args`), one per tile.
+    pub fine: wgpu::Buffer,
+    /// Pixels per tile in the prepass image.
+    pub counts: wgpu::Buffer,
+    /// Full-image pixels per prepass pixel: the real size ratio (rounding and the 1-pixel floor
+    /// make it differ from 1 / scale² for small images).
+    pub ratio: f64,
+    /// Coarse-proxy triangles drawn by the prepass.
+    pub prepass_tris: u64,
+}
+
+/// Passes 1–3 of three_pass into `enc`: the prepass of the coarse proxies into `targets` (made or
+/// resized for `prepass_scale`), its histogram and the GPU selection of the tiles with more than
+/// `pixel_threshold` pixels (compared in prepass pixels).
+pub fn prepass_first_set(
+    f: &FrameInputs<'_>,
+    enc: &mut wgpu::CommandEncoder,
+    targets: &mut Option<Targets>,
+) -> FirstSet {
+    let d = &f.ctx.device;
+    let n = f.n_tiles();
+    let scale = f.options.prepass_scale;
+    let pw = ((f.width as f64 * scale).round() as u32).max(1);
+    let ph = ((f.height as f64 * scale).round() as u32).max(1);
+    let pt = Targets::ensure(targets, d, pw, ph);
+
+    // Pass 1: coarse proxies, front to back.
+    let mut coarse = f.pick(&f.geometry.coarse, |_| true);
+    let dist = f.tile_dist2;
+    coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
+    let prepass_tris: u64 = coarse.iter().map(|a| a.triangles()).sum();
+    let coarse_buf = passes::args_buffer(d, "coarse_args", &coarse);
+    f.passes.record_prepass(enc, pt, f.scene_bg, f.geometry, &coarse_buf, f.timestamps);
+
+    // Pass 2: exact visible pixels per tile.
+    let counts = passes::counts_buffer(d, n);
+    enc.clear_buffer(&counts, 0, None);
+    let ts = |name| f.timestamps.and_then(|t| t.compute(name));
+    f.passes.record_histogram(d, enc, &pt.id, (pw, ph), &counts, ts("count_ms"));
+
+    // Pass 3: the first set of fine draws, selected on the GPU.
+    let fine = passes::args_buffer(d, "fine_args", &f.pick(f.draw_args, |_| true));
+    let first = passes::empty_args_buffer(d, "draw_args", n);
+    let threshold = f.options.pixel_threshold;
+    let scaled = (threshold * (pw as f64 * ph as f64) / (f.width as f64 * f.height as f64)) as f32;
+    f.passes.record_select(d, enc, &counts, &fine, &first, n, scaled, ts("count_ms"));
+    let ratio = (f.width as f64 * f.height as f64) / (pw as f64 * ph as f64);
+    FirstSet { first, fine, counts, ratio, prepass_tris }
+}
 
 /// Initial box count of tiles drawn untested (their box reaches the near plane).
 pub const FORCED: u32 = 1 << 30;
