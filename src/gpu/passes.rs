@@ -106,7 +106,7 @@ pub struct Passes {
     box_layout: wgpu::BindGroupLayout,
     box_test: wgpu::RenderPipeline,
     /// The box test on the hardware's early depth test, where the device allows it exactly.
-    box_early: Option<super::box_early::EarlyBoxTest>,
+    box_early: Option<wgpu::RenderPipeline>,
 }
 
 pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
@@ -135,7 +135,7 @@ pub fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLa
     }
 }
 
-fn shader(d: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+pub fn shader(d: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
     d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -401,7 +401,7 @@ impl Passes {
         });
         let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(BOX_TEST_WGSL));
         let box_test = box_pipeline(d, &box_pl, &box_shader, if gl { "fs_box_gl" } else { "fs_box" }, None);
-        let box_early = super::box_early::EarlyBoxTest::new(d, &box_pl);
+        let box_early = super::box_early::early_box_pipeline(d, &box_pl);
         Self {
             scene_layout,
             hist_layout,
@@ -562,10 +562,14 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
             ],
         });
-        if let Some(early) = &self.box_early {
-            return early.record(enc, scene_bg, &bg, targets, boxes, n, ts);
-        }
-        // No depth attachment: the fragment shader reads the depth texture and counts by hand.
+        // Without the early-depth pipeline there is no depth attachment: the fragment shader reads
+        // the depth texture and counts by hand. With it, the same depth is also bound read-only
+        // as the attachment the rasteriser tests against (both uses are reads).
+        let depth_stencil_attachment = self.box_early.as_ref().map(|_| wgpu::RenderPassDepthStencilAttachment {
+            view: &targets.depth,
+            depth_ops: None,
+            stencil_ops: None,
+        });
         let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("box_test"),
@@ -575,13 +579,13 @@ impl Passes {
                 resolve_target: None,
                 ops: keep,
             })],
-            depth_stencil_attachment: None,
+            depth_stencil_attachment,
             timestamp_writes: ts,
             occlusion_query_set: None,
             multiview_mask: None,
         });
         if n > 0 {
-            pass.set_pipeline(&self.box_test);
+            pass.set_pipeline(self.box_early.as_ref().unwrap_or(&self.box_test));
             pass.set_bind_group(0, scene_bg, &[]);
             pass.set_bind_group(1, &bg, &[]);
             pass.set_vertex_buffer(0, boxes.slice(..));
