@@ -24,23 +24,26 @@ pub const MAX_CREASE_FRACTION: f64 = 0.005;
 
 /// Packed smooth normals, one per vertex, or None for facet shading (see the module doc).
 pub fn smooth_normals(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Option<Vec<u32>> {
-    let face_normal = |f: &[u32; 3]| {
-        let [a, b, c] = f.map(|k| DVec3::from_array(vertices[k as usize]));
-        (b - a).cross(c - a)
-    };
+    // Per face its normal scaled by twice its area.
+    let face_normals: Vec<DVec3> = faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|k| DVec3::from_array(vertices[k as usize]));
+            (b - a).cross(c - a)
+        })
+        .collect();
     let mut sum = vec![DVec3::ZERO; vertices.len()];
-    for f in faces {
-        let n = face_normal(f);
+    for (f, n) in faces.iter().zip(&face_normals) {
         for &k in f {
-            sum[k as usize] += n;
+            sum[k as usize] += *n;
         }
     }
     let unit: Vec<Option<DVec3>> = sum.iter().map(|s| s.try_normalize()).collect();
     let cos_crease = CREASE_DEGREES.to_radians().cos();
     let mut crease = vec![false; vertices.len()];
     let mut used = vec![false; vertices.len()];
-    for f in faces {
-        let n = face_normal(f).try_normalize();
+    for (f, n) in faces.iter().zip(&face_normals) {
+        let n = n.try_normalize();
         for &k in f {
             used[k as usize] = true;
             // A vertex whose faces' normals cancel (inconsistent winding) is a crease too.

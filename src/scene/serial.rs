@@ -400,21 +400,18 @@ impl Scene {
                     return Err(r.err(format!("object {id}: tile positions are not finite xyz triples")));
                 }
                 let positions: Vec<[f32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                // Per-vertex attributes: none, or one per position.
+                let per_vertex = |what: &str, len: usize| {
+                    (len != 0 && len != positions.len())
+                        .then(|| format!("object {id}: a tile has {len} {what} for {} vertices", positions.len()))
+                };
                 let values = if version >= 4 { r.f32s()? } else { Vec::new() };
-                if !values.is_empty() && values.len() != positions.len() {
-                    return Err(r.err(format!(
-                        "object {id}: a tile has {} values for {} vertices",
-                        values.len(),
-                        positions.len()
-                    )));
+                if let Some(msg) = per_vertex("values", values.len()) {
+                    return Err(r.err(msg));
                 }
                 let normals = if version >= 5 { r.u32s()? } else { Vec::new() };
-                if !normals.is_empty() && normals.len() != positions.len() {
-                    return Err(r.err(format!(
-                        "object {id}: a tile has {} normals for {} vertices",
-                        normals.len(),
-                        positions.len()
-                    )));
+                if let Some(msg) = per_vertex("normals", normals.len()) {
+                    return Err(r.err(msg));
                 }
                 let (fine, coarse) = (r.u32s()?, r.u32s()?);
                 let proxy_error = r.f32()?;
