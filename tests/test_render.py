@@ -178,3 +178,25 @@ def test_scene_wholly_nearer_than_the_near_plane_warns(r64):
         hidden.set_visible(0, False)
         r64.render(hidden, top_down())
         r64.render(flat(), top_down())
+
+
+def test_height_fields_cost_their_heights_not_their_triangles_on_the_gpu():
+    # Lattice tiles (gpu::geometry::Plan): a hole-free height field's draws are patterns shared by
+    # every tile of one shape, rebuilt by the vertex stage from the normal map's heights (8 bytes
+    # per sample), so its GPU bytes stay far below vertices + indices (~40 bytes per triangle).
+    # The same triangles as a mesh have vertices of their own. Both render alike.
+    n = 201
+    s = flat(n=n, tiles=(5, 5))
+    r = gc.Renderer(32, 32)
+    res = r.render(s, top_down())
+    tris = res.stats["triangles_fine_total"]
+    assert tris == 2 * (n - 1) ** 2
+    assert r.gpu_bytes < 8 * tris
+    v, f = s.geometry(s.object_ids()[0])
+    m = gc.Scene()
+    m.add_mesh(v, f)
+    rm = gc.Renderer(32, 32)
+    res_m = rm.render(m, top_down())
+    assert rm.gpu_bytes > 30 * tris
+    assert np.array_equal(res.coverage, res_m.coverage)
+    np.testing.assert_array_equal(res.depth, res_m.depth)

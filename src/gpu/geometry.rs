@@ -1,5 +1,6 @@
 //! The scene's geometry on the GPU: one vertex buffer and one index buffer for every tile of
-//! every object, the tile → object table, and each tile's fine and coarse draw.
+//! every object (height-field tiles as shared patterns over the normal map's heights, see
+//! [`Plan`]), the tile → object table, and each tile's fine, coarse and level draws.
 
 use super::layout::DrawArgs;
 use super::readback::map_err;
@@ -21,6 +22,14 @@ pub struct SceneGeometry {
     /// Object index (position in `scene.objects()`) of every tile.
     pub tile_object: wgpu::Buffer,
     pub tile_object_cpu: Vec<u32>,
+    /// Per tile two vec4 for the vertex stage (`tile_grid` in common.wgsl): for a lattice tile
+    /// (see [`Plan`]) the object-relative (x, y) of its first sample and the grid's column axis,
+    /// then its row axis, the first sample's index in `shading` and the grid's row length (u32
+    /// bits); for other tiles u32::MAX in place of the index.
+    pub tile_grid: wgpu::Buffer,
+    /// Tiles drawn as lattice tiles, and the patterns they share.
+    pub lattice_tiles: usize,
+    pub patterns: usize,
     /// The fine (level 0) draw of every tile, in tile order.
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
@@ -94,6 +103,110 @@ pub fn check_buffer_sizes(nv: u64, ni: u64, max: u64) -> Result<()> {
     Ok(())
 }
 
+/// `indices` (into `n` vertices) renumbered into `out` over the vertices they use, which are
+/// returned in first-use order; `remap` is scratch.
+fn compact_indices(indices: &[u32], n: usize, remap: &mut Vec<u32>, out: &mut Vec<u32>) -> Vec<u32> {
+    remap.clear();
+    remap.resize(n, u32::MAX);
+    out.clear();
+    let mut used = Vec::new();
+    for &k in indices {
+        let slot = &mut remap[k as usize];
+        if *slot == u32::MAX {
+            *slot = used.len() as u32;
+            used.push(k);
+        }
+        out.push(*slot);
+    }
+    used
+}
+
+/// A draw of a lattice tile as a pattern: compact vertices as (column, row) relative to the
+/// tile's first sample, and the triangle list into them. Tiles of one size without holes share
+/// theirs.
+type Pattern = (Vec<[u32; 2]>, Vec<u32>);
+
+/// What the upload writes, counted before any buffer exists.
+///
+/// A *lattice tile* is a height-field tile whose object has its heights in the normal map
+/// (`SceneGeometry::shading`) and no per-vertex values or normals: its vertices are rebuilt by
+/// the vertex stage from the tile's first sample, the grid's axes and the normal map's heights
+/// (`tile_position` in common.wgsl), so its draws (fine, coarse, levels) need no vertices of
+/// their own, only indices into a pattern of (column, row) vertices shared by every tile of the
+/// same shape. The heights are the tiles' own f32 heights bit for bit; x and y are the corner's
+/// f32 position plus column and row times the axes, in f32, within a few units in the last place
+/// of the tile's extent of the vertices it replaces.
+struct Plan {
+    /// Per tile: the patterns of its fine, coarse and level draws (in that order) for a lattice
+    /// tile, None for a tile drawn from vertices of its own.
+    runs: Vec<Option<Vec<usize>>>,
+    patterns: Vec<Pattern>,
+    /// Two vec4 per tile (`tile_grid` in common.wgsl).
+    tile_grid: Vec<[f32; 4]>,
+    lattice_tiles: usize,
+    nv: u64,
+    ni: u64,
+}
+
+impl Plan {
+    fn new(scene: &Scene, shading_base: &[Option<u32>]) -> Self {
+        let mut ids: std::collections::HashMap<Pattern, usize> = std::collections::HashMap::new();
+        let (mut remap, mut cidx, mut seen) = (Vec::new(), Vec::new(), Vec::new());
+        let mut plan =
+            Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), lattice_tiles: 0, nv: 0, ni: 0 };
+        for (oi, o) in scene.objects().iter().enumerate() {
+            let axes = o.grid_axes();
+            for t in &o.tiles {
+                let lattice = match (shading_base[oi], &axes) {
+                    (Some(base), Some(g)) if t.values.is_empty() && t.normals.is_empty() && !t.is_empty() => {
+                        o.tile_lattice(t).map(|l| (base, g, l))
+                    }
+                    _ => None,
+                };
+                let Some((base, g, l)) = lattice else {
+                    plan.runs.push(None);
+                    plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, f32::from_bits(u32::MAX), 0.0]]);
+                    plan.nv += t.positions.len() as u64;
+                    plan.ni += t.fine.len() as u64;
+                    for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
+                        seen.clear();
+                        seen.resize(t.positions.len(), false);
+                        plan.nv +=
+                            idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
+                        plan.ni += idx.len() as u64;
+                    }
+                    continue;
+                };
+                let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
+                let run = draws
+                    .map(|idx| {
+                        let used = compact_indices(idx, t.positions.len(), &mut remap, &mut cidx);
+                        let key = (used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone());
+                        let next = ids.len();
+                        *ids.entry(key).or_insert(next)
+                    })
+                    .collect();
+                plan.runs.push(Some(run));
+                let corner = g.pos(l.i0, l.j0);
+                let k0 = base as usize + l.j0 * g.nx + l.i0;
+                plan.tile_grid.extend([
+                    [corner[0] as f32, corner[1] as f32, g.u[0] as f32, g.u[1] as f32],
+                    [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
+                ]);
+                plan.lattice_tiles += 1;
+            }
+        }
+        let mut patterns: Vec<(usize, Pattern)> = ids.into_iter().map(|(p, k)| (k, p)).collect();
+        patterns.sort_unstable_by_key(|(k, _)| *k);
+        plan.patterns = patterns.into_iter().map(|(_, p)| p).collect();
+        for (verts, idx) in &plan.patterns {
+            plan.nv += verts.len() as u64;
+            plan.ni += idx.len() as u64;
+        }
+        plan
+    }
+}
+
 impl SceneGeometry {
     pub fn n_tiles(&self) -> usize {
         self.fine.len()
@@ -104,23 +217,15 @@ impl SceneGeometry {
         self.fine.iter().map(|a| a.index_count as u64 / 3).sum()
     }
 
-    /// Uploads `scene`'s geometry. Sizes are computed first (the coarse proxies get compact
-    /// copies of the vertices they use), so that the geometry is written straight into mapped
-    /// GPU buffers without host temporaries.
+    /// Uploads `scene`'s geometry. Sizes are computed first (the coarse proxies and LOD levels get
+    /// compact copies of the vertices they use; the draws of lattice tiles become shared
+    /// patterns), so that the geometry is written straight into mapped GPU buffers without host
+    /// temporaries beyond the patterns.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
-        let (mut nv, mut ni) = (0u64, 0u64);
-        let mut seen: Vec<bool> = Vec::new();
-        for t in scene.objects().iter().flat_map(|o| &o.tiles) {
-            nv += t.positions.len() as u64;
-            ni += t.fine.len() as u64;
-            for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
-                seen.clear();
-                seen.resize(t.positions.len(), false);
-                nv += idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
-                ni += idx.len() as u64;
-            }
-        }
+        let (shading, shading_base) = upload_shading(ctx, scene);
+        let plan = Plan::new(scene, &shading_base);
+        let (nv, ni) = (plan.nv, plan.ni);
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             (size > 0).then(|| {
@@ -162,13 +267,37 @@ impl SceneGeometry {
                 imap.slice(*i * 4..(*i + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(data));
                 *i += data.len();
             };
-            let (mut remap, mut cverts, mut cidx): (Vec<u32>, Vec<[f32; 3]>, Vec<u32>) =
-                (Vec::new(), Vec::new(), Vec::new());
-            let mut cvals: Vec<f32> = Vec::new();
-            let mut cnormals: Vec<u32> = Vec::new();
+            // The patterns first: vertices (column, row, 0) as exact floats (common.wgsl).
+            let mut pattern_args = Vec::with_capacity(plan.patterns.len());
+            let mut cverts: Vec<[f32; 3]> = Vec::new();
+            for (verts, idx) in &plan.patterns {
+                pattern_args.push(DrawArgs {
+                    index_count: idx.len() as u32,
+                    instance_count: 1,
+                    first_index: i as u32,
+                    base_vertex: v as i32,
+                    first_instance: 0,
+                });
+                cverts.clear();
+                cverts.extend(verts.iter().map(|&[a, b]| [a as f32, b as f32, 0.0]));
+                put_v(&mut v, &cverts, &[], &[]);
+                put_i(&mut i, idx);
+            }
+            let (mut remap, mut cidx) = (Vec::new(), Vec::new());
+            let (mut cvals, mut cnormals): (Vec<f32>, Vec<u32>) = (Vec::new(), Vec::new());
+            let mut runs = plan.runs.iter();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
                     let tile = fine.len() as u32;
+                    tile_object.push(oi as u32);
+                    bbox.push(tile_bbox(t));
+                    if let Some(ids) = runs.next().expect("one plan per tile") {
+                        let args = |p: usize| DrawArgs { first_instance: tile, ..pattern_args[p] };
+                        fine.push(args(ids[0]));
+                        coarse.push(args(ids[1]));
+                        levels.push(ids[2..].iter().zip(&t.levels).map(|(&p, l)| (args(p), l.error)).collect());
+                        continue;
+                    }
                     fine.push(DrawArgs {
                         index_count: t.fine.len() as u32,
                         instance_count: 1,
@@ -183,26 +312,13 @@ impl SceneGeometry {
                     // indexed draw's index range, so indexing into the fine vertices would make
                     // them cost as much as a fine draw.
                     let mut compact = |indices: &[u32], v: &mut usize, i: &mut usize| {
-                        remap.clear();
-                        remap.resize(t.positions.len(), u32::MAX);
+                        let used = compact_indices(indices, t.positions.len(), &mut remap, &mut cidx);
                         cverts.clear();
+                        cverts.extend(used.iter().map(|&k| t.positions[k as usize]));
                         cvals.clear();
+                        cvals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
                         cnormals.clear();
-                        cidx.clear();
-                        for &k in indices {
-                            let slot = &mut remap[k as usize];
-                            if *slot == u32::MAX {
-                                *slot = cverts.len() as u32;
-                                cverts.push(t.positions[k as usize]);
-                                if !t.values.is_empty() {
-                                    cvals.push(t.values[k as usize]);
-                                }
-                                if !t.normals.is_empty() {
-                                    cnormals.push(t.normals[k as usize]);
-                                }
-                            }
-                            cidx.push(*slot);
-                        }
+                        cnormals.extend(used.iter().filter_map(|&k| t.normals.get(k as usize)));
                         let args = DrawArgs {
                             index_count: cidx.len() as u32,
                             instance_count: 1,
@@ -216,8 +332,6 @@ impl SceneGeometry {
                     };
                     coarse.push(compact(&t.coarse, &mut v, &mut i));
                     levels.push(t.levels.iter().map(|l| (compact(&l.indices, &mut v, &mut i), l.error)).collect());
-                    tile_object.push(oi as u32);
-                    bbox.push(tile_bbox(t));
                 }
             }
             debug_assert_eq!((v as u64, i as u64), (nv, ni));
@@ -237,7 +351,6 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
-        let (shading, shading_base) = upload_shading(ctx, scene);
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -245,7 +358,13 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&to),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + shading.size();
+        let grid = if plan.tile_grid.is_empty() { vec![[0.0f32; 4]; 2] } else { plan.tile_grid };
+        let tile_grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tile_grid"),
+            contents: bytemuck::cast_slice(&grid),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size();
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -254,6 +373,9 @@ impl SceneGeometry {
             indices: ib,
             tile_object: tob,
             tile_object_cpu: tile_object,
+            tile_grid,
+            lattice_tiles: plan.lattice_tiles,
+            patterns: plan.patterns.len(),
             fine,
             coarse,
             levels,

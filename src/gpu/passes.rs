@@ -221,7 +221,8 @@ impl Passes {
                 storage_entry(1, true, vf),
                 storage_entry(2, true, vf),
                 storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
-                storage_entry(4, true, wgpu::ShaderStages::FRAGMENT),
+                storage_entry(4, true, vf),
+                storage_entry(5, true, wgpu::ShaderStages::VERTEX),
             ],
         });
         let cs = wgpu::ShaderStages::COMPUTE;
@@ -717,8 +718,8 @@ impl GpuContext {
 
 impl Passes {
     /// The scene bind group of one frame: uniforms, per-object state, the tile → object table,
-    /// the colour-map rows the objects' `cmap.w` point into (RGBA), and the height fields' normal
-    /// map (`SceneGeometry::shading`).
+    /// the colour-map rows the objects' `cmap.w` point into (RGBA), the height fields' normal
+    /// map (`SceneGeometry::shading`) and the lattice tiles' grids (`SceneGeometry::tile_grid`).
     pub fn scene_bind_group(
         &self,
         d: &wgpu::Device,
@@ -755,6 +756,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 2, resource: geom.tile_object.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: lut_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: geom.shading.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: geom.tile_grid.as_entire_binding() },
             ],
         })
     }

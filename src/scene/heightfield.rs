@@ -12,7 +12,7 @@
 use super::{check_coarse_factor, check_color, AddOptions, ColorByArg, ColorSource, Object, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
-use crate::lod::{self, cos_sin_deg, GridSpec};
+use crate::lod::{self, cos_sin_deg, GridSpec, TileMesh};
 use glam::DVec3;
 
 /// Where a height field's grid lies: sample (i, j) at `origin + R(rotation) (i dx, ±j dy)` (world
@@ -195,28 +195,102 @@ fn undefined_hint(v: f64) -> String {
     }
 }
 
+/// A height field's grid in its object's frame: sample (i, j) at `o + i u + j v`, relative to the
+/// object's origin (`u = dx (cos, sin)`, `v = dy (-sin, cos)` with `dy < 0` when rows are flipped).
+#[derive(Clone, Copy, Debug)]
+pub struct GridAxes {
+    pub o: [f64; 2],
+    pub u: [f64; 2],
+    pub v: [f64; 2],
+    pub nx: usize,
+    pub ny: usize,
+    /// (cos, sin) of the rotation.
+    rot: (f64, f64),
+    dx: f64,
+    dy: f64,
+}
+
+impl GridAxes {
+    /// Object-relative (x, y) of sample (i, j), rounded as `lod::GridSpec::pos` rounds it (so that
+    /// it is the f64 value the tiles' f32 vertices were made from).
+    pub fn pos(&self, i: usize, j: usize) -> [f64; 2] {
+        let (a, b) = (i as f64 * self.dx, j as f64 * self.dy);
+        let (c, s) = self.rot;
+        if (c, s) == (1.0, 0.0) {
+            [self.o[0] + a, self.o[1] + b]
+        } else {
+            [self.o[0] + (c * a - s * b), self.o[1] + (s * a + c * b)]
+        }
+    }
+
+    /// The sample (column, row) nearest to object-relative (x, y): the grid frame's inverse,
+    /// rounded; None outside the grid.
+    pub fn sample_at(&self, x: f64, y: f64) -> Option<(usize, usize)> {
+        let (c, s) = self.rot;
+        let (qx, qy) = (x - self.o[0], y - self.o[1]);
+        let (a, b) = if (c, s) == (1.0, 0.0) { (qx, qy) } else { (c * qx + s * qy, c * qy - s * qx) };
+        let (i, j) = ((a / self.dx).round(), (b / self.dy).round());
+        ((0.0..self.nx as f64).contains(&i) && (0.0..self.ny as f64).contains(&j)).then_some((i as usize, j as usize))
+    }
+}
+
+/// A height-field tile's vertices as samples of its grid (`Object::tile_lattice`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TileLattice {
+    /// The smallest column and row of the tile's vertices.
+    pub i0: usize,
+    pub j0: usize,
+    /// Per vertex of the tile (in `TileMesh::positions` order), its column and row relative to
+    /// `(i0, j0)`.
+    pub local: Vec<[u32; 2]>,
+}
+
 impl Object {
+    /// The grid of a height field in its object's frame; None for other kinds.
+    pub fn grid_axes(&self) -> Option<GridAxes> {
+        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = self.kind else { return None };
+        let (c, s) = cos_sin_deg(rotation);
+        Some(GridAxes { o: [x0, y0], u: [c * dx, s * dx], v: [-s * dy, c * dy], nx, ny, rot: (c, s), dx, dy })
+    }
+
     /// The heights of a height field as a row-major (ny, nx) grid relative to the origin's z
     /// (NaN where no triangle uses the sample), rebuilt from the tiles' vertices: every vertex is
     /// a grid sample, and its origin-relative x, y, turned back into the grid's frame, give back its
     /// integer column and row.
     pub fn height_grid(&self) -> Option<Vec<f32>> {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = self.kind else { return None };
-        let (c, s) = cos_sin_deg(rotation);
-        let mut z = vec![f32::NAN; nx * ny];
+        let g = self.grid_axes()?;
+        let mut z = vec![f32::NAN; g.nx * g.ny];
         for t in &self.tiles {
             for p in &t.positions {
-                // Back into the grid's frame (the inverse rotation), then to (column, row).
-                let (qx, qy) = (p[0] as f64 - x0, p[1] as f64 - y0);
-                let (u, v) = if (c, s) == (1.0, 0.0) { (qx, qy) } else { (c * qx + s * qy, c * qy - s * qx) };
-                let i = (u / dx).round();
-                let j = (v / dy).round();
-                if (0.0..nx as f64).contains(&i) && (0.0..ny as f64).contains(&j) {
-                    z[j as usize * nx + i as usize] = p[2];
+                if let Some((i, j)) = g.sample_at(p[0] as f64, p[1] as f64) {
+                    z[j * g.nx + i] = p[2];
                 }
             }
         }
         Some(z)
+    }
+
+    /// Tile `t` of this height field as grid samples (the same inverse as [`Self::height_grid`]),
+    /// so that the GPU can rebuild its vertices from the normal map's heights
+    /// (`gpu::geometry`); None for other kinds, for empty tiles, and for a tile with a vertex that
+    /// is not within a thousandth of a sample spacing of its sample (never, for tiles made by
+    /// `lod::tile_heightfield`).
+    pub fn tile_lattice(&self, t: &TileMesh) -> Option<TileLattice> {
+        let g = self.grid_axes()?;
+        let tol = 1e-3 * g.dx.abs().min(g.dy.abs());
+        let samples = t
+            .positions
+            .iter()
+            .map(|p| {
+                let (i, j) = g.sample_at(p[0] as f64, p[1] as f64)?;
+                let q = g.pos(i, j);
+                ((q[0] - p[0] as f64).abs() <= tol && (q[1] - p[1] as f64).abs() <= tol).then_some((i, j))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let i0 = samples.iter().map(|s| s.0).min()?;
+        let j0 = samples.iter().map(|s| s.1).min()?;
+        let local = samples.iter().map(|&(i, j)| [(i - i0) as u32, (j - j0) as u32]).collect();
+        Some(TileLattice { i0, j0, local })
     }
 }
 

@@ -1,6 +1,8 @@
 // Shared by the scene passes (prepended to draw.wgsl and prepass.wgsl): one vertex buffer of f32
-// positions relative to the scene origin, drawn with multi-draw-indirect where first_instance
-// carries the global tile index. Both passes use this one vertex shader, so their depths agree.
+// positions relative to their objects' origins, drawn with multi-draw-indirect where
+// first_instance carries the global tile index. A lattice tile's vertices are (column, row, 0)
+// of a shared pattern instead, turned into positions by tile_position. Every pass uses this one
+// transform, so their depths agree.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -30,6 +32,27 @@ struct Object {
 @group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 @group(0) @binding(2) var<storage, read> tile_object: array<u32>;
+// Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
+// sample: the gradient (dz/dx, dz/dy) as two f16, and the object-relative height's f32 bits.
+@group(0) @binding(4) var<storage, read> surface: array<vec2<u32>>;
+// Per tile two vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
+// object-relative (x, y) and the grid's column axis; its row axis, the first sample's index in
+// `surface` and the grid's row length (u32 bits); 0xffffffff in place of the index for a tile
+// with vertices of its own.
+@group(0) @binding(5) var<storage, read> tile_grid: array<vec4<f32>>;
+
+// The object-relative position of vertex `pos` of `tile`: `pos` itself, or for a lattice tile the
+// sample at column pos.x, row pos.y from the tile's first, with its height from `surface`.
+fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
+    let b = tile_grid[2u * tile + 1u];
+    let k0 = bitcast<u32>(b.z);
+    if (k0 == 0xffffffffu) {
+        return pos;
+    }
+    let a = tile_grid[2u * tile];
+    let k = k0 + u32(pos.y) * bitcast<u32>(b.w) + u32(pos.x);
+    return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface[k].y));
+}
 
 struct VOut {
     // Invariant so that the depth prepass and later passes rasterise identical depth.
@@ -39,9 +62,9 @@ struct VOut {
 }
 
 @vertex
-fn vs_main(@location(0) pos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOut {
+fn vs_main(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOut {
     let o = objects[tile_object[tile]];
-    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOut;
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
     out.world = p;
@@ -68,9 +91,9 @@ struct VOutGl {
 
 // The same transform as vs_main (kept apart so that vs_main's code is what it always was).
 @vertex
-fn vs_gl(@location(0) pos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOutGl {
+fn vs_gl(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOutGl {
     let o = objects[tile_object[tile]];
-    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
     return VOutGl(clip, p, tile, clip.zw);
 }

@@ -4,9 +4,6 @@
 
 // Colour maps of this frame's objects: 256 rows each, then the object's NaN colour.
 @group(0) @binding(3) var<storage, read> lut: array<vec4<f32>>;
-// Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
-// sample: the gradient (dz/dx, dz/dy) as two f16, and the object-relative height's f32 bits.
-@group(0) @binding(4) var<storage, read> surface: array<vec2<u32>>;
 
 // The fine surface under render-space point `w` of a height field with a normal map:
 // (dz/dx, dz/dy, z) interpolated bilinearly at the point's (x, y), so that every level of detail
@@ -73,9 +70,10 @@ fn vertex_normal(p: u32) -> vec3<f32> {
 }
 
 @vertex
-fn vs_draw(@location(0) pos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
            @builtin(instance_index) tile: u32) -> VOutDraw {
     let o = objects[tile_object[tile]];
+    let pos = tile_position(vpos, tile);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
@@ -135,9 +133,10 @@ struct VOutDrawGl {
 }
 
 @vertex
-fn vs_draw_gl(@location(0) pos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
               @builtin(instance_index) tile: u32) -> VOutDrawGl {
     let o = objects[tile_object[tile]];
+    let pos = tile_position(vpos, tile);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
     return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), vertex_normal(nrm));
