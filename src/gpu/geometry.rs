@@ -6,7 +6,7 @@ use super::layout::DrawArgs;
 use super::readback::map_err;
 use super::GpuContext;
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{ObjectKind, Scene};
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
@@ -57,35 +57,59 @@ pub const NO_DATA: f32 = -f32::MAX;
 
 /// The normal map of the lit pass: every height field's shading samples, as long as they fit one
 /// storage binding (later height fields fall back to facet normals and vertex heights).
-fn upload_shading(ctx: &GpuContext, scene: &Scene) -> (wgpu::Buffer, Vec<Option<u32>>) {
-    let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
-    let pack = |[gx, gy, z]: [f32; 3]| {
-        let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
-        [h(gx) | (h(gy) << 16), z.to_bits()]
-    };
-    let mut words: Vec<u32> = Vec::new();
-    let base = scene
+fn upload_shading(ctx: &GpuContext, scene: &Scene) -> Result<(wgpu::Buffer, Vec<Option<u32>>)> {
+    let max_samples = ctx.limits.max_storage_buffer_binding_size / 8;
+    let mut total = 0u64;
+    let base: Vec<Option<u32>> = scene
         .objects()
         .iter()
         .map(|o| {
-            let g = o.shading_samples()?;
-            if (words.len() + 2 * g.len()) as u64 > max_words {
-                return None;
-            }
-            let first = (words.len() / 2) as u32;
-            words.extend(g.into_iter().flat_map(pack));
-            Some(first)
+            let ObjectKind::Heightfield { nx, ny, .. } = o.kind else { return None };
+            let n = (nx * ny) as u64;
+            (total + n <= max_samples).then(|| {
+                total += n;
+                (total - n) as u32
+            })
         })
         .collect();
-    if words.is_empty() {
-        words.extend([0, 0]);
-    }
-    let buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    // Written in place (no staging copy where the device maps storage buffers), sample by sample
+    // from each height grid: no host copy of the whole map.
+    let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
+        wgpu::BufferUsages::MAP_WRITE
+    } else {
+        wgpu::BufferUsages::empty()
+    };
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shading"),
-        contents: bytemuck::cast_slice(&words),
-        usage: wgpu::BufferUsages::STORAGE,
+        size: 8 * total.max(1),
+        usage: wgpu::BufferUsages::STORAGE | direct,
+        mapped_at_creation: true,
     });
-    (buf, base)
+    {
+        let mut map = buf.slice(..).get_mapped_range_mut().map_err(map_err)?;
+        let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
+        // Mapped memory is write-only: runs of 4096 samples.
+        let mut run: Vec<[u32; 2]> = Vec::with_capacity(4096);
+        let mut at = 0usize;
+        let mut flush = |run: &mut Vec<[u32; 2]>| {
+            map.slice(at * 8..(at + run.len()) * 8).copy_from_slice(bytemuck::cast_slice(run));
+            at += run.len();
+            run.clear();
+        };
+        for (o, b) in scene.objects().iter().zip(&base) {
+            if b.is_some() {
+                o.for_each_shading_sample(|[gx, gy, z]| {
+                    run.push([h(gx) | (h(gy) << 16), z.to_bits()]);
+                    if run.len() == run.capacity() {
+                        flush(&mut run);
+                    }
+                });
+            }
+        }
+        flush(&mut run);
+    }
+    buf.unmap();
+    Ok((buf, base))
 }
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
@@ -223,7 +247,7 @@ impl SceneGeometry {
     /// temporaries beyond the patterns.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
-        let (shading, shading_base) = upload_shading(ctx, scene);
+        let (shading, shading_base) = upload_shading(ctx, scene)?;
         let plan = Plan::new(scene, &shading_base);
         let (nv, ni) = (plan.nv, plan.ni);
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;

@@ -402,7 +402,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     let mut lev = merge::level0(faces, b);
     let (fine, mut st) = emit(&lev, &verts, &mut tile, 1);
     st.cells = present.iter().filter(|&&p| p).count() as u64;
-    tile.fine = fine;
+    tile.fine = fine.into();
     stats.push(st);
     kinds.push(kind_counts(&lev));
     for h in 1..=block_levels(bw, bh) {
@@ -421,7 +421,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         }
         stats.push(st);
         kinds.push(kind_counts(&lev));
-        tile.levels.push(Level { indices: idx, error: lev.error as f32 });
+        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32 });
     }
     match tile.levels.last() {
         Some(l) => {

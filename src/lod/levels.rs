@@ -28,7 +28,7 @@ pub const MAX_LEVELS: usize = 5;
 /// One level of a tile: a triangle list into the tile's vertices and its error (world units).
 #[derive(Clone, Debug, Default)]
 pub struct Level {
-    pub indices: Vec<u32>,
+    pub indices: super::Indices,
     pub error: f32,
 }
 
@@ -179,7 +179,7 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32]) -> Vec<Level> {
             break;
         }
         error += step;
-        levels.push(Level { indices: idx.clone(), error });
+        levels.push(Level { indices: idx.as_slice().into(), error });
         prev = idx;
     }
     levels

@@ -22,6 +22,35 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 
+/// A triangle list into a tile's vertices, shared between tiles whose lists are equal (hole-free
+/// tiles of one height field's shape: [`share_indices`]).
+pub type Indices = std::sync::Arc<[u32]>;
+
+/// Makes equal triangle lists of `tiles` (fine, coarse and levels, across tiles) one shared
+/// allocation: the tiles of a height field without holes all have the same few, so their host
+/// copy costs the vertices only.
+pub fn share_indices(tiles: &mut [TileMesh]) {
+    let mut seen: std::collections::HashSet<Indices> = std::collections::HashSet::new();
+    let mut share = |l: &mut Indices| {
+        if l.is_empty() {
+            return;
+        }
+        match seen.get(l) {
+            Some(s) => *l = s.clone(),
+            None => {
+                seen.insert(l.clone());
+            }
+        }
+    };
+    for t in tiles {
+        share(&mut t.fine);
+        share(&mut t.coarse);
+        for l in &mut t.levels {
+            share(&mut l.indices);
+        }
+    }
+}
+
 /// One tile of one object.
 #[derive(Clone, Debug, Default)]
 pub struct TileMesh {
@@ -37,10 +66,11 @@ pub struct TileMesh {
     /// empty when the object shades by its facets (height fields take theirs from the fine
     /// surface instead, grids are flat), else one per entry of `positions`.
     pub normals: Vec<u32>,
-    /// Fine (level 0) triangle list into `positions`.
-    pub fine: Vec<u32>,
+    /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
+    /// [`share_indices`]).
+    pub fine: Indices,
     /// Coarse proxy triangle list into `positions`.
-    pub coarse: Vec<u32>,
+    pub coarse: Indices,
     pub bbox_min: [f32; 3],
     pub bbox_max: [f32; 3],
     /// How far the coarse proxy may lie from the fine triangles, world units (not exaggerated):
@@ -86,8 +116,8 @@ impl TileMesh {
     /// `coarse` is given.
     fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
         self.compute_bbox();
-        (self.coarse, self.proxy_error) =
-            coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
+        let (c, e) = coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
+        (self.coarse, self.proxy_error) = (c.into(), e);
         if self.levels.is_empty() && !self.fine.is_empty() {
             self.levels = levels::simplified_levels(&self.positions, &self.fine);
         }
@@ -199,6 +229,7 @@ pub fn tile_heightfield(
                 }
                 *slot
             };
+            let mut fine = Vec::with_capacity(6 * (w - 1) * (h - 1));
             for lj in 0..h - 1 {
                 for li in 0..w - 1 {
                     let (i, j) = (i0 + li, j0 + lj);
@@ -210,16 +241,17 @@ pub fn tile_heightfield(
                         let a = vertex(li, lj, &mut tile);
                         let b = vertex(li + 1, lj, &mut tile);
                         let c = vertex(li + 1, lj + 1, &mut tile);
-                        tile.fine.extend_from_slice(&[a, b, c]);
+                        fine.extend_from_slice(&[a, b, c]);
                     }
                     if z00 && z11 && z01 {
                         let a = vertex(li, lj, &mut tile);
                         let c = vertex(li + 1, lj + 1, &mut tile);
                         let d = vertex(li, lj + 1, &mut tile);
-                        tile.fine.extend_from_slice(&[a, c, d]);
+                        fine.extend_from_slice(&[a, c, d]);
                     }
                 }
             }
+            tile.fine = fine.into();
             // Hole-free tiles: the proxy is the sample lattice at stride k = round(sqrt(coarse_factor)),
             // always keeping the tile's last row and column. Neighbours then keep the same border
             // samples, so proxies meet without cracks at any factor. (Quadric simplification with a
@@ -310,6 +342,7 @@ pub fn tile_mesh(
             }
             let mut map = std::collections::HashMap::<u32, u32>::with_capacity(fs.len());
             let mut tile = TileMesh { ix: c as u32, iy: 0, ..Default::default() };
+            let mut fine = Vec::with_capacity(3 * fs.len());
             for &f in &fs {
                 for &v in &faces[f as usize] {
                     let next = tile.positions.len() as u32;
@@ -328,9 +361,10 @@ pub fn tile_mesh(
                             tile.normals.push(ns[v as usize]);
                         }
                     }
-                    tile.fine.push(slot);
+                    fine.push(slot);
                 }
             }
+            tile.fine = fine.into();
             tile.finish(coarse_factor, None)
         })
         .inspect(|_| stop.item_done())

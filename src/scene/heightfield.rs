@@ -308,6 +308,15 @@ impl Object {
     /// takes the mean of its defined 4-neighbours, so that interpolation next to a hole stays
     /// smooth (its own triangles are never drawn).
     pub fn shading_samples(&self) -> Option<Vec<[f32; 3]>> {
+        let mut out = Vec::new();
+        self.for_each_shading_sample(|v| out.push(v))?;
+        Some(out)
+    }
+
+    /// [`Self::shading_samples`] without the vector: `out` gets every sample in row-major order.
+    /// Holds only the (ny, nx) f32 height grid meanwhile (the upload writes straight into the
+    /// GPU buffer). None, without a call, for other kinds.
+    pub fn for_each_shading_sample(&self, mut out: impl FnMut([f32; 3])) -> Option<()> {
         let ObjectKind::Heightfield { nx, ny, dx, dy, rotation, .. } = self.kind else { return None };
         let z = self.height_grid()?;
         let at = |i: usize, j: usize| z[j * nx + i];
@@ -321,38 +330,35 @@ impl Object {
             }
         };
         let (c, s) = cos_sin_deg(rotation);
-        let mut g = vec![[f32::NAN; 3]; nx * ny];
-        for j in 0..ny {
-            for i in 0..nx {
-                let h = at(i, j);
-                if !h.is_finite() {
-                    continue;
-                }
-                let gi = diff((i > 0).then(|| at(i - 1, j)), h, (i + 1 < nx).then(|| at(i + 1, j))) / dx;
-                let gj = diff((j > 0).then(|| at(i, j - 1)), h, (j + 1 < ny).then(|| at(i, j + 1))) / dy;
-                // Grid frame -> world: the gradient turns with the grid (dy < 0 flips rows).
-                g[j * nx + i] = [(c * gi - s * gj) as f32, (s * gi + c * gj) as f32, h];
+        // The sample's (gradient, height) where it is defined.
+        let defined = |i: usize, j: usize| -> Option<[f32; 3]> {
+            let h = at(i, j);
+            if !h.is_finite() {
+                return None;
             }
-        }
-        // Holes from the defined samples only (not from holes filled before them).
-        let defined = g.clone();
+            let gi = diff((i > 0).then(|| at(i - 1, j)), h, (i + 1 < nx).then(|| at(i + 1, j))) / dx;
+            let gj = diff((j > 0).then(|| at(i, j - 1)), h, (j + 1 < ny).then(|| at(i, j + 1))) / dy;
+            // Grid frame -> world: the gradient turns with the grid (dy < 0 flips rows).
+            Some([(c * gi - s * gj) as f32, (s * gi + c * gj) as f32, h])
+        };
         for j in 0..ny {
             for i in 0..nx {
-                if g[j * nx + i][2].is_finite() {
-                    continue;
-                }
-                let near = [(i.wrapping_sub(1), j), (i + 1, j), (i, j.wrapping_sub(1)), (i, j + 1)];
-                let (mut sum, mut n) = ([0.0f32; 3], 0.0f32);
-                for (a, b) in near.into_iter().filter(|&(a, b)| a < nx && b < ny) {
-                    let v = defined[b * nx + a];
-                    if v[2].is_finite() {
+                out(defined(i, j).unwrap_or_else(|| {
+                    // A hole: the mean of its defined 4-neighbours (not of holes filled before).
+                    let near = [(i.wrapping_sub(1), j), (i + 1, j), (i, j.wrapping_sub(1)), (i, j + 1)];
+                    let (mut sum, mut n) = ([0.0f32; 3], 0.0f32);
+                    for v in near.into_iter().filter(|&(a, b)| a < nx && b < ny).filter_map(|(a, b)| defined(a, b)) {
                         sum = [sum[0] + v[0], sum[1] + v[1], sum[2] + v[2]];
                         n += 1.0;
                     }
-                }
-                g[j * nx + i] = if n > 0.0 { sum.map(|x| x / n) } else { [0.0; 3] };
+                    if n > 0.0 {
+                        sum.map(|x| x / n)
+                    } else {
+                        [0.0; 3]
+                    }
+                }));
             }
         }
-        Some(g)
+        Some(())
     }
 }

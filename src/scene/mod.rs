@@ -316,6 +316,7 @@ impl Scene {
                 t.levels.clear();
             }
         }
+        crate::lod::share_indices(&mut tiles);
         self.origin.get_or_insert(origin);
         let id = self.next_id;
         self.next_id += 1;
@@ -411,20 +412,18 @@ impl Scene {
         Ok((verts, faces))
     }
 
-    /// Bytes of geometry held on the host (vertices, both index levels, height grids).
+    /// Bytes of geometry held on the host: vertices with their values and normals, and the
+    /// triangle lists (fine, coarse, levels), each shared list once.
     pub fn host_bytes(&self) -> usize {
-        self.objects
-            .iter()
-            .map(|o| {
-                o.tiles
-                    .iter()
-                    .map(|t| {
-                        let levels: usize = t.levels.iter().map(|l| l.indices.len()).sum();
-                        t.positions.len() * 12 + (t.fine.len() + t.coarse.len() + levels) * 4
-                    })
-                    .sum::<usize>()
-            })
-            .sum()
+        // Triangle lists shared between tiles (lod::share_indices) count once.
+        let mut seen = std::collections::HashSet::new();
+        let mut list = |l: &crate::lod::Indices| if seen.insert(l.as_ptr()) { l.len() * 4 } else { 0 };
+        let mut bytes = 0;
+        for t in self.objects.iter().flat_map(|o| &o.tiles) {
+            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len()) * 4 + list(&t.fine) + list(&t.coarse);
+            bytes += t.levels.iter().map(|l| list(&l.indices)).sum::<usize>();
+        }
+        bytes
     }
 }
 

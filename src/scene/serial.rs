@@ -413,7 +413,7 @@ impl Scene {
                 if let Some(msg) = per_vertex("normals", normals.len()) {
                     return Err(r.err(msg));
                 }
-                let (fine, coarse) = (r.u32s()?, r.u32s()?);
+                let (fine, coarse): (crate::lod::Indices, crate::lod::Indices) = (r.u32s()?.into(), r.u32s()?.into());
                 let proxy_error = r.f32()?;
                 let nl = r.u32()? as usize;
                 if nl > crate::lod::levels::MAX_LEVELS {
@@ -425,7 +425,7 @@ impl Scene {
                 let mut levels = Vec::with_capacity(nl.min(64));
                 for _ in 0..nl {
                     let error = r.f32()?;
-                    levels.push(crate::lod::levels::Level { error, indices: r.u32s()? });
+                    levels.push(crate::lod::levels::Level { error, indices: r.u32s()?.into() });
                 }
                 for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
                     if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
@@ -458,6 +458,7 @@ impl Scene {
             {
                 return Err(r.err(format!("object {id}: coloured by values but has none")));
             }
+            crate::lod::share_indices(&mut tiles);
             objects.push(Object {
                 id,
                 name,
