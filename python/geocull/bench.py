@@ -186,6 +186,15 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
                          fault_triangles=cfg["fault_triangles"])
     gen_s = time.perf_counter() - t0
     rss_before = _rss_mb()  # the process with the scene's numpy data, before any geocull object
+    # What geocull costs whatever the scene: a renderer of this size (the driver, lavapipe's JIT
+    # pipelines of every method) on a one-tile scene. The growth above it is the scenes' own.
+    fixed_renderer, fixed_scene = gc.Renderer(w, h), gc.Scene()
+    fixed_scene.add_heightfield(np.zeros((3, 3)))
+    fixed_cam = gc.Camera.look_at((0.5, -2.0, 2.0), (1.0, 1.0, 0.0))
+    for kind in ("none", "three_pass", "temporal", "oracle"):
+        for lod in ("full", "screen_error"):
+            fixed_renderer.render(fixed_scene, fixed_cam, culling=kind, lod=lod)
+    rss_fixed = _rss_mb()
     task.total = 2 + len(_select_views(cfg["views"], (spec, 45.0, 1.0, w / h)))  # two builds, then the views
     _say(f"bench: building tiles + LOD (tiles {TILES[0]}x{TILES[1]}, coarse factor {COARSE_FACTOR})")
     t0 = time.perf_counter()
@@ -406,6 +415,9 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         # Both scenes (two coarse factors) and their renderers count: the growth of the peak over
         # the process before geocull, per fine triangle of the two scenes.
         rss_bytes_per_triangle=((rss_geocull - rss_before) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
+        rss_fixed_mb=rss_fixed - rss_before,
+        # The same growth above a renderer's fixed cost (driver, JIT pipelines): the scenes' own.
+        rss_scene_bytes_per_triangle=((rss_geocull - rss_fixed) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
         peak_rss_mb=_rss_mb(),
         pyvista_setup_s_mean=(sum(pv_setup_s) / len(pv_setup_s)) if pv_setup_s else None,
         adapter=renderer.adapter_info,
@@ -547,7 +559,9 @@ def format_table(result: dict[str, Any]) -> str:
                  f"after geocull's first view, {s['peak_rss_mb']:.0f} MiB at the end (PyVista included); "
                  f"attributable to geocull (peak growth over {s['rss_before_geocull_mb']:.0f} MiB before its first "
                  f"object, two scenes and their renderers): {_f(s.get('rss_bytes_per_triangle'), '.0f')} bytes per "
-                 f"fine triangle (target <= 60)")
+                 f"fine triangle (target <= 60), of which a renderer's fixed cost (driver, JIT pipelines, "
+                 f"one-tile scene) is {_f(s.get('rss_fixed_mb'), '.0f')} MiB and the scenes' own "
+                 f"{_f(s.get('rss_scene_bytes_per_triangle'), '.0f')} bytes per fine triangle")
     pv = f"; PyVista {s['pyvista']}, VTK {s['vtk']}" if "pyvista" in s else ""
     lines.append(f"adapter: {s['adapter']}{pv}; {s['cpu_count']} CPU(s); wall {s['wall_s']:.0f} s")
     lines.append("columns: ms = best frame time (geocull stats total_ms: call -> GPU done; PyVista: Render + "

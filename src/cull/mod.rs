@@ -123,11 +123,17 @@ impl FrameInputs<'_> {
     /// f32 round-off, as the box passes draw it, and whether it reaches the near plane (then its
     /// front faces may be clipped and a box test cannot be trusted to see it).
     pub fn tile_box(&self, i: usize) -> (glam::DVec3, glam::DVec3, bool) {
+        let (lo, hi) = self.geometry.bbox[i];
+        self.render_box(i, lo, hi)
+    }
+
+    /// The box `lo..hi` of tile `i` (origin-relative, as `SceneGeometry::bbox`) as [`Self::tile_box`]
+    /// makes the tile's.
+    pub fn render_box(&self, i: usize, lo: glam::DVec3, hi: glam::DVec3) -> (glam::DVec3, glam::DVec3, bool) {
         use glam::DVec3;
         let g = self.geometry;
         let zs = DVec3::new(1.0, 1.0, self.camera.z_scale);
         let off = self.placement(g.tile_object_cpu[i] as usize);
-        let (lo, hi) = g.bbox[i];
         let (a, b) = ((lo + off) * zs, (hi + off) * zs);
         let (lo, hi) = (a.min(b), a.max(b));
         let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;

@@ -5,7 +5,7 @@
 //! image; the tiles above the threshold selected on the GPU as the first set A.
 //!
 //! [`draw_and_test_the_rest`] is the conservative second phase: after A has been drawn into the
-//! final targets, every other visible tile's box is tested
+//! final targets, every other visible tile's box (its sub-boxes when drawn at level 0) is tested
 //! against that image's depth at full resolution (`Passes::record_box_test`), and the tiles whose
 //! count exceeds the threshold are drawn too, selected on the GPU (`record_select_rest`).
 //!
@@ -13,7 +13,13 @@
 //! of the scene's fine triangles, so at every pixel it is at or behind the nearest fine surface
 //! F(p); a tile T with a visible fragment at p lies at F(p) there, inside T's box, so the box's
 //! entry point on p's ray is at or in front of D(p): T's count is at least its number of visible
-//! pixels. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
+//! pixels. The same holds for any set of boxes whose union holds what is drawn of T (the ray enters
+//! one of them in front of the fragment): T's sub-boxes (`TileMesh::sub_boxes`, each cell of its
+//! (x, y) box spanning only its own triangles' heights) when T is drawn at level 0, which cuts the
+//! tiles whose box pokes through an occluder while their surface stays behind it; the whole box
+//! at coarser levels, whose triangles may leave the sub-boxes but not the convex box of the
+//! vertices they share with level 0. A pixel counted in several overlapping sub-boxes only raises
+//! the count. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
 //! f32 round-off and ties count as visible (`FrameInputs::tile_box`).
 
 use super::{Draw, FrameInputs};
@@ -87,11 +93,19 @@ pub fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
         if !f.object_visible[i] || g.fine[i].index_count == 0 {
             continue;
         }
-        let (lo, hi, near) = f.tile_box(i);
-        if near {
-            *first = FORCED;
+        // A tile drawn at level 0 is tested with its sub-boxes (their union holds its triangles);
+        // one drawn at a coarser level with its whole box, which holds every level (levels use
+        // the tile's own vertices, and a box is convex).
+        let subs = &g.sub_boxes[i];
+        let whole = [g.bbox[i]];
+        let parts = if f.draw_args[i] == g.fine[i] && !subs.is_empty() { &subs[..] } else { &whole[..] };
+        for &(lo, hi) in parts {
+            let (lo, hi, near) = f.render_box(i, lo, hi);
+            if near {
+                *first = FORCED;
+            }
+            boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
         }
-        boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
     }
     (boxes, init)
 }
@@ -102,7 +116,7 @@ pub struct Rest {
     pub draw: Draw,
     /// Per tile, the box pixels counted (FORCED + count for untested tiles).
     pub box_counts: wgpu::Buffer,
-    /// Boxes tested.
+    /// Tiles tested (each with one box or its sub-boxes).
     pub tested: usize,
 }
 
@@ -133,5 +147,6 @@ pub fn draw_and_test_the_rest(
     } else {
         Draw::Mask(vec![false; n])
     };
-    Rest { draw, box_counts, tested: boxes.len() }
+    let tested = (0..n).filter(|&i| f.object_visible[i] && f.geometry.fine[i].index_count > 0).count();
+    Rest { draw, box_counts, tested }
 }

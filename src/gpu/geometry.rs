@@ -39,6 +39,9 @@ pub struct SceneGeometry {
     pub levels: Vec<Vec<(DrawArgs, f32)>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
+    /// Per tile, boxes whose union holds its fine triangles (`TileMesh::sub_boxes`, [`SUB_BOXES`]²
+    /// cells), origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
+    pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
     /// The fine surfaces of the height fields as the lit pass samples them
     /// (`Object::shading_samples`), object after object, two words per sample: the gradient as
     /// two f16 (x in the low half) and the object-relative height's f32 bits.
@@ -49,6 +52,9 @@ pub struct SceneGeometry {
     pub shading_base: Vec<Option<u32>>,
     pub bytes: u64,
 }
+
+/// Cells per side of a tile's sub-boxes (`SceneGeometry::sub_boxes`).
+pub const SUB_BOXES: usize = 2;
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
 /// travels as the most negative f32, which the lit pass tests for (`s < -1e37`) and which any
@@ -388,6 +394,15 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&grid),
             usage: wgpu::BufferUsages::STORAGE,
         });
+        let sub_boxes = scene
+            .objects()
+            .iter()
+            .flat_map(|o| &o.tiles)
+            .map(|t| {
+                let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+                t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
+            })
+            .collect();
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size();
         ctx.take_error()?;
         Ok(Self {
@@ -404,6 +419,7 @@ impl SceneGeometry {
             coarse,
             levels,
             bbox,
+            sub_boxes,
             shading,
             shading_base,
             bytes,

@@ -112,6 +112,45 @@ impl TileMesh {
         self.bbox_max = hi;
     }
 
+    /// Boxes whose union holds every fine triangle: the tile's (x, y) box cut into `s` × `s` cells,
+    /// each the bounding box of the triangles whose own box overlaps it (so the boxes overlap
+    /// where triangles straddle cells); cells without triangles are left out. Tighter than the
+    /// tile's box for a sloping or curved tile: each cell spans only its part of the heights.
+    pub fn sub_boxes(&self, s: usize) -> Vec<([f32; 3], [f32; 3])> {
+        let s = s.max(1);
+        let (lo, hi) = (self.bbox_min, self.bbox_max);
+        let cell = [(hi[0] - lo[0]) / s as f32, (hi[1] - lo[1]) / s as f32];
+        let mut boxes = vec![([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]); s * s];
+        let index = |v: f32, a: usize| {
+            if cell[a] > 0.0 {
+                (((v - lo[a]) / cell[a]).floor().max(0.0) as usize).min(s - 1)
+            } else {
+                0
+            }
+        };
+        for t in self.fine.chunks_exact(3) {
+            let p = [t[0], t[1], t[2]].map(|k| self.positions[k as usize]);
+            let (mut a, mut b) = (p[0], p[0]);
+            for q in &p[1..] {
+                for d in 0..3 {
+                    a[d] = a[d].min(q[d]);
+                    b[d] = b[d].max(q[d]);
+                }
+            }
+            for cy in index(a[1], 1)..=index(b[1], 1) {
+                for cx in index(a[0], 0)..=index(b[0], 0) {
+                    let (l, h) = &mut boxes[cy * s + cx];
+                    for d in 0..3 {
+                        l[d] = l[d].min(a[d]);
+                        h[d] = h[d].max(b[d]);
+                    }
+                }
+            }
+        }
+        boxes.retain(|(l, h)| l[0] <= h[0]);
+        boxes
+    }
+
     /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
     /// `coarse` is given.
     fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
@@ -430,6 +469,39 @@ mod tests {
             assert_eq!(on_seam(&tiles[0]).first(), Some(&0));
             assert_eq!(on_seam(&tiles[0]).last(), Some(&40));
         }
+    }
+
+    /// Every fine triangle lies in one of its tile's sub-boxes; on a sloping tile the 2 × 2
+    /// sub-boxes hold half the volume of the tile's box; cells without triangles (a hole) get
+    /// none; equal triangle lists are shared.
+    #[test]
+    fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
+        let (nx, ny) = (21, 21);
+        let mut z: Vec<f64> = (0..nx * ny).map(|k| 0.5 * (k % nx) as f64 + 0.1 * ((k / nx) as f64).sin()).collect();
+        for j in 0..10 {
+            for i in 0..10 {
+                z[j * nx + i] = f64::NAN;
+            }
+        }
+        let g =
+            GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
+        let mut tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default());
+        let t = &tiles[0];
+        let boxes = t.sub_boxes(2);
+        assert_eq!(boxes.len(), 3, "the hole's cell has no triangles");
+        for tri in t.fine.chunks_exact(3) {
+            let p = [tri[0], tri[1], tri[2]].map(|k| t.positions[k as usize]);
+            let inside = |(l, h): &([f32; 3], [f32; 3])| p.iter().all(|q| (0..3).all(|d| l[d] <= q[d] && q[d] <= h[d]));
+            assert!(boxes.iter().any(inside), "{p:?}");
+        }
+        let vol = |l: [f32; 3], h: [f32; 3]| (0..3).map(|d| (h[d] - l[d]) as f64).product::<f64>();
+        let sum: f64 = boxes.iter().map(|&(l, h)| vol(l, h)).sum();
+        assert!(sum < 0.5 * vol(t.bbox_min, t.bbox_max), "{sum} {}", vol(t.bbox_min, t.bbox_max));
+        let mut twins = vec![tiles[0].clone(), tiles.remove(0)];
+        twins[1].fine = twins[0].fine.to_vec().into();
+        assert!(!std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
+        share_indices(&mut twins);
+        assert!(std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
     }
 
     #[test]
