@@ -417,7 +417,8 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         rss_bytes_per_triangle=((rss_geocull - rss_before) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
         rss_fixed_mb=rss_fixed - rss_before,
         # The same growth above a renderer's fixed cost (driver, JIT pipelines): the scenes' own.
-        rss_scene_bytes_per_triangle=((rss_geocull - rss_fixed) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
+        rss_scene_bytes_per_triangle=((rss_geocull - rss_fixed) * 2**20 / (2 * n_tri))
+        if rss_geocull and n_tri else None,
         peak_rss_mb=_rss_mb(),
         pyvista_setup_s_mean=(sum(pv_setup_s) / len(pv_setup_s)) if pv_setup_s else None,
         adapter=renderer.adapter_info,
