@@ -15,6 +15,7 @@
 
 pub mod levels;
 pub mod normals;
+pub mod shading;
 pub mod simplify;
 
 use crate::error::Work;
@@ -83,13 +84,16 @@ impl TileMesh {
     }
 
     /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
-    /// `coarse` is given.
-    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
+    /// `coarse` is given; levels by simplification unless set, with their shading error measured
+    /// unless the tile is `fine_shaded` (a height field's: the lit pass shades it from its fine
+    /// surface at every level).
+    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>, fine_shaded: bool) -> Self {
         self.compute_bbox();
         (self.coarse, self.proxy_error) =
             coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         if self.levels.is_empty() && !self.fine.is_empty() {
-            self.levels = levels::simplified_levels(&self.positions, &self.fine);
+            let normals = (!fine_shaded).then_some(&self.normals[..]);
+            self.levels = levels::simplified_levels(&self.positions, &self.fine, normals);
         }
         self
     }
@@ -260,7 +264,7 @@ pub fn tile_heightfield(
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
             }
-            tile.finish(coarse_factor, lattice)
+            tile.finish(coarse_factor, lattice, true)
         })
         .inspect(|_| stop.item_done())
         .collect()
@@ -331,7 +335,7 @@ pub fn tile_mesh(
                     tile.fine.push(slot);
                 }
             }
-            tile.finish(coarse_factor, None)
+            tile.finish(coarse_factor, None, false)
         })
         .inspect(|_| stop.item_done())
         .collect()

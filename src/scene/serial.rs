@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 5 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 6 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -22,7 +22,9 @@
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
 //!             normals [u32] (version 5: packed smooth normals, empty or one per position),
 //!             fine [u32], coarse [u32], proxy_error f32,
-//!             levels: n u32, then per level error f32, indices [u32]
+//!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
+//!             measured again on reading: `lod::shading`, 0 for height fields and grids),
+//!             indices [u32]
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
@@ -36,7 +38,7 @@ use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 5;
+const VERSION: u32 = 6;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -267,6 +269,7 @@ impl Scene {
                 w.u32(t.levels.len() as u32);
                 for l in &t.levels {
                     w.f32(l.error);
+                    w.f32(l.shading_error);
                     w.u32s(&l.indices);
                 }
             }
@@ -425,12 +428,26 @@ impl Scene {
                 let mut levels = Vec::with_capacity(nl.min(64));
                 for _ in 0..nl {
                     let error = r.f32()?;
-                    levels.push(crate::lod::levels::Level { error, indices: r.u32s()? });
+                    let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
+                    levels.push(crate::lod::levels::Level { error, shading_error, indices: r.u32s()? });
                 }
                 for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
                     if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
                         return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
                     }
+                }
+                // Before version 6 the shading error was not stored: measured again (meshes) or
+                // 0 (height fields, grids), as `lod` sets it when building.
+                for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
+                    l.shading_error = match kind {
+                        ObjectKind::Mesh { .. } => {
+                            crate::lod::shading::shading_error(&positions, &normals, &fine, &l.indices)
+                        }
+                        _ => 0.0,
+                    };
+                }
+                if levels.iter().any(|l| l.shading_error < 0.0) {
+                    return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
                 }
                 tiles.push(TileMesh {
                     ix,
@@ -561,6 +578,50 @@ mod tests {
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);
+    }
+
+    #[test]
+    fn version_5_meshes_measure_their_shading_error_again() {
+        // A curved sheet, one tile: its levels have a shading error.
+        let n = 24;
+        let v: Vec<[f64; 3]> = (0..n * n)
+            .map(|k| {
+                let (x, y) = ((k % n) as f64 * 10.0, (k / n) as f64 * 10.0);
+                [x, y, 30.0 * (x / 60.0).sin()]
+            })
+            .collect();
+        let mut f = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let k = (j * n + i) as i64;
+                f.push([k, k + 1, k + n as i64 + 1]);
+                f.push([k, k + n as i64 + 1, k + n as i64]);
+            }
+        }
+        let mut s = Scene::new();
+        s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
+        let t = &s.objects()[0].tiles[0];
+        assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
+        let v6 = s.to_bytes();
+        // Version 5: the same bytes without each level's shading error (the f32 after its error).
+        let mut head = t.proxy_error.to_le_bytes().to_vec();
+        head.extend((t.levels.len() as u32).to_le_bytes());
+        head.extend(t.levels[0].error.to_le_bytes());
+        head.extend(t.levels[0].shading_error.to_le_bytes());
+        let start = v6.windows(head.len()).position(|w| w == head).unwrap() + 8;
+        let mut v5 = v6[..start].to_vec();
+        let mut at = start;
+        for l in &t.levels {
+            v5.extend(&v6[at..at + 4]); // error
+            at += 8; // and the shading error, dropped
+            let len = 8 + 4 * l.indices.len();
+            v5.extend(&v6[at..at + len]);
+            at += len;
+        }
+        v5.extend(&v6[at..]);
+        v5[8..12].copy_from_slice(&5u32.to_le_bytes());
+        let back = Scene::from_bytes(&v5).unwrap();
+        assert_eq!(back.to_bytes(), v6);
     }
 
     #[test]
