@@ -26,8 +26,8 @@ pub struct SceneGeometry {
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
     pub coarse: Vec<DrawArgs>,
     /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
-    /// vertex copy) and their errors in world units.
-    pub levels: Vec<Vec<(DrawArgs, f32)>>,
+    /// vertex copy) and their errors.
+    pub levels: Vec<Vec<LevelDraw>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
     /// The fine surfaces of the height fields as the lit pass samples them
@@ -39,6 +39,16 @@ pub struct SceneGeometry {
     /// lit pass shades with their facets' normals.
     pub shading_base: Vec<Option<u32>>,
     pub bytes: u64,
+}
+
+/// The draw of one LOD level of a tile and its errors (`lod::levels::Level`).
+#[derive(Clone, Copy, Debug)]
+pub struct LevelDraw {
+    pub args: DrawArgs,
+    /// Geometric error, world units (not exaggerated).
+    pub error: f32,
+    /// Shading error, a normal chord (unitless; `lod::shading`).
+    pub shading_error: f32,
 }
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
@@ -215,7 +225,16 @@ impl SceneGeometry {
                         args
                     };
                     coarse.push(compact(&t.coarse, &mut v, &mut i));
-                    levels.push(t.levels.iter().map(|l| (compact(&l.indices, &mut v, &mut i), l.error)).collect());
+                    levels.push(
+                        t.levels
+                            .iter()
+                            .map(|l| LevelDraw {
+                                args: compact(&l.indices, &mut v, &mut i),
+                                error: l.error,
+                                shading_error: l.shading_error,
+                            })
+                            .collect(),
+                    );
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
                 }

@@ -79,6 +79,16 @@ impl Object {
         (self.origin - origin) + self.offset
     }
 
+    /// The brightest channel (0..=1) of any colour the lit pass may give this object: its flat
+    /// colour, or every row of its colour map and its no-data colour.
+    pub fn max_color_channel(&self) -> f32 {
+        let max3 = |c: &[f32; 3]| c[0].max(c[1]).max(c[2]);
+        match &self.color_by {
+            None => max3(&self.color),
+            Some(c) => c.lut.iter().chain(std::iter::once(&c.nan_color)).map(max3).fold(0.0, f32::max),
+        }
+    }
+
     /// The scalars colour by `source` reads, in world units for z (every vertex of every tile).
     pub fn scalars<'a>(&'a self, source: &ColorSource) -> Box<dyn Iterator<Item = f64> + 'a> {
         tile_scalars(&self.tiles, self.origin.z, source)
