@@ -182,6 +182,20 @@ impl TriangleGrid {
     /// triangles.
     fn closest(&self, p: &[DVec3], tris: &[[usize; 3]], q: DVec3) -> Option<(usize, [f64; 3])> {
         let c = self.cell(q);
+        // How far q lies inside its cell (0 when outside the grid): cells beyond shell r are at
+        // least r cell widths plus this away.
+        let rel = (q - self.lo) / self.h;
+        let margin = (0..3)
+            .map(|a| {
+                let f = rel[a] - c[a] as f64;
+                if (0.0..=1.0).contains(&f) {
+                    f.min(1.0 - f)
+                } else {
+                    0.0
+                }
+            })
+            .fold(f64::INFINITY, f64::min)
+            * self.h;
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         let reach = *self.dims.iter().max().unwrap();
         for r in 0..=reach {
@@ -206,9 +220,9 @@ impl TriangleGrid {
                     }
                 }
             }
-            // Triangles in cells beyond this shell lie at least r cell widths from q's cell.
+            // Triangles in cells beyond this shell lie at least r cell widths plus the margin away.
             if let Some((d2, _, _)) = best {
-                if d2 <= (r as f64 * self.h).powi(2) {
+                if d2 <= (r as f64 * self.h + margin).powi(2) {
                     break;
                 }
             }
@@ -330,6 +344,29 @@ mod tests {
         assert!((d2 - 4.0).abs() < 1e-12 && (bc[1] - 0.25).abs() < 1e-12 && (bc[2] - 0.25).abs() < 1e-12);
         let (d2, bc) = closest_on_triangle(DVec3::new(2.0, -1.0, 0.0), a, b, c);
         assert!((d2 - 2.0).abs() < 1e-12 && bc == [0.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn grid_queries_find_the_closest_triangle() {
+        let (pos, _, coarse) = sheet(21, |x, y| 2.0 * (x / 3.0).sin() * (y / 4.0).cos());
+        let p: Vec<DVec3> = pos.iter().map(|v| DVec3::from_array(v.map(f64::from))).collect();
+        let tris: Vec<[usize; 3]> =
+            coarse.chunks_exact(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+        let grid = TriangleGrid::new(&p, &tris);
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..500 {
+            let q = DVec3::new(rnd() * 26.0 - 3.0, rnd() * 26.0 - 3.0, rnd() * 8.0 - 4.0);
+            let (k, b) = grid.closest(&p, &tris, q).unwrap();
+            let t = tris[k];
+            let got = (q - (b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]])).length_squared();
+            let want =
+                tris.iter().map(|t| closest_on_triangle(q, p[t[0]], p[t[1]], p[t[2]]).0).fold(f64::INFINITY, f64::min);
+            assert!((got - want).abs() <= 1e-9 * (1.0 + want), "{q}: {got} vs {want}");
+        }
     }
 
     #[test]
