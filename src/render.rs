@@ -619,6 +619,10 @@ fn frame_state(
                 normal_map[0] = base + 1;
             }
             normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));
+            if let (Some((nu, nv)), Some(base)) = (geom.grid_dims[oi], geom.shading_base[oi]) {
+                grid_rows = [0.0, 0.0, nu as f32, nv as f32];
+                normal_map = [base + 1, 2, 0, 0];
+            }
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
                 color: [o.color[0], o.color[1], o.color[2], o.opacity],

@@ -38,6 +38,10 @@ pub struct SceneGeometry {
     /// without (meshes, grids; height fields past the device's storage-binding limit), which the
     /// lit pass shades with their facets' normals.
     pub shading_base: Vec<Option<u32>>,
+    /// Per object, (columns, rows) of a structured grid mesh whose fine normals are in `shading`
+    /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
+    /// vertices carry their grid coordinates in place of their normals; None for other objects.
+    pub grid_dims: Vec<Option<(u32, u32)>>,
     pub bytes: u64,
 }
 
@@ -56,19 +60,32 @@ pub struct LevelDraw {
 /// interpolation with it keeps below that (a triangle touching no data is no data).
 pub const NO_DATA: f32 = -f32::MAX;
 
-/// The normal map of the lit pass: every height field's shading samples, as long as they fit one
-/// storage binding (later height fields fall back to facet normals and vertex heights).
-fn upload_shading(ctx: &GpuContext, scene: &Scene) -> (wgpu::Buffer, Vec<Option<u32>>) {
+/// The normal map of the lit pass: every height field's shading samples and every structured
+/// grid mesh's fine normals, as long as they fit one storage binding (later height fields fall
+/// back to facet normals and vertex heights, later grid meshes to their vertex normals).
+#[allow(clippy::type_complexity)]
+fn upload_shading(ctx: &GpuContext, scene: &Scene) -> (wgpu::Buffer, Vec<Option<u32>>, Vec<Option<(u32, u32)>>) {
     let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
     let pack = |[gx, gy, z]: [f32; 3]| {
         let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
         [h(gx) | (h(gy) << 16), z.to_bits()]
     };
     let mut words: Vec<u32> = Vec::new();
+    let mut dims = vec![None; scene.objects().len()];
     let base = scene
         .objects()
         .iter()
-        .map(|o| {
+        .enumerate()
+        .map(|(oi, o)| {
+            if let Some((nu, nv, normals)) = o.grid_normals() {
+                if (words.len() + 2 * normals.len()) as u64 > max_words {
+                    return None;
+                }
+                let first = (words.len() / 2) as u32;
+                words.extend(normals.into_iter().flat_map(|n| [n, 0]));
+                dims[oi] = Some((nu as u32, nv as u32));
+                return Some(first);
+            }
             let g = o.shading_samples()?;
             if (words.len() + 2 * g.len()) as u64 > max_words {
                 return None;
@@ -86,7 +103,7 @@ fn upload_shading(ctx: &GpuContext, scene: &Scene) -> (wgpu::Buffer, Vec<Option<
         contents: bytemuck::cast_slice(&words),
         usage: wgpu::BufferUsages::STORAGE,
     });
-    (buf, base)
+    (buf, base, dims)
 }
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
@@ -147,6 +164,7 @@ impl SceneGeometry {
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut levels = Vec::new();
+        let (shading, shading_base, grid_dims) = upload_shading(ctx, scene);
         let tile_bbox = |t: &crate::lod::TileMesh| {
             (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
         };
@@ -178,6 +196,8 @@ impl SceneGeometry {
             let mut cnormals: Vec<u32> = Vec::new();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
+                    // A grid-shaded mesh's vertices carry their grid coordinates for its normals.
+                    let nrm: &[u32] = if grid_dims[oi].is_some() { &t.grid_uv } else { &t.normals };
                     let tile = fine.len() as u32;
                     fine.push(DrawArgs {
                         index_count: t.fine.len() as u32,
@@ -186,7 +206,7 @@ impl SceneGeometry {
                         base_vertex: v as i32,
                         first_instance: tile,
                     });
-                    put_v(&mut v, &t.positions, &t.values, &t.normals);
+                    put_v(&mut v, &t.positions, &t.values, nrm);
                     put_i(&mut i, &t.fine);
                     // The coarse proxy and each LOD level get their own compact copy of the
                     // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -207,8 +227,8 @@ impl SceneGeometry {
                                 if !t.values.is_empty() {
                                     cvals.push(t.values[k as usize]);
                                 }
-                                if !t.normals.is_empty() {
-                                    cnormals.push(t.normals[k as usize]);
+                                if !nrm.is_empty() {
+                                    cnormals.push(nrm[k as usize]);
                                 }
                             }
                             cidx.push(*slot);
@@ -256,7 +276,6 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
-        let (shading, shading_base) = upload_shading(ctx, scene);
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -279,6 +298,7 @@ impl SceneGeometry {
             bbox,
             shading,
             shading_base,
+            grid_dims,
             bytes,
         })
     }

@@ -27,6 +27,7 @@
 //! then dominates), or after [`MAX_LEVELS`] levels.
 
 use super::{shading, simplify};
+pub use shading::Shading;
 
 /// The most levels beyond level 0.
 pub const MAX_LEVELS: usize = 5;
@@ -179,10 +180,10 @@ fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64)
 }
 
 /// Levels of any tile by quadric simplification: each level a quarter of the previous one's
-/// triangles, border and hole outlines locked (see the module docs for the errors). `normals`:
-/// the tile's packed smooth normals (empty for facet shading) to measure the shading error
-/// against, None for a tile shaded from its fine surface (shading error 0).
-pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], normals: Option<&[u32]>) -> Vec<Level> {
+/// triangles, border and hole outlines locked (see the module docs for the errors). `shading`:
+/// how the tile is shaded, to measure the shading error; None for a height-field tile shaded
+/// from its fine surface (shading error 0).
+pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], shading: Option<shading::Shading<'_>>) -> Vec<Level> {
     let mut levels: Vec<Level> = Vec::new();
     let mut prev: Vec<u32> = fine.to_vec();
     let mut error = 0.0f32;
@@ -192,7 +193,7 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], normals: Option<&
             break;
         }
         error += step;
-        let shading_error = normals.map_or(0.0, |n| shading::shading_error(positions, n, fine, &idx));
+        let shading_error = shading.map_or(0.0, |sh| shading::shading_error(positions, sh, fine, &idx));
         levels.push(Level { indices: idx.clone(), error, shading_error });
         prev = idx;
     }
@@ -201,6 +202,7 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], normals: Option<&
 
 #[cfg(test)]
 mod tests {
+    use super::shading::Shading;
     use super::*;
     use std::collections::HashMap;
 
@@ -301,7 +303,7 @@ mod tests {
     #[test]
     fn simplified_levels_of_a_curved_sheet_have_a_shading_error_and_a_flat_ones_none() {
         let (pos, fine, normals) = mesh_sheet(|x, y| 3.0 * (x / 6.0).sin() + 0.05 * y * y);
-        let levels = simplified_levels(&pos, &fine, Some(&normals));
+        let levels = simplified_levels(&pos, &fine, Some(Shading { normals: &normals, grid_uv: &[] }));
         assert!(levels.len() >= 2, "{}", levels.len());
         assert!(
             levels.iter().all(|l| l.shading_error > 1e-3),
@@ -311,10 +313,10 @@ mod tests {
         // Coarser levels turn the normals further.
         assert!(levels.last().unwrap().shading_error > levels[0].shading_error);
         // Facet shading (no normals) is measured too; a tile shaded from its fine surface is not.
-        assert!(simplified_levels(&pos, &fine, Some(&[])).iter().all(|l| l.shading_error > 1e-3));
+        assert!(simplified_levels(&pos, &fine, Some(Shading::default())).iter().all(|l| l.shading_error > 1e-3));
         assert!(simplified_levels(&pos, &fine, None).iter().all(|l| l.shading_error == 0.0));
         let (pos, fine, normals) = mesh_sheet(|x, y| 0.4 * x - 0.3 * y + 7.0);
-        let levels = simplified_levels(&pos, &fine, Some(&normals));
+        let levels = simplified_levels(&pos, &fine, Some(Shading { normals: &normals, grid_uv: &[] }));
         assert!(!levels.is_empty());
         assert!(
             levels.iter().all(|l| l.shading_error < 1e-4),

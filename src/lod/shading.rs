@@ -14,6 +14,12 @@
 //! samples both normals are interpolated linearly, so the maximum over the samples stands for the
 //! maximum over the surface up to the curvature of the normal field within a fine triangle.
 //!
+//! Structured grid meshes (`TileMesh::grid_uv`) shade every level from the fine grid's normals at
+//! the grid coordinates the level interpolates: there n_c is the fine normal at the interpolated
+//! (i, j) of the closest point (where that cell's corners are not all in the tile, the level's
+//! own interpolated normal stands for it), so such a level's error is only how far its surface
+//! slides along the grid, not how far its normals turn.
+//!
 //! Conversion to colour ([`shade_levels_per_chord`], done at render time, where the colour and
 //! the vertical exaggeration are known): `| |a·x| - |b·x| | <= |a - b|` for a unit x, so the shade
 //! moves by at most `(0.45 + 0.35) × chord`, and an 8-bit channel of a base colour c by at most
@@ -36,16 +42,58 @@ pub fn shade_levels_per_chord(max_channel: f64, z_scale: f64) -> f64 {
     255.0 * max_channel.clamp(0.0, 1.0) * SHADE_PER_CHORD * turn
 }
 
+/// How a tile is shaded: its packed smooth normals (one per position, `normals::NONE` = none;
+/// empty for facet shading) and packed grid coordinates (`TileMesh::grid_uv`; empty unless the
+/// tile shades from its grid).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Shading<'a> {
+    pub normals: &'a [u32],
+    pub grid_uv: &'a [u32],
+}
+
 /// The shading error (normal chord, unitless, see the module docs) of the triangle list `level`
-/// against the tile's fine triangles `fine`, both indexing `positions`; `normals` are the tile's
-/// packed smooth normals (one per position, `normals::NONE` = none) or empty for facet shading.
-/// 0 for an empty level or an empty fine level.
-pub fn shading_error(positions: &[[f32; 3]], normals: &[u32], fine: &[u32], level: &[u32]) -> f32 {
+/// against the tile's fine triangles `fine`, both indexing `positions`, for a tile shaded as
+/// `shading` says. 0 for an empty level or an empty fine level.
+pub fn shading_error(positions: &[[f32; 3]], shading: Shading<'_>, fine: &[u32], level: &[u32]) -> f32 {
     if fine.len() < 3 || level.len() < 3 {
         return 0.0;
     }
     let p: Vec<DVec3> = positions.iter().map(|v| DVec3::from_array(v.map(f64::from))).collect();
-    let n: Vec<DVec3> = normals.iter().map(|&k| normals::unpack(k).unwrap_or(DVec3::ZERO)).collect();
+    let n: Vec<DVec3> = shading.normals.iter().map(|&k| normals::unpack(k).unwrap_or(DVec3::ZERO)).collect();
+    // Grid coordinates -> vertex, for the grid lookup.
+    let uv = |k: usize| (shading.grid_uv[k] & 0xffff, shading.grid_uv[k] >> 16);
+    let by_uv: std::collections::HashMap<(u32, u32), usize> = if shading.grid_uv.len() == p.len() && n.len() == p.len()
+    {
+        (0..p.len()).map(|k| (uv(k), k)).collect()
+    } else {
+        Default::default()
+    };
+    // The fine grid's normal at grid coordinates (x, y), as the lit pass interpolates it (the
+    // cell's triangle (a, b, d) where x - i >= y - j, else (a, d, c)); None where a corner is
+    // not in the tile.
+    let grid_normal = |x: f64, y: f64| -> Option<DVec3> {
+        // On a cell edge either cell gives the same normal: try the other where one has a
+        // corner outside the tile (at the grid's last row or column, the lit pass clamps so).
+        let cells = |v: f64| {
+            let c = v.floor().max(0.0) as u32;
+            [Some(c), (v == c as f64 && c > 0).then(|| c - 1)]
+        };
+        for i in cells(x).into_iter().flatten() {
+            for j in cells(y).into_iter().flatten() {
+                let (fx, fy) = (x - i as f64, y - j as f64);
+                let at = |di: u32, dj: u32| by_uv.get(&(i + di, j + dj)).map(|&k| n[k]);
+                let v = if fx >= fy {
+                    at(0, 0).zip(at(1, 0)).zip(at(1, 1)).map(|((a, b), d)| (1.0 - fx) * a + (fx - fy) * b + fy * d)
+                } else {
+                    at(0, 0).zip(at(0, 1)).zip(at(1, 1)).map(|((a, c), d)| (1.0 - fy) * a + (fy - fx) * c + fx * d)
+                };
+                if let Some(v) = v {
+                    return v.try_normalize();
+                }
+            }
+        }
+        None
+    };
     let tris = |idx: &[u32]| -> Vec<[usize; 3]> {
         idx.chunks_exact(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect()
     };
@@ -85,7 +133,17 @@ pub fn shading_error(positions: &[[f32; 3]], normals: &[u32], fine: &[u32], leve
                 let Some(nf) = normal_at(t, b) else { continue };
                 let q = b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]];
                 let Some((kc, bc)) = grid.closest(&p, &level, q) else { continue };
-                let Some(nc) = normal_at(&level[kc], bc) else { continue };
+                let t = &level[kc];
+                let looked_up = (!by_uv.is_empty())
+                    .then(|| {
+                        let (x, y) = (0..3).fold((0.0, 0.0), |(x, y), c| {
+                            let (u, v) = uv(t[c]);
+                            (x + bc[c] * u as f64, y + bc[c] * v as f64)
+                        });
+                        grid_normal(x, y)
+                    })
+                    .flatten();
+                let Some(nc) = looked_up.or_else(|| normal_at(t, bc)) else { continue };
                 err = err.max((nf - nc).length().min((nf + nc).length()));
             }
             err
@@ -298,6 +356,10 @@ mod tests {
         (pos, quads(1), quads(2))
     }
 
+    fn sm(normals: &[u32]) -> Shading<'_> {
+        Shading { normals, grid_uv: &[] }
+    }
+
     fn smooth(pos: &[[f32; 3]], fine: &[u32]) -> Vec<u32> {
         let v: Vec<[f64; 3]> = pos.iter().map(|p| p.map(f64::from)).collect();
         let f: Vec<[u32; 3]> = fine.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
@@ -309,17 +371,22 @@ mod tests {
         // Tilted plane: every level's normals are the plane's, smooth or facet.
         let (pos, fine, coarse) = sheet(17, |x, y| 0.3 * x - 0.2 * y);
         let n = smooth(&pos, &fine);
-        assert!(shading_error(&pos, &n, &fine, &coarse) < 1e-4);
-        assert!(shading_error(&pos, &[], &fine, &coarse) < 1e-4);
+        assert!(shading_error(&pos, sm(&n), &fine, &coarse) < 1e-4);
+        assert!(shading_error(&pos, sm(&[]), &fine, &coarse) < 1e-4);
         // A cylinder-like bend: interpolating over twice the width turns the normals.
         let (pos, fine, coarse) = sheet(17, |x, _| 0.05 * x * x);
         let n = smooth(&pos, &fine);
-        let smooth_err = shading_error(&pos, &n, &fine, &coarse);
-        let facet_err = shading_error(&pos, &[], &fine, &coarse);
+        let smooth_err = shading_error(&pos, sm(&n), &fine, &coarse);
+        let facet_err = shading_error(&pos, sm(&[]), &fine, &coarse);
         assert!(smooth_err > 1e-3, "{smooth_err}");
         assert!(facet_err > smooth_err, "{facet_err} vs {smooth_err}");
         // The level itself has no error against itself.
-        assert!(shading_error(&pos, &n, &coarse, &coarse) < 1e-6);
+        assert!(shading_error(&pos, sm(&n), &coarse, &coarse) < 1e-6);
+        // Shaded from its grid, the level takes the fine normals: only a sliver of the error is
+        // left (where the level lies off the fine surface).
+        let uv: Vec<u32> = (0..pos.len()).map(|k| (k % 17) as u32 | (((k / 17) as u32) << 16)).collect();
+        let grid_err = shading_error(&pos, Shading { normals: &n, grid_uv: &uv }, &fine, &coarse);
+        assert!(grid_err < 0.2 * smooth_err, "{grid_err} vs {smooth_err}");
     }
 
     #[test]
@@ -331,7 +398,7 @@ mod tests {
         let (pos, fine, _) = sheet(n, |x, _| (x - 4.0).max(0.0));
         let k = |a: usize, b: usize| (b * n + a) as u32;
         let coarse = vec![k(0, 0), k(8, 0), k(8, 8), k(0, 0), k(8, 8), k(0, 8)];
-        let err = shading_error(&pos, &[], &fine, &coarse) as f64;
+        let err = shading_error(&pos, sm(&[]), &fine, &coarse) as f64;
         let a = 0.5f64.atan();
         let want = 2.0 * (a.max(std::f64::consts::FRAC_PI_4 - a) / 2.0).sin();
         assert!((err - want).abs() < 1e-5, "{err} vs {want}");

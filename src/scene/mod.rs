@@ -79,6 +79,30 @@ impl Object {
         (self.origin - origin) + self.offset
     }
 
+    /// A structured grid mesh's fine normals for the lit pass's grid lookup: (columns, rows, the
+    /// packed normal of every grid vertex, row-major), when every tile carries grid coordinates
+    /// (`lod::TileMesh::grid_uv`); None otherwise.
+    pub fn grid_normals(&self) -> Option<(usize, usize, Vec<u32>)> {
+        let tiles = || self.tiles.iter().filter(|t| !t.is_empty());
+        if tiles().next().is_none()
+            || tiles().any(|t| t.grid_uv.len() != t.positions.len() || t.normals.len() != t.positions.len())
+        {
+            return None;
+        }
+        let (mut nu, mut nv) = (0usize, 0usize);
+        for &k in tiles().flat_map(|t| &t.grid_uv) {
+            nu = nu.max((k & 0xffff) as usize + 1);
+            nv = nv.max((k >> 16) as usize + 1);
+        }
+        let mut grid = vec![crate::lod::normals::NONE; nu * nv];
+        for t in tiles() {
+            for (&k, &n) in t.grid_uv.iter().zip(&t.normals) {
+                grid[(k >> 16) as usize * nu + (k & 0xffff) as usize] = n;
+            }
+        }
+        Some((nu, nv, grid))
+    }
+
     /// The brightest channel (0..=1) of any colour the lit pass may give this object: its flat
     /// colour, or every row of its colour map and its no-data colour.
     pub fn max_color_channel(&self) -> f32 {
