@@ -15,7 +15,8 @@ pub struct SceneGeometry {
     pub vertices: Option<wgpu::Buffer>,
     /// Per vertex, in `vertices`' order, the lit pass's second vertex stream: an f32 scalar (the
     /// tiles' `values` for colour by data; 0 for tiles without; no data as [`NO_DATA`]) and the
-    /// packed smooth normal (`TileMesh::normals`; `lod::normals::NONE` for tiles without).
+    /// packed smooth normal (`TileMesh::normals`; `lod::normals::NONE` for tiles without), or for
+    /// a grid-shaded mesh (`grid_dims`) the packed grid coordinates (`TileMesh::grid_uv`).
     pub values: Option<wgpu::Buffer>,
     pub indices: Option<wgpu::Buffer>,
     /// Object index (position in `scene.objects()`) of every tile.
