@@ -32,9 +32,17 @@ pub enum Lod {
     /// Level 0 (the fine triangles) everywhere: the reference.
     Full,
     /// The coarsest level whose geometric error projects to at most `max_pixel_error` pixels at
-    /// the tile's nearest point (`crate::lod::levels`).
+    /// the tile's nearest point (`crate::lod::levels`) and whose shading error changes the lit
+    /// colour by at most [`MAX_SHADING_LEVELS`].
     ScreenError { max_pixel_error: f64 },
 }
+
+/// The most a level of detail may change a pixel's lit colour, in 8-bit levels per channel:
+/// a level is taken only if its shading error (`crate::lod::shading`, a normal chord) times the
+/// object's levels per chord (`lod::shading::shade_levels_per_chord`: its brightest colour, the
+/// vertical exaggeration) stays within it. Height fields shade from their fine surface at every
+/// level (shading error 0), so only meshes' levels are held back.
+pub const MAX_SHADING_LEVELS: f64 = 0.5;
 
 impl Lod {
     pub fn parse(name: &str, max_pixel_error: f64) -> Result<Self> {
@@ -389,7 +397,8 @@ impl Renderer {
                 continue;
             }
             let l = level[i] as usize;
-            let (args, err) = if l == 0 { (g.fine[i], 0.0) } else { g.levels[i][l - 1] };
+            let (args, err) =
+                if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].args, g.levels[i][l - 1].error) };
             tris[l] += args.index_count as u64 / 3;
             max_px = max_px.max(err_px[i] as f64);
             max_m = max_m.max(err as f64);
@@ -610,6 +619,10 @@ fn frame_state(
                 normal_map[0] = base + 1;
             }
             normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));
+            if let (Some((nu, nv)), Some(base)) = (geom.grid_dims[oi], geom.shading_base[oi]) {
+                grid_rows = [0.0, 0.0, nu as f32, nv as f32];
+                normal_map = [base + 1, 2, 0, 0];
+            }
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
                 color: [o.color[0], o.color[1], o.color[2], o.opacity],
@@ -674,6 +687,11 @@ fn choose_levels(
     let zs = camera.z_scale.max(1.0);
     let zv = DVec3::new(1.0, 1.0, camera.z_scale);
     let objects = scene.objects();
+    // Per object, 8-bit colour levels per unit of shading error.
+    let shade_levels: Vec<f64> = objects
+        .iter()
+        .map(|o| crate::lod::shading::shade_levels_per_chord(o.max_color_channel() as f64, camera.z_scale))
+        .collect();
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {
@@ -687,11 +705,12 @@ fn choose_levels(
             zs * px_per_unit
         };
         let px_of = |lerr: f32| if lerr == 0.0 { 0.0 } else { lerr as f64 * scale };
-        // The coarsest level within `max_px` pixels of error.
+        let per_chord = shade_levels[g.tile_object_cpu[i] as usize];
+        // The coarsest level within `max_px` pixels of error and MAX_SHADING_LEVELS of colour.
         let screen = |max_px: f64| {
             let mut l = 0usize;
-            for (k, &(_, lerr)) in g.levels[i].iter().enumerate() {
-                if px_of(lerr) > max_px {
+            for (k, lv) in g.levels[i].iter().enumerate() {
+                if px_of(lv.error) > max_px || lv.shading_error as f64 * per_chord > MAX_SHADING_LEVELS {
                     break;
                 }
                 l = k + 1;
@@ -710,7 +729,8 @@ fn choose_levels(
             (Some(_), GridLod::ScreenError { max_pixel_error }, _) => screen(max_pixel_error),
             (None, _, Lod::ScreenError { max_pixel_error }) => screen(max_pixel_error),
         };
-        let (a, e) = if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].0, px_of(g.levels[i][l - 1].1) as f32) };
+        let (a, e) =
+            if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].args, px_of(g.levels[i][l - 1].error) as f32) };
         args.push(a);
         level.push(l as u8);
         err_px.push(e);

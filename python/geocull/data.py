@@ -194,7 +194,9 @@ def grid_faces(nu: int, nv: int) -> np.ndarray:
     Returns (2 * (nu-1) * (nv-1), 3) int64: for the cell with corner a = (j, i), b = (j, i+1),
     c = (j+1, i), d = (j+1, i+1), the triangles (a, b, d) then (a, d, c) (split along the a-d
     diagonal, counter-clockwise when i runs along +x and j along +y), cells in row-major order.
-    The height-field triangulation of geocull and :func:`heightfield_mesh` is this one.
+    The height-field triangulation of geocull and :func:`heightfield_mesh` is this one. A smooth mesh
+    added with these faces (in any order or winding) over all ``nu * nv`` vertices shades every
+    level of detail from its fine grid's normals, as height fields do.
     """
     nu, nv = int(nu), int(nv)
     if nu < 2 or nv < 2:

@@ -173,8 +173,13 @@ class Renderer:
         lod: "full" (level 0, the fine triangles, everywhere: the reference) or "screen_error" (each
         drawn tile at the coarsest of its levels whose geometric error, ``tile_table()`` levels
         built with the scene, projects to at most ``max_pixel_error`` pixels at the tile's nearest
-        point; neighbouring tiles at different levels meet without cracks: every level keeps its
-        tile's border at full resolution). Works with every culling mode. Stats
+        point and whose shading error, ``tile_table()["level_shading_error"]``, changes the lit
+        colour by at most half an 8-bit level: a mesh's coarser levels interpolate its normals over
+        larger triangles, so a curved one keeps its finer levels, unless it is a structured grid
+        (:func:`geocull.data.grid_faces`), which shades every level from its fine grid's normals as
+        height fields do from their fine surface; neighbouring tiles at different
+        levels meet without cracks: every level keeps its tile's border at full resolution).
+        Works with every culling mode. Stats
         ``triangles_level0`` .. ``triangles_level5``, ``lod_max_error_px``, ``lod_max_error_m``.
         max_pixel_error: > 0, pixels (lod="screen_error" or grid_lod="screen_error").
         grid_lod: the level of reservoir grids' blocks (:meth:`Scene.add_grid`): "full" (level 0),

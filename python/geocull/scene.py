@@ -46,7 +46,8 @@ _COLOR_DOC = """
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
                         ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
-                        ("bbox_max", "f8", (3,)), ("level_triangles", "u4", (6,)), ("level_error", "f8", (6,))])
+                        ("bbox_max", "f8", (3,)), ("level_triangles", "u4", (6,)), ("level_error", "f8", (6,)),
+                        ("level_shading_error", "f8", (6,))])
 
 
 def _doc(values: str) -> str:
@@ -500,7 +501,11 @@ class Scene:
         meshoptimizer's estimate), bbox_min (3,), bbox_max (3,) (world coordinates, metres; NaN if
         empty), level_triangles (6,) and level_error (6,): the LOD levels 0..5 of the tile (level 0
         = fine, error 0; each further level about a quarter of the triangles; error in metres, NaN
-        past the tile's last level) that ``lod="screen_error"`` chooses from."""
+        past the tile's last level) that ``lod="screen_error"`` chooses from, and level_shading_error
+        (6,): how far the lit pass's normals on each level may turn from level 0's (the largest chord
+        between unit normals, unitless, 0 to sqrt(2); 0 for height fields, which shade from their
+        fine surface at every level, and grids; NaN past the last level): ``lod="screen_error"``
+        takes a level only if it changes the lit colour by at most half an 8-bit level."""
         c: Mapping[str, Any] = self._s.tile_table()
         t = np.zeros(len(c["object"]), dtype=_TILE_DTYPE)
         for k in _TILE_DTYPE.names or ():

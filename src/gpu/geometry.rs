@@ -16,7 +16,8 @@ pub struct SceneGeometry {
     pub vertices: Option<wgpu::Buffer>,
     /// Per vertex, in `vertices`' order, the lit pass's second vertex stream: an f32 scalar (the
     /// tiles' `values` for colour by data; 0 for tiles without; no data as [`NO_DATA`]) and the
-    /// packed smooth normal (`TileMesh::normals`; `lod::normals::NONE` for tiles without).
+    /// packed smooth normal (`TileMesh::normals`; `lod::normals::NONE` for tiles without), or for
+    /// a grid-shaded mesh (`grid_dims`) the packed grid coordinates (`TileMesh::grid_uv`).
     pub values: Option<wgpu::Buffer>,
     pub indices: Option<wgpu::Buffer>,
     /// Object index (position in `scene.objects()`) of every tile.
@@ -35,8 +36,8 @@ pub struct SceneGeometry {
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
     pub coarse: Vec<DrawArgs>,
     /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
-    /// vertex copy) and their errors in world units.
-    pub levels: Vec<Vec<(DrawArgs, f32)>>,
+    /// vertex copy) and their errors.
+    pub levels: Vec<Vec<LevelDraw>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
     /// Per tile, boxes whose union holds its fine triangles (`TileMesh::sub_boxes`, [`SUB_BOXES`]²
@@ -50,32 +51,65 @@ pub struct SceneGeometry {
     /// without (meshes, grids; height fields past the device's storage-binding limit), which the
     /// lit pass shades with their facets' normals.
     pub shading_base: Vec<Option<u32>>,
+    /// Per object, (columns, rows) of a structured grid mesh whose fine normals are in `shading`
+    /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
+    /// vertices carry their grid coordinates in place of their normals; None for other objects.
+    pub grid_dims: Vec<Option<(u32, u32)>>,
     pub bytes: u64,
 }
 
 /// Cells per side of a tile's sub-boxes (`SceneGeometry::sub_boxes`).
 pub const SUB_BOXES: usize = 2;
 
+/// The draw of one LOD level of a tile and its errors (`lod::levels::Level`).
+#[derive(Clone, Copy, Debug)]
+pub struct LevelDraw {
+    pub args: DrawArgs,
+    /// Geometric error, world units (not exaggerated).
+    pub error: f32,
+    /// Shading error, a normal chord (unitless; `lod::shading`).
+    pub shading_error: f32,
+}
+
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
 /// travels as the most negative f32, which the lit pass tests for (`s < -1e37`) and which any
 /// interpolation with it keeps below that (a triangle touching no data is no data).
 pub const NO_DATA: f32 = -f32::MAX;
 
-/// The normal map of the lit pass: every height field's shading samples, as long as they fit one
-/// storage binding (later height fields fall back to facet normals and vertex heights).
-fn upload_shading(ctx: &GpuContext, scene: &Scene) -> Result<(wgpu::Buffer, Vec<Option<u32>>)> {
+/// The normal map of the lit pass: every height field's shading samples and every structured
+/// grid mesh's fine normals, as long as they fit one storage binding (later height fields fall
+/// back to facet normals and vertex heights, later grid meshes to their vertex normals). Returns
+/// the buffer, each object's first sample, and each grid mesh's grid size.
+#[allow(clippy::type_complexity)]
+fn upload_shading(
+    ctx: &GpuContext,
+    scene: &Scene,
+) -> Result<(wgpu::Buffer, Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
     let max_samples = ctx.limits.max_storage_buffer_binding_size / 8;
     let mut total = 0u64;
+    let mut dims = vec![None; scene.objects().len()];
+    // The grid meshes' fine normals (small: faults), until they are written.
+    let mut grid_normals: Vec<Vec<u32>> = Vec::new();
     let base: Vec<Option<u32>> = scene
         .objects()
         .iter()
-        .map(|o| {
-            let ObjectKind::Heightfield { nx, ny, .. } = o.kind else { return None };
-            let n = (nx * ny) as u64;
-            (total + n <= max_samples).then(|| {
-                total += n;
-                (total - n) as u32
-            })
+        .enumerate()
+        .map(|(oi, o)| {
+            let (n, normals) = match o.kind {
+                ObjectKind::Heightfield { nx, ny, .. } => ((nx * ny) as u64, None),
+                _ => {
+                    let (nu, nv, normals) = o.grid_normals()?;
+                    dims[oi] = Some((nu as u32, nv as u32));
+                    ((nu * nv) as u64, Some(normals))
+                }
+            };
+            if total + n > max_samples {
+                dims[oi] = None;
+                return None;
+            }
+            total += n;
+            grid_normals.extend(normals);
+            Some((total - n) as u32)
         })
         .collect();
     // Written in place (no staging copy where the device maps storage buffers), sample by sample
@@ -102,20 +136,30 @@ fn upload_shading(ctx: &GpuContext, scene: &Scene) -> Result<(wgpu::Buffer, Vec<
             at += run.len();
             run.clear();
         };
-        for (o, b) in scene.objects().iter().zip(&base) {
-            if b.is_some() {
-                o.for_each_shading_sample(|[gx, gy, z]| {
-                    run.push([h(gx) | (h(gy) << 16), z.to_bits()]);
-                    if run.len() == run.capacity() {
-                        flush(&mut run);
-                    }
-                });
+        let mut grid_normals = grid_normals.into_iter();
+        for ((o, b), d) in scene.objects().iter().zip(&base).zip(&dims) {
+            if b.is_none() {
+                continue;
+            }
+            let mut push = |w: [u32; 2]| {
+                run.push(w);
+                if run.len() == run.capacity() {
+                    flush(&mut run);
+                }
+            };
+            if d.is_some() {
+                // A grid mesh: its packed fine normal, then 0.
+                for n in grid_normals.next().expect("one per grid mesh") {
+                    push([n, 0]);
+                }
+            } else {
+                o.for_each_shading_sample(|[gx, gy, z]| push([h(gx) | (h(gy) << 16), z.to_bits()]));
             }
         }
         flush(&mut run);
     }
     buf.unmap();
-    Ok((buf, base))
+    Ok((buf, base, dims))
 }
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
@@ -253,7 +297,7 @@ impl SceneGeometry {
     /// temporaries beyond the patterns.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
-        let (shading, shading_base) = upload_shading(ctx, scene)?;
+        let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
         let plan = Plan::new(scene, &shading_base);
         let (nv, ni) = (plan.nv, plan.ni);
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
@@ -318,6 +362,8 @@ impl SceneGeometry {
             let mut runs = plan.runs.iter();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
+                    // A grid-shaded mesh's vertices carry their grid coordinates for its normals.
+                    let nrm: &[u32] = if grid_dims[oi].is_some() { &t.grid_uv } else { &t.normals };
                     let tile = fine.len() as u32;
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
@@ -325,7 +371,17 @@ impl SceneGeometry {
                         let args = |p: usize| DrawArgs { first_instance: tile, ..pattern_args[p] };
                         fine.push(args(ids[0]));
                         coarse.push(args(ids[1]));
-                        levels.push(ids[2..].iter().zip(&t.levels).map(|(&p, l)| (args(p), l.error)).collect());
+                        levels.push(
+                            ids[2..]
+                                .iter()
+                                .zip(&t.levels)
+                                .map(|(&p, l)| LevelDraw {
+                                    args: args(p),
+                                    error: l.error,
+                                    shading_error: l.shading_error,
+                                })
+                                .collect(),
+                        );
                         continue;
                     }
                     fine.push(DrawArgs {
@@ -335,7 +391,7 @@ impl SceneGeometry {
                         base_vertex: v as i32,
                         first_instance: tile,
                     });
-                    put_v(&mut v, &t.positions, &t.values, &t.normals);
+                    put_v(&mut v, &t.positions, &t.values, nrm);
                     put_i(&mut i, &t.fine);
                     // The coarse proxy and each LOD level get their own compact copy of the
                     // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -348,7 +404,7 @@ impl SceneGeometry {
                         cvals.clear();
                         cvals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
                         cnormals.clear();
-                        cnormals.extend(used.iter().filter_map(|&k| t.normals.get(k as usize)));
+                        cnormals.extend(used.iter().filter_map(|&k| nrm.get(k as usize)));
                         let args = DrawArgs {
                             index_count: cidx.len() as u32,
                             instance_count: 1,
@@ -361,7 +417,16 @@ impl SceneGeometry {
                         args
                     };
                     coarse.push(compact(&t.coarse, &mut v, &mut i));
-                    levels.push(t.levels.iter().map(|l| (compact(&l.indices, &mut v, &mut i), l.error)).collect());
+                    levels.push(
+                        t.levels
+                            .iter()
+                            .map(|l| LevelDraw {
+                                args: compact(&l.indices, &mut v, &mut i),
+                                error: l.error,
+                                shading_error: l.shading_error,
+                            })
+                            .collect(),
+                    );
                 }
             }
             debug_assert_eq!((v as u64, i as u64), (nv, ni));
@@ -422,6 +487,7 @@ impl SceneGeometry {
             sub_boxes,
             shading,
             shading_base,
+            grid_dims,
             bytes,
         })
     }

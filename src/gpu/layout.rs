@@ -56,11 +56,13 @@ pub struct GpuObject {
     /// (x, y) of sample (0, 0), then the row of the inverse grid transform giving the column
     /// (`cos / dx, sin / dx`).
     pub grid: [f32; 4],
-    /// The row giving the grid row (`-sin / dy, cos / dy`), then `nx, ny`.
+    /// The row giving the grid row (`-sin / dy, cos / dy`), then `nx, ny` (a structured grid
+    /// mesh's: 0, 0, then its columns and rows).
     pub grid_rows: [f32; 4],
-    /// `x`: 1 + the first sample of the object's gradients in the normal map, 0 for none; `y`: 1
-    /// when the object's vertices carry smooth normals (`TileMesh::normals`); with neither, the
-    /// lit pass shades by facets. `zw` unused.
+    /// `x`: 1 + the first sample of the object's gradients (a structured grid mesh's: normals) in
+    /// the normal map, 0 for none; `y`: 1 when the object's vertices carry smooth normals
+    /// (`TileMesh::normals`), 2 when they carry grid coordinates (`TileMesh::grid_uv`) and its
+    /// normals are in the normal map; with neither, the lit pass shades by facets. `zw` unused.
     pub normal_map: [u32; 4],
 }
 

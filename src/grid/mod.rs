@@ -421,7 +421,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         }
         stats.push(st);
         kinds.push(kind_counts(&lev));
-        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32 });
+        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32, shading_error: 0.0 });
     }
     match tile.levels.last() {
         Some(l) => {

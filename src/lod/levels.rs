@@ -17,19 +17,31 @@
 //!   Error: the sum of meshoptimizer's estimates of each step (relative to the tile's extent, times
 //!   that extent), which bounds the distance to level 0 as far as those estimates are right.
 //!
+//! Every level also records its shading error ([`super::shading`]): how far the lit pass's normals
+//! on it may turn from the fine level's (a normal chord, unitless). Height-field levels record 0,
+//! as the lit pass shades every level of a height field from its fine surface; simplified levels
+//! measure it against the tile's smooth normals (or facet normals without them). The renderer
+//! takes a level only if both errors hold (`crate::render`).
+//!
 //! The chain stops when a level would not reach 0.6 × the triangles of the one before (the border
 //! then dominates), or after [`MAX_LEVELS`] levels.
 
-use super::simplify;
+use super::{shading, simplify};
+pub use shading::Shading;
 
 /// The most levels beyond level 0.
 pub const MAX_LEVELS: usize = 5;
 
-/// One level of a tile: a triangle list into the tile's vertices and its error (world units).
+/// One level of a tile: a triangle list into the tile's vertices and its errors.
 #[derive(Clone, Debug, Default)]
 pub struct Level {
     pub indices: super::Indices,
+    /// Geometric error, world units (not exaggerated).
     pub error: f32,
+    /// Shading error: the largest chord between the lit pass's unit normals on this level and on
+    /// level 0 ([`super::shading::shading_error`]; unitless, 0..=sqrt 2). 0 for height-field
+    /// levels (shaded from the fine surface) and reservoir-grid levels (not measured).
+    pub shading_error: f32,
 }
 
 /// Lattice positions 0, k, 2k, ..., n - 1 along a side of n samples, with every gap at least 2
@@ -71,7 +83,7 @@ pub fn lattice_levels(
         prev = tris.len();
         let error = lattice_error(&tris, &z) as f32;
         let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
-        levels.push(Level { indices, error });
+        levels.push(Level { indices, error, shading_error: 0.0 });
     }
     levels
 }
@@ -168,8 +180,10 @@ fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64)
 }
 
 /// Levels of any tile by quadric simplification: each level a quarter of the previous one's
-/// triangles, border and hole outlines locked (see the module docs for the error).
-pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32]) -> Vec<Level> {
+/// triangles, border and hole outlines locked (see the module docs for the errors). `shading`:
+/// how the tile is shaded, to measure the shading error; None for a height-field tile shaded
+/// from its fine surface (shading error 0).
+pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], shading: Option<shading::Shading<'_>>) -> Vec<Level> {
     let mut levels: Vec<Level> = Vec::new();
     let mut prev: Vec<u32> = fine.to_vec();
     let mut error = 0.0f32;
@@ -179,7 +193,8 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32]) -> Vec<Level> {
             break;
         }
         error += step;
-        levels.push(Level { indices: idx.as_slice().into(), error });
+        let shading_error = shading.map_or(0.0, |sh| shading::shading_error(positions, sh, fine, &idx));
+        levels.push(Level { indices: idx.as_slice().into(), error, shading_error });
         prev = idx;
     }
     levels
@@ -187,6 +202,7 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32]) -> Vec<Level> {
 
 #[cfg(test)]
 mod tests {
+    use super::shading::Shading;
     use super::*;
     use std::collections::HashMap;
 
@@ -263,6 +279,49 @@ mod tests {
             levels.iter().all(|l| (l.error - 4.0).abs() < 1e-5),
             "{:?}",
             levels.iter().map(|l| l.error).collect::<Vec<_>>()
+        );
+    }
+
+    /// A 33 × 33 vertex sheet z = f(x, y) as a mesh: positions, fine triangles, smooth normals.
+    fn mesh_sheet(f: impl Fn(f64, f64) -> f64) -> (Vec<[f32; 3]>, Vec<u32>, Vec<u32>) {
+        let n = 33;
+        let v: Vec<[f64; 3]> =
+            (0..n * n).map(|k| [(k % n) as f64, (k / n) as f64, f((k % n) as f64, (k / n) as f64)]).collect();
+        let mut faces = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let k = (j * n + i) as u32;
+                faces.push([k, k + 1, k + n as u32 + 1]);
+                faces.push([k, k + n as u32 + 1, k + n as u32]);
+            }
+        }
+        let normals = super::super::normals::smooth_normals(&v, &faces).expect("smooth");
+        let pos = v.iter().map(|p| p.map(|c| c as f32)).collect();
+        (pos, faces.into_iter().flatten().collect(), normals)
+    }
+
+    #[test]
+    fn simplified_levels_of_a_curved_sheet_have_a_shading_error_and_a_flat_ones_none() {
+        let (pos, fine, normals) = mesh_sheet(|x, y| 3.0 * (x / 6.0).sin() + 0.05 * y * y);
+        let levels = simplified_levels(&pos, &fine, Some(Shading { normals: &normals, grid_uv: &[] }));
+        assert!(levels.len() >= 2, "{}", levels.len());
+        assert!(
+            levels.iter().all(|l| l.shading_error > 1e-3),
+            "{:?}",
+            levels.iter().map(|l| l.shading_error).collect::<Vec<_>>()
+        );
+        // Coarser levels turn the normals further.
+        assert!(levels.last().unwrap().shading_error > levels[0].shading_error);
+        // Facet shading (no normals) is measured too; a tile shaded from its fine surface is not.
+        assert!(simplified_levels(&pos, &fine, Some(Shading::default())).iter().all(|l| l.shading_error > 1e-3));
+        assert!(simplified_levels(&pos, &fine, None).iter().all(|l| l.shading_error == 0.0));
+        let (pos, fine, normals) = mesh_sheet(|x, y| 0.4 * x - 0.3 * y + 7.0);
+        let levels = simplified_levels(&pos, &fine, Some(Shading { normals: &normals, grid_uv: &[] }));
+        assert!(!levels.is_empty());
+        assert!(
+            levels.iter().all(|l| l.shading_error < 1e-4),
+            "{:?}",
+            levels.iter().map(|l| l.shading_error).collect::<Vec<_>>()
         );
     }
 

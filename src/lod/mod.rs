@@ -15,6 +15,7 @@
 
 pub mod levels;
 pub mod normals;
+pub mod shading;
 pub mod simplify;
 
 use crate::error::Work;
@@ -66,6 +67,12 @@ pub struct TileMesh {
     /// empty when the object shades by its facets (height fields take theirs from the fine
     /// surface instead, grids are flat), else one per entry of `positions`.
     pub normals: Vec<u32>,
+    /// Per-vertex grid coordinates of a mesh that is a structured grid with smooth normals
+    /// ([`structured_grid`]): `i | j << 16` for column i and row j (packed as two u16). The lit
+    /// pass then shades every level from the fine grid's normals at the interpolated (i, j), as
+    /// height fields do from their fine surface. Empty otherwise, else one per entry of
+    /// `positions`.
+    pub grid_uv: Vec<u32>,
     /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
     /// [`share_indices`]).
     pub fine: Indices,
@@ -152,13 +159,16 @@ impl TileMesh {
     }
 
     /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
-    /// `coarse` is given.
-    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>) -> Self {
+    /// `coarse` is given; levels by simplification unless set, with their shading error measured
+    /// unless the tile is `fine_shaded` (a height field's: the lit pass shades it from its fine
+    /// surface at every level).
+    fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>, fine_shaded: bool) -> Self {
         self.compute_bbox();
         let (c, e) = coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         (self.coarse, self.proxy_error) = (c.into(), e);
         if self.levels.is_empty() && !self.fine.is_empty() {
-            self.levels = levels::simplified_levels(&self.positions, &self.fine);
+            let shading = (!fine_shaded).then_some(levels::Shading { normals: &self.normals, grid_uv: &self.grid_uv });
+            self.levels = levels::simplified_levels(&self.positions, &self.fine, shading);
         }
         self
     }
@@ -331,7 +341,7 @@ pub fn tile_heightfield(
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
             }
-            tile.finish(coarse_factor, lattice)
+            tile.finish(coarse_factor, lattice, true)
         })
         .inspect(|_| stop.item_done())
         .collect()
@@ -344,6 +354,50 @@ pub struct VertexAttributes<'a> {
     pub values: Option<&'a [f64]>,
     /// Packed smooth normals ([`normals::smooth_normals`]).
     pub normals: Option<&'a [u32]>,
+    /// Packed grid coordinates (`TileMesh::grid_uv`).
+    pub grid_uv: Option<&'a [u32]>,
+}
+
+/// The largest side (columns or rows) of a structured grid mesh that shades from its grid.
+pub const MAX_GRID_SIDE: usize = 1 << 16;
+
+/// The columns `nu` and rows `nv` of a mesh that is a structured grid of vertices numbered
+/// row-major (vertex `j nu + i`), triangulated as `geocull.data.grid_faces` and height fields
+/// are: every cell, with a = (j, i), b = (j, i + 1), c = (j + 1, i), d = (j + 1, i + 1), split into
+/// the triangles (a, b, d) and (a, d, c), each once, in any order and either winding. None for any
+/// other mesh, or a grid with a side over [`MAX_GRID_SIDE`].
+pub fn structured_grid(n_vertices: usize, faces: &[[u32; 3]]) -> Option<(usize, usize)> {
+    let sorted = |f: &[u32; 3]| {
+        let mut s = f.map(|k| k as usize);
+        s.sort_unstable();
+        s
+    };
+    let s = sorted(faces.first()?);
+    let nu = if s[1] == s[0] + 1 { (s[2] - s[0]).checked_sub(1)? } else { s[1] - s[0] };
+    if nu < 2 || !n_vertices.is_multiple_of(nu) {
+        return None;
+    }
+    let nv = n_vertices / nu;
+    if nv < 2 || nu > MAX_GRID_SIDE || nv > MAX_GRID_SIDE || faces.len() != 2 * (nu - 1) * (nv - 1) {
+        return None;
+    }
+    // Per cell and half (0: (a, b, d), 1: (a, d, c)), whether a face is it.
+    let mut seen = vec![false; 2 * (nu - 1) * (nv - 1)];
+    for f in faces {
+        let [a, x, y] = sorted(f);
+        let (i, j) = (a % nu, a / nu);
+        let half = if (x, y) == (a + 1, a + nu + 1) {
+            0
+        } else if (x, y) == (a + nu, a + nu + 1) {
+            1
+        } else {
+            return None;
+        };
+        if i + 1 >= nu || j + 1 >= nv || std::mem::replace(&mut seen[2 * (j * (nu - 1) + i) + half], true) {
+            return None;
+        }
+    }
+    Some((nu, nv))
 }
 
 /// Cuts a triangle mesh into about `clusters` spatially coherent tiles (1 = one tile).
@@ -399,12 +453,15 @@ pub fn tile_mesh(
                         if let Some(ns) = attrs.normals {
                             tile.normals.push(ns[v as usize]);
                         }
+                        if let Some(uv) = attrs.grid_uv {
+                            tile.grid_uv.push(uv[v as usize]);
+                        }
                     }
                     fine.push(slot);
                 }
             }
             tile.fine = fine.into();
-            tile.finish(coarse_factor, None)
+            tile.finish(coarse_factor, None, false)
         })
         .inspect(|_| stop.item_done())
         .collect()
@@ -413,6 +470,35 @@ pub fn tile_mesh(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn structured_grids_are_recognised_in_any_face_order_and_winding() {
+        let (nu, nv) = (5usize, 4usize);
+        let mut faces = Vec::new();
+        for j in 0..nv - 1 {
+            for i in 0..nu - 1 {
+                let a = (j * nu + i) as u32;
+                let (b, c, d) = (a + 1, a + nu as u32, a + nu as u32 + 1);
+                faces.push([a, b, d]);
+                faces.push([a, d, c]);
+            }
+        }
+        assert_eq!(structured_grid(nu * nv, &faces), Some((nu, nv)));
+        let mut shuffled: Vec<[u32; 3]> =
+            faces.iter().step_by(2).chain(faces.iter().skip(1).step_by(2)).copied().collect();
+        shuffled.reverse();
+        shuffled[3] = [shuffled[3][2], shuffled[3][1], shuffled[3][0]];
+        assert_eq!(structured_grid(nu * nv, &shuffled), Some((nu, nv)));
+        // Another diagonal, a missing or repeated face, a wrong vertex count: not this grid.
+        let mut other = faces.clone();
+        other[0] = [0, 1, nu as u32];
+        assert_eq!(structured_grid(nu * nv, &other), None);
+        assert_eq!(structured_grid(nu * nv, &faces[1..]), None);
+        let mut twice = faces.clone();
+        twice[2] = twice[0];
+        assert_eq!(structured_grid(nu * nv, &twice), None);
+        assert_eq!(structured_grid(nu * nv + 1, &faces), None);
+    }
 
     #[test]
     fn bounds_share_ends_and_cover() {

@@ -7,7 +7,9 @@
 //! wound inconsistently, whose normals would cancel). Vertices used only by zero-area faces get
 //! [`NONE`]. Every level of detail of a tile indexes the fine level's vertices, so a coarser level
 //! interpolates the fine surface's normals and shades close to it, where facet normals of larger
-//! triangles shade visibly differently.
+//! triangles shade visibly differently; how close is each level's shading error
+//! ([`super::shading`]), which the renderer bounds. A structured grid mesh shades every level from
+//! these normals at its grid coordinates instead (`TileMesh::grid_uv`).
 //!
 //! Packing: octahedral, two snorm16 (`pack2x16snorm`: x in the low half), decoded by draw.wgsl;
 //! [`NONE`] (0) means "no normal" (the lit pass then uses the facet's), so the one unit vector that

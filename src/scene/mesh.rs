@@ -63,7 +63,12 @@ impl Scene {
         let values = color_by.as_ref().and_then(|c| c.values.as_deref());
         // Smooth shading where the surface is smooth (faults, isosurfaces), facets elsewhere.
         let normals = lod::normals::smooth_normals(vertices, &f32faces);
-        let attrs = lod::VertexAttributes { values, normals: normals.as_deref() };
+        // A smooth structured grid (a fault sampled on a grid) shades every level from its grid.
+        let grid_uv: Option<Vec<u32>> = normals
+            .as_ref()
+            .and_then(|_| lod::structured_grid(n, &f32faces))
+            .map(|(nu, _)| (0..n).map(|k| (k % nu) as u32 | (((k / nu) as u32) << 16)).collect());
+        let attrs = lod::VertexAttributes { values, normals: normals.as_deref(), grid_uv: grid_uv.as_deref() };
         let tiles = opts.interrupt.run_parallel(|stop| lod::tile_mesh(vertices, attrs, &f32faces, o, k, cf, stop))?;
         // The range of what is drawn: the vertices the faces use.
         let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&tiles, o.z, &c.source))).transpose()?;

@@ -79,6 +79,40 @@ impl Object {
         (self.origin - origin) + self.offset
     }
 
+    /// A structured grid mesh's fine normals for the lit pass's grid lookup: (columns, rows, the
+    /// packed normal of every grid vertex, row-major), when every tile carries grid coordinates
+    /// (`lod::TileMesh::grid_uv`); None otherwise.
+    pub fn grid_normals(&self) -> Option<(usize, usize, Vec<u32>)> {
+        let tiles = || self.tiles.iter().filter(|t| !t.is_empty());
+        if tiles().next().is_none()
+            || tiles().any(|t| t.grid_uv.len() != t.positions.len() || t.normals.len() != t.positions.len())
+        {
+            return None;
+        }
+        let (mut nu, mut nv) = (0usize, 0usize);
+        for &k in tiles().flat_map(|t| &t.grid_uv) {
+            nu = nu.max((k & 0xffff) as usize + 1);
+            nv = nv.max((k >> 16) as usize + 1);
+        }
+        let mut grid = vec![crate::lod::normals::NONE; nu * nv];
+        for t in tiles() {
+            for (&k, &n) in t.grid_uv.iter().zip(&t.normals) {
+                grid[(k >> 16) as usize * nu + (k & 0xffff) as usize] = n;
+            }
+        }
+        Some((nu, nv, grid))
+    }
+
+    /// The brightest channel (0..=1) of any colour the lit pass may give this object: its flat
+    /// colour, or every row of its colour map and its no-data colour.
+    pub fn max_color_channel(&self) -> f32 {
+        let max3 = |c: &[f32; 3]| c[0].max(c[1]).max(c[2]);
+        match &self.color_by {
+            None => max3(&self.color),
+            Some(c) => c.lut.iter().chain(std::iter::once(&c.nan_color)).map(max3).fold(0.0, f32::max),
+        }
+    }
+
     /// The scalars colour by `source` reads, in world units for z (every vertex of every tile).
     pub fn scalars<'a>(&'a self, source: &ColorSource) -> Box<dyn Iterator<Item = f64> + 'a> {
         tile_scalars(&self.tiles, self.origin.z, source)
@@ -420,7 +454,8 @@ impl Scene {
         let mut list = |l: &crate::lod::Indices| if seen.insert(l.as_ptr()) { l.len() * 4 } else { 0 };
         let mut bytes = 0;
         for t in self.objects.iter().flat_map(|o| &o.tiles) {
-            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len()) * 4 + list(&t.fine) + list(&t.coarse);
+            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len() + t.grid_uv.len()) * 4;
+            bytes += list(&t.fine) + list(&t.coarse);
             bytes += t.levels.iter().map(|l| list(&l.indices)).sum::<usize>();
         }
         bytes

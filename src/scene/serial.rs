@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 5 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 6 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -21,8 +21,11 @@
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
 //!             normals [u32] (version 5: packed smooth normals, empty or one per position),
+//!             grid_uv [u32] (version 6: packed grid coordinates, empty or one per position),
 //!             fine [u32], coarse [u32], proxy_error f32,
-//!             levels: n u32, then per level error f32, indices [u32]
+//!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
+//!             measured again on reading: `lod::shading`, 0 for height fields and grids),
+//!             indices [u32]
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
@@ -36,7 +39,7 @@ use glam::DVec3;
 use std::sync::atomic::Ordering;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 5;
+const VERSION: u32 = 6;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -261,12 +264,14 @@ impl Scene {
                 w.f32s(bytemuck::cast_slice(&t.positions));
                 w.f32s(&t.values);
                 w.u32s(&t.normals);
+                w.u32s(&t.grid_uv);
                 w.u32s(&t.fine);
                 w.u32s(&t.coarse);
                 w.f32(t.proxy_error);
                 w.u32(t.levels.len() as u32);
                 for l in &t.levels {
                     w.f32(l.error);
+                    w.f32(l.shading_error);
                     w.u32s(&l.indices);
                 }
             }
@@ -413,6 +418,10 @@ impl Scene {
                 if let Some(msg) = per_vertex("normals", normals.len()) {
                     return Err(r.err(msg));
                 }
+                let grid_uv = if version >= 6 { r.u32s()? } else { Vec::new() };
+                if let Some(msg) = per_vertex("grid coordinates", grid_uv.len()) {
+                    return Err(r.err(msg));
+                }
                 let (fine, coarse): (crate::lod::Indices, crate::lod::Indices) = (r.u32s()?.into(), r.u32s()?.into());
                 let proxy_error = r.f32()?;
                 let nl = r.u32()? as usize;
@@ -425,12 +434,27 @@ impl Scene {
                 let mut levels = Vec::with_capacity(nl.min(64));
                 for _ in 0..nl {
                     let error = r.f32()?;
-                    levels.push(crate::lod::levels::Level { error, indices: r.u32s()?.into() });
+                    let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
+                    levels.push(crate::lod::levels::Level { error, shading_error, indices: r.u32s()?.into() });
                 }
                 for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
                     if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
                         return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
                     }
+                }
+                // Before version 6 the shading error was not stored: measured again (meshes) or
+                // 0 (height fields, grids), as `lod` sets it when building.
+                for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
+                    l.shading_error = match kind {
+                        ObjectKind::Mesh { .. } => {
+                            let shading = crate::lod::shading::Shading { normals: &normals, grid_uv: &grid_uv };
+                            crate::lod::shading::shading_error(&positions, shading, &fine, &l.indices)
+                        }
+                        _ => 0.0,
+                    };
+                }
+                if levels.iter().any(|l| l.shading_error < 0.0) {
+                    return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
                 }
                 tiles.push(TileMesh {
                     ix,
@@ -438,6 +462,7 @@ impl Scene {
                     positions,
                     values,
                     normals,
+                    grid_uv,
                     fine,
                     coarse,
                     bbox_min,
@@ -552,16 +577,69 @@ mod tests {
         // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
         // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
         // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
-        // byte and opacity after it (flat, 1), and no tile values nor normals (two empty arrays after
-        // the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
+        // byte and opacity after it (flat, 1), and no tile values, normals nor grid coordinates
+        // (three empty arrays after the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
         let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
         let origin_at = at + 8 + 16 + 12 + 1 + 24;
         let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
         let mut v1 =
-            [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 16..]].concat();
+            [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 24..]].concat();
         v1[8..12].copy_from_slice(&1u32.to_le_bytes());
         let t = Scene::from_bytes(&v1).unwrap();
         assert_eq!(t.to_bytes(), v2);
+    }
+
+    #[test]
+    fn version_5_meshes_measure_their_shading_error_again() {
+        // A curved sheet, one tile: its levels have a shading error.
+        let n = 24;
+        let v: Vec<[f64; 3]> = (0..n * n)
+            .map(|k| {
+                let (x, y) = ((k % n) as f64 * 10.0, (k / n) as f64 * 10.0);
+                [x, y, 30.0 * (x / 60.0).sin()]
+            })
+            .collect();
+        let mut f = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                // The other diagonal: not a structured grid (no grid coordinates to strip).
+                let k = (j * n + i) as i64;
+                f.push([k, k + 1, k + n as i64]);
+                f.push([k + 1, k + n as i64 + 1, k + n as i64]);
+            }
+        }
+        let mut s = Scene::new();
+        s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
+        let t = &s.objects()[0].tiles[0];
+        assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
+        let v6 = s.to_bytes();
+        // Version 5: the same bytes without the tile's (empty) grid coordinates, after its
+        // normals, and without each level's shading error (the f32 after its error).
+        let mut normals_then = (t.normals.len() as u64).to_le_bytes().to_vec();
+        normals_then.extend(t.normals.iter().flat_map(|n| n.to_le_bytes()));
+        normals_then.extend(0u64.to_le_bytes());
+        normals_then.extend((t.fine.len() as u64).to_le_bytes());
+        let grid_at = v6.windows(normals_then.len()).position(|w| w == normals_then).unwrap() + normals_then.len() - 16;
+        let v6_no_grid = [&v6[..grid_at], &v6[grid_at + 8..]].concat();
+        let mut head = t.proxy_error.to_le_bytes().to_vec();
+        head.extend((t.levels.len() as u32).to_le_bytes());
+        head.extend(t.levels[0].error.to_le_bytes());
+        head.extend(t.levels[0].shading_error.to_le_bytes());
+        let w = &v6_no_grid;
+        let start = w.windows(head.len()).position(|x| x == head).unwrap() + 8;
+        let mut v5 = w[..start].to_vec();
+        let mut at = start;
+        for l in &t.levels {
+            v5.extend(&w[at..at + 4]); // error
+            at += 8; // and the shading error, dropped
+            let len = 8 + 4 * l.indices.len();
+            v5.extend(&w[at..at + len]);
+            at += len;
+        }
+        v5.extend(&w[at..]);
+        v5[8..12].copy_from_slice(&5u32.to_le_bytes());
+        let back = Scene::from_bytes(&v5).unwrap();
+        assert_eq!(back.to_bytes(), v6);
     }
 
     #[test]

@@ -21,11 +21,13 @@ struct Object {
     // Colour map (draw.wgsl): lo, 1 / (hi - lo), mode (0 flat, 1 vertex scalar, 2 z), first row.
     cmap: vec4<f32>,
     // A height field's normal map (draw.wgsl): object-relative (x, y) of sample (0, 0), then
-    // (cos, sin) / dx: the column of a point; (-sin, cos) / dy: its row, then nx, ny.
+    // (cos, sin) / dx: the column of a point; (-sin, cos) / dy: its row, then nx, ny (a grid
+    // mesh's: its columns and rows).
     grid: vec4<f32>,
     grid_rows: vec4<f32>,
     // x: 1 + the object's first sample in the normal map, 0: none; y: 1 when its vertices carry
-    // smooth normals; with neither, facet normals.
+    // smooth normals, 2 when they carry grid coordinates (normals in the normal map: a grid
+    // mesh); with neither, facet normals.
     normal_map: vec4<u32>,
 }
 

@@ -27,12 +27,41 @@ fn fine_surface(o: Object, w: vec3<f32>) -> vec3<f32> {
     return mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
 }
 
+// A structured grid mesh's fine normal at grid coordinates `uv` (column, row), as its fine level
+// interpolates its vertex normals: the cell's triangle (a, b, d) where the fraction along the
+// columns is at least the one along the rows, else (a, d, c) (lod::structured_grid), so that
+// every level of detail shades as level 0 does.
+fn grid_mesh_normal(o: Object, uv: vec2<f32>) -> vec3<f32> {
+    let n = o.grid_rows.zw;
+    let q = clamp(uv, vec2<f32>(0.0), n - 1.0);
+    let c = min(floor(q), n - 2.0);
+    let f = q - c;
+    let nx = u32(n.x);
+    let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
+    let a = vertex_normal(surface[k].x);
+    let d = vertex_normal(surface[k + nx + 1u].x);
+    var v: vec3<f32>;
+    if (f.x >= f.y) {
+        v = (1.0 - f.x) * a + (f.x - f.y) * vertex_normal(surface[k + 1u].x) + f.y * d;
+    } else {
+        v = (1.0 - f.y) * a + (f.y - f.x) * vertex_normal(surface[k + nx].x) + f.x * d;
+    }
+    return v;
+}
+
 // The shading normal and colouring scalar at render-space point `w`: from the fine surface for a
-// height field with a normal map (the scalar replaced when colouring by z); the interpolated
-// vertex normal `vn` for a mesh with smooth normals (normal_map.y = 1); else the facet's normal
-// from screen-space derivatives; with the vertex scalar `s`.
-fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
-    if (o.normal_map.x == 0u) {
+// height field with a normal map (the scalar replaced when colouring by z); from the fine grid's
+// normals at the interpolated grid coordinates `uv` for a grid mesh (normal_map.y = 2); the
+// interpolated vertex normal `vn` for a mesh with smooth normals (normal_map.y = 1); else the
+// facet's normal from screen-space derivatives; with the vertex scalar `s`.
+fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, uv: vec2<f32>, s: f32) -> vec4<f32> {
+    if (o.normal_map.y == 2u) {
+        let gn = grid_mesh_normal(o, uv);
+        if (dot(gn, gn) > 1e-12) {
+            return vec4<f32>(normalize(gn), s);
+        }
+    }
+    if (o.normal_map.x == 0u || o.normal_map.y == 2u) {
         if (o.normal_map.y == 1u && dot(vn, vn) > 1e-12) {
             return vec4<f32>(normalize(vn), s);
         }
@@ -51,8 +80,10 @@ struct VOutDraw {
     @location(1) @interpolate(flat) tile: u32,
     // The colouring scalar: the vertex's value (mode 1) or its object-relative z (mode 2).
     @location(2) s: f32,
-    // The vertex's smooth normal, exaggerated (0 where it has none).
+    // The vertex's smooth normal, exaggerated (0 where it has none or a grid mesh's).
     @location(3) n: vec3<f32>,
+    // A grid mesh's vertex's grid coordinates (column, row); 0 for other objects.
+    @location(4) uv: vec2<f32>,
 }
 
 // A packed smooth normal (lod::normals: octahedral, two snorm16; 0 = none) in render space,
@@ -80,8 +111,15 @@ fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2) n
     out.world = p;
     out.tile = tile;
     out.s = select(value, pos.z, o.cmap.z > 1.5);
-    out.n = vertex_normal(nrm);
+    let grid = o.normal_map.y == 2u;
+    out.n = select(vertex_normal(nrm), vec3<f32>(0.0), grid);
+    out.uv = select(vec2<f32>(0.0), grid_coords(nrm), grid);
     return out;
+}
+
+// A grid mesh's vertex's packed grid coordinates (lod::TileMesh::grid_uv: column | row << 16).
+fn grid_coords(p: u32) -> vec2<f32> {
+    return vec2<f32>(f32(p & 0xffffu), f32(p >> 16u));
 }
 
 // The object's colour at scalar s: flat, or matplotlib's mapping of a 256-row colour map
@@ -108,7 +146,7 @@ struct FOut {
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.uv, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
@@ -130,6 +168,7 @@ struct VOutDrawGl {
     @location(2) zw: vec2<f32>,
     @location(3) s: f32,
     @location(4) n: vec3<f32>,
+    @location(5) uv: vec2<f32>,
 }
 
 @vertex
@@ -139,7 +178,10 @@ fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2
     let pos = tile_position(vpos, tile);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
-    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), vertex_normal(nrm));
+    let grid = o.normal_map.y == 2u;
+    let n = select(vertex_normal(nrm), vec3<f32>(0.0), grid);
+    let uv = select(vec2<f32>(0.0), grid_coords(nrm), grid);
+    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), n, uv);
 }
 
 struct FOutGl {
@@ -153,7 +195,7 @@ struct FOutGl {
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.uv, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
