@@ -23,11 +23,17 @@ pub struct SceneGeometry {
     /// Object index (position in `scene.objects()`) of every tile.
     pub tile_object: wgpu::Buffer,
     pub tile_object_cpu: Vec<u32>,
-    /// Per tile two vec4 for the vertex stage (`tile_grid` in common.wgsl): for a lattice tile
-    /// (see [`Plan`]) the object-relative (x, y) of its first sample and the grid's column axis,
-    /// then its row axis, the first sample's index in `shading` and the grid's row length (u32
-    /// bits); for other tiles u32::MAX in place of the index.
+    /// Per tile three vec4 for the vertex stage (`tile_grid` in common.wgsl): for a lattice tile
+    /// (see [`Plan`]) the object-relative (x, y) of its first sample and the grid's column axis;
+    /// its row axis, the first sample's index in `shading` and the grid's row length (u32 bits);
+    /// the first sample's index in `sample_values` (u32::MAX: no values). For other tiles u32::MAX
+    /// in place of the `shading` index.
     pub tile_grid: wgpu::Buffer,
+    /// The values (colour by data) of the height fields that have them and are drawn as lattice
+    /// tiles, per grid sample (`Object::value_grid`; no data as [`NO_DATA`]), object after object:
+    /// what the lit pass's vertex stage reads in place of the vertex scalar (`sample_values` in
+    /// draw.wgsl). One zero word when there are none.
+    pub sample_values: wgpu::Buffer,
     /// Tiles drawn as lattice tiles, and the patterns they share.
     pub lattice_tiles: usize,
     pub patterns: usize,
@@ -162,6 +168,39 @@ fn upload_shading(
     Ok((buf, base, dims))
 }
 
+/// The per-sample values of the height fields coloured by data (`SceneGeometry::sample_values`)
+/// and each object's first sample in them, for those whose heights are in the normal map
+/// (`shading_base`), as long as they fit one storage binding (later ones keep vertices of their
+/// own).
+fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) -> (wgpu::Buffer, Vec<Option<u32>>) {
+    let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
+    let mut words: Vec<f32> = Vec::new();
+    let base = scene
+        .objects()
+        .iter()
+        .zip(shading_base)
+        .map(|(o, b)| {
+            b.as_ref()?;
+            let v = o.value_grid()?;
+            if (words.len() + v.len()) as u64 > max_words {
+                return None;
+            }
+            let first = words.len() as u32;
+            words.extend(v.into_iter().map(|x| if x.is_nan() { NO_DATA } else { x }));
+            Some(first)
+        })
+        .collect();
+    if words.is_empty() {
+        words.push(0.0);
+    }
+    let buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("sample_values"),
+        contents: bytemuck::cast_slice(&words),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    (buf, base)
+}
+
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
 /// at most `max` bytes, with u32 indices and offsets: a clear error rather than a wrong image.
 pub fn check_buffer_sizes(nv: u64, ni: u64, max: u64) -> Result<()> {
@@ -203,7 +242,8 @@ type Pattern = (Vec<[u32; 2]>, Vec<u32>);
 /// What the upload writes, counted before any buffer exists.
 ///
 /// A *lattice tile* is a height-field tile whose object has its heights in the normal map
-/// (`SceneGeometry::shading`) and no per-vertex values or normals: its vertices are rebuilt by
+/// (`SceneGeometry::shading`), its values (if any) in `SceneGeometry::sample_values` and no
+/// per-vertex normals: its vertices are rebuilt by
 /// the vertex stage from the tile's first sample, the grid's axes and the normal map's heights
 /// (`tile_position` in common.wgsl), so its draws (fine, coarse, levels) need no vertices of
 /// their own, only indices into a pattern of (column, row) vertices shared by every tile of the
@@ -215,7 +255,7 @@ struct Plan {
     /// tile, None for a tile drawn from vertices of its own.
     runs: Vec<Option<Vec<usize>>>,
     patterns: Vec<Pattern>,
-    /// Two vec4 per tile (`tile_grid` in common.wgsl).
+    /// Three vec4 per tile (`tile_grid` in common.wgsl).
     tile_grid: Vec<[f32; 4]>,
     lattice_tiles: usize,
     nv: u64,
@@ -223,7 +263,9 @@ struct Plan {
 }
 
 impl Plan {
-    fn new(scene: &Scene, shading_base: &[Option<u32>]) -> Self {
+    /// `shading_base`: each object's first sample in the normal map; `values_base`: in the
+    /// per-sample values (`SceneGeometry::sample_values`), for height fields coloured by data.
+    fn new(scene: &Scene, shading_base: &[Option<u32>], values_base: &[Option<u32>]) -> Self {
         let mut ids: std::collections::HashMap<Pattern, usize> = std::collections::HashMap::new();
         let (mut remap, mut cidx, mut seen) = (Vec::new(), Vec::new(), Vec::new());
         let mut plan =
@@ -232,14 +274,19 @@ impl Plan {
             let axes = o.grid_axes();
             for t in &o.tiles {
                 let lattice = match (shading_base[oi], &axes) {
-                    (Some(base), Some(g)) if t.values.is_empty() && t.normals.is_empty() && !t.is_empty() => {
+                    (Some(base), Some(g))
+                        if (t.values.is_empty() || values_base[oi].is_some())
+                            && t.normals.is_empty()
+                            && !t.is_empty() =>
+                    {
                         o.tile_lattice(t).map(|l| (base, g, l))
                     }
                     _ => None,
                 };
                 let Some((base, g, l)) = lattice else {
                     plan.runs.push(None);
-                    plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, f32::from_bits(u32::MAX), 0.0]]);
+                    let none = f32::from_bits(u32::MAX);
+                    plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, none, 0.0], [none, 0.0, 0.0, 0.0]]);
                     plan.nv += t.positions.len() as u64;
                     plan.ni += t.fine.len() as u64;
                     for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
@@ -262,10 +309,13 @@ impl Plan {
                     .collect();
                 plan.runs.push(Some(run));
                 let corner = g.pos(l.i0, l.j0);
-                let k0 = base as usize + l.j0 * g.nx + l.i0;
+                let first = l.j0 * g.nx + l.i0;
+                let k0 = base as usize + first;
+                let v0 = values_base[oi].map_or(u32::MAX, |b| b + first as u32);
                 plan.tile_grid.extend([
                     [corner[0] as f32, corner[1] as f32, g.u[0] as f32, g.u[1] as f32],
                     [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
+                    [f32::from_bits(v0), 0.0, 0.0, 0.0],
                 ]);
                 plan.lattice_tiles += 1;
             }
@@ -298,7 +348,8 @@ impl SceneGeometry {
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
         let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
-        let plan = Plan::new(scene, &shading_base);
+        let (sample_values, values_base) = upload_values(ctx, scene, &shading_base);
+        let plan = Plan::new(scene, &shading_base, &values_base);
         let (nv, ni) = (plan.nv, plan.ni);
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -453,7 +504,7 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&to),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let grid = if plan.tile_grid.is_empty() { vec![[0.0f32; 4]; 2] } else { plan.tile_grid };
+        let grid = if plan.tile_grid.is_empty() { vec![[0.0f32; 4]; 3] } else { plan.tile_grid };
         let tile_grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tile_grid"),
             contents: bytemuck::cast_slice(&grid),
@@ -468,7 +519,7 @@ impl SceneGeometry {
                 t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
             })
             .collect();
-        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size();
+        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -478,6 +529,7 @@ impl SceneGeometry {
             tile_object: tob,
             tile_object_cpu: tile_object,
             tile_grid,
+            sample_values,
             lattice_tiles: plan.lattice_tiles,
             patterns: plan.patterns.len(),
             fine,

@@ -223,6 +223,7 @@ impl Passes {
                 storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
                 storage_entry(4, true, vf),
                 storage_entry(5, true, wgpu::ShaderStages::VERTEX),
+                storage_entry(6, true, wgpu::ShaderStages::VERTEX),
             ],
         });
         let cs = wgpu::ShaderStages::COMPUTE;
@@ -719,7 +720,8 @@ impl GpuContext {
 impl Passes {
     /// The scene bind group of one frame: uniforms, per-object state, the tile → object table,
     /// the colour-map rows the objects' `cmap.w` point into (RGBA), the height fields' normal
-    /// map (`SceneGeometry::shading`) and the lattice tiles' grids (`SceneGeometry::tile_grid`).
+    /// map (`SceneGeometry::shading`), the lattice tiles' grids (`SceneGeometry::tile_grid`) and
+    /// values (`SceneGeometry::sample_values`).
     pub fn scene_bind_group(
         &self,
         d: &wgpu::Device,
@@ -757,6 +759,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 3, resource: lut_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: geom.shading.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: geom.tile_grid.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: geom.sample_values.as_entire_binding() },
             ],
         })
     }

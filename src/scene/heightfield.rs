@@ -258,16 +258,31 @@ impl Object {
     /// a grid sample, and its origin-relative x, y, turned back into the grid's frame, give back its
     /// integer column and row.
     pub fn height_grid(&self) -> Option<Vec<f32>> {
+        self.sample_grid(|t, k| t.positions[k][2])
+    }
+
+    /// The per-vertex values (colour by data) of a height field as a row-major (ny, nx) grid, as
+    /// [`Self::height_grid`] rebuilds the heights (NaN where no triangle uses the sample or where
+    /// the value is no data); None for other kinds and for height fields without values.
+    pub fn value_grid(&self) -> Option<Vec<f32>> {
+        if self.tiles.iter().all(|t| t.values.is_empty()) {
+            return None;
+        }
+        self.sample_grid(|t, k| t.values.get(k).copied().unwrap_or(f32::NAN))
+    }
+
+    /// `f(tile, vertex)` of every tile vertex, put at the grid sample the vertex is.
+    fn sample_grid(&self, f: impl Fn(&TileMesh, usize) -> f32) -> Option<Vec<f32>> {
         let g = self.grid_axes()?;
-        let mut z = vec![f32::NAN; g.nx * g.ny];
+        let mut out = vec![f32::NAN; g.nx * g.ny];
         for t in &self.tiles {
-            for p in &t.positions {
+            for (k, p) in t.positions.iter().enumerate() {
                 if let Some((i, j)) = g.sample_at(p[0] as f64, p[1] as f64) {
-                    z[j * g.nx + i] = p[2];
+                    out[j * g.nx + i] = f(t, k);
                 }
             }
         }
-        Some(z)
+        Some(out)
     }
 
     /// Tile `t` of this height field as grid samples (the same inverse as [`Self::height_grid`]),

@@ -37,21 +37,22 @@ struct Object {
 // Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
 // sample: the gradient (dz/dx, dz/dy) as two f16, and the object-relative height's f32 bits.
 @group(0) @binding(4) var<storage, read> surface: array<vec2<u32>>;
-// Per tile two vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
+// Per tile three vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
 // object-relative (x, y) and the grid's column axis; its row axis, the first sample's index in
-// `surface` and the grid's row length (u32 bits); 0xffffffff in place of the index for a tile
-// with vertices of its own.
+// `surface` and the grid's row length (u32 bits); the first sample's index in `sample_values`
+// (draw.wgsl; 0xffffffff: none). 0xffffffff in place of the `surface` index for a tile with
+// vertices of its own.
 @group(0) @binding(5) var<storage, read> tile_grid: array<vec4<f32>>;
 
 // The object-relative position of vertex `pos` of `tile`: `pos` itself, or for a lattice tile the
 // sample at column pos.x, row pos.y from the tile's first, with its height from `surface`.
 fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
-    let b = tile_grid[2u * tile + 1u];
+    let b = tile_grid[3u * tile + 1u];
     let k0 = bitcast<u32>(b.z);
     if (k0 == 0xffffffffu) {
         return pos;
     }
-    let a = tile_grid[2u * tile];
+    let a = tile_grid[3u * tile];
     let k = k0 + u32(pos.y) * bitcast<u32>(b.w) + u32(pos.x);
     return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface[k].y));
 }

@@ -5,6 +5,20 @@
 // Colour maps of this frame's objects: 256 rows each, then the object's NaN colour.
 @group(0) @binding(3) var<storage, read> lut: array<vec4<f32>>;
 
+// Height fields coloured by data that are drawn as lattice tiles: their values per grid sample
+// (gpu::geometry::SceneGeometry::sample_values; no data as the most negative f32).
+@group(0) @binding(6) var<storage, read> sample_values: array<f32>;
+
+// The colouring scalar of vertex `vpos` of `tile`: the vertex's own `value`, or for a lattice tile
+// with values the value of its sample (tile_position's column and row).
+fn tile_value(vpos: vec3<f32>, tile: u32, value: f32) -> f32 {
+    let v0 = bitcast<u32>(tile_grid[3u * tile + 2u].x);
+    if (v0 == 0xffffffffu) {
+        return value;
+    }
+    return sample_values[v0 + u32(vpos.y) * bitcast<u32>(tile_grid[3u * tile + 1u].w) + u32(vpos.x)];
+}
+
 // The fine surface under render-space point `w` of a height field with a normal map:
 // (dz/dx, dz/dy, z) interpolated bilinearly at the point's (x, y), so that every level of detail
 // of a tile shades and colours by z as the fine surface does.
@@ -101,10 +115,11 @@ fn vertex_normal(p: u32) -> vec3<f32> {
 }
 
 @vertex
-fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
            @builtin(instance_index) tile: u32) -> VOutDraw {
     let o = objects[tile_object[tile]];
     let pos = tile_position(vpos, tile);
+    let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
@@ -172,10 +187,11 @@ struct VOutDrawGl {
 }
 
 @vertex
-fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) value: f32, @location(2) nrm: u32,
+fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
               @builtin(instance_index) tile: u32) -> VOutDrawGl {
     let o = objects[tile_object[tile]];
     let pos = tile_position(vpos, tile);
+    let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
     let grid = o.normal_map.y == 2u;
