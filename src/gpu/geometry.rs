@@ -61,6 +61,9 @@ pub struct SceneGeometry {
     /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
     /// vertices carry their grid coordinates in place of their normals; None for other objects.
     pub grid_dims: Vec<Option<(u32, u32)>>,
+    /// The tiles in runs `(start, end, grid)`, in order, covering every tile: `grid` for the tiles
+    /// of grid meshes (`grid_dims`), which the lit pass draws with their own fragment entry point.
+    pub draw_runs: Vec<(usize, usize, bool)>,
     pub bytes: u64,
 }
 
@@ -520,6 +523,14 @@ impl SceneGeometry {
             })
             .collect();
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
+        let mut draw_runs: Vec<(usize, usize, bool)> = Vec::new();
+        for (k, &oi) in tile_object.iter().enumerate() {
+            let grid = grid_dims[oi as usize].is_some();
+            match draw_runs.last_mut() {
+                Some((_, end, g)) if *g == grid => *end = k + 1,
+                _ => draw_runs.push((k, k + 1, grid)),
+            }
+        }
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -540,6 +551,7 @@ impl SceneGeometry {
             shading,
             shading_base,
             grid_dims,
+            draw_runs,
             bytes,
         })
     }

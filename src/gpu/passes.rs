@@ -97,6 +97,8 @@ pub struct Passes {
     hist_layout: wgpu::BindGroupLayout,
     select_layout: wgpu::BindGroupLayout,
     draw: wgpu::RenderPipeline,
+    /// The lit pass for the tiles of grid meshes (`SceneGeometry::draw_runs`).
+    draw_grid: wgpu::RenderPipeline,
     draw_blend: wgpu::RenderPipeline,
     prepass: wgpu::RenderPipeline,
     histogram: wgpu::ComputePipeline,
@@ -322,18 +324,25 @@ impl Passes {
                 cache: None,
             })
         };
-        let draw = scene_pipeline(
-            "draw.wgsl",
-            include_str!("shaders/draw.wgsl"),
-            ("vs_draw", "vs_draw_gl"),
-            "fs_main",
-            &[Some(vertex_layout.clone()), Some(value_layout.clone())],
-            &[
-                Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL }),
-                Some(ID_FORMAT.into()),
-            ],
-            &depth_state,
-        );
+        let lit = |fs: &str| {
+            scene_pipeline(
+                "draw.wgsl",
+                include_str!("shaders/draw.wgsl"),
+                ("vs_draw", "vs_draw_gl"),
+                fs,
+                &[Some(vertex_layout.clone()), Some(value_layout.clone())],
+                &[
+                    Some(wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    }),
+                    Some(ID_FORMAT.into()),
+                ],
+                &depth_state,
+            )
+        };
+        let (draw, draw_grid) = (lit("fs_main"), lit("fs_grid"));
         // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
         // but not written, the tile ids left as the opaque pass wrote them.
         let draw_blend = scene_pipeline(
@@ -409,6 +418,7 @@ impl Passes {
             hist_layout,
             select_layout,
             draw,
+            draw_grid,
             draw_blend,
             prepass,
             histogram,
@@ -450,7 +460,11 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
-        self.draw_into(&mut pass, &self.draw, true, scene_bg, geom, args, geom.n_tiles());
+        // Runs of tiles: grid meshes' with their own fragment entry point, the rest with fs_main.
+        for &(start, end, grid) in &geom.draw_runs {
+            let pipeline = if grid { &self.draw_grid } else { &self.draw };
+            self.draw_range(&mut pass, pipeline, true, scene_bg, geom, args, start..end);
+        }
     }
 
     /// Pass: `args` (`n` draws, in their order) blended over `targets`' colour with their objects'
@@ -481,7 +495,25 @@ impl Passes {
         args: &wgpu::Buffer,
         n: usize,
     ) {
+        self.draw_range(pass, pipeline, with_values, scene_bg, geom, args, 0..n);
+    }
+
+    /// Draws `range` of `args` with `pipeline`; the scalar stream bound when `with_values`.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_range(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        with_values: bool,
+        scene_bg: &wgpu::BindGroup,
+        geom: &SceneGeometry,
+        args: &wgpu::Buffer,
+        range: std::ops::Range<usize>,
+    ) {
         if let (Some(vb), Some(sb), Some(ib)) = (&geom.vertices, &geom.values, &geom.indices) {
+            if range.is_empty() {
+                return;
+            }
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, scene_bg, &[]);
             pass.set_vertex_buffer(0, vb.slice(..));
@@ -489,7 +521,8 @@ impl Passes {
                 pass.set_vertex_buffer(1, sb.slice(..));
             }
             pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.multi_draw_indexed_indirect(args, 0, n as u32);
+            let stride = std::mem::size_of::<super::layout::DrawArgs>() as u64;
+            pass.multi_draw_indexed_indirect(args, range.start as u64 * stride, range.len() as u32);
         }
     }
 

@@ -65,16 +65,14 @@ fn grid_mesh_normal(o: Object, uv: vec2<f32>) -> vec3<f32> {
 
 // The shading normal and colouring scalar at render-space point `w`: from the fine surface for a
 // height field with a normal map (the scalar replaced when colouring by z); from the fine grid's
-// normals at the interpolated grid coordinates `uv` for a grid mesh (normal_map.y = 2); the
-// interpolated vertex normal `vn` for a mesh with smooth normals (normal_map.y = 1); else the
-// facet's normal from screen-space derivatives; with the vertex scalar `s`.
-fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, uv: vec2<f32>, s: f32) -> vec4<f32> {
-    if (o.normal_map.y == 2u) {
-        let gn = grid_mesh_normal(o, uv);
-        if (dot(gn, gn) > 1e-12) {
-            return vec4<f32>(normalize(gn), s);
-        }
-    }
+// normals at the interpolated grid coordinates for a grid mesh (normal_map.y = 2; they travel in
+// `vn.xy`); the interpolated vertex normal `vn` for a mesh with smooth normals (normal_map.y =
+// 1); else the facet's normal from screen-space derivatives; with the vertex scalar `s`.
+//
+// Grid meshes are drawn by their own entry points (fs_grid, fs_grid_gl: `shading_grid`): on a CPU
+// rasteriser the grid lookup costs every fragment of the pass whether taken or not (13 % of a
+// reservoir grid's frame), so fs_main does without it and shades a grid mesh by its facets.
+fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
     if (o.normal_map.x == 0u || o.normal_map.y == 2u) {
         if (o.normal_map.y == 1u && dot(vn, vn) > 1e-12) {
             return vec4<f32>(normalize(vn), s);
@@ -88,16 +86,24 @@ fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, uv: vec2<f3
     return vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
 }
 
+// `shading` for a grid mesh: the fine grid's normal at the interpolated grid coordinates.
+fn shading_grid(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
+    let gn = grid_mesh_normal(o, vn.xy);
+    if (o.normal_map.y == 2u && dot(gn, gn) > 1e-12) {
+        return vec4<f32>(normalize(gn), s);
+    }
+    return shading(o, w, facet, vn, s);
+}
+
 struct VOutDraw {
     @builtin(position) @invariant clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) @interpolate(flat) tile: u32,
     // The colouring scalar: the vertex's value (mode 1) or its object-relative z (mode 2).
     @location(2) s: f32,
-    // The vertex's smooth normal, exaggerated (0 where it has none or a grid mesh's).
+    // The vertex's smooth normal, exaggerated (0 where it has none); for a grid mesh its grid
+    // coordinates (column, row, 0) instead (one varying for both: each costs every fragment).
     @location(3) n: vec3<f32>,
-    // A grid mesh's vertex's grid coordinates (column, row); 0 for other objects.
-    @location(4) uv: vec2<f32>,
 }
 
 // A packed smooth normal (lod::normals: octahedral, two snorm16; 0 = none) in render space,
@@ -126,9 +132,7 @@ fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) 
     out.world = p;
     out.tile = tile;
     out.s = select(value, pos.z, o.cmap.z > 1.5);
-    let grid = o.normal_map.y == 2u;
-    out.n = select(vertex_normal(nrm), vec3<f32>(0.0), grid);
-    out.uv = select(vec2<f32>(0.0), grid_coords(nrm), grid);
+    out.n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
     return out;
 }
 
@@ -161,7 +165,25 @@ struct FOut {
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.uv, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let n = ns.xyz;
+    let c = base_color(o, ns.w);
+    // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
+    // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
+    let sun = vec3<f32>(-0.45, 0.45, 0.77);
+    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
+    var out: FOut;
+    // Translucent objects (volume lenses, drawn blended) are unlit, with the object's opacity.
+    out.color = vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a);
+    out.id = v.tile + 1u;
+    return out;
+}
+
+// fs_main for the tiles of grid meshes (gpu::geometry::SceneGeometry::draw_runs).
+@fragment
+fn fs_grid(v: VOutDraw) -> FOut {
+    let o = objects[tile_object[v.tile]];
+    let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
@@ -183,7 +205,6 @@ struct VOutDrawGl {
     @location(2) zw: vec2<f32>,
     @location(3) s: f32,
     @location(4) n: vec3<f32>,
-    @location(5) uv: vec2<f32>,
 }
 
 @vertex
@@ -194,10 +215,8 @@ fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
-    let grid = o.normal_map.y == 2u;
-    let n = select(vertex_normal(nrm), vec3<f32>(0.0), grid);
-    let uv = select(vec2<f32>(0.0), grid_coords(nrm), grid);
-    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), n, uv);
+    let n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
+    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), n);
 }
 
 struct FOutGl {
@@ -211,7 +230,19 @@ struct FOutGl {
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.uv, v.s);
+    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let n = ns.xyz;
+    let c = base_color(o, ns.w);
+    let sun = vec3<f32>(-0.45, 0.45, 0.77);
+    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
+    return FOutGl(vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a), v.tile + 1u, v.zw.x / v.zw.y);
+}
+
+// fs_main_gl for the tiles of grid meshes.
+@fragment
+fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
+    let o = objects[tile_object[v.tile]];
+    let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
     let n = ns.xyz;
     let c = base_color(o, ns.w);
     let sun = vec3<f32>(-0.45, 0.45, 0.77);
