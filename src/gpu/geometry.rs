@@ -34,9 +34,6 @@ pub struct SceneGeometry {
     /// what the lit pass's vertex stage reads in place of the vertex scalar (`sample_values` in
     /// draw.wgsl). One zero word when there are none.
     pub sample_values: wgpu::Buffer,
-    /// Tiles drawn as lattice tiles, and the patterns they share.
-    pub lattice_tiles: usize,
-    pub patterns: usize,
     /// The fine (level 0) draw of every tile, in tile order.
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
@@ -260,7 +257,6 @@ struct Plan {
     patterns: Vec<Pattern>,
     /// Three vec4 per tile (`tile_grid` in common.wgsl).
     tile_grid: Vec<[f32; 4]>,
-    lattice_tiles: usize,
     nv: u64,
     ni: u64,
 }
@@ -271,8 +267,7 @@ impl Plan {
     fn new(scene: &Scene, shading_base: &[Option<u32>], values_base: &[Option<u32>]) -> Self {
         let mut ids: std::collections::HashMap<Pattern, usize> = std::collections::HashMap::new();
         let (mut remap, mut cidx, mut seen) = (Vec::new(), Vec::new(), Vec::new());
-        let mut plan =
-            Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), lattice_tiles: 0, nv: 0, ni: 0 };
+        let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
         for (oi, o) in scene.objects().iter().enumerate() {
             let axes = o.grid_axes();
             for t in &o.tiles {
@@ -320,7 +315,6 @@ impl Plan {
                     [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
                     [f32::from_bits(v0), 0.0, 0.0, 0.0],
                 ]);
-                plan.lattice_tiles += 1;
             }
         }
         let mut patterns: Vec<(usize, Pattern)> = ids.into_iter().map(|(p, k)| (k, p)).collect();
@@ -541,8 +535,6 @@ impl SceneGeometry {
             tile_object_cpu: tile_object,
             tile_grid,
             sample_values,
-            lattice_tiles: plan.lattice_tiles,
-            patterns: plan.patterns.len(),
             fine,
             coarse,
             levels,
