@@ -325,7 +325,8 @@ impl Renderer {
             choose_levels(geometry, scene, camera, &fc, &tile_dist2, *height, (opts.lod, opts.grid_lod), origin);
         // Grid blocks' interior faces (drawn last in each level) are left out when the grid lies
         // wholly beyond the near plane.
-        let interior = scene.grid_interior_indices(origin, (fc.eye, fc.forward, fc.near), camera.z_scale, |t| {
+        let outside = scene.seen_from_outside(origin, (fc.eye, fc.forward, fc.near), camera.z_scale);
+        let interior = scene.grid_interior_indices(&outside, |t| {
             chosen.as_ref().and_then(|c| c.0.get(t)).map_or(0, |&l| l as usize)
         });
         for (a, &n) in draw_args.iter_mut().zip(&interior) {
@@ -343,6 +344,7 @@ impl Renderer {
             tile_dist2: &tile_dist2,
             scene_bg: &scene_bg,
             object_visible: &object_visible,
+            outside: &outside,
             width: *width,
             height: *height,
             main_targets,
@@ -890,7 +892,7 @@ fn draw(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, visible: &Visible) 
         Draw::Gpu(b) => b.clone(),
     };
     let load = visible.predrawn.is_some();
-    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &args, load, f.timestamps);
+    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, &args, load, f.outside, f.timestamps);
     args
 }
 

@@ -96,6 +96,9 @@ pub struct FrameInputs<'a> {
     pub scene_bg: &'a wgpu::BindGroup,
     /// Per tile: its object is visible (`Scene::set_visible`). Hidden objects are never drawn.
     pub object_visible: &'a [bool],
+    /// Per object: this frame sees it from outside (`Scene::seen_from_outside`): its interior
+    /// faces are left out of `draw_args` and the lit pass culls its back faces.
+    pub outside: &'a [bool],
     pub width: u32,
     pub height: u32,
     /// The final image's targets; a strategy may draw into them in `prepare` (the final pass

@@ -133,7 +133,7 @@ pub fn draw_and_test_the_rest(
 ) -> Rest {
     let d = &f.ctx.device;
     let n = f.n_tiles();
-    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, first, false, f.timestamps);
+    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, first, false, f.outside, f.timestamps);
     let (boxes, init) = tile_boxes(f);
     let box_counts = passes::counts_buffer_init(d, &init);
     let boxes_buf = passes::boxes_buffer(d, &boxes);

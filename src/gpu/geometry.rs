@@ -58,10 +58,23 @@ pub struct SceneGeometry {
     /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
     /// vertices carry their grid coordinates in place of their normals; None for other objects.
     pub grid_dims: Vec<Option<(u32, u32)>>,
-    /// The tiles in runs `(start, end, grid)`, in order, covering every tile: `grid` for the tiles
-    /// of grid meshes (`grid_dims`), which the lit pass draws with their own fragment entry point.
-    pub draw_runs: Vec<(usize, usize, bool)>,
+    /// The tiles in runs, in order, covering every tile, each drawn by the lit pass with one
+    /// pipeline.
+    pub draw_runs: Vec<DrawRun>,
     pub bytes: u64,
+}
+
+/// A run of consecutive tiles that the lit pass draws with one pipeline
+/// (`SceneGeometry::draw_runs`, `Passes::record_draw`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DrawRun {
+    pub tiles: std::ops::Range<usize>,
+    /// Tiles of a grid mesh (`SceneGeometry::grid_dims`): their own fragment entry point.
+    pub grid_mesh: bool,
+    /// Tiles of object `o`, a reservoir grid: in frames that see it from outside
+    /// (`Scene::seen_from_outside`) its drawn faces bound its cells, wound outwards, and the lit
+    /// pass culls their back faces.
+    pub closed: Option<usize>,
 }
 
 /// Cells per side of a tile's sub-boxes (`SceneGeometry::sub_boxes`).
@@ -517,12 +530,14 @@ impl SceneGeometry {
             })
             .collect();
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
-        let mut draw_runs: Vec<(usize, usize, bool)> = Vec::new();
+        let mut draw_runs: Vec<DrawRun> = Vec::new();
         for (k, &oi) in tile_object.iter().enumerate() {
-            let grid = grid_dims[oi as usize].is_some();
+            let o = oi as usize;
+            let grid_mesh = grid_dims[o].is_some();
+            let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
             match draw_runs.last_mut() {
-                Some((_, end, g)) if *g == grid => *end = k + 1,
-                _ => draw_runs.push((k, k + 1, grid)),
+                Some(r) if r.grid_mesh == grid_mesh && r.closed == closed => r.tiles.end = k + 1,
+                _ => draw_runs.push(DrawRun { tiles: k..k + 1, grid_mesh, closed }),
             }
         }
         ctx.take_error()?;

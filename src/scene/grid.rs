@@ -104,39 +104,50 @@ impl Scene {
         Ok(id)
     }
 
+    /// Per object (scene order): whether it is a reservoir grid whose box lies wholly beyond the
+    /// near plane (`eye`, unit `forward` and `near` in render space: relative to `origin`, z times
+    /// `z_scale`), so the eye is outside all of its cells and the near plane cuts nothing open.
+    /// Seen so, the grid's faces without its interior ones (`grid::faces::kind::interior`) bound
+    /// its cells, wound outwards: every point of them that the eye sees lies on a face turned
+    /// towards it (a ray from outside first meets the cells where it enters them), so a frame
+    /// leaves out the interior faces ([`Scene::grid_interior_indices`]) and may cull back faces.
+    pub fn seen_from_outside(&self, origin: DVec3, (eye, forward, near): (DVec3, DVec3, f64), z_scale: f64) -> Vec<bool> {
+        let zs = DVec3::new(1.0, 1.0, z_scale);
+        self.objects()
+            .iter()
+            .map(|o| {
+                if !matches!(o.kind, ObjectKind::Grid(_)) || o.tiles.len() != info_len(&o.kind) {
+                    return false;
+                }
+                let off = o.placement(origin);
+                let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                for t in o.tiles.iter().filter(|t| !t.fine.is_empty()) {
+                    lo = lo.min((DVec3::from_array(t.bbox_min.map(f64::from)) + off) * zs);
+                    hi = hi.max((DVec3::from_array(t.bbox_max.map(f64::from)) + off) * zs);
+                }
+                // The box's least depth along the view, beyond the near plane by a margin (f32 positions).
+                let m = 1e-5 * (hi - lo).max_element().max(1.0);
+                let depth = (0..8)
+                    .map(|c| DVec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), hi, lo))
+                    .map(|p| (p - eye).dot(forward))
+                    .fold(f64::INFINITY, f64::min);
+                lo.x <= hi.x && depth > near + m
+            })
+            .collect()
+    }
+
     /// Per tile (scene tile order): how many indices at the end of the tile's level `level(t)`
     /// a frame leaves out: a grid block's interior triangles (`grid::faces::kind::interior`:
     /// faces between regions and of cavities, ordered last, hidden from any point outside the
-    /// grid's cells) while the grid's box lies wholly beyond the near plane (`eye`, unit
-    /// `forward` and `near` in render space: relative to `origin`, z times `z_scale`), so the eye
-    /// is outside it and the near plane cuts nothing open; 0 for other tiles and views.
-    pub fn grid_interior_indices(
-        &self,
-        origin: DVec3,
-        (eye, forward, near): (DVec3, DVec3, f64),
-        z_scale: f64,
-        level: impl Fn(usize) -> usize,
-    ) -> Vec<u32> {
-        let zs = DVec3::new(1.0, 1.0, z_scale);
+    /// grid's cells) when its grid is seen from outside (`outside`, per object:
+    /// [`Scene::seen_from_outside`]); 0 for other tiles and views.
+    pub fn grid_interior_indices(&self, outside: &[bool], level: impl Fn(usize) -> usize) -> Vec<u32> {
         let mut out = Vec::new();
-        for o in self.objects() {
+        for (o, &outside) in self.objects().iter().zip(outside) {
             let (ObjectKind::Grid(info), true) = (&o.kind, o.tiles.len() == info_len(&o.kind)) else {
                 out.extend(std::iter::repeat_n(0, o.tiles.len()));
                 continue;
             };
-            let off = o.placement(origin);
-            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for t in o.tiles.iter().filter(|t| !t.fine.is_empty()) {
-                lo = lo.min((DVec3::from_array(t.bbox_min.map(f64::from)) + off) * zs);
-                hi = hi.max((DVec3::from_array(t.bbox_max.map(f64::from)) + off) * zs);
-            }
-            // The box's least depth along the view, beyond the near plane by a margin (f32 positions).
-            let m = 1e-5 * (hi - lo).max_element().max(1.0);
-            let depth = (0..8)
-                .map(|c| DVec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), hi, lo))
-                .map(|p| (p - eye).dot(forward))
-                .fold(f64::INFINITY, f64::min);
-            let outside = lo.x <= hi.x && depth > near + m;
             for levels in &info.block_levels {
                 let t = out.len();
                 let n = match levels.get(level(t).min(levels.len().saturating_sub(1))) {
@@ -212,7 +223,10 @@ mod tests {
         assert_eq!(levels[0].interior_triangles, 2 * 16 * 2);
         // Render space relative to the world origin: the grid spans (0..40, 0..40, -20..0).
         let at = |p: [f64; 3], f: [f64; 3], near: f64| {
-            s.grid_interior_indices(DVec3::ZERO, (DVec3::from_array(p), DVec3::from_array(f), near), 1.0, |_| 0)
+            let outside = s.seen_from_outside(DVec3::ZERO, (DVec3::from_array(p), DVec3::from_array(f), near), 1.0);
+            let n = s.grid_interior_indices(&outside, |_| 0);
+            assert_eq!(outside, vec![n[0] > 0]);
+            n
         };
         let down = [0.0, 0.0, -1.0];
         assert_eq!(at([20.0, 20.0, 50.0], down, 1.0), vec![3 * 64]);
