@@ -205,7 +205,8 @@ pub struct Renderer {
     ctx: GpuContext,
     width: u32,
     height: u32,
-    passes: Passes,
+    /// The scene passes' pipelines, shared by the renderers on one device.
+    passes: std::sync::Arc<Passes>,
     main_targets: Targets,
     geometry: Option<SceneGeometry>,
     timestamps: Option<Timestamps>,
@@ -228,7 +229,7 @@ impl Renderer {
         let wanted = strategies.iter().fold(wgpu::Features::SHADER_EARLY_DEPTH_TEST, |f, s| f | s.required_features());
         let ctx = GpuContext::new(backend, wanted)?;
         ctx.check_image_size(width, height)?;
-        let passes = Passes::new(&ctx.device);
+        let passes = ctx.per_device(Passes::new);
         let timestamps = ctx.timestamps.then(|| Timestamps::new(&ctx.device));
         let main_targets = Targets::new(&ctx.device, width, height, true);
         ctx.take_error()?;
@@ -326,9 +327,8 @@ impl Renderer {
         // Grid blocks' interior faces (drawn last in each level) are left out when the grid lies
         // wholly beyond the near plane.
         let outside = scene.seen_from_outside(origin, (fc.eye, fc.forward, fc.near), camera.z_scale);
-        let interior = scene.grid_interior_indices(&outside, |t| {
-            chosen.as_ref().and_then(|c| c.0.get(t)).map_or(0, |&l| l as usize)
-        });
+        let interior = scene
+            .grid_interior_indices(&outside, |t| chosen.as_ref().and_then(|c| c.0.get(t)).map_or(0, |&l| l as usize));
         for (a, &n) in draw_args.iter_mut().zip(&interior) {
             a.index_count -= n.min(a.index_count);
         }
@@ -561,7 +561,7 @@ impl Renderer {
         camera: &Camera,
         opts: &IsoOptions,
     ) -> Result<IsoOutput> {
-        let iso = self.iso.get_or_insert_with(|| Box::new(IsoRenderer::new(&self.ctx.device)));
+        let iso = self.iso.get_or_insert_with(|| Box::new(IsoRenderer::new(&self.ctx)));
         iso.render(&self.ctx, self.width, self.height, vol, tree, w, camera, opts)
     }
 }

@@ -67,3 +67,24 @@ def test_isosurfaces_from_many_threads():
         images = list(ex.map(lambda w: r.render_isosurface(vol, w, cam, culling="implicit").image, isos))
     for w, im in zip(isos, images, strict=True):
         np.testing.assert_array_equal(im, serial[w])
+
+
+def test_renderers_sharing_one_device_render_concurrently():
+    # Renderers on one backend share the process's device (and its pipelines): each renders its own
+    # scene at its own size on its own thread, and every frame equals the one rendered alone
+    # (threshold 0: temporal's image then does not depend on which frame came before).
+    scenes = [_scene(n) for n in (17, 25, 33)]
+    renderers = [gc.Renderer(40 + 8 * k, 32 + 4 * k) for k in range(3)]
+    cams = _cams(4)
+    jobs = [(k, c, m) for k in range(3) for c in cams for m in ("none", "three_pass", "temporal")]
+    serial = [renderers[k].render(scenes[k], c, culling=m, pixel_threshold=0).image for k, c, m in jobs]
+    assert len({r.adapter_info for r in renderers}) == 1
+
+    def work(i):
+        k, c, m = jobs[i]
+        return renderers[k].render(scenes[k], c, culling=m, pixel_threshold=0).image
+
+    with ThreadPoolExecutor(max_workers=6) as ex:
+        images = list(ex.map(work, range(len(jobs))))
+    for a, b in zip(images, serial, strict=True):
+        np.testing.assert_array_equal(a, b)

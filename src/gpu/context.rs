@@ -3,13 +3,41 @@
 use super::depth_read::{DepthReadback, DepthReader};
 use super::readback::ReadbackTexture;
 use crate::error::{Error, Interrupt, Result};
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc, Mutex};
+use std::sync::{mpsc, Arc, Mutex, Weak};
 
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
 pub const INSTALL_HINT: &str = "install a Vulkan driver; on Debian/Ubuntu without a GPU: \
     `apt-get install libvulkan1 mesa-vulkan-drivers` (Mesa's lavapipe renders on the CPU)";
 
+/// A device and what is built once for it, shared by every [`GpuContext`] opened with the same
+/// backends and optional features while any of them lives ([`GpuContext::new`]).
+struct Shared {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    timestamps: bool,
+    features: wgpu::Features,
+    errors: Arc<Mutex<Vec<String>>>,
+    depth_copies: bool,
+    depth_reader: Arc<DepthReader>,
+    /// Objects built once per device ([`GpuContext::per_device`]), by type.
+    objects: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
+    /// The device's number among those this process opened.
+    serial: u64,
+}
+
+static OPENED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// The devices open in this process, by (backends asked for, optional features).
+#[allow(clippy::type_complexity)]
+static DEVICES: Mutex<Vec<((wgpu::Backends, wgpu::Features), Weak<Shared>)>> = Mutex::new(Vec::new());
+
+/// One user of a device (a renderer): the device's handles, shared with every other context on
+/// it, and this user's own state of interrupted submissions.
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -18,13 +46,16 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// The features the device was opened with.
     pub features: wgpu::Features,
-    /// Errors the device reported outside an error scope, taken after each frame.
+    /// Errors the device reported outside an error scope, taken after each frame (by whichever
+    /// context on the device takes them first: they are the device's).
     errors: Arc<Mutex<Vec<String>>>,
     /// Whether depth textures can be copied into buffers (downlevel flag
     /// DEPTH_TEXTURE_AND_BUFFER_COPIES: Vulkan yes, GL no).
     pub depth_copies: bool,
     /// Reads depth textures back through a shader where they cannot be copied.
-    depth_reader: DepthReader,
+    depth_reader: Arc<DepthReader>,
+    /// Keeps the device's shared entry alive.
+    shared: Arc<Shared>,
     /// A submission abandoned by an interrupt, still running on its worker thread (see
     /// [`GpuContext::submit_and_wait`]): the next one waits for it.
     pending: Mutex<Option<mpsc::Receiver<Result<()>>>>,
@@ -77,10 +108,62 @@ fn parse_backends(backend: &str) -> Result<wgpu::Backends> {
 }
 
 impl GpuContext {
-    /// Opens a device on `backend`, with the features geocull always needs plus those of
+    /// A context on a device of `backend`, with the features geocull always needs plus those of
     /// `optional` that the adapter has (strategies check for theirs before use).
+    ///
+    /// The device is opened once per process for each (resolved backends, `optional`) and shared
+    /// by every context asking for the same while any of them lives: on a CPU adapter a device
+    /// costs its driver's pipelines, their compiled code and its rasteriser's bins, about 250 MiB
+    /// on lavapipe once it has drawn a large frame, which a second renderer then does not pay
+    /// again. Each context keeps its own interrupted-submission state.
     pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
-        let (backend, backends) = resolve_backend(backend)?;
+        let (name, backends) = resolve_backend(backend)?;
+        let key = (backends, optional);
+        let shared = {
+            let mut devices = DEVICES.lock().unwrap_or_else(|p| p.into_inner());
+            devices.retain(|(_, w)| w.strong_count() > 0);
+            match devices.iter().find(|(k, _)| *k == key).and_then(|(_, w)| w.upgrade()) {
+                Some(s) => s,
+                None => {
+                    let s = Arc::new(Self::open(&name, backends, optional)?);
+                    devices.push((key, Arc::downgrade(&s)));
+                    s
+                }
+            }
+        };
+        Ok(Self {
+            device: shared.device.clone(),
+            queue: shared.queue.clone(),
+            info: shared.info.clone(),
+            limits: shared.limits.clone(),
+            timestamps: shared.timestamps,
+            features: shared.features,
+            errors: shared.errors.clone(),
+            depth_copies: shared.depth_copies,
+            depth_reader: shared.depth_reader.clone(),
+            shared,
+            pending: Mutex::new(None),
+            abandoned: AtomicBool::new(false),
+            submitter: Mutex::new(None),
+        })
+    }
+
+    /// The object of type `T` built once for this context's device by `make` (pipelines and
+    /// layouts every user of the device can share), built on first request.
+    pub fn per_device<T: Send + Sync + 'static>(&self, make: impl FnOnce(&wgpu::Device) -> T) -> Arc<T> {
+        let mut objects = self.shared.objects.lock().unwrap_or_else(|p| p.into_inner());
+        let entry = objects.entry(TypeId::of::<T>()).or_insert_with(|| Arc::new(make(&self.device)));
+        entry.clone().downcast::<T>().expect("keyed by its type")
+    }
+
+    /// The number of this context's device among those the process opened: equal for contexts
+    /// that share it.
+    pub fn device_serial(&self) -> u64 {
+        self.shared.serial
+    }
+
+    /// Opens a device (see [`GpuContext::new`]).
+    fn open(backend: &str, backends: wgpu::Backends, optional: wgpu::Features) -> Result<Shared> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);
@@ -137,9 +220,8 @@ impl GpuContext {
         }));
         let depth_copies =
             adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
-        let depth_reader = DepthReader::new(&device);
-        let pending = Mutex::new(None);
-        Ok(Self {
+        let depth_reader = Arc::new(DepthReader::new(&device));
+        Ok(Shared {
             device,
             queue,
             info,
@@ -149,9 +231,8 @@ impl GpuContext {
             errors,
             depth_copies,
             depth_reader,
-            pending,
-            abandoned: AtomicBool::new(false),
-            submitter: Mutex::new(None),
+            objects: Mutex::new(HashMap::new()),
+            serial: OPENED.fetch_add(1, Ordering::Relaxed),
         })
     }
 

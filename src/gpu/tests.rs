@@ -30,6 +30,25 @@ fn read_u32s(ctx: &GpuContext, enc: wgpu::CommandEncoder, src: &wgpu::Buffer, n:
 
 /// An id image with a known number of pixels per id (runs crossing the 16-wide workgroups,
 /// a partial last workgroup) is counted exactly.
+/// Contexts asking for the same backend and features share one device and its per-device
+/// objects while any of them lives; after the last is gone the next one opens a new device.
+#[test]
+fn contexts_share_a_device_while_one_lives() {
+    // Optional features no other test asks for: a device of this test's own.
+    let mine = wgpu::Features::DEPTH32FLOAT_STENCIL8;
+    let Ok(a) = GpuContext::new("auto", mine) else { return };
+    let b = GpuContext::new("auto", mine).unwrap();
+    assert_eq!(a.device_serial(), b.device_serial());
+    let (pa, pb) = (a.per_device(Passes::new), b.per_device(Passes::new));
+    assert!(std::sync::Arc::ptr_eq(&pa, &pb));
+    let other = GpuContext::new("auto", mine | wgpu::Features::SHADER_EARLY_DEPTH_TEST).unwrap();
+    assert_ne!(other.device_serial(), a.device_serial(), "other features, another device");
+    let first = a.device_serial();
+    drop((a, b, pa, pb));
+    let c = GpuContext::new("auto", mine).unwrap();
+    assert_ne!(c.device_serial(), first, "the last user gone, the device was closed");
+}
+
 #[test]
 fn histogram_counts_every_pixel_once() {
     let Some((ctx, p)) = device() else { return };

@@ -330,7 +330,7 @@ mod walk_tests {
     #[test]
     fn skipping_changes_nothing_drawn() {
         let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
-        let mut r = IsoRenderer::new(&ctx.device);
+        let mut r = IsoRenderer::new(&ctx);
         let vol = bricky_volume();
         let tree = crate::iso::MinMaxOctree::build(&vol);
         let md = tree.max_depth();

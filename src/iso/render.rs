@@ -235,7 +235,8 @@ type StraddlingEntry = ((u32, u32), Arc<Vec<NodeInfo>>);
 
 /// Pipelines and caches of the isosurface passes (the scene renderer holds one, made on first use).
 pub struct IsoRenderer {
-    passes: IsoPasses,
+    /// The pipelines, shared by the renderers on one device.
+    passes: Arc<IsoPasses>,
     targets: Option<Targets>,
     source: Option<super::VolumeId>,
     classes: Option<ClassGrid>,
@@ -247,11 +248,12 @@ pub struct IsoRenderer {
 }
 
 impl IsoRenderer {
-    /// Creates the pipelines (and the marching-cubes case table); their time is reported as the
-    /// first frame's `setup_ms`.
-    pub fn new(d: &wgpu::Device) -> Self {
+    /// Creates the pipelines, or takes those of `ctx`'s device if another renderer on it made
+    /// them (and the marching-cubes case table); their time is reported as the first frame's
+    /// `setup_ms`.
+    pub fn new(ctx: &GpuContext) -> Self {
         let t = Instant::now();
-        let passes = IsoPasses::new(d);
+        let passes = ctx.per_device(IsoPasses::new);
         super::march::cases::cases();
         Self {
             passes,
@@ -625,7 +627,7 @@ mod tests {
     #[test]
     fn sphere_implicit_equals_none() {
         let Some(ctx) = device() else { return };
-        let mut r = IsoRenderer::new(&ctx.device);
+        let mut r = IsoRenderer::new(&ctx);
         let vol = super::super::sphere_field(24, 0.6);
         let tree = MinMaxOctree::build(&vol);
         let cam = Camera::look_at(

@@ -111,7 +111,12 @@ impl Scene {
     /// its cells, wound outwards: every point of them that the eye sees lies on a face turned
     /// towards it (a ray from outside first meets the cells where it enters them), so a frame
     /// leaves out the interior faces ([`Scene::grid_interior_indices`]) and may cull back faces.
-    pub fn seen_from_outside(&self, origin: DVec3, (eye, forward, near): (DVec3, DVec3, f64), z_scale: f64) -> Vec<bool> {
+    pub fn seen_from_outside(
+        &self,
+        origin: DVec3,
+        (eye, forward, near): (DVec3, DVec3, f64),
+        z_scale: f64,
+    ) -> Vec<bool> {
         let zs = DVec3::new(1.0, 1.0, z_scale);
         self.objects()
             .iter()
