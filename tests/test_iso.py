@@ -221,6 +221,29 @@ def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
         renderer.render_isosurface(big, 1e300, cam)
 
 
+def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
+    # Cached patches stay on the GPU between frames (appended as views reveal them); frames drawn
+    # from there equal frames uploaded from scratch (cache=False), across views, both cullings,
+    # and a change of exaggeration (a new render space: the GPU copy starts again).
+    r = gc.Renderer(56, 48)
+    v = sphere_volume(40, 0.6)
+    sizes = []
+    for k, (az, zs) in enumerate([(0, 1.0), (120, 1.0), (240, 1.0), (60, 2.5), (0, 1.0)]):
+        a, e = np.radians(az), np.radians(25.0)
+        cam = gc.Camera.look_at(4 * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), (0, 0, 0),
+                                up=(0, 0, 1), fov_y=40.0, z_scale=zs)
+        for culling in ("implicit", "none"):
+            kept = r.render_isosurface(v, 0.1, cam, culling=culling)
+            fresh = r.render_isosurface(v, 0.1, cam, culling=culling, cache=False)
+            assert kept.stats["surface_triangles"] == fresh.stats["surface_triangles"] > 0
+            np.testing.assert_array_equal(kept.image, fresh.image)
+            np.testing.assert_array_equal(kept.depth, fresh.depth)
+            sizes.append(kept.stats["gpu_cache_bytes"])
+    assert min(sizes) > 0
+    gc.iso.clear_cache(r)
+    assert r.render_isosurface(v, 0.1, cam, cache=False).stats["gpu_cache_bytes"] == 0
+
+
 def test_patch_cache_is_bounded_by_its_budget():
     r = gc.Renderer(48, 48)
     v = sphere_volume(40, 0.6)
@@ -236,6 +259,8 @@ def test_patch_cache_is_bounded_by_its_budget():
         res = r.render_isosurface(v, float(w), cam)
         sizes.append(res.stats["cache_bytes"])
         assert res.stats["cache_bytes"] <= budget
+        # the GPU copy of the cached patches (no f64 positions) stays within ~2 x theirs
+        assert 0 < res.stats["gpu_cache_bytes"] <= 2 * budget
         # evictions never change what is drawn
         np.testing.assert_array_equal(res.image, r.render_isosurface(v, float(w), cam, cache=False).image)
     assert max(sizes) > one  # it does keep more than one isovalue's patches
@@ -246,7 +271,8 @@ def test_patch_cache_is_bounded_by_its_budget():
         last = r.render_isosurface(v, w, cam)
     assert last.stats["patches_extracted"] == 0
     gc.iso.set_cache_budget(r, 0)  # nothing is kept
-    assert r.render_isosurface(v, 0.0, cam).stats["cache_bytes"] == 0
+    none_kept = r.render_isosurface(v, 0.0, cam).stats
+    assert none_kept["cache_bytes"] == none_kept["gpu_cache_bytes"] == 0
     with pytest.raises(gc.InputError, match="^bytes"):
         gc.iso.set_cache_budget(r, -1)
     with pytest.raises(gc.InputError, match="^bytes"):

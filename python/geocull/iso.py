@@ -27,6 +27,9 @@ Pesco field 128³).
 
 Caches: a renderer keeps the patches it extracted (per volume, isovalue and node) within a memory
 budget, 256 MiB by default (:func:`set_cache_budget`); ``stats["cache_bytes"]`` is what it holds.
+Their vertices and triangles stay on the GPU between frames (``stats["gpu_cache_bytes"]``), so a
+frame uploads only patches it draws for the first time (and, with implicit culling, the indices of
+the cells it keeps).
 
 The implementation is :meth:`geocull.Renderer.render_isosurface`; this module is its functional
 form plus the cache control and the mode names, and :func:`extract_isosurface` (re-exported as

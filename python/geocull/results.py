@@ -110,7 +110,7 @@ class IsoStats(TypedDict):
     occluder_ms: float  # ms, CPU: node classes (first frame of an isovalue/depth) + recording the map pass
     cull_ms: float  # ms, the occlusion map on the GPU + coarse-to-fine node tests, read-backs included
     extract_ms: float  # ms, marching cubes (cache look-ups included)
-    draw_ms: float  # ms, vertex assembly, upload and the lit draw (GPU finished)
+    draw_ms: float  # ms, upload of what is not on the GPU yet and the lit draw (GPU finished)
     surface_ms: float  # ms, extract_ms + draw_ms
     total_ms: float  # ms, wall time from the call to the GPU finishing the image, read-back and setup excluded
     setup_ms: float  # ms, one-time work before the clock (pipelines, case table, targets at a new size); else 0
@@ -118,6 +118,7 @@ class IsoStats(TypedDict):
     readbacks: int  # GPU-to-host read-backs inside the frame (node-test counts; the image read-back excluded)
     readback_ms: float  # ms, wall time to copy image and depth back
     cache_bytes: int  # bytes the renderer's isosurface caches hold after the frame (<= its iso_cache_budget)
+    gpu_cache_bytes: int  # bytes of the cached patches kept on the GPU between frames (<= about 2 x their own)
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

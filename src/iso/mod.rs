@@ -35,6 +35,7 @@ pub mod march;
 pub mod mesh;
 pub mod octree;
 mod passes;
+mod pool;
 pub mod render;
 /// The extraction's former name (marching tetrahedra), kept for paths that use it.
 pub use march as tetra;

@@ -440,3 +440,89 @@ pub(super) fn draw_surface(
     ctx.take_error()?;
     Ok((nt as u64, nv as u64))
 }
+
+/// [`draw_surface`] from the renderer's pool ([`super::pool::SurfacePool`]): `patches` are put
+/// in the pool (only those not there yet are uploaded), then drawn whole (`ranges` None: runs of
+/// patches consecutive in the pool, one draw each) or, with `ranges`, only those triangle ranges
+/// of each patch (their indices uploaded). Returns (triangles drawn, vertices of the patches).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn draw_pooled(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    pool: &mut super::pool::SurfacePool,
+    globals_bg: &wgpu::BindGroup,
+    tg: &Targets,
+    patches: &[Arc<SurfacePatch>],
+    ranges: Option<&[Vec<[u32; 2]>]>,
+    space: &Space,
+) -> Result<(u64, u64)> {
+    let d = &ctx.device;
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
+    let bases = pool.ensure(ctx, &mut enc, patches, space)?;
+    let nv: u64 = patches.iter().map(|p| p.positions.len() as u64).sum();
+    // Triangle runs of the pool's index buffer, or this frame's own indices.
+    let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
+    let mut own: Option<wgpu::Buffer> = None;
+    let mut nt = 0u64;
+    match ranges {
+        None => {
+            let mut order: Vec<(u32, u32)> =
+                patches.iter().zip(&bases).map(|(p, &(_, t))| (t, t + p.triangles.len() as u32)).collect();
+            order.sort_unstable();
+            for (a, b) in order {
+                nt += (b - a) as u64;
+                match runs.last_mut() {
+                    Some(r) if r.end == 3 * a => r.end = 3 * b,
+                    _ if a < b => runs.push(3 * a..3 * b),
+                    _ => {}
+                }
+            }
+        }
+        Some(ranges) => {
+            let counts: Vec<usize> = ranges.iter().map(|r| r.iter().map(|[a, b]| (b - a) as usize).sum()).collect();
+            nt = counts.iter().sum::<usize>() as u64;
+            let mut idx = vec![[0u32; 3]; nt as usize];
+            let mut chunks = Vec::with_capacity(patches.len());
+            let mut rest = idx.as_mut_slice();
+            for &n in &counts {
+                let (h, t) = rest.split_at_mut(n);
+                chunks.push(h);
+                rest = t;
+            }
+            chunks.into_par_iter().zip(patches.par_iter().zip(ranges).zip(&bases)).for_each(
+                |(out, ((p, r), &(vb, _)))| {
+                    let mut out = out.iter_mut();
+                    for &[a, b] in r {
+                        for (tri, o) in p.triangles[a as usize..b as usize].iter().zip(&mut out) {
+                            *o = [tri[0] + vb, tri[1] + vb, tri[2] + vb];
+                        }
+                    }
+                },
+            );
+            if nt > 0 {
+                own = Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("iso_indices"),
+                    contents: bytemuck::cast_slice(&idx),
+                    usage: wgpu::BufferUsages::INDEX,
+                }));
+                runs.push(0..3 * nt as u32);
+            }
+        }
+    }
+    {
+        let mut p = pass(&mut enc, "iso_surface", Some(&tg.color), Some(&tg.depth));
+        if let (Some((vb, pool_ib)), false) = (pool.buffers(), runs.is_empty()) {
+            p.set_pipeline(&iso.surf_pipeline);
+            p.set_bind_group(0, globals_bg, &[]);
+            p.set_vertex_buffer(0, vb.slice(..));
+            p.set_index_buffer(own.as_ref().unwrap_or(pool_ib).slice(..), wgpu::IndexFormat::Uint32);
+            for r in runs {
+                p.draw_indexed(r, 0, 0..1);
+            }
+        }
+    }
+    ctx.queue.submit([enc.finish()]);
+    ctx.wait()?;
+    ctx.take_error()?;
+    Ok((nt, nv))
+}

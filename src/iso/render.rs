@@ -82,7 +82,8 @@ use wgpu::util::DeviceExt;
 pub use super::bricks::{node_classes, occluder_nodes};
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{MinMaxOctree, NodeInfo};
-use super::passes::{draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
+use super::passes::{draw_pooled, draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
+use super::pool::SurfacePool;
 use super::Volume;
 use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -187,7 +188,8 @@ pub struct IsoStats {
     pub cull_ms: f64,
     /// Marching cubes (cache look-ups included).
     pub extract_ms: f64,
-    /// Vertex assembly, upload and the lit draw (GPU finished).
+    /// Upload of what is not on the GPU yet (the pool's new patches; implicit culling: the kept
+    /// cells' indices) and the lit draw (GPU finished).
     pub draw_ms: f64,
     /// extract_ms + draw_ms.
     pub surface_ms: f64,
@@ -205,6 +207,9 @@ pub struct IsoStats {
     /// Bytes held by the renderer's isosurface caches after the frame (patches and straddling-node
     /// lists), at most `IsoOptions::cache_budget`.
     pub cache_bytes: u64,
+    /// Bytes of the cached patches' copy kept on the GPU between frames (vertices and triangles;
+    /// at most about twice those the cache holds).
+    pub gpu_cache_bytes: u64,
 }
 
 /// One rendered isosurface frame as host arrays.
@@ -245,6 +250,8 @@ pub struct IsoRenderer {
     /// Straddling nodes per (isovalue bits, depth).
     straddling: Vec<StraddlingEntry>,
     patches: PatchCache,
+    /// The cached patches' vertices and triangles on the GPU.
+    pool: SurfacePool,
 }
 
 impl IsoRenderer {
@@ -263,6 +270,7 @@ impl IsoRenderer {
             setup_ms: t.elapsed().as_secs_f64() * 1e3,
             straddling: Vec::new(),
             patches: PatchCache::new(),
+            pool: SurfacePool::default(),
         }
     }
 
@@ -305,6 +313,7 @@ impl IsoRenderer {
         self.classes = None;
         self.straddling.clear();
         self.patches.clear();
+        self.pool.clear();
         self.source = None;
     }
 }
@@ -551,13 +560,21 @@ impl IsoRenderer {
         // ---- Draw.
         let t_draw = Instant::now();
         let d = &ctx.device;
-        let iso: &IsoRenderer = &*self;
-        let tg = iso.targets.as_ref().unwrap();
         // Of the visible nodes' patches, only the cells some ray entered before the map.
         let ranges: Option<Vec<Vec<[u32; 2]>>> = seen.as_ref().map(|(bits, mdims, shift)| {
             visible.par_iter().zip(&patches).map(|(n, p)| visible_ranges(p, n, bits, *mdims, *shift)).collect()
         });
-        let (tris, verts) = draw_surface(ctx, &iso.passes, &globals_bg, tg, &patches, ranges.as_deref(), &space)?;
+        let Self { passes, targets, pool, .. } = &mut *self;
+        let tg = targets.as_ref().unwrap();
+        // Cached patches stay on the GPU between frames (the pool); patches extracted for this
+        // frame only are uploaded with it.
+        let (tris, verts) = if opts.use_cache {
+            draw_pooled(ctx, passes, pool, &globals_bg, tg, &patches, ranges.as_deref(), &space)?
+        } else {
+            draw_surface(ctx, passes, &globals_bg, tg, &patches, ranges.as_deref(), &space)?
+        };
+        let iso: &IsoRenderer = &*self;
+        let tg = iso.targets.as_ref().unwrap();
         stats.submissions += 1;
         stats.surface_triangles = tris;
         stats.surface_vertices = verts;
@@ -598,7 +615,11 @@ impl IsoRenderer {
         }
         stats.readback_ms = t_rb.elapsed().as_secs_f64() * 1e3;
         stats.setup_ms = setup_ms;
+        // This frame's patches that the cache did not keep leave the pool.
+        drop(patches);
+        self.pool.trim();
         stats.cache_bytes = self.cache_bytes() as u64;
+        stats.gpu_cache_bytes = self.pool.bytes();
         Ok(IsoOutput {
             width,
             height,

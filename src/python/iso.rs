@@ -204,6 +204,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("submissions", s.submissions)?;
     st.set_item("readbacks", s.readbacks)?;
     st.set_item("cache_bytes", s.cache_bytes)?;
+    st.set_item("gpu_cache_bytes", s.gpu_cache_bytes)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
