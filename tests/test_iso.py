@@ -228,7 +228,7 @@ def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
     r = gc.Renderer(56, 48)
     v = sphere_volume(40, 0.6)
     sizes = []
-    for k, (az, zs) in enumerate([(0, 1.0), (120, 1.0), (240, 1.0), (60, 2.5), (0, 1.0)]):
+    for az, zs in [(0, 1.0), (120, 1.0), (240, 1.0), (60, 2.5), (0, 1.0)]:
         a, e = np.radians(az), np.radians(25.0)
         cam = gc.Camera.look_at(4 * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), (0, 0, 0),
                                 up=(0, 0, 1), fov_y=40.0, z_scale=zs)
