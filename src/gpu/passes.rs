@@ -110,6 +110,9 @@ pub struct Passes {
     select_rest: wgpu::ComputePipeline,
     box_layout: wgpu::BindGroupLayout,
     box_test: wgpu::RenderPipeline,
+    /// The 36 corner indices of a box's 12 triangles (box.wgsl `CUBE`): one indexed instance per
+    /// box shades its 8 corners instead of 36 vertices.
+    box_indices: wgpu::Buffer,
     /// The box test on the hardware's early depth test, where the device allows it exactly.
     box_early: Option<wgpu::RenderPipeline>,
 }
@@ -421,7 +424,16 @@ impl Passes {
         let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(BOX_TEST_WGSL));
         let box_test = box_pipeline(d, &box_pl, &box_shader, if gl { "fs_box_gl" } else { "fs_box" }, None);
         let box_early = super::box_early::early_box_pipeline(d, &box_pl);
+        let cube: [u32; 36] = [
+            0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6,
+        ];
+        let box_indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("box_indices"),
+            contents: bytemuck::cast_slice(&cube),
+            usage: wgpu::BufferUsages::INDEX,
+        });
         Self {
+            box_indices,
             scene_layout,
             hist_layout,
             select_layout,
@@ -629,7 +641,8 @@ impl Passes {
             pass.set_bind_group(0, scene_bg, &[]);
             pass.set_bind_group(1, &bg, &[]);
             pass.set_vertex_buffer(0, boxes.slice(..));
-            pass.draw(0..36, 0..n as u32);
+            pass.set_index_buffer(self.box_indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..36, 0, 0..n as u32);
         }
     }
 

@@ -12,6 +12,10 @@ var<private> CUBE: array<u32, 36> = array<u32, 36>(
 
 // Corner of box lo..hi for vertex `vi` (0..36) of its triangle list.
 fn box_corner(vi: u32, lo: vec3<f32>, hi: vec3<f32>) -> vec3<f32> {
-    let c = CUBE[vi];
+    return corner(CUBE[vi], lo, hi);
+}
+
+// Corner `c` (0..8) of box lo..hi (indexed draws: `CUBE` as the index buffer).
+fn corner(c: u32, lo: vec3<f32>, hi: vec3<f32>) -> vec3<f32> {
     return select(lo, hi, vec3<bool>((c & 1u) != 0u, (c & 2u) != 0u, (c & 4u) != 0u));
 }

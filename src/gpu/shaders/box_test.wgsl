@@ -41,11 +41,11 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
     var out: BoxOut;
     out.tile = tile;
     if (skip[tile].instance_count > 0u) {
-        out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all 36 vertices equal: nothing rasterised
+        out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all corners equal: nothing rasterised
         out.zw = vec2<f32>(0.0, 1.0);
         return out;
     }
-    out.clip = g.view_proj * vec4<f32>(box_corner(vi, lo.xyz, hi.xyz), 1.0);
+    out.clip = g.view_proj * vec4<f32>(corner(vi, lo.xyz, hi.xyz), 1.0);
     out.zw = out.clip.zw;
     return out;
 }
