@@ -77,7 +77,12 @@ class Renderer:
     ``GEOCULL_BACKEND`` (one of those names; unset, empty or "auto": geocull chooses), which picks
     the backend for a whole program or test run, e.g. ``GEOCULL_BACKEND=gl pytest``; an explicit
     backend wins over it. Raises DeviceError if no adapter is found, InputError for an unknown
-    name (in ``backend`` or in ``GEOCULL_BACKEND``)."""
+    name (in ``backend`` or in ``GEOCULL_BACKEND``).
+
+    Renderers of one backend share the process's device and its compiled pipelines while any of
+    them lives (on lavapipe ~250 MiB once it has drawn a large frame): a second renderer costs only
+    its own images and caches. Each renderer keeps its own geometry, history and caches; they may
+    render from different threads at once."""
 
     def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
         if not isinstance(backend, str):
