@@ -149,7 +149,8 @@ impl GpuContext {
     }
 
     /// The object of type `T` built once for this context's device by `make` (pipelines and
-    /// layouts every user of the device can share), built on first request.
+    /// layouts every user of the device can share), built on first request. `make` runs under the
+    /// device's lock: it must not ask for another per-device object.
     pub fn per_device<T: Send + Sync + 'static>(&self, make: impl FnOnce(&wgpu::Device) -> T) -> Arc<T> {
         let mut objects = self.shared.objects.lock().unwrap_or_else(|p| p.into_inner());
         let entry = objects.entry(TypeId::of::<T>()).or_insert_with(|| Arc::new(make(&self.device)));
