@@ -179,7 +179,8 @@ impl Interrupt {
         }
     }
 
-    /// Runs `job` (which may use rayon) while this thread polls the hook, once before and then
+    /// Runs `job` (which may use rayon; on this process's pool, [`in_pool`]) while this thread
+    /// polls the hook, once before and then
     /// every [`Self::POLL`]; when it says stop, the flag passed to `job` is set, `job` should
     /// return soon (skipping work not started) and the result is `Err(Error::Interrupted)`.
     /// Without a hook, `job` runs on this thread.
@@ -193,7 +194,7 @@ impl Interrupt {
         let out = std::thread::scope(|s| {
             let stop = &stop;
             let worker = s.spawn(move || {
-                let out = job(stop);
+                let out = in_pool(|| job(stop));
                 let _ = tx.send(());
                 out
             });
@@ -211,6 +212,46 @@ impl Interrupt {
             Ok(v) => Ok(v),
         }
     }
+}
+
+/// The process whose threads rayon's global pool has (or will have): the first to use geocull.
+static FIRST_PROCESS: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
+
+/// Records this process as the one whose threads rayon's global pool has (the Python module does
+/// at import; otherwise the first [`in_pool`] call does).
+pub fn record_process() {
+    FIRST_PROCESS.get_or_init(std::process::id);
+}
+
+/// Runs `f` where its rayon work can run: directly (rayon's global pool) in the process that
+/// first used geocull; in a process forked from it, which inherits the global pool without its
+/// threads (work given to it would wait forever), on a worker of a pool of that process's own,
+/// made on its first call.
+pub fn in_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    let pid = std::process::id();
+    if *FIRST_PROCESS.get_or_init(|| pid) == pid {
+        return f();
+    }
+    static POOL: std::sync::Mutex<Option<(u32, std::sync::Arc<rayon::ThreadPool>)>> = std::sync::Mutex::new(None);
+    let pool = {
+        let mut slot = POOL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        match &*slot {
+            Some((p, pool)) if *p == pid => pool.clone(),
+            _ => {
+                // The pool of a process this one was forked from is forgotten, not dropped: its
+                // threads are not here.
+                std::mem::forget(slot.take());
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .thread_name(|i| format!("geocull-{i}"))
+                    .build()
+                    .map(std::sync::Arc::new)
+                    .expect("a thread pool (the system refused to start threads)");
+                *slot = Some((pid, pool.clone()));
+                pool
+            }
+        }
+    };
+    pool.install(f)
 }
 
 #[cfg(test)]

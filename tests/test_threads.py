@@ -7,6 +7,7 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pytest
 
 import geocull as gc
 
@@ -88,3 +89,29 @@ def test_renderers_sharing_one_device_render_concurrently():
         images = list(ex.map(work, range(len(jobs))))
     for a, b in zip(images, serial, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def _render_in_child(q, cam):
+    q.put(gc.Renderer(48, 40).render(_scene(), cam, culling="three_pass").image)
+
+
+def test_a_process_forked_after_rendering_renders_too():
+    # The parent has started geocull's threads (rayon's pool, the driver's) and holds a device; a
+    # forked child inherits neither's threads, so it must open its own instead of waiting forever.
+    import multiprocessing as mp
+
+    if "fork" not in mp.get_all_start_methods():
+        pytest.skip("no fork on this platform")
+    cam = _cams(1)[0]
+    r = gc.Renderer(48, 40)
+    ref = r.render(_scene(), cam, culling="three_pass").image
+    ctx = mp.get_context("fork")
+    q = ctx.Queue()
+    p = ctx.Process(target=_render_in_child, args=(q, cam))
+    p.start()
+    p.join(60)
+    if p.is_alive():
+        p.kill()
+        pytest.fail("the forked child hung")
+    assert p.exitcode == 0
+    np.testing.assert_array_equal(q.get(timeout=10), ref)

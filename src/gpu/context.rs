@@ -32,9 +32,11 @@ struct Shared {
 
 static OPENED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
-/// The devices open in this process, by (backends asked for, optional features).
+/// The devices open in this process, by (backends asked for, optional features) and the id of
+/// the process that opened them: a process forked from one that holds a device inherits the
+/// entry but not the driver's threads, so it must open a device of its own.
 #[allow(clippy::type_complexity)]
-static DEVICES: Mutex<Vec<((wgpu::Backends, wgpu::Features), Weak<Shared>)>> = Mutex::new(Vec::new());
+static DEVICES: Mutex<Vec<((wgpu::Backends, wgpu::Features, u32), Weak<Shared>)>> = Mutex::new(Vec::new());
 
 /// One user of a device (a renderer): the device's handles, shared with every other context on
 /// it, and this user's own state of interrupted submissions.
@@ -118,10 +120,11 @@ impl GpuContext {
     /// again. Each context keeps its own interrupted-submission state.
     pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
         let (name, backends) = resolve_backend(backend)?;
-        let key = (backends, optional);
+        let key = (backends, optional, std::process::id());
         let shared = {
             let mut devices = DEVICES.lock().unwrap_or_else(|p| p.into_inner());
-            devices.retain(|(_, w)| w.strong_count() > 0);
+            // Entries of a parent process (before a fork) are dropped without dropping their devices.
+            devices.retain(|((_, _, pid), w)| *pid == key.2 && w.strong_count() > 0);
             match devices.iter().find(|(k, _)| *k == key).and_then(|(_, w)| w.upgrade()) {
                 Some(s) => s,
                 None => {

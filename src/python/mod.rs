@@ -89,9 +89,13 @@ fn active_progress(py: Python<'_>) -> PyResult<Option<Py<PyAny>>> {
     Ok(if t.is_none() { None } else { Some(t.unbind()) })
 }
 
-/// Runs `f` without the GIL, turning errors and panics into Python exceptions.
+/// Runs `f` without the GIL, turning errors and panics into Python exceptions. In a process
+/// forked from one that used geocull, `f` runs on that process's own thread pool
+/// ([`crate::error::in_pool`]); Ctrl-C there is then honoured only when `f` returns (Python
+/// checks signals on the main thread only).
 pub(crate) fn run<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> + Send) -> PyResult<T> {
-    match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
+    let out = py.detach(|| crate::error::in_pool(|| catch_unwind(AssertUnwindSafe(f))));
+    match out {
         Ok(r) => Ok(r?),
         Err(p) => {
             let what = p
@@ -131,6 +135,7 @@ pub(crate) fn contiguous<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
 
 #[pymodule]
 fn _geocull(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    crate::error::record_process();
     m.add_class::<scene::PyScene>()?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<renderer::PyRenderer>()?;
