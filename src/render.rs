@@ -208,6 +208,8 @@ pub struct Renderer {
     /// The scene passes' pipelines, shared by the renderers on one device.
     passes: std::sync::Arc<Passes>,
     main_targets: Targets,
+    /// Prepass targets, shared by the strategies that run a prepass (three_pass, temporal).
+    prepass_targets: std::sync::Mutex<Option<Targets>>,
     geometry: Option<SceneGeometry>,
     timestamps: Option<Timestamps>,
     /// One instance of every registered strategy (they may cache between frames).
@@ -240,6 +242,7 @@ impl Renderer {
             height,
             passes,
             main_targets,
+            prepass_targets: std::sync::Mutex::new(None),
             geometry: None,
             timestamps,
             strategies,
@@ -318,7 +321,9 @@ impl Renderer {
         if let Some(ts) = self.timestamps.as_mut() {
             ts.begin_frame();
         }
-        let Self { ctx, passes, main_targets, geometry, timestamps, strategies, width, height, .. } = self;
+        let Self {
+            ctx, passes, main_targets, prepass_targets, geometry, timestamps, strategies, width, height, ..
+        } = self;
         let geometry = geometry.as_ref().expect("uploaded above");
         let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
         let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
@@ -348,6 +353,7 @@ impl Renderer {
             width: *width,
             height: *height,
             main_targets,
+            prepass_targets,
             options: &opts.cull,
             timestamps: timestamps.as_ref(),
         };

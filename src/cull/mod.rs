@@ -104,6 +104,9 @@ pub struct FrameInputs<'a> {
     /// The final image's targets; a strategy may draw into them in `prepare` (the final pass
     /// clears them).
     pub main_targets: &'a Targets,
+    /// The renderer's id + depth targets for a prepass (`phases::prepass_first_set`), shared by
+    /// the strategies that run one; made or resized on use.
+    pub prepass_targets: &'a std::sync::Mutex<Option<Targets>>,
     pub options: &'a CullOptions,
     pub timestamps: Option<&'a Timestamps>,
 }

@@ -41,20 +41,18 @@ pub struct FirstSet {
     pub prepass_tris: u64,
 }
 
-/// Passes 1–3 of three_pass into `enc`: the prepass of the coarse proxies into `targets` (made or
-/// resized for `prepass_scale`), its histogram and the GPU selection of the tiles with more than
-/// `pixel_threshold` pixels (compared in prepass pixels).
-pub fn prepass_first_set(
-    f: &FrameInputs<'_>,
-    enc: &mut wgpu::CommandEncoder,
-    targets: &mut Option<Targets>,
-) -> FirstSet {
+/// Passes 1–3 of three_pass into `enc`: the prepass of the coarse proxies into the renderer's
+/// prepass targets (`FrameInputs::prepass_targets`, made or resized for `prepass_scale`), its
+/// histogram and the GPU selection of the tiles with more than `pixel_threshold` pixels (compared
+/// in prepass pixels).
+pub fn prepass_first_set(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> FirstSet {
     let d = &f.ctx.device;
     let n = f.n_tiles();
     let scale = f.options.prepass_scale;
     let pw = ((f.width as f64 * scale).round() as u32).max(1);
     let ph = ((f.height as f64 * scale).round() as u32).max(1);
-    let pt = Targets::ensure(targets, d, pw, ph);
+    let mut targets = f.prepass_targets.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let pt = Targets::ensure(&mut targets, d, pw, ph);
 
     // Pass 1: coarse proxies, front to back.
     let mut coarse = f.pick(&f.geometry.coarse, |_| true);

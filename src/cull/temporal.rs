@@ -23,14 +23,12 @@
 use super::phases::{draw_and_test_the_rest, prepass_first_set};
 use super::{CullStrategy, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
-use crate::gpu::{passes, Targets};
+use crate::gpu::passes;
 
 #[derive(Default)]
 pub struct Temporal {
     /// The geometry key and, per tile, whether it had pixels in the last frame rendered with it.
     last: Option<((u64, u64), Vec<bool>)>,
-    /// Targets of the prepass that stands in for a missing history.
-    targets: Option<Targets>,
     /// The geometry key of the frame being rendered (for `report`).
     current: Option<(u64, u64)>,
 }
@@ -64,7 +62,7 @@ impl CullStrategy for Temporal {
             }
             // No history (a scene's first frame, new geometry): three_pass's prepass chooses.
             None => {
-                let set = prepass_first_set(f, enc, &mut self.targets);
+                let set = prepass_first_set(f, enc);
                 stats.push(("tiles_reused", Stat::Count(0)));
                 stats.push(("triangles_prepass", Stat::Count(set.prepass_tris)));
                 (set.first, set.fine)

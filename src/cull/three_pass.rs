@@ -56,12 +56,9 @@
 use super::phases::{draw_and_test_the_rest, prepass_first_set, FirstSet};
 use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
-use crate::gpu::Targets;
 
 #[derive(Default)]
 pub struct ThreePass {
-    /// Id + depth targets of the prepass, re-created when its size changes.
-    targets: Option<Targets>,
     /// This frame ran the box test (conservative or predictor).
     tested: bool,
     /// This frame only predicts (approximate mode).
@@ -106,7 +103,7 @@ impl CullStrategy for ThreePass {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc, &mut self.targets);
+        let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc);
         let threshold = f.options.pixel_threshold;
         let dist = f.tile_dist2;
         let pixels = Pixels::Gpu { counts, scale: ratio };
