@@ -92,26 +92,40 @@ def test_renderers_sharing_one_device_render_concurrently():
 
 
 def _render_in_child(q, cam):
-    q.put(gc.Renderer(48, 40).render(_scene(), cam, culling="three_pass").image)
+    # Scene building is the core's CPU work (its own thread pool in a forked child); a renderer
+    # needs a device, which a child forked from a process with one may not open.
+    out: dict = {"triangles": _scene().n_triangles}
+    try:
+        out["image"] = gc.Renderer(48, 40).render(_scene(), cam, culling="three_pass").image
+    except gc.DeviceError as e:
+        out["error"] = str(e)
+    q.put(out)
 
 
-def test_a_process_forked_after_rendering_renders_too():
-    # The parent has started geocull's threads (rayon's pool, the driver's) and holds a device; a
-    # forked child inherits neither's threads, so it must open its own instead of waiting forever.
+@pytest.mark.parametrize("method", ["fork", "spawn"])
+def test_worker_processes_after_the_parent_rendered(method):
+    # A child forked after its parent opened a device inherits the driver's state without its
+    # threads: it builds scenes (it used to wait forever for rayon's threads) and gets a clear
+    # DeviceError for a renderer instead of a crash at random; a spawned child renders.
     import multiprocessing as mp
 
-    if "fork" not in mp.get_all_start_methods():
-        pytest.skip("no fork on this platform")
+    if method not in mp.get_all_start_methods():
+        pytest.skip(f"no {method} on this platform")
     cam = _cams(1)[0]
     r = gc.Renderer(48, 40)
     ref = r.render(_scene(), cam, culling="three_pass").image
-    ctx = mp.get_context("fork")
+    ctx = mp.get_context(method)
     q = ctx.Queue()
     p = ctx.Process(target=_render_in_child, args=(q, cam))
     p.start()
-    p.join(60)
+    p.join(120)
     if p.is_alive():
         p.kill()
-        pytest.fail("the forked child hung")
+        pytest.fail("the child hung")
     assert p.exitcode == 0
-    np.testing.assert_array_equal(q.get(timeout=10), ref)
+    out = q.get(timeout=10)
+    assert out["triangles"] == _scene().n_triangles
+    if method == "fork":
+        assert "image" not in out and "spawn" in out["error"] and "forked" in out["error"]
+    else:
+        np.testing.assert_array_equal(out["image"], ref)

@@ -82,7 +82,10 @@ class Renderer:
     Renderers of one backend share the process's device and its compiled pipelines while any of
     them lives (on lavapipe ~250 MiB once it has drawn a large frame): a second renderer costs only
     its own images and caches. Each renderer keeps its own geometry, history and caches; they may
-    render from different threads at once."""
+    render from different threads at once. Worker processes: start them with multiprocessing's
+    "spawn" or "forkserver" method (scenes, cameras and volumes pickle); a process forked after
+    its parent opened a renderer can build scenes but gets a DeviceError for a renderer (the
+    driver's threads do not survive fork())."""
 
     def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
         if not isinstance(backend, str):

@@ -32,6 +32,11 @@ struct Shared {
 
 static OPENED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
+/// The process that opened this process's first device (0: none yet). A process forked from one
+/// that had opened a device inherits the driver's state without its threads: opening a device
+/// there crashes at random (lavapipe: heap corruption in about one fork in four), so it is refused.
+static DEVICE_PROCESS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+
 /// The devices open in this process, by (backends asked for, optional features) and the id of
 /// the process that opened them: a process forked from one that holds a device inherits the
 /// entry but not the driver's threads, so it must open a device of its own.
@@ -121,6 +126,16 @@ impl GpuContext {
     pub fn new(backend: &str, optional: wgpu::Features) -> Result<Self> {
         let (name, backends) = resolve_backend(backend)?;
         let key = (backends, optional, std::process::id());
+        if let p @ 1.. = DEVICE_PROCESS.load(Ordering::Relaxed) {
+            if p != key.2 {
+                return Err(Error::Device(format!(
+                    "this process was forked from process {p}, which had opened a graphics device: the driver's \
+                     threads do not survive fork() and a device opened here may crash; create renderers in worker \
+                     processes started with multiprocessing's \"spawn\" or \"forkserver\" method (scenes, \
+                     cameras and volumes pickle), or before the parent opens one"
+                )));
+            }
+        }
         let shared = {
             let mut devices = DEVICES.lock().unwrap_or_else(|p| p.into_inner());
             // Entries of a parent process (before a fork) are dropped without dropping their devices.
@@ -129,6 +144,7 @@ impl GpuContext {
                 Some(s) => s,
                 None => {
                     let s = Arc::new(Self::open(&name, backends, optional)?);
+                    DEVICE_PROCESS.store(key.2, Ordering::Relaxed);
                     devices.push((key, Arc::downgrade(&s)));
                     s
                 }
