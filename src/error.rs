@@ -180,9 +180,9 @@ impl Interrupt {
     }
 
     /// Runs `job` (which may use rayon; on this process's pool, [`in_pool`]) while this thread
-    /// polls the hook, once before and then
-    /// every [`Self::POLL`]; when it says stop, the flag passed to `job` is set, `job` should
-    /// return soon (skipping work not started) and the result is `Err(Error::Interrupted)`.
+    /// polls the hook, once before and then every [`Self::POLL`]; when it says stop, the flag
+    /// passed to `job` is set, `job` should return soon (skipping work not started) and the
+    /// result is `Err(Error::Interrupted)`.
     /// Without a hook, `job` runs on this thread.
     pub fn run_parallel<T: Send>(&self, job: impl FnOnce(&Work) -> T + Send) -> Result<T> {
         let stop = Work::default();
