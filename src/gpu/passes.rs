@@ -487,8 +487,8 @@ impl Passes {
         // Runs of tiles: grid meshes' with their own fragment entry point (fs_grid), the rest with
         // fs_main. One fs_main with the lookup behind a pipeline-overridable constant was slower
         // on lavapipe: the reservoir grid's near frame took 40.4-40.9 ms against 37.6-39.5.
-        // Closed surfaces seen from outside skip their back faces: the reservoir grid's frames
-        // from outside took 12-20 % less (distant view, level 0: 25.1 -> 21.4 ms).
+        // Closed surfaces seen from outside skip their back faces: the reservoir grid bench's
+        // frames took about a quarter less (level 0, near 38.8 -> 28.4 ms, distant 25.1 -> 18.4).
         for run in &geom.draw_runs {
             let pipeline = match run.closed {
                 _ if run.grid_mesh => &self.draw_grid,
