@@ -333,6 +333,107 @@ pub(super) fn march(
     Ok(v)
 }
 
+/// Bytes of one surface vertex (`[x, y, z, nx, ny, nz]` f32, [`pack_vertices`]) and triangle.
+pub(super) const VERTEX_BYTES: u64 = 24;
+pub(super) const TRIANGLE_BYTES: u64 = 12;
+
+/// An error unless `nv` vertices and `nt` triangles fit one GPU buffer each and u32 indices.
+pub(super) fn check_surface_size(ctx: &GpuContext, nv: u64, nt: u64) -> Result<()> {
+    if nv > u32::MAX as u64 || nt * 3 > u32::MAX as u64 {
+        return Err(Error::Device(format!("isosurface too large to index: {nv} vertices, {nt} triangles")));
+    }
+    let max = ctx.limits.max_buffer_size;
+    if nv * VERTEX_BYTES > max || nt * TRIANGLE_BYTES > max {
+        return Err(Error::Device(format!(
+            "isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)",
+            max >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// One vector of `lens[i]` items for each `i`, back to back, part `i` written by `fill(i, part)`;
+/// the parts are filled in parallel.
+pub(super) fn fill_parts<T: Copy + Default + Send>(lens: &[usize], fill: impl Fn(usize, &mut [T]) + Sync) -> Vec<T> {
+    let mut out = vec![T::default(); lens.iter().sum()];
+    let mut parts = Vec::with_capacity(lens.len());
+    let mut rest = out.as_mut_slice();
+    for &n in lens {
+        let (part, tail) = rest.split_at_mut(n);
+        parts.push(part);
+        rest = tail;
+    }
+    parts.into_par_iter().enumerate().for_each(|(i, part)| fill(i, part));
+    out
+}
+
+/// Patch `p`'s vertices as the surface pass reads them, into `out` (one per vertex): the position
+/// in render space (`space`) and the normal, whose z is divided by the exaggeration (normals
+/// transform with the inverse transpose).
+pub(super) fn pack_vertices(p: &SurfacePatch, space: &Space, out: &mut [[f32; 6]]) {
+    for (k, v) in out.iter_mut().enumerate() {
+        let q = space.point(p.positions[k]);
+        let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
+        *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / space.z_scale) as f32];
+    }
+}
+
+/// Patch `p`'s triangles (all, or the ranges `[a, b)` of `ranges`) into `out`, their indices
+/// offset by the patch's first vertex `base`.
+pub(super) fn offset_triangles(p: &SurfacePatch, ranges: Option<&[[u32; 2]]>, base: u32, out: &mut [[u32; 3]]) {
+    let whole = [[0, p.triangles.len() as u32]];
+    let mut out = out.iter_mut();
+    for &[a, b] in ranges.unwrap_or(&whole) {
+        for (tri, o) in p.triangles[a as usize..b as usize].iter().zip(&mut out) {
+            *o = [tri[0] + base, tri[1] + base, tri[2] + base];
+        }
+    }
+}
+
+/// Triangles per patch: all, or those of its `ranges`.
+fn triangle_counts(patches: &[Arc<SurfacePatch>], ranges: Option<&[Vec<[u32; 2]>]>) -> Vec<usize> {
+    match ranges {
+        Some(r) => r.iter().map(|r| r.iter().map(|[a, b]| (b - a) as usize).sum()).collect(),
+        None => patches.iter().map(|p| p.triangles.len()).collect(),
+    }
+}
+
+/// Records into `enc` the lit surface pass (clearing colour and depth) drawing the index `runs` of
+/// `buffers` (vertices, indices; nothing when None), submits it and waits for the GPU.
+fn submit_surface(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    globals_bg: &wgpu::BindGroup,
+    tg: &Targets,
+    mut enc: wgpu::CommandEncoder,
+    buffers: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+    runs: &[std::ops::Range<u32>],
+) -> Result<()> {
+    {
+        let mut p = pass(&mut enc, "iso_surface", Some(&tg.color), Some(&tg.depth));
+        if let (Some((vb, ib)), false) = (buffers, runs.is_empty()) {
+            p.set_pipeline(&iso.surf_pipeline);
+            p.set_bind_group(0, globals_bg, &[]);
+            p.set_vertex_buffer(0, vb.slice(..));
+            p.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            for r in runs {
+                p.draw_indexed(r.clone(), 0, 0..1);
+            }
+        }
+    }
+    ctx.queue.submit([enc.finish()]);
+    ctx.wait()?;
+    ctx.take_error()
+}
+
+fn index_buffer(d: &wgpu::Device, idx: &[[u32; 3]]) -> wgpu::Buffer {
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("iso_indices"),
+        contents: bytemuck::cast_slice(idx),
+        usage: wgpu::BufferUsages::INDEX,
+    })
+}
+
 /// Uploads the patches (render space, f32) and draws them lit; waits for the GPU. With `ranges`,
 /// only the triangles `[a, b)` of each patch's ranges are drawn (the visible cells').
 pub(super) fn draw_surface(
@@ -345,99 +446,25 @@ pub(super) fn draw_surface(
     space: &Space,
 ) -> Result<(u64, u64)> {
     let d = &ctx.device;
-    let nv: usize = patches.iter().map(|p| p.positions.len()).sum();
-    let tri_count = |i: usize| match ranges {
-        Some(r) => r[i].iter().map(|[a, b]| (b - a) as usize).sum(),
-        None => patches[i].triangles.len(),
-    };
-    let counts: Vec<usize> = (0..patches.len()).map(tri_count).collect();
-    let nt: usize = counts.iter().sum();
-    let max = ctx.limits.max_buffer_size;
-    if (nv as u64) * 24 > max || (nt as u64) * 12 > max {
-        return Err(Error::Device(format!(
-            "isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)",
-            max >> 20
-        )));
-    }
-    // Vertex offset of each patch in the shared buffer, then fill in parallel.
-    let mut voff = Vec::with_capacity(patches.len());
-    let mut a = 0usize;
-    for p in patches {
-        voff.push(a);
-        a += p.positions.len();
-    }
-    let mut verts = vec![[0f32; 6]; nv];
-    let mut idx = vec![[0u32; 3]; nt];
-    let zs = space.z_scale;
-    {
-        let mut vchunks: Vec<&mut [[f32; 6]]> = Vec::with_capacity(patches.len());
-        let mut rest = verts.as_mut_slice();
-        for p in patches {
-            let (h, t) = rest.split_at_mut(p.positions.len());
-            vchunks.push(h);
-            rest = t;
-        }
-        let mut ichunks: Vec<&mut [[u32; 3]]> = Vec::with_capacity(patches.len());
-        let mut rest = idx.as_mut_slice();
-        for &n in &counts {
-            let (h, t) = rest.split_at_mut(n);
-            ichunks.push(h);
-            rest = t;
-        }
-        let work: Vec<(usize, &Arc<SurfacePatch>)> = patches.iter().enumerate().collect();
-        vchunks.into_par_iter().zip(ichunks).zip(work.par_iter().zip(&voff)).for_each(
-            |((vc, ic), (&(i, p), &base))| {
-                for (k, v) in vc.iter_mut().enumerate() {
-                    let q = space.point(p.positions[k]);
-                    let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
-                    // Normals transform with the inverse transpose of the exaggeration.
-                    *v = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
-                }
-                let base = base as u32;
-                let mut out = ic.iter_mut();
-                let mut put = |tris: &[[u32; 3]]| {
-                    // tris first: zip pulls from its first iterator before it finds the second empty
-                    for (tri, t) in tris.iter().zip(&mut out) {
-                        *t = [tri[0] + base, tri[1] + base, tri[2] + base];
-                    }
-                };
-                match ranges {
-                    Some(r) => r[i].iter().for_each(|&[a, b]| put(&p.triangles[a as usize..b as usize])),
-                    None => put(&p.triangles),
-                }
-            },
-        );
-    }
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
-    let (vb, ib) = if nt > 0 {
-        (
-            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("iso_vertices"),
-                contents: bytemuck::cast_slice(&verts),
-                usage: wgpu::BufferUsages::VERTEX,
-            })),
-            Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("iso_indices"),
-                contents: bytemuck::cast_slice(&idx),
-                usage: wgpu::BufferUsages::INDEX,
-            })),
-        )
-    } else {
-        (None, None)
-    };
-    {
-        let mut p = pass(&mut enc, "iso_surface", Some(&tg.color), Some(&tg.depth));
-        if let (Some(vb), Some(ib)) = (&vb, &ib) {
-            p.set_pipeline(&iso.surf_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            p.set_vertex_buffer(0, vb.slice(..));
-            p.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            p.draw_indexed(0..(nt as u32 * 3), 0, 0..1);
-        }
-    }
-    ctx.queue.submit([enc.finish()]);
-    ctx.wait()?;
-    ctx.take_error()?;
+    let vlens: Vec<usize> = patches.iter().map(|p| p.positions.len()).collect();
+    let counts = triangle_counts(patches, ranges);
+    let (nv, nt) = (vlens.iter().sum::<usize>(), counts.iter().sum::<usize>());
+    check_surface_size(ctx, nv as u64, nt as u64)?;
+    // Each patch's first vertex in the shared buffer.
+    let base: Vec<u32> = vlens.iter().scan(0u32, |a, &n| Some(std::mem::replace(a, *a + n as u32))).collect();
+    let enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
+    let buffers = (nt > 0).then(|| {
+        let verts = fill_parts(&vlens, |i, out| pack_vertices(&patches[i], space, out));
+        let idx = fill_parts(&counts, |i, out| offset_triangles(&patches[i], ranges.map(|r| &r[i][..]), base[i], out));
+        let vb = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_vertices"),
+            contents: bytemuck::cast_slice(&verts),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        (vb, index_buffer(d, &idx))
+    });
+    let all = 0..3 * nt as u32;
+    submit_surface(ctx, iso, globals_bg, tg, enc, buffers.as_ref().map(|(v, i)| (v, i)), std::slice::from_ref(&all))?;
     Ok((nt as u64, nv as u64))
 }
 
@@ -460,69 +487,31 @@ pub(super) fn draw_pooled(
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
     let bases = pool.ensure(ctx, &mut enc, patches, space)?;
     let nv: u64 = patches.iter().map(|p| p.positions.len() as u64).sum();
+    let counts = triangle_counts(patches, ranges);
+    let nt = counts.iter().sum::<usize>() as u64;
     // Triangle runs of the pool's index buffer, or this frame's own indices.
     let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
-    let mut own: Option<wgpu::Buffer> = None;
-    let mut nt = 0u64;
-    match ranges {
+    let own = match ranges {
         None => {
             let mut order: Vec<(u32, u32)> =
                 patches.iter().zip(&bases).map(|(p, &(_, t))| (t, t + p.triangles.len() as u32)).collect();
             order.sort_unstable();
             for (a, b) in order {
-                nt += (b - a) as u64;
                 match runs.last_mut() {
                     Some(r) if r.end == 3 * a => r.end = 3 * b,
                     _ if a < b => runs.push(3 * a..3 * b),
                     _ => {}
                 }
             }
+            None
         }
         Some(ranges) => {
-            let counts: Vec<usize> = ranges.iter().map(|r| r.iter().map(|[a, b]| (b - a) as usize).sum()).collect();
-            nt = counts.iter().sum::<usize>() as u64;
-            let mut idx = vec![[0u32; 3]; nt as usize];
-            let mut chunks = Vec::with_capacity(patches.len());
-            let mut rest = idx.as_mut_slice();
-            for &n in &counts {
-                let (h, t) = rest.split_at_mut(n);
-                chunks.push(h);
-                rest = t;
-            }
-            chunks.into_par_iter().zip(patches.par_iter().zip(ranges).zip(&bases)).for_each(
-                |(out, ((p, r), &(vb, _)))| {
-                    let mut out = out.iter_mut();
-                    for &[a, b] in r {
-                        for (tri, o) in p.triangles[a as usize..b as usize].iter().zip(&mut out) {
-                            *o = [tri[0] + vb, tri[1] + vb, tri[2] + vb];
-                        }
-                    }
-                },
-            );
-            if nt > 0 {
-                own = Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("iso_indices"),
-                    contents: bytemuck::cast_slice(&idx),
-                    usage: wgpu::BufferUsages::INDEX,
-                }));
-                runs.push(0..3 * nt as u32);
-            }
+            let idx = fill_parts(&counts, |i, out| offset_triangles(&patches[i], Some(&ranges[i]), bases[i].0, out));
+            runs.push(0..3 * nt as u32);
+            (nt > 0).then(|| index_buffer(d, &idx))
         }
-    }
-    {
-        let mut p = pass(&mut enc, "iso_surface", Some(&tg.color), Some(&tg.depth));
-        if let (Some((vb, pool_ib)), false) = (pool.buffers(), runs.is_empty()) {
-            p.set_pipeline(&iso.surf_pipeline);
-            p.set_bind_group(0, globals_bg, &[]);
-            p.set_vertex_buffer(0, vb.slice(..));
-            p.set_index_buffer(own.as_ref().unwrap_or(pool_ib).slice(..), wgpu::IndexFormat::Uint32);
-            for r in runs {
-                p.draw_indexed(r, 0, 0..1);
-            }
-        }
-    }
-    ctx.queue.submit([enc.finish()]);
-    ctx.wait()?;
-    ctx.take_error()?;
+    };
+    let buffers = pool.buffers().map(|(vb, pool_ib)| (vb, own.as_ref().unwrap_or(pool_ib)));
+    submit_surface(ctx, iso, globals_bg, tg, enc, buffers, &runs)?;
     Ok((nt, nv))
 }

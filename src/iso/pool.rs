@@ -15,16 +15,13 @@
 //!   in z), indices are global (a patch's first vertex added), as `draw_surface` builds them.
 
 use super::march::SurfacePatch;
-use super::passes::Space;
-use crate::error::{Error, Result};
+use super::passes::{
+    check_surface_size, fill_parts, offset_triangles, pack_vertices, Space, TRIANGLE_BYTES, VERTEX_BYTES,
+};
+use crate::error::Result;
 use crate::gpu::GpuContext;
-use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Weak};
-
-/// Bytes of one pooled vertex and one triangle.
-const VERTEX_BYTES: u64 = 24;
-const TRIANGLE_BYTES: u64 = 12;
 
 struct Slot {
     patch: Weak<SurfacePatch>,
@@ -119,19 +116,11 @@ impl SurfacePool {
         space: &Space,
     ) -> Result<()> {
         let d = &ctx.device;
-        let add_v: u64 = fresh.iter().map(|p| p.positions.len() as u64).sum();
-        let add_t: u64 = fresh.iter().map(|p| p.triangles.len() as u64).sum();
-        let (nv, nt) = (self.nv + add_v, self.nt + add_t);
-        if nv > u32::MAX as u64 || nt * 3 > u32::MAX as u64 {
-            return Err(Error::Device(format!("isosurface too large to index: {nv} vertices, {nt} triangles")));
-        }
+        let vlens: Vec<usize> = fresh.iter().map(|p| p.positions.len()).collect();
+        let tlens: Vec<usize> = fresh.iter().map(|p| p.triangles.len()).collect();
+        let (nv, nt) = (self.nv + vlens.iter().sum::<usize>() as u64, self.nt + tlens.iter().sum::<usize>() as u64);
+        check_surface_size(ctx, nv, nt)?;
         let max = ctx.limits.max_buffer_size;
-        if nv * VERTEX_BYTES > max || nt * TRIANGLE_BYTES > max {
-            return Err(Error::Device(format!(
-                "isosurface too large for one GPU buffer: {nv} vertices, {nt} triangles (limit {} MB)",
-                max >> 20
-            )));
-        }
         // Grow to at least 1.5 x what is needed (amortised appends), within the limit.
         let mut grow = |buf: &mut Option<wgpu::Buffer>, used: u64, need: u64, unit: u64, usage, label| {
             if buf.as_ref().is_some_and(|b| b.size() >= need * unit) {
@@ -153,37 +142,13 @@ impl SurfacePool {
         grow(&mut self.indices, self.nt, nt, TRIANGLE_BYTES, wgpu::BufferUsages::INDEX, "iso_pool_indices");
         // Each fresh patch's place, then its data, filled in parallel.
         let mut bases = Vec::with_capacity(fresh.len());
-        let (mut v, mut t) = (self.nv, self.nt);
-        for p in fresh {
-            bases.push((v as u32, t as u32));
-            v += p.positions.len() as u64;
-            t += p.triangles.len() as u64;
+        let (mut v, mut t) = (self.nv as u32, self.nt as u32);
+        for (&nv, &nt) in vlens.iter().zip(&tlens) {
+            bases.push((v, t));
+            (v, t) = (v + nv as u32, t + nt as u32);
         }
-        let mut verts = vec![[0f32; 6]; add_v as usize];
-        let mut tris = vec![[0u32; 3]; add_t as usize];
-        let zs = space.z_scale;
-        let mut vchunks = Vec::with_capacity(fresh.len());
-        let mut tchunks = Vec::with_capacity(fresh.len());
-        let (mut vrest, mut trest) = (verts.as_mut_slice(), tris.as_mut_slice());
-        for p in fresh {
-            let (a, b) = vrest.split_at_mut(p.positions.len());
-            vchunks.push(a);
-            vrest = b;
-            let (a, b) = trest.split_at_mut(p.triangles.len());
-            tchunks.push(a);
-            trest = b;
-        }
-        vchunks.into_par_iter().zip(tchunks).zip(fresh.par_iter().zip(&bases)).for_each(|((vc, tc), (p, &(vb, _)))| {
-            for (k, out) in vc.iter_mut().enumerate() {
-                let q = space.point(p.positions[k]);
-                let n = p.normals.get(k).copied().unwrap_or([0.0; 3]);
-                // Normals transform with the inverse transpose of the exaggeration.
-                *out = [q.x as f32, q.y as f32, q.z as f32, n[0], n[1], (n[2] as f64 / zs) as f32];
-            }
-            for (out, tri) in tc.iter_mut().zip(&p.triangles) {
-                *out = [tri[0] + vb, tri[1] + vb, tri[2] + vb];
-            }
-        });
+        let verts = fill_parts(&vlens, |i, out| pack_vertices(fresh[i], space, out));
+        let tris = fill_parts(&tlens, |i, out| offset_triangles(fresh[i], None, bases[i].0, out));
         let (vbuf, ibuf) = self.buffers().expect("grown above");
         ctx.queue.write_buffer(vbuf, self.nv * VERTEX_BYTES, bytemuck::cast_slice(&verts));
         ctx.queue.write_buffer(ibuf, self.nt * TRIANGLE_BYTES, bytemuck::cast_slice(&tris));
