@@ -156,6 +156,18 @@ fn base_color(o: Object, s: f32) -> vec3<f32> {
     return lut[base + min(u32(t * 256.0), 255u)].rgb;
 }
 
+// The lit colour of object `o` at a fragment with shading normal and colouring scalar `ns`
+// (`shading`): two-sided Lambert, a head light (so nothing facing the viewer is dark) plus a fixed
+// sun from the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
+// Translucent objects (volume lenses, drawn blended) are unlit, with the object's opacity.
+fn lit_color(o: Object, ns: vec4<f32>) -> vec4<f32> {
+    let n = ns.xyz;
+    let c = base_color(o, ns.w);
+    let sun = vec3<f32>(-0.45, 0.45, 0.77);
+    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
+    return vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a);
+}
+
 struct FOut {
     @location(0) color: vec4<f32>,
     // Tile index + 1 of the visible surface (0 = nothing).
@@ -166,17 +178,7 @@ struct FOut {
 fn fs_main(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
     let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
-    let n = ns.xyz;
-    let c = base_color(o, ns.w);
-    // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
-    // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
-    let sun = vec3<f32>(-0.45, 0.45, 0.77);
-    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
-    var out: FOut;
-    // Translucent objects (volume lenses, drawn blended) are unlit, with the object's opacity.
-    out.color = vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a);
-    out.id = v.tile + 1u;
-    return out;
+    return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
 // fs_main for the tiles of grid meshes (gpu::geometry::SceneGeometry::draw_runs).
@@ -184,17 +186,7 @@ fn fs_main(v: VOutDraw) -> FOut {
 fn fs_grid(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
     let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
-    let n = ns.xyz;
-    let c = base_color(o, ns.w);
-    // Two-sided Lambert: a head light (so nothing facing the viewer is dark) plus a fixed sun from
-    // the north-west at 50° elevation (so gentle undulations of a horizon read as relief).
-    let sun = vec3<f32>(-0.45, 0.45, 0.77);
-    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
-    var out: FOut;
-    // Translucent objects (volume lenses, drawn blended) are unlit, with the object's opacity.
-    out.color = vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a);
-    out.id = v.tile + 1u;
-    return out;
+    return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
 // GL: vs_draw's transform with clip z and w carried to the fragment (see VOutGl in common.wgsl).
@@ -231,11 +223,7 @@ struct FOutGl {
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
     let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
-    let n = ns.xyz;
-    let c = base_color(o, ns.w);
-    let sun = vec3<f32>(-0.45, 0.45, 0.77);
-    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
-    return FOutGl(vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a), v.tile + 1u, v.zw.x / v.zw.y);
+    return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
 // fs_main_gl for the tiles of grid meshes.
@@ -243,9 +231,5 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
 fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
     let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
-    let n = ns.xyz;
-    let c = base_color(o, ns.w);
-    let sun = vec3<f32>(-0.45, 0.45, 0.77);
-    let shade = 0.2 + 0.45 * abs(dot(n, g.light_dir.xyz)) + 0.35 * abs(dot(n, sun));
-    return FOutGl(vec4<f32>(c * select(shade, 1.0, o.color.a < 1.0), o.color.a), v.tile + 1u, v.zw.x / v.zw.y);
+    return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
