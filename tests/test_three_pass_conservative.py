@@ -89,6 +89,31 @@ def test_conservative_is_the_default(renderer_small):
     assert "tiles_drawn_second" in res.stats and res.box_pixels is not None
 
 
+def test_conservative_prepass_draws_each_tiles_cheapest_proxy(renderer_small):
+    """Built without coarse proxies (coarse_factor 1: the proxy is the fine tile), the conservative
+    prepass draws each tile's coarsest level of detail instead when that has fewer triangles; the
+    approximate mode, whose culling rests on the built proxies, still draws those. Same image."""
+    rng = np.random.default_rng(3)
+    s = gc.Scene()
+    s.add_heightfield(rng.normal(0.0, 2.0, (41, 41)), tiles=(4, 4))  # coarse_factor 1
+    s.add_heightfield(rng.normal(-30.0, 2.0, (41, 41)), tiles=(4, 4), coarse_factor=100)
+    t = s.tile_table()
+    levels = t["level_triangles"]
+    coarsest = np.array([row[row > 0][-1] if (row > 0).any() else 0 for row in levels])
+    cheapest = np.where((coarsest > 0) & (coarsest < t["tris_coarse"]), coarsest, t["tris_coarse"])
+    assert (cheapest < t["tris_fine"])[t["object"] == 0].all(), "the fine horizon's tiles must have coarser levels"
+    r = renderer_small(64, 48)
+    cam = gc.Camera.look_at((20.0, -30.0, 40.0), (20.0, 20.0, -10.0))
+    none = r.render(s, cam, culling="none")
+    cons = r.render(s, cam, culling="three_pass", pixel_threshold=0)
+    approx = r.render(s, cam, culling="three_pass", pixel_threshold=0, conservative=False)
+    assert cons.stats["triangles_prepass"] == cheapest.sum()
+    assert approx.stats["triangles_prepass"] == t["tris_coarse"].sum()
+    assert np.array_equal(cons.image, none.image)
+    first = r.render(s, cam, culling="temporal", pixel_threshold=0)  # no history for this scene yet
+    assert first.stats["tiles_reused"] == 0 and first.stats["triangles_prepass"] == cheapest.sum()
+
+
 # ------------------------------------------------------------------ random scenes and cameras
 
 

@@ -4,6 +4,12 @@
 //! the coarse proxies, front to back, at `prepass_scale`; the exact pixels per tile of its id
 //! image; the tiles above the threshold selected on the GPU as the first set A.
 //!
+//! When the second phase follows (conservative three_pass, temporal), nothing drawn rests on the
+//! proxies: they only choose A. Each tile's prepass then draws the cheaper of its coarse proxy
+//! and its coarsest level of detail ([`Proxies::Cheapest`]), so a scene built without coarse
+//! proxies (`coarse_factor` 1, the default: the proxy is the fine tile) does not pay a prepass of
+//! every fine triangle.
+//!
 //! [`draw_and_test_the_rest`] is the conservative second phase: after A has been drawn into the
 //! final targets, every other visible tile's box (its sub-boxes when drawn at level 0) is tested
 //! against that image's depth at full resolution (`Passes::record_box_test`), and the tiles whose
@@ -24,6 +30,7 @@
 
 use super::{Draw, FrameInputs};
 use crate::gpu::layout::BoxInstance;
+use crate::gpu::DrawArgs;
 use crate::gpu::{passes, Targets};
 
 /// What the prepass phase recorded.
@@ -41,11 +48,40 @@ pub struct FirstSet {
     pub prepass_tris: u64,
 }
 
-/// Passes 1–3 of three_pass into `enc`: the prepass of the coarse proxies into the renderer's
-/// prepass targets (`FrameInputs::prepass_targets`, made or resized for `prepass_scale`), its
-/// histogram and the GPU selection of the tiles with more than `pixel_threshold` pixels (compared
-/// in prepass pixels).
-pub fn prepass_first_set(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> FirstSet {
+/// Which draw of each tile the prepass makes.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Proxies {
+    /// The coarse proxy built with the scene (`coarse_factor`): the paper's method, whose
+    /// culling rests on it.
+    Built,
+    /// Whichever of the coarse proxy and the coarsest level of detail has fewer triangles: for
+    /// frames whose second phase finds whatever the first set misses.
+    Cheapest,
+}
+
+/// Each visible tile's prepass draw (`proxies`), switched off for the others.
+pub fn prepass_draws(f: &FrameInputs<'_>, proxies: Proxies) -> Vec<DrawArgs> {
+    let g = f.geometry;
+    let args: Vec<DrawArgs> = match proxies {
+        Proxies::Built => g.coarse.clone(),
+        Proxies::Cheapest => g
+            .coarse
+            .iter()
+            .zip(&g.levels)
+            .map(|(&c, levels)| match levels.last() {
+                Some(l) if l.args.index_count > 0 && l.args.index_count < c.index_count => l.args,
+                _ => c,
+            })
+            .collect(),
+    };
+    f.pick(&args, |_| true)
+}
+
+/// Passes 1–3 of three_pass into `enc`: the prepass of each tile's `proxies` draw into the
+/// renderer's prepass targets (`FrameInputs::prepass_targets`, made or resized for
+/// `prepass_scale`), its histogram and the GPU selection of the tiles with more than
+/// `pixel_threshold` pixels (compared in prepass pixels).
+pub fn prepass_first_set(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, proxies: Proxies) -> FirstSet {
     let d = &f.ctx.device;
     let n = f.n_tiles();
     let scale = f.options.prepass_scale;
@@ -55,7 +91,7 @@ pub fn prepass_first_set(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) ->
     let pt = Targets::ensure(&mut targets, d, pw, ph);
 
     // Pass 1: coarse proxies, front to back.
-    let mut coarse = f.pick(&f.geometry.coarse, |_| true);
+    let mut coarse = prepass_draws(f, proxies);
     let dist = f.tile_dist2;
     coarse.sort_by(|a, b| dist[a.first_instance as usize].total_cmp(&dist[b.first_instance as usize]));
     let prepass_tris: u64 = coarse.iter().map(|a| a.triangles()).sum();

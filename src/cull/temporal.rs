@@ -20,7 +20,7 @@
 //! `tiles_reused` (the first set when it came from the history), `tiles_box_tested`,
 //! `triangles_prepass` (frames without history); per-tile counts `box_pixels`.
 
-use super::phases::{draw_and_test_the_rest, prepass_first_set};
+use super::phases::{draw_and_test_the_rest, prepass_first_set, Proxies};
 use super::{CullStrategy, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
 use crate::gpu::passes;
@@ -62,7 +62,7 @@ impl CullStrategy for Temporal {
             }
             // No history (a scene's first frame, new geometry): three_pass's prepass chooses.
             None => {
-                let set = prepass_first_set(f, enc);
+                let set = prepass_first_set(f, enc, Proxies::Cheapest);
                 stats.push(("tiles_reused", Stat::Count(0)));
                 stats.push(("triangles_prepass", Stat::Count(set.prepass_tris)));
                 (set.first, set.fine)

@@ -53,7 +53,7 @@
 //! tile's proxy error (`TileMesh::proxy_error`, metres, from the build) projected to pixels at the
 //! tile's nearest point (array `proxy_error_px`): how far the proxy the prepass drew may be off.
 
-use super::phases::{draw_and_test_the_rest, prepass_first_set, FirstSet};
+use super::phases::{draw_and_test_the_rest, prepass_first_set, FirstSet, Proxies};
 use super::{CullStrategy, Draw, FrameInputs, FrameReport, Pixels, Stat, Visible};
 use crate::error::Result;
 
@@ -103,7 +103,10 @@ impl CullStrategy for ThreePass {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc);
+        // Conservative frames find what the first set misses: their prepass may use the cheapest
+        // proxy of each tile. The paper's method (and its predictor) culls by the built proxies.
+        let proxies = if f.options.conservative { Proxies::Cheapest } else { Proxies::Built };
+        let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc, proxies);
         let threshold = f.options.pixel_threshold;
         let dist = f.tile_dist2;
         let pixels = Pixels::Gpu { counts, scale: ratio };
