@@ -835,7 +835,8 @@ fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Option<Le
     let boxes_buf = passes::boxes_buffer(d, &boxes);
     let skip = passes::empty_args_buffer(d, "lens_skip", m);
     enc.clear_buffer(&skip, 0, None);
-    f.passes.record_box_test(d, enc, f.scene_bg, f.main_targets, &boxes_buf, m, &skip, &counts, None);
+    let open = passes::counts_buffer_init(d, &vec![1; m]);
+    f.passes.record_box_test(d, enc, f.scene_bg, f.main_targets, &boxes_buf, m, &skip, &open, &counts, None);
     let src: Vec<DrawArgs> = chosen.iter().map(|&(_, ti, _)| g.fine[ti]).collect();
     let src = passes::args_buffer(d, "lens_args", &src);
     let out = passes::empty_args_buffer(d, "lens_draws", m);

@@ -25,7 +25,8 @@
 //! tiles whose box pokes through an occluder while their surface stays behind it; the whole box
 //! at coarser levels, whose triangles may leave the sub-boxes but not the convex box of the
 //! vertices they share with level 0. A pixel counted in several overlapping sub-boxes only raises
-//! the count. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
+//! the count. Sub-boxes are rasterised only where the tile's whole box, tested first, counts a
+//! pixel ([`tile_boxes`]): that changes no count, only the work. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
 //! f32 round-off and ties count as visible (`FrameInputs::tile_box`).
 
 use super::{Draw, FrameInputs};
@@ -117,31 +118,65 @@ pub fn prepass_first_set(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, pr
 /// Initial box count of tiles drawn untested (their box reaches the near plane).
 pub const FORCED: u32 = 1 << 30;
 
-/// Render-space boxes of the visible, non-empty tiles (instance id = tile index), grown against
-/// f32 round-off, and for each tile the initial count (FORCED when the box reaches the near plane).
-pub fn tile_boxes(f: &FrameInputs<'_>) -> (Vec<BoxInstance>, Vec<u32>) {
+/// The boxes of the box test (render space, grown against f32 round-off; instance id = tile).
+pub struct TileBoxes {
+    /// Every visible, non-empty tile's box, or its sub-boxes when it is drawn at level 0.
+    pub boxes: Vec<BoxInstance>,
+    /// Per tile, the initial count (FORCED when its box reaches the near plane, else 0).
+    pub init: Vec<u32>,
+    /// The whole box of each tile tested with sub-boxes: the gate of its sub-boxes.
+    pub gates: Vec<BoxInstance>,
+    /// Per tile, the initial gate count: 0 for a tile whose sub-boxes wait for its whole box, 1
+    /// (open) for the others.
+    pub gate_init: Vec<u32>,
+}
+
+/// The boxes of the visible, non-empty tiles. A tile drawn at level 0 is tested with its
+/// sub-boxes (their union holds its triangles), behind the gate of its whole box: its sub-boxes
+/// are rasterised only when the whole box counts a pixel. The gate changes no count: each sub-box
+/// lies in the whole box (grown by no more), so where a sub-box's front face is at or in front of
+/// the image, the whole box's (the ray's entry into the larger convex box) is too. Most hidden
+/// tiles are then rasterised once, as one box, instead of as four.
+pub fn tile_boxes(f: &FrameInputs<'_>) -> TileBoxes {
     let g = f.geometry;
-    let mut init = vec![0u32; g.n_tiles()];
-    let mut boxes = Vec::new();
-    for (i, first) in init.iter_mut().enumerate() {
+    let n = g.n_tiles();
+    let mut t = TileBoxes { boxes: Vec::new(), init: vec![0; n], gates: Vec::new(), gate_init: vec![1; n] };
+    let instance = |i: usize, (lo, hi, _): (glam::DVec3, glam::DVec3, bool)| BoxInstance {
+        lo: lo.as_vec3().to_array(),
+        id: i as u32,
+        hi: hi.as_vec3().to_array(),
+        _pad: 0,
+    };
+    for i in 0..n {
         if !f.object_visible[i] || g.fine[i].index_count == 0 {
             continue;
         }
-        // A tile drawn at level 0 is tested with its sub-boxes (their union holds its triangles);
-        // one drawn at a coarser level with its whole box, which holds every level (levels use
-        // the tile's own vertices, and a box is convex).
+        // A tile drawn at a coarser level is tested with its whole box, which holds every level
+        // (levels use the tile's own vertices, and a box is convex).
         let subs = &g.sub_boxes[i];
-        let whole = [g.bbox[i]];
-        let parts = if f.draw_args[i] == g.fine[i] && !subs.is_empty() { &subs[..] } else { &whole[..] };
-        for &(lo, hi) in parts {
-            let (lo, hi, near) = f.render_box(i, lo, hi);
-            if near {
-                *first = FORCED;
+        let whole = f.render_box(i, g.bbox[i].0, g.bbox[i].1);
+        if f.draw_args[i] == g.fine[i] && !subs.is_empty() {
+            // A whole box reaching the near plane is clipped, so it cannot gate: its sub-boxes
+            // are then tested straight away.
+            if !whole.2 {
+                t.gates.push(instance(i, whole));
+                t.gate_init[i] = 0;
             }
-            boxes.push(BoxInstance { lo: lo.as_vec3().to_array(), id: i as u32, hi: hi.as_vec3().to_array(), _pad: 0 });
+            for &(lo, hi) in subs {
+                let b = f.render_box(i, lo, hi);
+                if b.2 {
+                    t.init[i] = FORCED;
+                }
+                t.boxes.push(instance(i, b));
+            }
+        } else {
+            if whole.2 {
+                t.init[i] = FORCED;
+            }
+            t.boxes.push(instance(i, whole));
         }
     }
-    (boxes, init)
+    t
 }
 
 /// What the second phase recorded.
@@ -168,11 +203,17 @@ pub fn draw_and_test_the_rest(
     let d = &f.ctx.device;
     let n = f.n_tiles();
     f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, first, false, f.outside, f.timestamps);
-    let (boxes, init) = tile_boxes(f);
-    let box_counts = passes::counts_buffer_init(d, &init);
-    let boxes_buf = passes::boxes_buffer(d, &boxes);
-    let ts_test = f.timestamps.and_then(|t| t.render("test_ms"));
-    f.passes.record_box_test(d, enc, f.scene_bg, f.main_targets, &boxes_buf, boxes.len(), first, &box_counts, ts_test);
+    let t = tile_boxes(f);
+    // The gates first (every gate open for them), then the boxes behind open gates.
+    let gate = passes::counts_buffer_init(d, &t.gate_init);
+    let open = passes::counts_buffer_init(d, &vec![1; n]);
+    let gates_buf = passes::boxes_buffer(d, &t.gates);
+    let ts = |name| f.timestamps.and_then(|t| t.render(name));
+    let (main, bg) = (f.main_targets, f.scene_bg);
+    f.passes.record_box_test(d, enc, bg, main, &gates_buf, t.gates.len(), first, &open, &gate, ts("test_ms"));
+    let box_counts = passes::counts_buffer_init(d, &t.init);
+    let boxes_buf = passes::boxes_buffer(d, &t.boxes);
+    f.passes.record_box_test(d, enc, bg, main, &boxes_buf, t.boxes.len(), first, &gate, &box_counts, ts("test_ms"));
     let draw = if add {
         let rest = passes::empty_args_buffer(d, "rest_args", n);
         let ts = f.timestamps.and_then(|t| t.compute("count_ms"));

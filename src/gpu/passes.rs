@@ -414,6 +414,7 @@ impl Passes {
                 },
                 storage_entry(1, false, fs),
                 storage_entry(2, true, wgpu::ShaderStages::VERTEX),
+                storage_entry(3, true, wgpu::ShaderStages::VERTEX),
             ],
         });
         let box_pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -589,9 +590,9 @@ impl Passes {
 
 impl Passes {
     /// Pass: for every box of `boxes` (render space; its `id` is a tile index) whose tile's draw in
-    /// `skip` is off, adds to `counts[id]` the pixels where the front faces of the box are at or in
-    /// front of the depth of `targets` (drawn by an earlier pass, reverse-Z). Writes nothing to
-    /// `targets`.
+    /// `skip` is off and whose `gate` count is above 0, adds to `counts[id]` the pixels where the
+    /// front faces of the box are at or in front of the depth of `targets` (drawn by an earlier
+    /// pass, reverse-Z). Writes nothing to `targets`.
     #[allow(clippy::too_many_arguments)]
     pub fn record_box_test(
         &self,
@@ -602,6 +603,7 @@ impl Passes {
         boxes: &wgpu::Buffer,
         n: usize,
         skip: &wgpu::Buffer,
+        gate: &wgpu::Buffer,
         counts: &wgpu::Buffer,
         ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
@@ -612,6 +614,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
                 wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: gate.as_entire_binding() },
             ],
         });
         // Without the early-depth pipeline there is no depth attachment: the fragment shader reads

@@ -7,7 +7,7 @@ use crate::error::Result;
 use std::sync::Mutex;
 
 /// Pairs of timestamps a frame can hold.
-const MAX_SPANS: u32 = 8;
+const MAX_SPANS: u32 = 16;
 
 pub struct Timestamps {
     set: wgpu::QuerySet,

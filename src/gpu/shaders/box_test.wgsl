@@ -1,7 +1,8 @@
 // Box test (box.wgsl is prepended): per tile, the pixels where the front faces of its box are at
 // or in front of a depth image (reverse-Z: nearer = larger). The comparison is done here by hand,
 // with no depth attachment, so hidden fragments are never counted and no early-depth-test feature
-// is needed. Tiles whose draw is already on (`skip`) are not tested: their box collapses.
+// is needed. Tiles whose draw is already on (`skip`), or whose `gate` count is 0, are not tested:
+// their box collapses.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -25,6 +26,8 @@ struct DrawArgs {
 @group(1) @binding(0) var depth: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;
 @group(1) @binding(2) var<storage, read> skip: array<DrawArgs>;
+// Per tile: its boxes are tested only when this is above 0 (the count of an earlier box pass).
+@group(1) @binding(3) var<storage, read> gate: array<u32>;
 
 struct BoxOut {
     @builtin(position) clip: vec4<f32>,
@@ -40,7 +43,7 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
     let tile = bitcast<u32>(lo.w);
     var out: BoxOut;
     out.tile = tile;
-    if (skip[tile].instance_count > 0u) {
+    if (skip[tile].instance_count > 0u || gate[tile] == 0u) {
         out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all corners equal: nothing rasterised
         out.zw = vec2<f32>(0.0, 1.0);
         return out;
