@@ -23,8 +23,10 @@ RED, BLUE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
 
 
 def render_all(r, scene, cam, **kw):
-    """{culling: RenderResult} over every mode, threshold 0 (nothing visible may be culled)."""
+    """{culling: RenderResult} over every mode, threshold 0 (nothing visible may be culled), the
+    prepass at full resolution (so that three_pass's tile_pixels, its prepass counts, are exact)."""
     kw.setdefault("pixel_threshold", 0)
+    kw.setdefault("prepass_scale", 1.0)
     return {m: r.render(scene, cam, culling=m, **kw) for m in gc.CULLING_MODES}
 
 

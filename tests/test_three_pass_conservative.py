@@ -89,6 +89,20 @@ def test_conservative_is_the_default(renderer_small):
     assert "tiles_drawn_second" in res.stats and res.box_pixels is not None
 
 
+def test_default_prepass_scale_is_half_for_conservative_frames_and_one_for_the_paper(renderer_small):
+    """prepass_scale=None: 0.5 when conservative (the image does not depend on it), 1 otherwise.
+    tile_pixels are the prepass counts scaled to the image, so they show which prepass ran."""
+    r = renderer_small(96, 96)
+    s, _, _ = pit_scene()
+    cam = gc.Camera.look_at((20.0, -25.0, 30.0), (20.0, 20.0, -20.0))
+    px = {(c, ps): r.render(s, cam, culling="three_pass", pixel_threshold=0, conservative=c,
+                            **({} if ps is None else dict(prepass_scale=ps))).tile_pixels
+          for c in (True, False) for ps in (None, 0.5, 1.0)}
+    assert not np.array_equal(px[True, 0.5], px[True, 1.0]), "the scene must tell the two scales apart"
+    assert np.array_equal(px[True, None], px[True, 0.5])
+    assert np.array_equal(px[False, None], px[False, 1.0])
+
+
 def test_conservative_prepass_draws_each_tiles_cheapest_proxy(renderer_small):
     """Built without coarse proxies (coarse_factor 1: the proxy is the fine tile), the conservative
     prepass draws each tile's coarsest level of detail instead when that has fewer triangles; the

@@ -310,7 +310,7 @@ class Renderer:
         camera: Camera,
         culling: str,
         pixel_threshold: float,
-        prepass_scale: float,
+        prepass_scale: float | None,
         conservative: bool,
         predict_errors: bool,
         lod: str,

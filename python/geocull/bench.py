@@ -227,7 +227,7 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         (f"three_pass(cf={COARSE_ALT},s=0.5)",
          dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=0.5, coarse_factor=COARSE_ALT,
               conservative=False)),
-        ("three_pass(cons,t=0)", dict(culling="three_pass", pixel_threshold=0, prepass_scale=1.0)),
+        ("three_pass(cons,t=0)", dict(culling="three_pass", pixel_threshold=0)),  # default prepass_scale (1/2)
         (f"three_pass(cons,t=0,cf={COARSE_ALT},s=0.5)",
          dict(culling="three_pass", pixel_threshold=0, prepass_scale=0.5, coarse_factor=COARSE_ALT)),
         ("none(lod=0.5)", dict(culling="none", lod="screen_error", max_pixel_error=0.5)),

@@ -145,7 +145,7 @@ class Renderer:
         camera: Camera,
         culling: CullingMode = "none",
         pixel_threshold: float = 10,
-        prepass_scale: float = 1.0,
+        prepass_scale: float | None = None,
         conservative: bool = True,
         predict_errors: bool = False,
         lod: LodMode = "full",
@@ -168,7 +168,10 @@ class Renderer:
         three_pass's prepass; stats ``tiles_reused``).
         pixel_threshold: >= 0, in full-image pixels: tiles with at most this many visible pixels
         are not drawn.  prepass_scale: (0, 1], prepass resolution as a fraction of the image's
-        width and height.
+        width and height; None (default): 0.5 with conservative=True (the image does not depend on
+        it, the prepass only chooses which tiles are drawn first), 1 with conservative=False.
+        Each tile's prepass draws its coarse proxy (``coarse_factor`` of the ``add_*`` call), or
+        with conservative=True (and temporal) its coarsest level of detail where that is smaller.
         conservative (three_pass): True (default) never culls a tile with more than
         ``pixel_threshold`` visible pixels: after drawing the tiles the prepass found, every other
         tile's bounding box is tested against that image's depth at full resolution and drawn when
@@ -220,7 +223,8 @@ class Renderer:
         if not isinstance(culling, str):
             raise InputError(f"culling: {culling!r} is not a string")
         d = self._r.render(scene._s, camera._c, culling, cv.number(pixel_threshold, "pixel_threshold"),
-                           cv.number(prepass_scale, "prepass_scale"), bool(conservative), bool(predict_errors),
+                           None if prepass_scale is None else cv.number(prepass_scale, "prepass_scale"),
+                           bool(conservative), bool(predict_errors),
                            lod if isinstance(lod, str) else cv.fail_type(lod, "lod", "a string"),
                            cv.number(max_pixel_error, "max_pixel_error"),
                            grid_lod if isinstance(grid_lod, str) else cv.fail_type(grid_lod, "grid_lod", "a string"),

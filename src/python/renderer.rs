@@ -118,7 +118,7 @@ impl PyRenderer {
         camera: PyRef<'py, PyCamera>,
         culling: String,
         pixel_threshold: f64,
-        prepass_scale: f64,
+        prepass_scale: Option<f64>,
         conservative: bool,
         predict_errors: bool,
         lod: String,
@@ -128,6 +128,7 @@ impl PyRenderer {
         lam: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (r, s, c) = (&self.inner, &scene.inner, &camera.inner);
+        let prepass_scale = prepass_scale.unwrap_or_else(|| CullOptions::default_prepass_scale(conservative));
         let cull = CullOptions { pixel_threshold, prepass_scale, conservative, predict_errors };
         // Renderer first, then the scene (the lock order of every binding).
         let out = run_interruptible(py, move |interrupt| {

@@ -72,7 +72,12 @@ fn three_pass_counts_sum_to_coverage_and_hidden_plane_is_culled() {
     let none = r.render(&s, &cam, &RenderOptions::default()).unwrap();
     let three_pass = |conservative| RenderOptions {
         culling: "three_pass".into(),
-        cull: CullOptions { pixel_threshold: 0.0, conservative, ..Default::default() },
+        cull: CullOptions {
+            pixel_threshold: 0.0,
+            conservative,
+            prepass_scale: CullOptions::default_prepass_scale(conservative),
+            ..Default::default()
+        },
         ..Default::default()
     };
     let tp = r.render(&s, &cam, &three_pass(false)).unwrap();
