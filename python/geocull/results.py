@@ -145,8 +145,10 @@ class RenderResult(Generic[StatsT]):
 
     image: (H, W, 4) uint8 RGBA, row 0 at the top.  depth: (H, W) float32 distance along the view
     axis in (exaggerated) world units, +inf where empty.  tile_pixels: (n_tiles,) uint32 visible
-    pixels per tile, in :meth:`geocull.Scene.tile_table` order (three_pass: the pass-2 counts in
-    full-image pixels; none/oracle/temporal: in the final image).  tile_drawn: (n_tiles,) bool.
+    pixels per tile, in :meth:`geocull.Scene.tile_table` order (three_pass: the pass-2 counts of
+    its prepass, scaled to full-image pixels: of the built coarse proxies with conservative=False,
+    of each tile's cheapest proxy with conservative=True, so an estimate there; none/oracle/temporal:
+    in the final image).  tile_drawn: (n_tiles,) bool.
     stats: :class:`RenderStats` (triangles, tiles and per-pass milliseconds).  near, far: the clip
     distances used (exaggerated world units).  culling: the mode rendered.  horizon: for
     culling="horizon", (W,) float32 per image column, the pixel rows from the bottom known hidden

@@ -38,6 +38,10 @@ pub struct SceneGeometry {
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
     pub coarse: Vec<DrawArgs>,
+    /// Every tile's occluder draw: for hole-free height-field tiles drawn as lattice patterns, the
+    /// 8 triangles of their corner, mid-side and centre samples (a shared pattern); switched off
+    /// (no indices) for the others. Cheaper than any proxy; for prepasses that only guess.
+    pub occluder: Vec<DrawArgs>,
     /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
     /// vertex copy) and their errors.
     pub levels: Vec<Vec<LevelDraw>>,
@@ -252,6 +256,34 @@ fn compact_indices(indices: &[u32], n: usize, remap: &mut Vec<u32>, out: &mut Ve
 /// theirs.
 type Pattern = (Vec<[u32; 2]>, Vec<u32>);
 
+/// The occluder of a hole-free lattice tile (`local`: its vertices' (column, row)): its corner,
+/// mid-side and centre samples as 2 × 2 cells, 8 triangles wound as the tile's (1 × 1 cells on a
+/// side of 2 samples); the empty pattern for a tile with holes. A first guess for prepasses whose
+/// frame does not rest on their proxies ([`SceneGeometry::occluder`]).
+fn occluder_pattern(t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Pattern {
+    let w = local.iter().map(|p| p[0]).max().unwrap_or(0) as usize + 1;
+    let h = local.iter().map(|p| p[1]).max().unwrap_or(0) as usize + 1;
+    if w < 2 || h < 2 || t.fine_triangles() != 2 * (w - 1) * (h - 1) {
+        return (Vec::new(), Vec::new());
+    }
+    let steps = |n: usize| -> Vec<u32> {
+        let mut s = vec![0, ((n - 1) / 2) as u32, (n - 1) as u32];
+        s.dedup();
+        s
+    };
+    let (xs, ys) = (steps(w), steps(h));
+    let verts: Vec<[u32; 2]> = ys.iter().flat_map(|&y| xs.iter().map(move |&x| [x, y])).collect();
+    let k = |i: usize, j: usize| (j * xs.len() + i) as u32;
+    let mut idx = Vec::new();
+    for j in 0..ys.len() - 1 {
+        for i in 0..xs.len() - 1 {
+            let (a, b, c, d) = (k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1));
+            idx.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    (verts, idx)
+}
+
 /// What the upload writes, counted before any buffer exists.
 ///
 /// A *lattice tile* is a height-field tile whose object has its heights in the normal map
@@ -310,7 +342,7 @@ impl Plan {
                     continue;
                 };
                 let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
-                let run = draws
+                let mut run: Vec<usize> = draws
                     .map(|idx| {
                         let used = compact_indices(idx, t.positions.len(), &mut remap, &mut cidx);
                         let key = (used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone());
@@ -318,6 +350,8 @@ impl Plan {
                         *ids.entry(key).or_insert(next)
                     })
                     .collect();
+                let next = ids.len();
+                run.push(*ids.entry(occluder_pattern(t, &l.local)).or_insert(next));
                 plan.runs.push(Some(run));
                 let corner = g.pos(l.i0, l.j0);
                 let first = l.j0 * g.nx + l.i0;
@@ -376,6 +410,7 @@ impl SceneGeometry {
         let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | direct);
         let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut occluder = Vec::new();
         let mut levels = Vec::new();
         let tile_bbox = |t: &crate::lod::TileMesh| {
             (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
@@ -432,6 +467,7 @@ impl SceneGeometry {
                         let args = |p: usize| DrawArgs { first_instance: tile, ..pattern_args[p] };
                         fine.push(args(ids[0]));
                         coarse.push(args(ids[1]));
+                        occluder.push(args(*ids.last().expect("fine, coarse, levels, occluder")));
                         levels.push(
                             ids[2..]
                                 .iter()
@@ -445,6 +481,7 @@ impl SceneGeometry {
                         );
                         continue;
                     }
+                    occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
                     fine.push(DrawArgs {
                         index_count: t.fine.len() as u32,
                         instance_count: 1,
@@ -498,6 +535,7 @@ impl SceneGeometry {
                     let tile = fine.len() as u32;
                     fine.push(DrawArgs { first_instance: tile, ..Default::default() });
                     coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
+                    occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
                     levels.push(Vec::new());
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
@@ -552,6 +590,7 @@ impl SceneGeometry {
             sample_values,
             fine,
             coarse,
+            occluder,
             levels,
             bbox,
             sub_boxes,

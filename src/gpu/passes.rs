@@ -453,8 +453,10 @@ impl Passes {
         }
     }
 
-    /// Pass: depth + tile id of `args` (one draw per tile) into `targets` (no colour). Depth is
-    /// discarded; the ids are what later passes count.
+    /// Pass: depth + tile id of the first `count` draws of `args` (each draws instances of tile
+    /// ids, usually one) into `targets` (no colour). Depth is discarded; the ids are what later
+    /// passes count.
+    #[allow(clippy::too_many_arguments)]
     pub fn record_prepass(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -462,10 +464,11 @@ impl Passes {
         scene_bg: &wgpu::BindGroup,
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
+        count: usize,
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "prepass", targets, false, false, false, ts.and_then(|t| t.render("prepass_ms")));
-        self.draw_range(&mut pass, &self.prepass, false, scene_bg, geom, args, 0..geom.n_tiles());
+        self.draw_range(&mut pass, &self.prepass, false, scene_bg, geom, args, 0..count);
     }
 
     /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
