@@ -43,6 +43,7 @@ class RenderStats(TypedDict):
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
     tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes tested
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
+    tiles_proven_hidden: NotRequired[int]  # three_pass conservative, temporal: hidden by a height field (CPU proof)
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
     tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test
     test_ms: NotRequired[float]  # three_pass conservative / predict_errors, temporal with GPU timestamps: ms, box test

@@ -10,6 +10,7 @@
 //! Each strategy's file documents what it draws and when that is exact; [`REGISTRY`] lists them.
 
 pub mod frustum;
+pub mod hidden;
 pub mod horizon;
 pub mod none;
 pub mod oracle;
@@ -93,6 +94,7 @@ impl CullOptions {
 }
 
 /// What a strategy sees of the frame being rendered.
+#[derive(Clone, Copy)]
 pub struct FrameInputs<'a> {
     pub ctx: &'a GpuContext,
     pub passes: &'a Passes,

@@ -7,7 +7,8 @@
 //! `three_pass`). Whatever the last frame was (another view, another z_scale, objects hidden or
 //! moved since), the first set is only a guess: the box test finds every tile it missed, so the
 //! image equals `none` with `pixel_threshold` 0 (a threshold t drops only tiles outside the first
-//! set with at most t visible pixels; tiles of the first set are always drawn).
+//! set with at most t visible pixels; tiles of the first set are always drawn). The tiles that a
+//! height field provably hides are left out of both phases first (`hidden`, on the CPU).
 //!
 //! Cost: the last frame's visible set (some of which may be hidden now) plus the box pass. With a
 //! coherent camera (an orbit, a Jupyter viewer, repeated renders of one view) the first set is
@@ -43,6 +44,9 @@ impl CullStrategy for Temporal {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
+        // The tiles proven hidden by height fields (`hidden`) are left out of every pass.
+        let (mask, proven_hidden) = super::hidden::visible_without_hidden(f);
+        let f = &FrameInputs { object_visible: &mask, ..*f };
         let d = &f.ctx.device;
         let n = f.n_tiles();
         let key = f.geometry.key;
@@ -75,6 +79,7 @@ impl CullStrategy for Temporal {
         v.tile_counts.push(("box_pixels", rest.box_counts));
         v.stats.extend(stats);
         v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
+        v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
         Ok(v)
     }
 

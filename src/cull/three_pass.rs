@@ -16,7 +16,8 @@
 //!
 //! # Conservative mode (`conservative: true`, the default)
 //!
-//! Steps 1–3 choose a first set A, whose fine tiles are drawn at once into the final targets.
+//! First the tiles that a height field provably hides are left out of every pass (`hidden`, on
+//! the CPU). Then steps 1–3 choose a first set A, whose fine tiles are drawn at once into the final targets.
 //! Then every other visible tile's bounding box is tested against the depth of that image, at
 //! full resolution: a render pass rasterises the front faces of each box and counts,
 //! per tile, the pixels where the box is at or in front of the stored depth (the comparison is
@@ -103,8 +104,23 @@ impl CullStrategy for ThreePass {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        // Conservative frames find what the first set misses: their prepass may use the cheapest
-        // proxy of each tile. The paper's method (and its predictor) culls by the built proxies.
+        // Conservative frames first leave out the tiles proven hidden by height fields (`hidden`), and
+        // find what the first set misses: their prepass may use the cheapest proxy of each tile.
+        // The paper's method (and its predictor) culls by the built proxies only.
+        let (mask, proven_hidden) = if f.options.conservative {
+            let (m, k) = super::hidden::visible_without_hidden(f);
+            (Some(m), k)
+        } else {
+            (None, 0)
+        };
+        let narrowed;
+        let f = match &mask {
+            Some(m) => {
+                narrowed = FrameInputs { object_visible: m, ..*f };
+                &narrowed
+            }
+            None => f,
+        };
         let proxies = if f.options.conservative { Proxies::Cheapest } else { Proxies::Built };
         let FirstSet { first, fine, counts, ratio, prepass_tris } = prepass_first_set(f, enc, proxies);
         let threshold = f.options.pixel_threshold;
@@ -130,6 +146,9 @@ impl CullStrategy for ThreePass {
         v.tile_counts.push(("box_pixels", box_counts));
         v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
         v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
+        if !self.predicting {
+            v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
+        }
         Ok(v)
     }
 
