@@ -5,10 +5,11 @@
 //! image; the tiles above the threshold selected on the GPU as the first set A.
 //!
 //! When the second phase follows (conservative three_pass, temporal), nothing drawn rests on the
-//! proxies: they only choose A. Each tile's prepass then draws the cheaper of its coarse proxy
-//! and its coarsest level of detail ([`Proxies::Cheapest`]), so a scene built without coarse
-//! proxies (`coarse_factor` 1, the default: the proxy is the fine tile) does not pay a prepass of
-//! every fine triangle.
+//! proxies: they only choose A. Each tile's prepass then draws the cheapest of its coarse proxy,
+//! its coarsest level of detail and its occluder ([`Proxies::Cheapest`]), so a scene built
+//! without coarse proxies (`coarse_factor` 1, the default: the proxy is the fine tile) does not
+//! pay a prepass of every fine triangle; tiles drawing one pattern go as one instanced draw
+//! ([`instanced_runs`]).
 //!
 //! [`draw_and_test_the_rest`] is the conservative second phase: after A has been drawn into the
 //! final targets, every other visible tile's box (its sub-boxes when drawn at level 0) is tested
@@ -26,8 +27,9 @@
 //! at coarser levels, whose triangles may leave the sub-boxes but not the convex box of the
 //! vertices they share with level 0. A pixel counted in several overlapping sub-boxes only raises
 //! the count. Sub-boxes are rasterised only where the tile's whole box, tested first, counts a
-//! pixel ([`tile_boxes`]): that changes no count, only the work. Boxes reaching the near plane are drawn untested ([`FORCED`]); boxes are grown against
-//! f32 round-off and ties count as visible (`FrameInputs::tile_box`).
+//! pixel ([`tile_boxes`]): that changes no count, only the work. Boxes reaching the near plane
+//! are drawn untested ([`FORCED`]); boxes are grown against f32 round-off and ties count as
+//! visible (`FrameInputs::tile_box`).
 
 use super::{Draw, FrameInputs};
 use crate::gpu::layout::BoxInstance;

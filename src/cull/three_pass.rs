@@ -17,7 +17,8 @@
 //! # Conservative mode (`conservative: true`, the default)
 //!
 //! First the tiles that a height field provably hides are left out of every pass (`hidden`, on
-//! the CPU). Then steps 1–3 choose a first set A, whose fine tiles are drawn at once into the final targets.
+//! the CPU). Then steps 1–3 choose a first set A, whose fine tiles are drawn at once into the
+//! final targets.
 //! Then every other visible tile's bounding box is tested against the depth of that image, at
 //! full resolution: a render pass rasterises the front faces of each box and counts,
 //! per tile, the pixels where the box is at or in front of the stored depth (the comparison is
@@ -104,9 +105,9 @@ impl CullStrategy for ThreePass {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        // Conservative frames first leave out the tiles proven hidden by height fields (`hidden`), and
-        // find what the first set misses: their prepass may use the cheapest proxy of each tile.
-        // The paper's method (and its predictor) culls by the built proxies only.
+        // Conservative frames first leave out the tiles proven hidden by height fields (`hidden`),
+        // and find what the first set misses: their prepass may use the cheapest proxy of each
+        // tile. The paper's method (and its predictor) culls by the built proxies only.
         let (mask, proven_hidden) = if f.options.conservative {
             let (m, k) = super::hidden::visible_without_hidden(f);
             (Some(m), k)
