@@ -21,7 +21,7 @@
 //! boxes are not their footprints), height fields with holes or hidden tiles, and ranges that
 //! keep growing.
 
-use super::FrameInputs;
+use super::{box_corners, FrameInputs};
 use crate::camera::Projection;
 use glam::{DVec2, DVec3};
 
@@ -97,7 +97,7 @@ fn hiders(f: &FrameInputs<'_>, drawn: &dyn Fn(usize) -> bool) -> Vec<Hider> {
         let (mut xb, mut yb) = (vec![f64::NAN; tx + 1], vec![f64::NAN; ty + 1]);
         let mut z = vec![(0.0, 0.0); tx * ty];
         for (t, i) in o.tiles.iter().zip(range) {
-            let (lo, hi) = render_space(f, i);
+            let (lo, hi) = f.render_space_box(i, g.bbox[i].0, g.bbox[i].1);
             let (ix, iy) = (t.ix as usize, t.iy as usize);
             (xb[ix], xb[ix + 1], yb[iy], yb[iy + 1]) = (lo.x, hi.x, lo.y, hi.y);
             z[iy * tx + ix] = (lo.z, hi.z);
@@ -110,30 +110,13 @@ fn hiders(f: &FrameInputs<'_>, drawn: &dyn Fn(usize) -> bool) -> Vec<Hider> {
     out
 }
 
-/// Tile `i`'s box in render space (placement and z_scale applied), not grown.
-fn render_space(f: &FrameInputs<'_>, i: usize) -> (DVec3, DVec3) {
-    let g = f.geometry;
-    let zs = DVec3::new(1.0, 1.0, f.camera.z_scale);
-    let off = f.placement(g.tile_object_cpu[i] as usize);
-    let (a, b) = ((g.bbox[i].0 + off) * zs, (g.bbox[i].1 + off) * zs);
-    (a.min(b), a.max(b))
-}
-
 /// Whether height field `a` hides every point of box `blo..bhi` (the module docs' argument).
 fn hides(f: &FrameInputs<'_>, a: &Hider, (blo, bhi): (DVec3, DVec3)) -> bool {
     let fc = f.fc;
     let persp = fc.projection == Projection::Perspective;
     let extent = DVec2::new(a.xb[a.xb.len() - 1] - a.xb[0], a.yb[a.yb.len() - 1] - a.yb[0]);
     let m = 1e-4 * extent.length() + 1e-6 * a.xb[0].abs().max(a.yb[0].abs()).max(extent.max_element());
-    let corners: Vec<DVec3> = (0..8)
-        .map(|c| {
-            DVec3::new(
-                if c & 1 == 0 { blo.x } else { bhi.x },
-                if c & 2 == 0 { blo.y } else { bhi.y },
-                if c & 4 == 0 { blo.z } else { bhi.z },
-            )
-        })
-        .collect();
+    let corners = box_corners(blo, bhi);
     // Start from the tiles under B's own footprint, then grow.
     let Some(mut z) = a.range(blo.truncate(), bhi.truncate(), m) else { return false };
     for _ in 0..6 {

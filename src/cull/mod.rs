@@ -153,29 +153,32 @@ impl FrameInputs<'_> {
         self.render_box(i, lo, hi)
     }
 
+    /// The box `lo..hi` of tile `i` (origin-relative, as `SceneGeometry::bbox`) in render space:
+    /// its object's placement and z_scale applied, not grown.
+    pub fn render_space_box(&self, i: usize, lo: glam::DVec3, hi: glam::DVec3) -> (glam::DVec3, glam::DVec3) {
+        let zs = glam::DVec3::new(1.0, 1.0, self.camera.z_scale);
+        let off = self.placement(self.geometry.tile_object_cpu[i] as usize);
+        let (a, b) = ((lo + off) * zs, (hi + off) * zs);
+        (a.min(b), a.max(b))
+    }
+
     /// The box `lo..hi` of tile `i` (origin-relative, as `SceneGeometry::bbox`) as [`Self::tile_box`]
     /// makes the tile's.
     pub fn render_box(&self, i: usize, lo: glam::DVec3, hi: glam::DVec3) -> (glam::DVec3, glam::DVec3, bool) {
         use glam::DVec3;
-        let g = self.geometry;
-        let zs = DVec3::new(1.0, 1.0, self.camera.z_scale);
-        let off = self.placement(g.tile_object_cpu[i] as usize);
-        let (a, b) = ((lo + off) * zs, (hi + off) * zs);
-        let (lo, hi) = (a.min(b), a.max(b));
+        let (lo, hi) = self.render_space_box(i, lo, hi);
         let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
         let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
-        let nearest = (0..8)
-            .map(|c| {
-                let p = DVec3::new(
-                    if c & 1 == 0 { lo.x } else { hi.x },
-                    if c & 2 == 0 { lo.y } else { hi.y },
-                    if c & 4 == 0 { lo.z } else { hi.z },
-                );
-                (p - self.fc.eye).dot(self.fc.forward)
-            })
-            .fold(f64::INFINITY, f64::min);
+        let nearest =
+            box_corners(lo, hi).iter().map(|&p| (p - self.fc.eye).dot(self.fc.forward)).fold(f64::INFINITY, f64::min);
         (lo, hi, nearest <= self.fc.near * 1.001 + 1e-9)
     }
+}
+
+/// The 8 corners of box `lo..hi`; corner c takes x from bit 0, y from bit 1, z from bit 2
+/// (0 = lo), as box.wgsl numbers them.
+pub fn box_corners(lo: glam::DVec3, hi: glam::DVec3) -> [glam::DVec3; 8] {
+    std::array::from_fn(|c| glam::DVec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), hi, lo))
 }
 
 /// Which fine tiles the final pass draws.

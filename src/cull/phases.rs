@@ -70,14 +70,10 @@ pub fn prepass_draws(f: &FrameInputs<'_>, proxies: Proxies) -> Vec<DrawArgs> {
         Proxies::Built => g.coarse.clone(),
         Proxies::Cheapest => (0..g.n_tiles())
             .map(|i| {
-                let candidates = [Some(g.occluder[i]), g.levels[i].last().map(|l| l.args)];
-                candidates.into_iter().flatten().filter(|a| a.index_count > 0).fold(g.coarse[i], |best, a| {
-                    if a.index_count < best.index_count {
-                        a
-                    } else {
-                        best
-                    }
-                })
+                // The coarse proxy first: it wins ties.
+                let others = [Some(g.occluder[i]), g.levels[i].last().map(|l| l.args)];
+                let drawable = others.into_iter().flatten().filter(|a| a.index_count > 0);
+                std::iter::once(g.coarse[i]).chain(drawable).min_by_key(|a| a.index_count).unwrap_or(g.coarse[i])
             })
             .collect(),
     };
