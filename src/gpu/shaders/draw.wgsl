@@ -97,13 +97,14 @@ fn shading_grid(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32
 
 struct VOutDraw {
     @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
+    // xyz: the render-space position; w: the colouring scalar, the vertex's value (mode 1) or its
+    // object-relative z (mode 2). One varying for both: a CPU rasteriser stores and sets up each
+    // varying of each binned triangle as four channels (lavapipe: 4-5 % of a frame).
+    @location(0) world_s: vec4<f32>,
     @location(1) @interpolate(flat) tile: u32,
-    // The colouring scalar: the vertex's value (mode 1) or its object-relative z (mode 2).
-    @location(2) s: f32,
     // The vertex's smooth normal, exaggerated (0 where it has none); for a grid mesh its grid
-    // coordinates (column, row, 0) instead (one varying for both: each costs every fragment).
-    @location(3) n: vec3<f32>,
+    // coordinates (column, row, 0) instead (one varying for both, as above).
+    @location(2) n: vec3<f32>,
 }
 
 // A packed smooth normal (lod::normals: octahedral, two snorm16; 0 = none) in render space,
@@ -129,9 +130,8 @@ fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) 
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
-    out.world = p;
+    out.world_s = vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5));
     out.tile = tile;
-    out.s = select(value, pos.z, o.cmap.z > 1.5);
     out.n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
     return out;
 }
@@ -177,7 +177,7 @@ struct FOut {
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
@@ -185,18 +185,17 @@ fn fs_main(v: VOutDraw) -> FOut {
 @fragment
 fn fs_grid(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading_grid(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
 // GL: vs_draw's transform with clip z and w carried to the fragment (see VOutGl in common.wgsl).
 struct VOutDrawGl {
     @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
+    @location(0) world_s: vec4<f32>,
     @location(1) @interpolate(flat) tile: u32,
     @location(2) zw: vec2<f32>,
-    @location(3) s: f32,
-    @location(4) n: vec3<f32>,
+    @location(3) n: vec3<f32>,
 }
 
 @vertex
@@ -208,7 +207,7 @@ fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
     let n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
-    return VOutDrawGl(clip, p, tile, clip.zw, select(value, pos.z, o.cmap.z > 1.5), n);
+    return VOutDrawGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw, n);
 }
 
 struct FOutGl {
@@ -222,7 +221,7 @@ struct FOutGl {
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
@@ -230,6 +229,6 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
 @fragment
 fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading_grid(o, v.world, cross(dpdx(v.world), dpdy(v.world)), v.n, v.s);
+    let ns = shading_grid(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
