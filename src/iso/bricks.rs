@@ -185,9 +185,35 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> 
     [(clean(f), fd.map(|v| v as u32)), (clean(c), cd.map(|v| v as u32))]
 }
 
-/// Packs 2-bit values 16 to a little-endian u32 word (value `i` in bits `2 (i % 16)` of word `i / 16`).
-pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
-    v.par_chunks(16).map(|c| c.iter().enumerate().fold(0u32, |w, (i, &k)| w | (k as u32 & 3) << (2 * i))).collect()
+/// The nodes as the walk reads them (iso.wgsl `node_info`): per node of `classes` (dims `dims`,
+/// x fastest), 4 bits: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
+/// nodes per axis, [`brick_classes`]) is skippable, bit 3 when its coarse brick is too (a
+/// skippable brick's class is that of each of its nodes). 8 nodes per little-endian u32 word
+/// (node `i` in bits `4 (i % 8)..4 (i % 8) + 4` of word `i / 8`): the walk's step reads one word
+/// for all three.
+pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3]) -> Vec<u32> {
+    let [(fine, fd), (coarse, cd)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
+    let [nx, ny] = [dims[0] as usize, dims[1] as usize];
+    let skippable = |v: &[u8], bd: [u32; 3], s: u32, i: usize| {
+        let (x, y, z) = ((i % nx) >> s, (i / nx % ny) >> s, (i / (nx * ny)) >> s);
+        v[(z * bd[1] as usize + y) * bd[0] as usize + x] != 0
+    };
+    (0..classes.len().div_ceil(8))
+        .into_par_iter()
+        .map(|w| {
+            (8 * w..(8 * w + 8).min(classes.len())).fold(0u32, |word, i| {
+                let f = skippable(&fine, fd, FINE_SHIFT, i);
+                let c = f && skippable(&coarse, cd, COARSE_SHIFT, i);
+                word | ((classes[i] & 3) as u32 | (f as u32) << 2 | (c as u32) << 3) << (4 * (i - 8 * w))
+            })
+        })
+        .collect()
+}
+
+/// The class (`CLASS_*`) of node `p` of the words `nodes` of [`pack_nodes`] (grid `dims`).
+pub(super) fn node_class(nodes: &[u32], dims: [u32; 3], p: [u32; 3]) -> u8 {
+    let i = ((p[2] * dims[1] + p[1]) * dims[0] + p[0]) as usize;
+    (nodes[i / 8] >> (4 * (i % 8)) & 3) as u8
 }
 
 #[cfg(test)]
@@ -280,13 +306,33 @@ mod tests {
     }
 
     #[test]
-    fn pack2_packs_16_per_word() {
-        let v: Vec<u8> = (0..37).map(|i| (i % 4) as u8).collect();
-        let p = pack2(&v);
-        assert_eq!(p.len(), 3);
+    fn pack_nodes_holds_classes_and_bricks() {
+        // Below under z = 9.5, Above over it, one passable node: skippable bricks of both classes
+        // at the fine level, Below ones at the coarse level, none near the passable node.
+        let d = [37usize, 21, 41];
+        let mut v: Vec<u8> =
+            (0..d[0] * d[1] * d[2]).map(|i| if i / (d[0] * d[1]) < 10 { CLASS_BELOW } else { CLASS_ABOVE }).collect();
+        v[(30 * d[1] + 5) * d[0] + 5] = CLASS_PASS;
+        let dims = d.map(|x| x as u32);
+        let p = pack_nodes(&v, dims);
+        assert_eq!(p.len(), v.len().div_ceil(8));
+        let fine = brute(&v, d, FINE_SHIFT);
+        let coarse = brute(&v, d, COARSE_SHIFT);
+        let at = |b: &[u8], s: u32, i: usize| {
+            let bd = d.map(|x| x.div_ceil(1 << s));
+            b[(((i / (d[0] * d[1])) >> s) * bd[1] + ((i / d[0] % d[1]) >> s)) * bd[0] + ((i % d[0]) >> s)]
+        };
+        let mut seen = [0; 2];
         for (i, &k) in v.iter().enumerate() {
-            assert_eq!((p[i / 16] >> (2 * (i % 16))) & 3, k as u32);
+            let nib = p[i / 8] >> (4 * (i % 8)) & 15;
+            let (f, c) = (at(&fine, FINE_SHIFT, i) != 0, at(&coarse, COARSE_SHIFT, i) != 0);
+            assert_eq!(nib, k as u32 | (f as u32) << 2 | ((f && c) as u32) << 3, "node {i}");
+            seen[0] += f as u32;
+            seen[1] += c as u32;
         }
+        assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
+        assert_eq!(v.len() % 8, 1);
+        assert_eq!(p[p.len() - 1] >> 4, 0, "no bits past the last node");
     }
 }
 

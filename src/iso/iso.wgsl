@@ -17,11 +17,12 @@ struct Globals {
 // an occluder node of the other class with no NaN node in between; the map is the depth of that
 // node's entry point, pushed farther by `lo.w` (render units), 0 (= far, nothing proven) where no
 // such pair exists. Every march cell that may hold surface (passable or NaN) the walk enters up to
-// and including that cell is seen: its bit in `cells_seen` is set; a cell the ray passes within
-// `hi.w` (grid units) of is marked too, so rounding never skips one. A cull node is visible when
-// one of its cells is seen (counted on the CPU).
-// Classes: 2 bits per occluder node, 16 per word: 0 = may hold surface (passable), 1 = Below,
-// 2 = Above, 3 = has a NaN sample (outside the domain: resets the walk).
+// and including that cell is seen: its bit in `cells_seen` is set; where the ray enters a cell
+// within `hi.w` (grid units) of a grid plane, a near event along that axis is set, and the CPU
+// marks the cells across it (iso/seen.rs), so rounding never skips one. A cull node is visible
+// when one of its cells is seen (counted on the CPU).
+// Classes (`node_info`): 0 = may hold surface (passable), 1 = Below, 2 = Above, 3 = has a NaN
+// sample (outside the domain: resets the walk).
 struct MapParams {
     inv_view_proj: mat4x4<f32>,
     // xyz: the volume's box (render space); lo.w: the map's margin (render units); hi.w: the
@@ -33,14 +34,14 @@ struct MapParams {
     // xyz: march cells per axis; w: image width.
     dims: vec4<u32>,
     // x: image height; y: march depth - occluder depth; z: unused; w: 1 = mark the march cells
-    // seen in `cells_seen` (1 bit each).
+    // in `cells_seen` (4 bits each, `mark_cell`).
     size: vec4<u32>,
     // xyz: occluder nodes per axis; w: unused.
     occ_dims: vec4<u32>,
     // Unused (the cull nodes are counted on the CPU).
     cull_dims: vec4<u32>,
     // Skip bricks (iso/bricks.rs): x, y: log2 of the fine and the coarse bricks' size in occluder
-    // nodes (x = 0: no skipping); z, w: the first word of their 2-bit classes in `classes`.
+    // nodes (x = 0: no skipping; the nodes' flags say which bricks are skippable); z, w: unused.
     bricks: vec4<u32>,
 }
 
@@ -49,75 +50,43 @@ struct MapParams {
 @group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
 @group(1) @binding(3) var<storage, read_write> cells_seen: array<atomic<u32>>;
 
-fn mark_cell(c: vec3<i32>) {
+// Marks march cell `c` in `cells_seen` (4 bits per cell, 8 per word): bit 0 = seen (it may hold
+// surface and the ray entered it); bits 1-3 = a near event along x, y, z (the ray entered it
+// within `hi.w` of a grid plane across that axis, so rounding may have skipped the cell on the
+// other side; the CPU marks those cells, iso::render::seen_cells).
+fn mark_cell(c: vec3<i32>, bits: u32) {
     if (mp.size.w == 1u) {
         let u = vec3<u32>(c);
         let i = (u.z * mp.dims.y + u.y) * mp.dims.x + u.x;
-        let bit = 1u << (i & 31u);
+        let b = bits << ((i & 7u) * 4u);
         // Most cells are seen by many rays: a load first spares the atomic read-modify-write.
-        if ((atomicLoad(&cells_seen[i >> 5u]) & bit) == 0u) {
-            atomicOr(&cells_seen[i >> 5u], bit);
+        if ((atomicLoad(&cells_seen[i >> 3u]) & b) != b) {
+            atomicOr(&cells_seen[i >> 3u], b);
         }
     }
 }
 
-fn node_class(c: vec3<i32>) -> u32 {
+// The occluder node holding march cell `c`: bits 0-1 its class, bit 2 set when its fine skip
+// brick (`2^bricks.x` nodes per axis) and the one-node ring around it are all of that class,
+// bit 3 the same for its coarse brick (`2^bricks.y`); 4 bits per node, 8 per word (one read per
+// step for all three).
+fn node_info(c: vec3<i32>) -> u32 {
     let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
     let i = (u.z * mp.occ_dims.y + u.y) * mp.occ_dims.x + u.x;
-    return (classes[i >> 4u] >> ((i & 15u) * 2u)) & 3u;
+    return (classes[i >> 3u] >> ((i & 7u) * 4u)) & 15u;
 }
 
-// The class of the skip brick of `2^s` occluder nodes per axis that holds march cell `c`: 1 / 2
-// when it and its one-node ring are all Below / Above, else 0.
-fn brick_class(c: vec3<i32>, s: u32, off: u32) -> u32 {
-    let u = vec3<u32>(c) >> vec3<u32>(mp.size.y + s);
-    let bd = (mp.occ_dims.xyz + vec3<u32>((1u << s) - 1u)) >> vec3<u32>(s);
-    let i = (u.z * bd.y + u.y) * bd.x + u.x;
-    return (classes[off + (i >> 4u)] >> ((i & 15u) * 2u)) & 3u;
-}
-
-// Where the ray `o + t d` (`inv` = 1 / d) leaves cell `c` across each axis (the DDA's next
-// crossings): a function of the cell alone, so a brick jump lands in the state the cell-by-cell
-// walk would reach, bit for bit.
-fn exits(c: vec3<i32>, o: vec3<f32>, inv: vec3<f32>, ahead: vec3<f32>) -> vec3<f32> {
-    return (mp.lo.xyz + (vec3<f32>(c) + ahead) * mp.node.xyz - o) * inv;
+// Where the ray leaves cell `c` across each axis (the DDA's next crossings), `t0 + c dt` with the
+// ray's constants from `ray_exits`: a function of the cell alone, so a brick jump lands in the
+// state the cell-by-cell walk would reach, bit for bit. (Two per-ray vectors rather than the
+// ray's origin, inverse direction and stepping side keep the walk's loop in fewer registers.)
+fn exits(c: vec3<i32>, t0: vec3<f32>, dt: vec3<f32>) -> vec3<f32> {
+    return fma(vec3<f32>(c), dt, t0);
 }
 
 fn unproject(ndc: vec3<f32>) -> vec3<f32> {
     let p = mp.inv_view_proj * vec4<f32>(ndc, 1.0);
     return p.xyz / p.w;
-}
-
-// At the entry point `g` (march-cell units) of cell `c`: every cell that touches `g` within `hi.w`
-// along each axis (across a face, an edge or a corner) is marked when it may hold surface; the ray
-// may have skipped it by rounding. The axis just crossed (`crossed`) has its other side marked
-// already.
-fn mark_near(g: vec3<f32>, c: vec3<i32>, dims: vec3<i32>, crossed: i32) {
-    var off = vec3<i32>(0);
-    var any_near = false;
-    for (var a = 0; a < 3; a++) {
-        let r = floor(g[a] + 0.5);
-        if (a != crossed && abs(g[a] - r) < mp.hi.w) {
-            off[a] = select(1, -1, c[a] == i32(r));
-            any_near = true;
-        }
-    }
-    if (!any_near) {
-        return;
-    }
-    for (var m = 1; m < 8; m++) {
-        let pick = vec3<bool>((m & 1) != 0, (m & 2) != 0, (m & 4) != 0);
-        if (any(pick & (off == vec3<i32>(0)))) {
-            continue;
-        }
-        let n = c + select(vec3<i32>(0), off, pick);
-        if (all(n >= vec3<i32>(0)) && all(n < dims)) {
-            let kn = node_class(n);
-            if (kn == 0u || kn == 3u) {
-                mark_cell(n);
-            }
-        }
-    }
 }
 
 @compute @workgroup_size(8, 8)
@@ -151,21 +120,31 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         let p = o + d * t0;
         var c = vec3<i32>(clamp(floor((p - mp.lo.xyz) / mp.node.xyz), vec3<f32>(0.0), vec3<f32>(dims - 1)));
         let stp = select(vec3<i32>(-1), vec3<i32>(1), d > vec3<f32>(0.0));
+        // exits(c) = (lo + (c + ahead) node - o) inv, ahead = 1 along the axes the ray advances.
         let ahead = select(vec3<f32>(0.0), vec3<f32>(1.0), d > vec3<f32>(0.0));
-        var tnext = exits(c, o, inv, ahead);
+        let xt0 = (mp.lo.xyz + ahead * mp.node.xyz - o) * inv;
+        let xdt = mp.node.xyz * inv;
+        var tnext = exits(c, xt0, xdt);
         var last = 0u;
         var t_enter = t0;
         var crossed = -1;
         loop {
-            let k = node_class(c);
+            let info = node_info(c);
+            let k = info & 3u;
             // Below / Above cells (uniform, NaN-free) hold no triangle: the others need their bit.
-            if (k == 0u || k == 3u) {
-                mark_cell(c);
+            // Where the entry point lies within `hi.w` of a grid plane other than the one just
+            // crossed (whose other side the walk has marked), the ray may have skipped a cell
+            // beside it by rounding: a near event, resolved on the CPU. (One mark per step and no
+            // neighbour loop here: a CPU rasteriser runs every branch of the loop for every lane.)
+            let gp = (o + d * t_enter - mp.lo.xyz) / mp.node.xyz;
+            let close = abs(gp - floor(gp + 0.5)) < vec3<f32>(mp.hi.w) & (vec3<i32>(0, 1, 2) != vec3<i32>(crossed));
+            let nb = select(vec3<u32>(0u), vec3<u32>(2u, 4u, 8u), close);
+            let bits = select(0u, 1u, k == 0u || k == 3u) | nb.x | nb.y | nb.z;
+            if (bits != 0u) {
+                mark_cell(c, bits);
             }
-            mark_near((o + d * t_enter - mp.lo.xyz) / mp.node.xyz, c, dims, crossed);
-            let tm = min(min(tnext.x, tnext.y), tnext.z);
             // A NaN cell, or a cell met only in the margin outside the box, breaks every pair.
-            if (k == 3u || tm <= in0 || t_enter >= in1) {
+            if (k == 3u || min(min(tnext.x, tnext.y), tnext.z) <= in0 || t_enter >= in1) {
                 last = 0u;
             } else if (k != 0u) {
                 if (last != 0u && last != k) {
@@ -176,73 +155,41 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
                 last = k;
             }
-            // Space skipping: in a brick of class `last` (it and its ring all of that class) the
-            // walk would mark nothing and never stop, so it jumps to where it leaves the brick
-            // (`last == k`: the cell counted; `k` is then Below or Above).
-            // A coarse brick is skippable only if its fine bricks are.
-            var s = 0u;
-            if (mp.bricks.x != 0u && last == k && k != 0u && brick_class(c, mp.bricks.x, mp.bricks.z) != 0u) {
-                s = mp.size.y + mp.bricks.x;
-                if (brick_class(c, mp.bricks.y, mp.bricks.w) != 0u) {
-                    s = mp.size.y + mp.bricks.y;
-                }
-            }
-            if (s != 0u) {
-                // The brick's last cell along the ray on each axis, and where the ray leaves it
-                // (ties to the lower axis, as the steps below).
-                let blo = (c >> vec3<u32>(s)) << vec3<u32>(s);
-                let e = select(blo, min(blo + vec3<i32>((1 << s) - 1), dims - 1), stp > vec3<i32>(0));
-                let x = exits(e, o, inv, ahead);
-                var a = 0;
-                if (x.y < x[a]) {
-                    a = 1;
-                }
-                if (x.z < x[a]) {
-                    a = 2;
-                }
-                let tx = x[a];
-                if (tx >= t1) {
-                    break;
-                }
-                // The other axes advance while their crossing comes first (a tie goes to the
-                // lower axis).
-                for (var b = 0; b < 3; b++) {
-                    if (b == a) {
-                        c[b] = e[b] + stp[b];
-                        continue;
-                    }
-                    loop {
-                        let tc = exits(c, o, inv, ahead)[b];
-                        if (c[b] == e[b] || tc > tx || (b > a && tc == tx)) {
-                            break;
-                        }
-                        c[b] += stp[b];
-                    }
-                }
-                tnext = exits(c, o, inv, ahead);
-                t_enter = tx;
-                crossed = a;
-                if (any(c < vec3<i32>(0)) || any(c >= dims)) {
-                    break;
-                }
-                continue;
-            }
-            if (tm >= t1) {
+            // One step: to the next cell, or, in a skip brick of class `last` (it and its ring all
+            // of that class: the walk would mark nothing in it and never stop), to where the ray
+            // leaves the brick (`last == k`: the cell counted; `k` is then Below or Above). A
+            // coarse brick is skippable only if its fine bricks are. A step is a brick of one
+            // cell (`s` = 0), so both run the same code.
+            let skip = mp.bricks.x != 0u && last == k && k != 0u && (info & 4u) != 0u;
+            let s = select(0u, mp.size.y + select(mp.bricks.x, mp.bricks.y, (info & 8u) != 0u), skip);
+            // The brick's last cell along the ray on each axis, and where the ray leaves it (ties
+            // to the lower axis).
+            let blo = (c >> vec3<u32>(s)) << vec3<u32>(s);
+            let e = select(blo, min(blo + vec3<i32>((1 << s) - 1), dims - 1), stp > vec3<i32>(0));
+            let x = exits(e, xt0, xdt);
+            let a01 = select(0, 1, x.y < x.x);
+            let a = select(a01, 2, x.z < min(x.x, x.y));
+            let tx = x[a];
+            if (tx >= t1) {
                 break;
             }
-            t_enter = tm;
-            // One axis at a time: a ray through an edge or corner visits the cells beside it too.
-            if (tnext.x <= tm) {
-                c.x += stp.x;
-                crossed = 0;
-            } else if (tnext.y <= tm) {
-                c.y += stp.y;
-                crossed = 1;
-            } else {
-                c.z += stp.z;
-                crossed = 2;
-            }
-            tnext = exits(c, o, inv, ahead);
+            // The other axes advance while their crossing comes first (a tie goes to the lower
+            // axis), at most to the brick's last cell (`s` = 0: none does). The crossings
+            // `exits(c + j stp)` grow with `j`, so the count is the estimate `(tx - tnext) / |dt|`
+            // corrected by one either way: the loop that counted them one by one, in closed form
+            // (a CPU rasteriser runs a loop's first round for every lane whether any needs it).
+            let axis = vec3<i32>(0, 1, 2);
+            let lower = axis < vec3<i32>(a);
+            let most = abs(e - c);
+            var n = vec3<i32>(clamp(ceil((tx - tnext) / abs(xdt)), vec3<f32>(0.0), vec3<f32>(most)));
+            let xb = exits(c + (n - 1) * stp, xt0, xdt);
+            n -= select(vec3<i32>(0), vec3<i32>(1), n > vec3<i32>(0) & !(xb < vec3<f32>(tx) | (xb == vec3<f32>(tx) & lower)));
+            let xn = exits(c + n * stp, xt0, xdt);
+            n += select(vec3<i32>(0), vec3<i32>(1), n < most & (xn < vec3<f32>(tx) | (xn == vec3<f32>(tx) & lower)));
+            c = select(c + n * stp, e + stp, axis == vec3<i32>(a));
+            tnext = exits(c, xt0, xdt);
+            t_enter = tx;
+            crossed = a;
             if (any(c < vec3<i32>(0)) || any(c >= dims)) {
                 break;
             }

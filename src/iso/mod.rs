@@ -37,6 +37,7 @@ pub mod octree;
 mod passes;
 mod pool;
 pub mod render;
+mod seen;
 /// The extraction's former name (marching tetrahedra), kept for paths that use it.
 pub use march as tetra;
 

@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{brick_classes, pack2, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
+use super::bricks::{pack_nodes, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -35,22 +35,26 @@ pub(super) struct Targets {
     pub(super) map: wgpu::Buffer,
 }
 
-/// The class grid of one (isovalue, occluder depth), on the GPU: 2 bits per node (see iso.wgsl),
-/// followed in the same buffer by its two levels of skip bricks ([`super::bricks`]), 2 bits each.
+/// The class grid of one (isovalue, occluder depth), on the GPU: 4 bits per node, its class and
+/// whether its two levels of skip bricks are skippable ([`super::bricks::pack_nodes`]).
 pub(super) struct ClassGrid {
     pub(super) key: (u32, u32),
     pub(super) buffer: wgpu::Buffer,
     pub(super) dims: [u32; 3],
-    /// `[fine shift, coarse shift, fine word offset, coarse word offset]` (iso.wgsl `bricks`).
+    /// `[fine shift, coarse shift, 0, 0]` (iso.wgsl `bricks`).
     pub(super) bricks: [u32; 4],
     pub(super) n_below: u32,
     pub(super) n_above: u32,
     pub(super) n_nan: u32,
+    /// The nodes as uploaded (4 bits per node, 8 per word: class, fine and coarse brick
+    /// skippable; iso.wgsl `node_info`), also read by the CPU's side of the walk
+    /// (`seen::seen_cells`).
+    pub(super) words: Vec<u32>,
 }
 
 impl ClassGrid {
-    /// Packs `classes` (x fastest, then y, z; `dims` per axis) 16 to a word, builds their skip
-    /// bricks and uploads both.
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) with their skip bricks' flags 8 to
+    /// a word and uploads them.
     pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8]) -> Self {
         // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
         let n = classes
@@ -58,19 +62,14 @@ impl ClassGrid {
             .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v == k) as u32).sum::<u32>()))
             .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
         let [n_below, n_above, n_nan] = n;
-        let [(fine, _), (coarse, _)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
-        let mut words = pack2(classes);
-        let fine_off = words.len() as u32;
-        words.extend(pack2(&fine));
-        let coarse_off = words.len() as u32;
-        words.extend(pack2(&coarse));
+        let words = pack_nodes(classes, dims);
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
             contents: bytemuck::cast_slice(&words),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bricks = [FINE_SHIFT, COARSE_SHIFT, fine_off, coarse_off];
-        Self { key, buffer, dims, bricks, n_below, n_above, n_nan }
+        let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
+        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, words }
     }
 }
 
@@ -278,8 +277,9 @@ fn pass<'e>(
 }
 
 /// The occlusion map and the cells seen in front of it (one compute pass, one invocation per
-/// pixel, see iso.wgsl): one submission, one read-back. Returns the bits of the `n_cells` march
-/// cells seen (cell `i` is bit `i % 32` of word `i / 32`).
+/// pixel, see iso.wgsl): one submission, one read-back. Returns the walk's marks of the `n_cells`
+/// march cells, 4 bits each (cell `i` is bits `4 (i % 8)` (seen) and `4 (i % 8) + 1..=3` (near
+/// events along x, y, z) of word `i / 8`), which `render::seen_cells` resolves.
 pub(super) fn march(
     ctx: &GpuContext,
     iso: &IsoPasses,
@@ -290,7 +290,7 @@ pub(super) fn march(
     n_cells: usize,
 ) -> Result<Vec<u32>> {
     let d = &ctx.device;
-    let words = n_cells.div_ceil(32).max(1);
+    let words = n_cells.div_ceil(8).max(1);
     let size = 4 * words as u64;
     let cells = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("iso_cells_seen"),

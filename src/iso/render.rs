@@ -5,7 +5,8 @@
 //!
 //! 1. **Classes** (view independent, cached per isovalue and occluder depth, kept on the GPU):
 //!    every node at `occluder_depth` is *Below* (`max < w`, no NaN), *Above* (`min > w`, no NaN),
-//!    *NaN* (some sample is NaN), or passable (it may hold surface); 2 bits per node.
+//!    *NaN* (some sample is NaN), or passable (it may hold surface); 4 bits per node with its
+//!    skip bricks' flags (step 3; [`super::bricks::pack_nodes`]).
 //! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z): the pixel's ray
 //!    walks the class grid near to far (3-D DDA) and stops at the first node of one class met
 //!    after a node of the other class with no NaN node in between; `M(p)` is the depth of that
@@ -35,12 +36,17 @@
 //!    NaN samples loses occluders (whole nodes count as NaN), never correctness.
 //! 3. **Cells and nodes seen**, in the same walk: every march cell (cells of the finer of the
 //!    occluder and cull depths) that may hold surface (passable or NaN class) and that the pixel's
-//!    ray enters before it stops (the stopping cell included; also a cell the ray passes within a
-//!    thousandth of a cell of, so rounding never skips one; the walk's box is widened by the same
-//!    margin, but a cell met only in that band outside the box breaks every pair as a NaN cell
-//!    does: a proof needs its segment inside the volume) sets one bit; Below / Above cells hold no triangle and set none. The surface lies in
-//!    those cells, so on every pixel where a cell's surface is the first hit, the ray enters the
-//!    cell before `M(p)`: drawing only the marked cells' triangles gives the unculled image. A
+//!    ray enters before it stops (the stopping cell included) is seen. So is a cell the ray passes
+//!    within a hundredth of a cell of, so rounding never skips one: where the ray enters a cell
+//!    that close to a grid plane, the walk marks a *near event* along that axis, and the CPU
+//!    marks the cells across it on both sides ([`super::seen::seen_cells`]; the walk used to mark
+//!    only the near side's cells itself, with up to seven class reads and atomics per step, which
+//!    a CPU rasteriser runs for every lane at every step: 40 % of the walk on the Pesco field,
+//!    for 1 % fewer triangles). The walk's box is widened by the same margin, but a cell met only
+//!    in that band outside the box breaks every pair as a NaN cell does: a proof needs its segment
+//!    inside the volume. Below / Above cells hold no triangle and are never seen. The surface lies
+//!    in those cells, so on every pixel where a cell's surface is the first hit, the ray enters the
+//!    cell before `M(p)`: drawing only the seen cells' triangles gives the unculled image. A
 //!    node at `cull_depth` is visible (extracted) when one of its cells is marked, counted on the
 //!    CPU from the bits (`node_pixels` = its marked cells): no atomic counter per node in the walk
 //!    (they cost ~40 % of the walk on the Pesco field on lavapipe), and a node whose only cells
@@ -54,13 +60,16 @@
 //!    enter is of class `k`, so it would mark none, and its state (last class `k`) would not change
 //!    (no class change, no NaN reset) — the map's stop is at the first cell of the *other* class,
 //!    outside the brick, at the entry point the cell-by-cell walk computes; the ring covers the
-//!    neighbours the rounding margin would mark (the walk marks them only within one cell). The
+//!    neighbours a near event in the brick would mark (they are of class `k`: never seen). The
 //!    jump lands in the very state the cell-by-cell walk reaches: the DDA's crossings are a
 //!    function of the cell alone (`exits` in iso.wgsl), the exit axis is the first crossing out of
 //!    the brick (ties to the lower axis, as the steps), and each other axis advances while its
-//!    crossing comes first. So the map and the marked cells are bit for bit those of the walk
-//!    without skipping (`bricks::walk_tests`). On the frog tissues (500×470×136) this takes the
-//!    walk from ~110 to ~13 steps per pixel.
+//!    crossing comes first (counted in closed form: the crossings grow with the cell index, so an
+//!    estimate corrected by one either way is exact). So the map and the seen cells are bit for
+//!    bit those of the walk without skipping (`bricks::walk_tests`). A step is a brick of one
+//!    cell, so both run the same straight-line code: a CPU rasteriser runs every branch for every
+//!    lane. On the frog tissues (500×470×136) skipping takes the walk from ~110 to ~13 steps per
+//!    pixel.
 //! 4. **Surface**: marching cubes ([`super::march`]) in the visible nodes at `cull_depth`,
 //!    cached per (volume, isovalue, node) in a [`PatchCache`]; drawn lit (two-sided Lambert).
 //!    Of each patch only the triangles of the marked cells are drawn (patches index their
@@ -84,6 +93,7 @@ use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{MinMaxOctree, NodeInfo};
 use super::passes::{draw_pooled, draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
 use super::pool::SurfacePool;
+use super::seen::{cells_seen, seen_cells, visible_ranges};
 use super::Volume;
 use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -119,7 +129,7 @@ impl IsoCulling {
 pub struct IsoOptions {
     pub culling: IsoCulling,
     /// Depth of the occluder nodes (root = 0); `None` = `max_depth` (single cells: the class grid
-    /// costs 2 bits per cell and the walk little more than at coarser depths).
+    /// costs 4 bits per cell and the walk little more than at coarser depths).
     pub occluder_depth: Option<u32>,
     /// Depth of the nodes tested and extracted (root = 0); `None` = `max_depth - 2`.
     pub cull_depth: Option<u32>,
@@ -322,52 +332,6 @@ fn norm_bits(w: f32) -> u32 {
     if w == 0.0 { 0.0f32 } else { w }.to_bits()
 }
 
-/// How many march cells of node `n` are set in `bits` (grid `mdims`, a volume cell `c` is march
-/// cell `c >> shift`; `n` is at the march depth or coarser).
-fn cells_seen(n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> u32 {
-    let r = |a: usize| (n.cell_lo[a] >> shift)..((n.cell_hi[a] + (1 << shift) - 1) >> shift);
-    let mut seen = 0;
-    for k in r(2) {
-        for j in r(1) {
-            for i in r(0) {
-                let m = ((k * mdims[1] + j) * mdims[0] + i) as usize;
-                seen += bits[m / 32] >> (m % 32) & 1;
-            }
-        }
-    }
-    seen
-}
-
-/// The triangle ranges of `p` (the patch of node `n`) that lie in march cells set in `bits`
-/// (grid `mdims`, a volume cell `c` is march cell `c >> shift`), consecutive cells merged.
-fn visible_ranges(p: &SurfacePatch, n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32) -> Vec<[u32; 2]> {
-    let mut out: Vec<[u32; 2]> = Vec::new();
-    if p.cell_starts.is_empty() {
-        return out;
-    }
-    let (lo, hi) = (n.cell_lo, n.cell_hi);
-    let mut c = 0usize;
-    for k in lo[2]..hi[2] {
-        for j in lo[1]..hi[1] {
-            for i in lo[0]..hi[0] {
-                let (a, b) = (p.cell_starts[c], p.cell_starts[c + 1]);
-                c += 1;
-                if a == b {
-                    continue;
-                }
-                let m = (((k >> shift) * mdims[1] + (j >> shift)) * mdims[0] + (i >> shift)) as usize;
-                if bits[m / 32] >> (m % 32) & 1 == 1 {
-                    match out.last_mut() {
-                        Some(r) if r[1] == a => r[1] = b,
-                        _ => out.push([a, b]),
-                    }
-                }
-            }
-        }
-    }
-    out
-}
-
 impl IsoRenderer {
     /// Renders the isosurface `vol = isovalue` (in the volume's units, f64) seen by `camera` into
     /// `width` × `height` targets of its own; `tree` must be the octree of `vol`. See the module docs for what `culling = Implicit`
@@ -519,7 +483,8 @@ impl IsoRenderer {
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
-            let bits = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
+            let marks = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
+            let bits = seen_cells(&marks, march_dims, &grid.words, grid.dims, md_march - occ_depth);
             let shift = maxd - md_march;
             let counts: Vec<u32> = candidates.par_iter().map(|n| cells_seen(n, &bits, march_dims, shift)).collect();
             seen = Some((bits, march_dims, shift));
