@@ -75,6 +75,9 @@ pub struct DrawRun {
     pub tiles: std::ops::Range<usize>,
     /// Tiles of a grid mesh (`SceneGeometry::grid_dims`): their own fragment entry point.
     pub grid_mesh: bool,
+    /// Tiles of a height field with a normal map (`SceneGeometry::shading_base`): shaded from it
+    /// alone, by entry points without the meshes' varyings and branches (draw.wgsl `vs_field`).
+    pub field: bool,
     /// Tiles of object `o`, a reservoir grid: in frames that see it from outside
     /// (`Scene::seen_from_outside`) its drawn faces bound its cells, wound outwards, and the lit
     /// pass culls their back faces.
@@ -568,16 +571,7 @@ impl SceneGeometry {
             })
             .collect();
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
-        let mut draw_runs: Vec<DrawRun> = Vec::new();
-        for (k, &oi) in tile_object.iter().enumerate() {
-            let o = oi as usize;
-            let grid_mesh = grid_dims[o].is_some();
-            let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
-            match draw_runs.last_mut() {
-                Some(r) if r.grid_mesh == grid_mesh && r.closed == closed => r.tiles.end = k + 1,
-                _ => draw_runs.push(DrawRun { tiles: k..k + 1, grid_mesh, closed }),
-            }
-        }
+        let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims);
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -616,5 +610,60 @@ impl SceneGeometry {
                 (eye.clamp(lo, hi) - eye).length_squared()
             })
             .collect()
+    }
+}
+
+/// The lit pass's runs of tiles (`tile_object`: each tile's object, in draw order), each drawn
+/// with one pipeline: consecutive tiles of the same kind (grid mesh, height field with a normal
+/// map, reservoir grid object, other) in one run.
+fn draw_runs(
+    scene: &Scene,
+    tile_object: &[u32],
+    shading_base: &[Option<u32>],
+    grid_dims: &[Option<(u32, u32)>],
+) -> Vec<DrawRun> {
+    let mut runs: Vec<DrawRun> = Vec::new();
+    for (k, &oi) in tile_object.iter().enumerate() {
+        let o = oi as usize;
+        let grid_mesh = grid_dims[o].is_some();
+        let field = !grid_mesh
+            && shading_base[o].is_some()
+            && matches!(scene.objects()[o].kind, ObjectKind::Heightfield { .. });
+        let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
+        match runs.last_mut() {
+            Some(r) if r.grid_mesh == grid_mesh && r.field == field && r.closed == closed => r.tiles.end = k + 1,
+            _ => runs.push(DrawRun { tiles: k..k + 1, grid_mesh, field, closed }),
+        }
+    }
+    runs
+}
+
+#[cfg(test)]
+mod run_tests {
+    use super::*;
+    use crate::scene::{AddOptions, GridFrame};
+
+    #[test]
+    fn height_fields_with_a_normal_map_draw_as_fields() {
+        let mut s = Scene::new();
+        let z: Vec<f64> = (0..81).map(|k| (k % 9) as f64 * 0.1).collect();
+        let frame = || GridFrame::new([0.0, 0.0], [10.0, 10.0]);
+        s.add_heightfield(&z, 9, 9, frame(), (2, 1), None, AddOptions::new(1.0)).unwrap();
+        let v = [[0.0, 0.0, -5.0], [10.0, 0.0, -5.0], [0.0, 10.0, 5.0]];
+        s.add_mesh(&v, &[[0, 1, 2]], "fault", None, AddOptions::new(1.0)).unwrap();
+        s.add_heightfield(&z, 9, 9, frame(), (1, 1), None, AddOptions::new(1.0)).unwrap();
+        s.add_heightfield(&z, 9, 9, frame(), (1, 1), None, AddOptions::new(1.0)).unwrap();
+        let tile_object: Vec<u32> =
+            s.objects().iter().enumerate().flat_map(|(o, ob)| std::iter::repeat_n(o as u32, ob.tiles.len())).collect();
+        assert_eq!(tile_object, [0, 0, 1, 2, 3]);
+        // The last height field's normal map did not fit: it draws as a mesh (fs_main).
+        let runs = draw_runs(&s, &tile_object, &[Some(0), None, Some(81), None], &[None; 4]);
+        let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
+        assert_eq!(got, [(0..2, true, false), (2..3, false, false), (3..4, true, false), (4..5, false, false)]);
+        // A grid mesh is never a field.
+        let runs =
+            draw_runs(&s, &tile_object, &[Some(0), Some(81), Some(90), Some(171)], &[None, Some((2, 2)), None, None]);
+        let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
+        assert_eq!(got, [(0..2, true, false), (2..3, false, true), (3..5, true, false)]);
     }
 }

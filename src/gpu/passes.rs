@@ -99,6 +99,8 @@ pub struct Passes {
     draw: wgpu::RenderPipeline,
     /// The lit pass for the tiles of grid meshes (`SceneGeometry::draw_runs`).
     draw_grid: wgpu::RenderPipeline,
+    /// The lit pass for the tiles of height fields with a normal map (`geometry::DrawRun::field`).
+    draw_field: wgpu::RenderPipeline,
     /// The lit pass with back faces culled, for closed surfaces seen from outside
     /// (`geometry::DrawRun::closed`).
     draw_closed: wgpu::RenderPipeline,
@@ -331,11 +333,11 @@ impl Passes {
                 cache: None,
             })
         };
-        let lit = |fs: &str, cull: Option<wgpu::Face>| {
+        let lit_vs = |vs: (&str, &str), fs: &str, cull: Option<wgpu::Face>| {
             scene_pipeline(
                 "draw.wgsl",
                 include_str!("shaders/draw.wgsl"),
-                ("vs_draw", "vs_draw_gl"),
+                vs,
                 fs,
                 &[Some(vertex_layout.clone()), Some(value_layout.clone())],
                 &[
@@ -350,7 +352,9 @@ impl Passes {
                 cull,
             )
         };
+        let lit = |fs: &str, cull: Option<wgpu::Face>| lit_vs(("vs_draw", "vs_draw_gl"), fs, cull);
         let (draw, draw_grid) = (lit("fs_main", None), lit("fs_grid", None));
+        let draw_field = lit_vs(("vs_field", "vs_field_gl"), "fs_field", None);
         let draw_closed = lit("fs_main", Some(wgpu::Face::Back));
         // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
         // but not written, the tile ids left as the opaque pass wrote them.
@@ -440,6 +444,7 @@ impl Passes {
             select_layout,
             draw,
             draw_grid,
+            draw_field,
             draw_closed,
             draw_blend,
             prepass,
@@ -488,14 +493,17 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
-        // Runs of tiles: grid meshes' with their own fragment entry point (fs_grid), the rest with
-        // fs_main. One fs_main with the lookup behind a pipeline-overridable constant was slower
+        // Runs of tiles: grid meshes' with their own fragment entry point (fs_grid), height fields
+        // with a normal map with entry points of their own that carry one varying fewer and run
+        // no mesh branch (vs_field / fs_field: the 418² bench scene's frames 5-8 % faster on
+        // lavapipe, the same images), the rest with fs_main. One fs_main with the lookup behind a pipeline-overridable constant was slower
         // on lavapipe: the reservoir grid's near frame took 40.4-40.9 ms against 37.6-39.5.
         // Closed surfaces seen from outside skip their back faces: the reservoir grid bench's
         // frames took about a quarter less (level 0, near 38.8 -> 28.4 ms, distant 25.1 -> 18.4).
         for run in &geom.draw_runs {
             let pipeline = match run.closed {
                 _ if run.grid_mesh => &self.draw_grid,
+                _ if run.field => &self.draw_field,
                 Some(o) if outside.get(o).copied().unwrap_or(false) => &self.draw_closed,
                 _ => &self.draw,
             };

@@ -82,6 +82,11 @@ fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> 
         }
         return vec4<f32>(0.0, 0.0, 1.0, s);
     }
+    return field_shading(o, w, s);
+}
+
+// `shading` for a height field with a normal map: from its fine surface alone.
+fn field_shading(o: Object, w: vec3<f32>, s: f32) -> vec4<f32> {
     let fs = fine_surface(o, w);
     return vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
 }
@@ -189,6 +194,32 @@ fn fs_grid(v: VOutDraw) -> FOut {
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
+// The tiles of height fields with a normal map (gpu::geometry::DrawRun::field): shaded and
+// coloured from the fine surface alone (field_shading), so they carry neither a smooth normal nor
+// screen-space derivatives. A CPU rasteriser stores and interpolates every varying of every binned
+// triangle and runs every branch of a shader for every lane: fs_main would pay for the mesh
+// paths on every horizon fragment.
+struct VOutField {
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world_s: vec4<f32>,
+    @location(1) @interpolate(flat) tile: u32,
+}
+
+@vertex
+fn vs_field(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @builtin(instance_index) tile: u32) -> VOutField {
+    let o = objects[tile_object[tile]];
+    let pos = tile_position(vpos, tile);
+    let value = tile_value(vpos, tile, vvalue);
+    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    return VOutField(g.view_proj * vec4<f32>(p, 1.0), vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile);
+}
+
+@fragment
+fn fs_field(v: VOutField) -> FOut {
+    let o = objects[tile_object[v.tile]];
+    return FOut(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u);
+}
+
 // GL: vs_draw's transform with clip z and w carried to the fragment (see VOutGl in common.wgsl).
 struct VOutDrawGl {
     @builtin(position) @invariant clip: vec4<f32>,
@@ -231,4 +262,29 @@ fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
     let ns = shading_grid(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
+}
+
+// GL: vs_field / fs_field with frag_depth written (see VOutGl in common.wgsl).
+struct VOutFieldGl {
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world_s: vec4<f32>,
+    @location(1) @interpolate(flat) tile: u32,
+    @location(2) zw: vec2<f32>,
+}
+
+@vertex
+fn vs_field_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32,
+               @builtin(instance_index) tile: u32) -> VOutFieldGl {
+    let o = objects[tile_object[tile]];
+    let pos = tile_position(vpos, tile);
+    let value = tile_value(vpos, tile, vvalue);
+    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    return VOutFieldGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw);
+}
+
+@fragment
+fn fs_field_gl(v: VOutFieldGl) -> FOutGl {
+    let o = objects[tile_object[v.tile]];
+    return FOutGl(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u, v.zw.x / v.zw.y);
 }
