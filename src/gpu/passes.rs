@@ -353,9 +353,11 @@ impl Passes {
             )
         };
         let lit = |fs: &str, cull: Option<wgpu::Face>| lit_vs(("vs_draw", "vs_draw_gl"), fs, cull);
-        let (draw, draw_grid) = (lit("fs_main", None), lit("fs_grid", None));
+        // Opaque tiles that are no height field with a normal map (the field branch of fs_main
+        // only serves blended ones).
+        let (draw, draw_grid) = (lit("fs_mesh", None), lit("fs_grid", None));
         let draw_field = lit_vs(("vs_field", "vs_field_gl"), "fs_field", None);
-        let draw_closed = lit("fs_main", Some(wgpu::Face::Back));
+        let draw_closed = lit("fs_mesh", Some(wgpu::Face::Back));
         // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
         // but not written, the tile ids left as the opaque pass wrote them.
         let draw_blend = scene_pipeline(

@@ -74,15 +74,20 @@ fn grid_mesh_normal(o: Object, uv: vec2<f32>) -> vec3<f32> {
 // reservoir grid's frame), so fs_main does without it and shades a grid mesh by its facets.
 fn shading(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
     if (o.normal_map.x == 0u || o.normal_map.y == 2u) {
-        if (o.normal_map.y == 1u && dot(vn, vn) > 1e-12) {
-            return vec4<f32>(normalize(vn), s);
-        }
-        if (dot(facet, facet) > 0.0) {
-            return vec4<f32>(normalize(facet), s);
-        }
-        return vec4<f32>(0.0, 0.0, 1.0, s);
+        return mesh_shading(o, facet, vn, s);
     }
     return field_shading(o, w, s);
+}
+
+// `shading` for an object without a height field's normal map.
+fn mesh_shading(o: Object, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
+    if (o.normal_map.y == 1u && dot(vn, vn) > 1e-12) {
+        return vec4<f32>(normalize(vn), s);
+    }
+    if (dot(facet, facet) > 0.0) {
+        return vec4<f32>(normalize(facet), s);
+    }
+    return vec4<f32>(0.0, 0.0, 1.0, s);
 }
 
 // `shading` for a height field with a normal map: from its fine surface alone.
@@ -92,12 +97,13 @@ fn field_shading(o: Object, w: vec3<f32>, s: f32) -> vec4<f32> {
 }
 
 // `shading` for a grid mesh: the fine grid's normal at the interpolated grid coordinates.
-fn shading_grid(o: Object, w: vec3<f32>, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
+// (A grid mesh has no height field's normal map: `shading` would take its mesh branch.)
+fn shading_grid(o: Object, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32> {
     let gn = grid_mesh_normal(o, vn.xy);
     if (o.normal_map.y == 2u && dot(gn, gn) > 1e-12) {
         return vec4<f32>(normalize(gn), s);
     }
-    return shading(o, w, facet, vn, s);
+    return mesh_shading(o, facet, vn, s);
 }
 
 struct VOutDraw {
@@ -186,11 +192,20 @@ fn fs_main(v: VOutDraw) -> FOut {
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
+// fs_main for the opaque tiles of objects without a height field's normal map (meshes, wells,
+// slices, reservoir grids, height fields whose map did not fit): their tiles never take the
+// field branch, which a CPU rasteriser would run for every fragment (gpu::geometry::DrawRun).
+@fragment
+fn fs_mesh(v: VOutDraw) -> FOut {
+    let o = objects[tile_object[v.tile]];
+    return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w)), v.tile + 1u);
+}
+
 // fs_main for the tiles of grid meshes (gpu::geometry::SceneGeometry::draw_runs).
 @fragment
 fn fs_grid(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let ns = shading_grid(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
+    let ns = shading_grid(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
 
@@ -256,11 +271,19 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
+// fs_mesh with frag_depth written.
+@fragment
+fn fs_mesh_gl(v: VOutDrawGl) -> FOutGl {
+    let o = objects[tile_object[v.tile]];
+    let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
+    return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
+}
+
 // fs_main_gl for the tiles of grid meshes.
 @fragment
 fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ns = shading_grid(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
+    let ns = shading_grid(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
