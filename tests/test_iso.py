@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -156,6 +158,48 @@ def test_occlusion_map_of_nested_boxes(renderer):
     assert res.stats["nodes_visible"] < res.stats["nodes_straddling"]
 
 
+def test_faces_prove_a_sheet_no_cell_can(renderer):
+    # Below everywhere but the sample plane z = 8, above: the surface is two sheets (z = 7.5 and
+    # 8.5) and no cell has 8 corners above, so no Above cell proves anything. The plane's cell
+    # faces are uniform (all 4 corners above): a ray from above crosses Below cells, then the
+    # upper sheet, then such a face, and stops there; the lower sheet behind it is not drawn.
+    n = 17
+    vals = np.full((n, n, n), -1.0, dtype=np.float32)
+    vals[8] = 1.0
+    v = gc.Volume(vals, origin=(0, 0, 0), spacing=(1, 1, 1))
+    assert not (v.nodes(v.max_depth())["min"] > 0).any(), "no Above cell"
+    cam = gc.Camera.look_at((8, 8, 40), (8, 8, 0), up=(0, 1, 0), projection="orthographic", ortho_height=20.0)
+    ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+    res = renderer.render_isosurface(v, 0.0, cam, return_map=True)
+    np.testing.assert_array_equal(res.image, ref.image)
+    np.testing.assert_array_equal(res.depth, ref.depth)
+    px = 8 - 10 + (np.arange(W) + 0.5) * (20 / W)
+    inside = ((px > 0) & (px < 16))[None, :] & ((px > 0) & (px < 16))[:, None]
+    m = res.occlusion_map
+    assert np.isfinite(m[inside]).all() and not np.isfinite(m[~inside]).any()
+    assert np.allclose(m[inside], 40 - 8, atol=1e-2)  # the plane z = 8
+    assert np.allclose(ref.depth[inside], 40 - 8.5, atol=1e-3)  # the upper sheet, in front
+    # The upper sheet only: half the triangles (its cells' and no more).
+    assert res.stats["surface_triangles"] == ref.stats["surface_triangles"] // 2
+
+
+def test_eye_beside_the_volume_with_the_near_plane_at_its_floor():
+    # The eye 0.18 outside the box, with box corners behind its plane: the near plane falls to
+    # its floor (1e-6), where an f32 inverse view-projection gave the walk other rays than the
+    # rasteriser's, and implicit lost 13 visible pixels along the image's top.
+    rng = np.random.default_rng(0)
+    vals = rng.normal(size=(6, 6, 6))
+    vals = (np.sign(vals) * np.abs(vals) ** 0.5).astype(np.float32)
+    v = gc.Volume(vals, origin=(0, 0, 0), spacing=(1, 1, 1))
+    cam = gc.Camera.look_at((5.18, 2.5, 2.877), (2.5, 2.5, 2.5), up=(0, 0, 1), fov_y=50.0)
+    r = gc.Renderer(48, 40)
+    ref = r.render_isosurface(v, 0.0, cam, culling="none")
+    assert ref.near == 1e-6
+    res = r.render_isosurface(v, 0.0, cam)
+    np.testing.assert_array_equal(res.image, ref.image)
+    np.testing.assert_array_equal(res.depth, ref.depth)
+
+
 def test_second_frame_reuses_patches(renderer):
     gc.iso.clear_cache(renderer)
     v = sphere_volume(24, 0.5)
@@ -213,10 +257,14 @@ def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
         assert a.stats["surface_triangles"] > 0
         assert b.stats["surface_triangles"] == a.stats["surface_triangles"]
         np.testing.assert_array_equal(a.image, b.image)
-    # integers too: 1e8 and 1e8 + 1 differ
-    ints = (base > 0).astype(np.int64) + 10**8
-    res = renderer.render_isosurface(gc.Volume(ints), 1e8 + 0.5, cam)
-    assert res.stats["surface_triangles"] > 0
+    # integers too: 1e8 and 1e8 + 1 differ (a volume at the default origin and spacing, seen from
+    # outside: the camera above sits inside it, looking away from its surface)
+    ints = gc.Volume((base > 0).astype(np.int64) + 10**8)
+    cam_i, _ = cam_around(40, dist=60.0, center=(11.5, 11.5, 11.5))
+    ref = renderer.render_isosurface(ints, 1e8 + 0.5, cam_i, culling="none")
+    res = renderer.render_isosurface(ints, 1e8 + 0.5, cam_i)
+    assert 0 < res.stats["surface_triangles"] < ref.stats["surface_triangles"]
+    np.testing.assert_array_equal(res.image, ref.image)
     with pytest.raises(gc.InputError, match="^isovalue"):
         renderer.render_isosurface(big, 1e300, cam)
 
@@ -430,3 +478,50 @@ def test_setup_is_reported_apart_from_the_frame():
     s = b.stats
     assert s["readbacks"] >= 1 and s["submissions"] == s["readbacks"] + 1
     assert r.render_isosurface(v, 0.0, cam, culling="none").stats["readbacks"] == 0
+
+
+# ---- Random volumes: the walk's cell and face occluders never cull a visible triangle
+
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+# GEOCULL_ISO_EXAMPLES (default 60) random cases; GEOCULL_FUZZ_RANDOM=1 draws new ones.
+ISO_EXAMPLES = int(os.environ.get("GEOCULL_ISO_EXAMPLES", "60"))
+CULLED: list[int] = []
+
+
+@settings(max_examples=ISO_EXAMPLES, deadline=None, derandomize=not os.environ.get("GEOCULL_FUZZ_RANDOM"),
+          database=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), shape=st.tuples(*[st.integers(6, 14)] * 3), smooth=st.sampled_from([0, 1, 3]),
+       nan=st.sampled_from([0.0, 0.02, 0.2]), on_iso=st.sampled_from([0.0, 0.1]), elev=st.floats(-85.0, 85.0),
+       az=st.floats(0.0, 360.0), dist=st.floats(0.3, 4.0), ortho=st.booleans())
+def _random_volume_renders_as_none(seed, shape, smooth, nan, on_iso, elev, az, dist, ortho):
+    """Noise (thin sheets, ambiguous faces), smoothed noise (blobs), NaN samples and samples on the
+    isovalue itself; cameras outside, at the border and inside: implicit's image equals none's."""
+    rng = np.random.default_rng(seed)
+    vals = rng.normal(size=shape[::-1])
+    for _ in range(smooth):
+        vals = (vals + np.roll(vals, 1, 0) + np.roll(vals, 1, 1) + np.roll(vals, 1, 2)) / 4
+    vals = np.sign(vals) * np.abs(vals) ** 0.5
+    vals[rng.random(vals.shape) < on_iso] = 0.0
+    vals[rng.random(vals.shape) < nan] = np.nan
+    v = gc.Volume(vals.astype(np.float32), origin=(0, 0, 0), spacing=(1, 1, 1))
+    size = np.array(shape, dtype=float) - 1
+    c = size / 2
+    e, a = np.radians(elev), np.radians(az)
+    eye = c + dist * np.linalg.norm(size) * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    cam = gc.Camera.look_at(tuple(eye), tuple(c), up=(0, 0, 1), fov_y=50.0,
+                            projection="orthographic" if ortho else "perspective", ortho_height=float(size.max()) * 1.2)
+    r = gc.Renderer(48, 40)
+    ref = r.render_isosurface(v, 0.0, cam, culling="none")
+    res = r.render_isosurface(v, 0.0, cam)
+    np.testing.assert_array_equal(res.image, ref.image)
+    np.testing.assert_array_equal(res.depth, ref.depth)
+    CULLED.append(ref.stats["surface_triangles"] - res.stats["surface_triangles"])
+
+
+def test_random_volumes_and_cameras_render_as_none():
+    CULLED.clear()
+    _random_volume_renders_as_none()
+    assert sum(k > 0 for k in CULLED) >= ISO_EXAMPLES // 3, CULLED

@@ -122,6 +122,35 @@ pub fn leaf_classes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
     out
 }
 
+/// Every cell's three low faces (the faces at its lowest x, y and z) of a volume with `samples`
+/// samples per axis (x fastest): bits 0, 1, 2 set when that face's 4 corners are all `< w` or
+/// all `> w`, bit 3 when the cell's low corner (on all three faces) is `< w`: a face's class is
+/// then Below or Above by that corner. A face whose corners are all on one side has no crossing
+/// edge, so no marching-cubes triangle touches it: the whole face lies on that side of the
+/// surface, as a Below / Above cell does (the walk's finer occluders, see `super::render`).
+/// Corners that are NaN or equal to `w` make no face uniform.
+pub fn leaf_faces(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
+    let [nx, ny, nz] = samples;
+    let (cx, cy, cz) = (nx - 1, ny - 1, nz - 1);
+    // Per sample: bit 0 below, bit 1 above (neither for NaN or w itself).
+    let code = |v: f32| (v < w) as u8 | ((v > w) as u8) << 1;
+    let mut out = vec![0u8; cx * cy * cz];
+    out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
+        let (k, j) = (r / cy, r % cy);
+        let row = |z: usize, y: usize| &values[(z * ny + y) * nx..][..nx];
+        let (r0, r1, r2, r3) = (row(k, j), row(k, j + 1), row(k + 1, j), row(k + 1, j + 1));
+        for (x, o) in row_out.iter_mut().enumerate() {
+            // x face: (x, j..j+1, k..k+1); y face: (x..x+1, j, k..k+1); z face: (x..x+1, j..j+1, k).
+            let c0 = code(r0[x]);
+            let fx = c0 & code(r1[x]) & code(r2[x]) & code(r3[x]);
+            let fy = c0 & code(r0[x + 1]) & code(r2[x]) & code(r2[x + 1]);
+            let fz = c0 & code(r0[x + 1]) & code(r1[x]) & code(r1[x + 1]);
+            *o = (fx != 0) as u8 | ((fy != 0) as u8) << 1 | ((fz != 0) as u8) << 2 | (c0 & 1) << 3;
+        }
+    });
+    out
+}
+
 /// `dst[i]` stays where it equals `src[i]`, else becomes [`MIXED`].
 fn common(dst: &mut [u8], src: &[u8]) {
     for (a, &b) in dst.iter_mut().zip(src) {
@@ -186,34 +215,40 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> 
 }
 
 /// The nodes as the walk reads them (iso.wgsl `node_info`): per node of `classes` (dims `dims`,
-/// x fastest), 4 bits: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
+/// x fastest), 8 bits: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
 /// nodes per axis, [`brick_classes`]) is skippable, bit 3 when its coarse brick is too (a
-/// skippable brick's class is that of each of its nodes). 8 nodes per little-endian u32 word
-/// (node `i` in bits `4 (i % 8)..4 (i % 8) + 4` of word `i / 8`): the walk's step reads one word
-/// for all three.
-pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3]) -> Vec<u32> {
+/// skippable brick's class is that of each of its nodes); bits 4-7 its low faces (`faces`,
+/// [`leaf_faces`]: single-cell nodes only; 0 without). 4 nodes per little-endian u32 word (node
+/// `i` in byte `i % 4` of word `i / 4`): the walk's step reads one word for all.
+pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3], faces: Option<&[u8]>) -> Vec<u32> {
     let [(fine, fd), (coarse, cd)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
     let [nx, ny] = [dims[0] as usize, dims[1] as usize];
     let skippable = |v: &[u8], bd: [u32; 3], s: u32, i: usize| {
         let (x, y, z) = ((i % nx) >> s, (i / nx % ny) >> s, (i / (nx * ny)) >> s);
         v[(z * bd[1] as usize + y) * bd[0] as usize + x] != 0
     };
-    (0..classes.len().div_ceil(8))
+    (0..classes.len().div_ceil(4))
         .into_par_iter()
         .map(|w| {
-            (8 * w..(8 * w + 8).min(classes.len())).fold(0u32, |word, i| {
+            (4 * w..(4 * w + 4).min(classes.len())).fold(0u32, |word, i| {
                 let f = skippable(&fine, fd, FINE_SHIFT, i);
                 let c = f && skippable(&coarse, cd, COARSE_SHIFT, i);
-                word | ((classes[i] & 3) as u32 | (f as u32) << 2 | (c as u32) << 3) << (4 * (i - 8 * w))
+                let fc = faces.map_or(0, |v| v[i] as u32 & 15);
+                word | ((classes[i] & 3) as u32 | (f as u32) << 2 | (c as u32) << 3 | fc << 4) << (8 * (i - 4 * w))
             })
         })
         .collect()
 }
 
-/// The class (`CLASS_*`) of node `p` of the words `nodes` of [`pack_nodes`] (grid `dims`).
-pub(super) fn node_class(nodes: &[u32], dims: [u32; 3], p: [u32; 3]) -> u8 {
+/// Packs 2-bit values 16 to a little-endian u32 word (value `i` in bits `2 (i % 16)` of word `i / 16`).
+pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
+    v.par_chunks(16).map(|c| c.iter().enumerate().fold(0u32, |w, (i, &k)| w | (k as u32 & 3) << (2 * i))).collect()
+}
+
+/// The class (`CLASS_*`) of node `p` of the classes packed by [`pack2`] (grid `dims`).
+pub(super) fn node_class(classes: &[u32], dims: [u32; 3], p: [u32; 3]) -> u8 {
     let i = ((p[2] * dims[1] + p[1]) * dims[0] + p[0]) as usize;
-    (nodes[i / 8] >> (4 * (i % 8)) & 3) as u8
+    (classes[i / 16] >> (2 * (i % 16)) & 3) as u8
 }
 
 #[cfg(test)]
@@ -293,6 +328,60 @@ mod tests {
     }
 
     #[test]
+    fn leaf_faces_match_their_corners() {
+        let mut vol = super::super::sphere_field(11, 0.5);
+        let mut v: Vec<f32> = vol.values.to_vec();
+        for i in (0..v.len()).step_by(97) {
+            v[i] = f32::NAN;
+        }
+        v[5] = 0.3; // a sample on the isovalue below
+        vol.values = v.into();
+        let (nx, ny, nz) = (vol.nx, vol.ny, vol.nz);
+        let s = |x: usize, y: usize, z: usize| vol.values[(z * ny + y) * nx + x];
+        for w in [0.0f32, 0.3] {
+            let got = leaf_faces(&vol.values, [nx, ny, nz], w);
+            let cls = leaf_classes(&vol.values, [nx, ny, nz], w);
+            let class = |c: [f32; 4]| {
+                if c.iter().all(|&v| v < w) {
+                    1
+                } else if c.iter().all(|&v| v > w) {
+                    2
+                } else {
+                    0
+                }
+            };
+            // A face's class from leaf_faces' bits: uniform, and the side of the low corner.
+            let decode = |b: u8, a: u32| match (b >> a & 1, b >> 3 & 1) {
+                (0, _) => 0,
+                (_, 1) => 1,
+                _ => 2,
+            };
+            let mut n = [0; 3];
+            for k in 0..nz - 1 {
+                for j in 0..ny - 1 {
+                    for i in 0..nx - 1 {
+                        let fx = class([s(i, j, k), s(i, j + 1, k), s(i, j, k + 1), s(i, j + 1, k + 1)]);
+                        let fy = class([s(i, j, k), s(i + 1, j, k), s(i, j, k + 1), s(i + 1, j, k + 1)]);
+                        let fz = class([s(i, j, k), s(i + 1, j, k), s(i, j + 1, k), s(i + 1, j + 1, k)]);
+                        let c = (k * (ny - 1) + j) * (nx - 1) + i;
+                        let f = [0, 1, 2].map(|a| decode(got[c], a));
+                        assert_eq!(f, [fx, fy, fz], "cell ({i}, {j}, {k}), w {w}");
+                        assert_eq!(got[c] >> 3, (s(i, j, k) < w) as u8);
+                        // A Below / Above cell's faces are of its class.
+                        if cls[c] == CLASS_BELOW || cls[c] == CLASS_ABOVE {
+                            assert_eq!(f, [cls[c]; 3]);
+                        }
+                        for (a, f) in [fx, fy, fz].into_iter().enumerate() {
+                            n[a] += (f != 0) as u32;
+                        }
+                    }
+                }
+            }
+            assert!(n.iter().all(|&c| c > 100), "{n:?}");
+        }
+    }
+
+    #[test]
     fn occluders_partition_the_classified_volume() {
         let vol = super::super::sphere_field(17, 0.5);
         let tree = MinMaxOctree::build(&vol);
@@ -314,8 +403,9 @@ mod tests {
             (0..d[0] * d[1] * d[2]).map(|i| if i / (d[0] * d[1]) < 10 { CLASS_BELOW } else { CLASS_ABOVE }).collect();
         v[(30 * d[1] + 5) * d[0] + 5] = CLASS_PASS;
         let dims = d.map(|x| x as u32);
-        let p = pack_nodes(&v, dims);
-        assert_eq!(p.len(), v.len().div_ceil(8));
+        let faces: Vec<u8> = (0..v.len()).map(|i| (i % 16) as u8).collect();
+        let p = pack_nodes(&v, dims, Some(&faces));
+        assert_eq!(p.len(), v.len().div_ceil(4));
         let fine = brute(&v, d, FINE_SHIFT);
         let coarse = brute(&v, d, COARSE_SHIFT);
         let at = |b: &[u8], s: u32, i: usize| {
@@ -324,15 +414,23 @@ mod tests {
         };
         let mut seen = [0; 2];
         for (i, &k) in v.iter().enumerate() {
-            let nib = p[i / 8] >> (4 * (i % 8)) & 15;
+            let byte = p[i / 4] >> (8 * (i % 4)) & 0xff;
             let (f, c) = (at(&fine, FINE_SHIFT, i) != 0, at(&coarse, COARSE_SHIFT, i) != 0);
-            assert_eq!(nib, k as u32 | (f as u32) << 2 | ((f && c) as u32) << 3, "node {i}");
+            let want = k as u32 | (f as u32) << 2 | ((f && c) as u32) << 3 | (i as u32 % 16) << 4;
+            assert_eq!(byte, want, "node {i}");
             seen[0] += f as u32;
             seen[1] += c as u32;
         }
         assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
-        assert_eq!(v.len() % 8, 1);
-        assert_eq!(p[p.len() - 1] >> 4, 0, "no bits past the last node");
+        assert_eq!(v.len() % 4, 1);
+        assert_eq!(p[p.len() - 1] >> 8, 0, "no bits past the last node");
+        let q = pack2(&v);
+        for (i, &k) in v.iter().enumerate() {
+            assert_eq!(
+                node_class(&q, dims, [(i % d[0]) as u32, (i / d[0] % d[1]) as u32, (i / (d[0] * d[1])) as u32]),
+                k
+            );
+        }
     }
 }
 

@@ -24,7 +24,14 @@ struct Globals {
 // Classes (`node_info`): 0 = may hold surface (passable), 1 = Below, 2 = Above, 3 = has a NaN
 // sample (outside the domain: resets the walk).
 struct MapParams {
-    inv_view_proj: mat4x4<f32>,
+    // The pixel's ray, affine in its NDC (x, y), built in f64 on the host: origin on the near
+    // plane `ray_o + x ray_ox + y ray_oy`, direction `ray_d + x ray_dx + y ray_dy`.
+    ray_o: vec4<f32>,
+    ray_ox: vec4<f32>,
+    ray_oy: vec4<f32>,
+    ray_d: vec4<f32>,
+    ray_dx: vec4<f32>,
+    ray_dy: vec4<f32>,
     // xyz: the volume's box (render space); lo.w: the map's margin (render units); hi.w: the
     // margin for marking a neighbouring cell (fraction of a march cell).
     lo: vec4<f32>,
@@ -33,7 +40,8 @@ struct MapParams {
     node: vec4<f32>,
     // xyz: march cells per axis; w: image width.
     dims: vec4<u32>,
-    // x: image height; y: march depth - occluder depth; z: unused; w: 1 = mark the march cells
+    // x: image height; y: march depth - occluder depth; z: 1 = the nodes carry their faces'
+    // classes and are the march cells (single cells); w: 1 = mark the march cells
     // in `cells_seen` (4 bits each, `mark_cell`).
     size: vec4<u32>,
     // xyz: occluder nodes per axis; w: unused.
@@ -68,12 +76,13 @@ fn mark_cell(c: vec3<i32>, bits: u32) {
 
 // The occluder node holding march cell `c`: bits 0-1 its class, bit 2 set when its fine skip
 // brick (`2^bricks.x` nodes per axis) and the one-node ring around it are all of that class,
-// bit 3 the same for its coarse brick (`2^bricks.y`); 4 bits per node, 8 per word (one read per
-// step for all three).
+// bit 3 the same for its coarse brick (`2^bricks.y`); for single cells (`size.z` = 1) bits 4-6
+// set when its low x, y, z face's 4 corners are all below or all above, bit 7 when its low
+// corner is below. 8 bits per node, 4 per word (one read per step for all).
 fn node_info(c: vec3<i32>) -> u32 {
     let u = vec3<u32>(c) >> vec3<u32>(mp.size.y);
     let i = (u.z * mp.occ_dims.y + u.y) * mp.occ_dims.x + u.x;
-    return (classes[i >> 3u] >> ((i & 7u) * 4u)) & 15u;
+    return (classes[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu;
 }
 
 // Where the ray leaves cell `c` across each axis (the DDA's next crossings), `t0 + c dt` with the
@@ -82,11 +91,6 @@ fn node_info(c: vec3<i32>) -> u32 {
 // ray's origin, inverse direction and stepping side keep the walk's loop in fewer registers.)
 fn exits(c: vec3<i32>, t0: vec3<f32>, dt: vec3<f32>) -> vec3<f32> {
     return fma(vec3<f32>(c), dt, t0);
-}
-
-fn unproject(ndc: vec3<f32>) -> vec3<f32> {
-    let p = mp.inv_view_proj * vec4<f32>(ndc, 1.0);
-    return p.xyz / p.w;
 }
 
 @compute @workgroup_size(8, 8)
@@ -98,8 +102,8 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let ndc = vec2<f32>((f32(gid.x) + 0.5) / f32(w) * 2.0 - 1.0, 1.0 - (f32(gid.y) + 0.5) / f32(h) * 2.0);
     // From the near plane along the pixel's ray (t = 0 at the near plane).
-    let o = unproject(vec3<f32>(ndc, 1.0));
-    var d = unproject(vec3<f32>(ndc, 0.5)) - o;
+    let o = mp.ray_o.xyz + ndc.x * mp.ray_ox.xyz + ndc.y * mp.ray_oy.xyz;
+    var d = mp.ray_d.xyz + ndc.x * mp.ray_dx.xyz + ndc.y * mp.ray_dy.xyz;
     d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
     let inv = 1.0 / d;
     // The walk covers the box widened by the marking margin: a ray that passes just outside it
@@ -128,9 +132,26 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         var last = 0u;
         var t_enter = t0;
         var crossed = -1;
+        // The node of the cell before (its low face is the one crossed when stepping down an
+        // axis), and whether the last move was a single step (a brick jump crosses a face of its
+        // brick's class, which changes nothing).
+        var prev_info = 0u;
+        var stepped = false;
         loop {
             let info = node_info(c);
             let k = info & 3u;
+            // The face just crossed, inside the box: all 4 corners below (above) put it on the
+            // below (above) side of the surface, as a Below (Above) cell is; a face of the other
+            // class than the last seen proves the crossing before it, in the cells already
+            // marked: this cell lies behind it and is not marked. The face's class: uniform (bit
+            // 4 + axis of the node that owns it as its low face) and the side of that node's low
+            // corner, which every one of its low faces holds (bit 7).
+            let owner = select(prev_info, info, stp[clamp(crossed, 0, 2)] > 0);
+            let uniform = ((owner >> (4u + u32(clamp(crossed, 0, 2)))) & 1u) == 1u;
+            let face_seen = mp.size.z == 1u && stepped && uniform && t_enter > in0 && t_enter < in1;
+            let fk = select(0u, select(2u, 1u, (owner & 128u) != 0u), face_seen);
+            var stop = fk != 0u && last != 0u && last != fk;
+            last = select(last, fk, fk != 0u);
             // Below / Above cells (uniform, NaN-free) hold no triangle: the others need their bit.
             // Where the entry point lies within `hi.w` of a grid plane other than the one just
             // crossed (whose other side the walk has marked), the ray may have skipped a cell
@@ -139,7 +160,7 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             let gp = (o + d * t_enter - mp.lo.xyz) / mp.node.xyz;
             let close = abs(gp - floor(gp + 0.5)) < vec3<f32>(mp.hi.w) & (vec3<i32>(0, 1, 2) != vec3<i32>(crossed));
             let nb = select(vec3<u32>(0u), vec3<u32>(2u, 4u, 8u), close);
-            let bits = select(0u, 1u, k == 0u || k == 3u) | nb.x | nb.y | nb.z;
+            let bits = select(0u, 1u, (k == 0u || k == 3u) && !stop) | nb.x | nb.y | nb.z;
             if (bits != 0u) {
                 mark_cell(c, bits);
             }
@@ -147,13 +168,14 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             if (k == 3u || min(min(tnext.x, tnext.y), tnext.z) <= in0 || t_enter >= in1) {
                 last = 0u;
             } else if (k != 0u) {
-                if (last != 0u && last != k) {
-                    let q = o + d * (t_enter + mp.lo.w / length(d));
-                    let clip = g.view_proj * vec4<f32>(q, 1.0);
-                    result = clamp(clip.z / clip.w, 0.0, 1.0);
-                    break;
-                }
+                stop = stop || (last != 0u && last != k);
                 last = k;
+            }
+            if (stop) {
+                let q = o + d * (t_enter + mp.lo.w / length(d));
+                let clip = g.view_proj * vec4<f32>(q, 1.0);
+                result = clamp(clip.z / clip.w, 0.0, 1.0);
+                break;
             }
             // One step: to the next cell, or, in a skip brick of class `last` (it and its ring all
             // of that class: the walk would mark nothing in it and never stop), to where the ray
@@ -190,6 +212,8 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             tnext = exits(c, xt0, xdt);
             t_enter = tx;
             crossed = a;
+            prev_info = info;
+            stepped = s == 0u;
             if (any(c < vec3<i32>(0)) || any(c >= dims)) {
                 break;
             }

@@ -382,6 +382,12 @@ impl MinMaxOctree {
         (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_classes(&self.values, self.samples, w))
     }
 
+    /// The classes of every single cell's low faces at isovalue `w` ([`super::bricks::leaf_faces`]);
+    /// `None` when the leaves are stored levels.
+    pub fn leaf_faces(&self, w: f32) -> Option<Vec<u8>> {
+        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_faces(&self.values, self.samples, w))
+    }
+
     /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
     /// materialising the nodes (single-cell depths of a 128³ volume have 2 M of them).
     pub fn map_at_depth<T: Send>(&self, depth: u32, f: impl Fn(f32, f32, bool) -> T + Sync) -> Vec<T> {

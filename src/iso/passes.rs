@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{pack_nodes, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
+use super::bricks::{pack2, pack_nodes, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -35,8 +35,9 @@ pub(super) struct Targets {
     pub(super) map: wgpu::Buffer,
 }
 
-/// The class grid of one (isovalue, occluder depth), on the GPU: 4 bits per node, its class and
-/// whether its two levels of skip bricks are skippable ([`super::bricks::pack_nodes`]).
+/// The class grid of one (isovalue, occluder depth), on the GPU: 16 bits per node, its class,
+/// whether its two levels of skip bricks are skippable and its low faces' classes
+/// ([`super::bricks::pack_nodes`]).
 pub(super) struct ClassGrid {
     pub(super) key: (u32, u32),
     pub(super) buffer: wgpu::Buffer,
@@ -46,30 +47,31 @@ pub(super) struct ClassGrid {
     pub(super) n_below: u32,
     pub(super) n_above: u32,
     pub(super) n_nan: u32,
-    /// The nodes as uploaded (4 bits per node, 8 per word: class, fine and coarse brick
-    /// skippable; iso.wgsl `node_info`), also read by the CPU's side of the walk
+    /// The node classes, 2 bits each ([`super::bricks::pack2`]), for the CPU's side of the walk
     /// (`seen::seen_cells`).
-    pub(super) words: Vec<u32>,
+    pub(super) classes: Vec<u32>,
+    /// Whether the nodes carry their low faces' classes (single cells, iso.wgsl `node_info`).
+    pub(super) faces: bool,
 }
 
 impl ClassGrid {
-    /// Packs `classes` (x fastest, then y, z; `dims` per axis) with their skip bricks' flags 8 to
-    /// a word and uploads them.
-    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8]) -> Self {
+    /// Packs `classes` (x fastest, then y, z; `dims` per axis) with their skip bricks' flags and
+    /// their low `faces`' classes (single cells only), 2 to a word, and uploads them.
+    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8], faces: Option<&[u8]>) -> Self {
         // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
         let n = classes
             .par_chunks(1 << 16)
             .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v == k) as u32).sum::<u32>()))
             .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
         let [n_below, n_above, n_nan] = n;
-        let words = pack_nodes(classes, dims);
+        let words = pack_nodes(classes, dims, faces);
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
             contents: bytemuck::cast_slice(&words),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
-        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, words }
+        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, classes: pack2(classes), faces: faces.is_some() }
     }
 }
 
@@ -77,7 +79,14 @@ impl ClassGrid {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub(super) struct MapParams {
-    pub(super) inv_view_proj: [[f32; 4]; 4],
+    /// The pixel rays, affine in the pixel's NDC (x, y) (iso.wgsl `ray_*`): origin on the near
+    /// plane `o + x ox + y oy` and direction `d + x dx + y dy`, built in f64.
+    pub(super) ray_o: [f32; 4],
+    pub(super) ray_ox: [f32; 4],
+    pub(super) ray_oy: [f32; 4],
+    pub(super) ray_d: [f32; 4],
+    pub(super) ray_dx: [f32; 4],
+    pub(super) ray_dy: [f32; 4],
     pub(super) lo: [f32; 4],
     pub(super) hi: [f32; 4],
     pub(super) node: [f32; 4],
@@ -88,7 +97,7 @@ pub(super) struct MapParams {
     pub(super) bricks: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<MapParams>() == 192);
+const _: () = assert!(std::mem::size_of::<MapParams>() == 224);
 
 const _: () = assert!(std::mem::size_of::<Globals>() == 96);
 

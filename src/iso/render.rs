@@ -7,7 +7,8 @@
 //!    every node at `occluder_depth` is *Below* (`max < w`, no NaN), *Above* (`min > w`, no NaN),
 //!    *NaN* (some sample is NaN), or passable (it may hold surface); 4 bits per node with its
 //!    skip bricks' flags (step 3; [`super::bricks::pack_nodes`]).
-//! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z): the pixel's ray
+//! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z; the pixel rays
+//!    are built in f64, as an origin and a direction affine in the pixel's NDC): the pixel's ray
 //!    walks the class grid near to far (3-D DDA) and stops at the first node of one class met
 //!    after a node of the other class with no NaN node in between; `M(p)` is the depth of that
 //!    node's entry point (pushed a thousandth of a cell farther), 0 (= nothing proven) where no
@@ -25,6 +26,14 @@
 //!    touch because touching nodes share samples). A ray segment that goes from a Below node to an
 //!    Above node (or back) through NaN-free nodes only stays where the surface is closed, so it
 //!    crosses the surface strictly before `M(p)`: any surface point behind `M(p)` is hidden.
+//!
+//!    **Faces.** With single-cell occluders the walk also reads the faces it crosses: a cell
+//!    face whose 4 corners are all below (above) has no crossing edge, so no triangle touches it
+//!    and the whole face lies on the below (above) side, as a Below (Above) cell does
+//!    ([`super::bricks::leaf_faces`]). A face of the other class than the last class seen proves
+//!    the crossing before it, so the walk stops there and leaves the cell behind it unmarked.
+//!    Thin sheets and aliased regions hold few uniform cells but many uniform faces: on the Pesco
+//!    field 128³ this draws 21-28 % fewer triangles (frog 12 %, channels 3 %).
 //!
 //!    **The domain.** The paper assumes a convex domain where the field is defined everywhere.
 //!    Here the domain is the NaN-free cells, which need not be convex (NaN borders, slabs, holes):
@@ -422,7 +431,9 @@ impl IsoRenderer {
             if iso.classes.as_ref().is_none_or(|g| g.key != key) {
                 iso.classes = None;
                 let dims = tree.dims_at_depth(occ_depth).expect("occ_depth <= max depth");
-                iso.classes = Some(ClassGrid::new(d, key, dims, &node_classes(tree, w, occ_depth)));
+                // Single cells carry their faces' classes too (finer occluders for the walk).
+                let faces = if occ_depth == tree.max_depth() { tree.leaf_faces(w) } else { None };
+                iso.classes = Some(ClassGrid::new(d, key, dims, &node_classes(tree, w, occ_depth), faces.as_deref()));
             }
         }
         let iso: &IsoRenderer = &*iso;
@@ -463,14 +474,39 @@ impl IsoRenderer {
             let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
             let march_dims = tree.dims_at_depth(md_march).expect("depth checked");
             let f4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+            // The pixel rays in f64: a point on a plane of constant depth is affine in the pixel's
+            // NDC (x, y), so the near plane's and a farther plane's points at three NDC corners
+            // give every ray. (The f32 inverse of the view-projection loses the rays when the
+            // near plane is tiny, as it is for an eye beside the volume's box: the walk then
+            // followed other lines than the rasteriser's and missed visible cells.)
             let inv = view_proj.inverse();
+            let unproject = |x: f64, y: f64, z: f64| {
+                let q = inv * DVec4::new(x, y, z, 1.0);
+                q.truncate() / q.w
+            };
+            let extent = (phi - plo).length().max(fc.near);
+            let z_far = match fc.projection {
+                crate::camera::Projection::Perspective => fc.near / (fc.near + extent),
+                crate::camera::Projection::Orthographic => 0.5,
+            };
+            let plane = |z: f64| {
+                let p0 = unproject(0.0, 0.0, z);
+                [p0, unproject(1.0, 0.0, z) - p0, unproject(0.0, 1.0, z) - p0]
+            };
+            let (near_pl, far_pl) = (plane(1.0), plane(z_far));
             let p = MapParams {
-                inv_view_proj: Mat4::from_cols_array(&inv.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
+                ray_o: f4(near_pl[0], 0.0),
+                ray_ox: f4(near_pl[1], 0.0),
+                ray_oy: f4(near_pl[2], 0.0),
+                ray_d: f4(far_pl[0] - near_pl[0], 0.0),
+                ray_dx: f4(far_pl[1] - near_pl[1], 0.0),
+                ray_dy: f4(far_pl[2] - near_pl[2], 0.0),
                 lo: f4(plo, eps.min(eps * space.z_scale)),
                 hi: f4(phi, 1e-2),
                 node: f4(size, 0.0),
                 dims: [march_dims[0], march_dims[1], march_dims[2], width],
-                size: [height, md_march - occ_depth, 0, 1],
+                // z: the walk reads the faces of the cells it crosses (march cells are the nodes).
+                size: [height, md_march - occ_depth, u32::from(grid.faces && md_march == occ_depth), 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
                 cull_dims: [0; 4],
                 bricks: if opts.space_skipping { grid.bricks } else { [0; 4] },
@@ -484,7 +520,7 @@ impl IsoRenderer {
             let t_cull = Instant::now();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
             let marks = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
-            let bits = seen_cells(&marks, march_dims, &grid.words, grid.dims, md_march - occ_depth);
+            let bits = seen_cells(&marks, march_dims, &grid.classes, grid.dims, md_march - occ_depth);
             let shift = maxd - md_march;
             let counts: Vec<u32> = candidates.par_iter().map(|n| cells_seen(n, &bits, march_dims, shift)).collect();
             seen = Some((bits, march_dims, shift));

@@ -34,7 +34,7 @@ pub(super) fn cells_seen(n: &NodeInfo, bits: &[u32], mdims: [u32; 3], shift: u32
 /// near side with up to seven class reads and atomics per step; a CPU rasteriser runs that code
 /// for every lane at every step whether any lane needs it or not (40 % of the walk on the Pesco
 /// field). Both sides are a superset: a cell more can only draw a triangle more.
-/// `nodes`: the occluder nodes' words ([`pack_nodes`](super::bricks::pack_nodes), grid `occ_dims`); `occ_shift`: march depth
+/// `nodes`: the occluder nodes' classes ([`pack2`](super::bricks::pack2), grid `occ_dims`); `occ_shift`: march depth
 /// - occluder depth (a march cell's node is its index `>> occ_shift`).
 pub(super) fn seen_cells(
     marks: &[u32],
@@ -139,7 +139,7 @@ pub(super) fn visible_ranges(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::iso::bricks::{pack_nodes, CLASS_ABOVE, CLASS_BELOW};
+    use crate::iso::bricks::{pack2, CLASS_ABOVE, CLASS_BELOW};
 
     /// Marks of a `d` grid with `(cell, 4-bit mark)` set.
     fn marks(d: [u32; 3], set: &[([u32; 3], u32)]) -> Vec<u32> {
@@ -166,7 +166,7 @@ mod tests {
         let mut cls = vec![CLASS_PASS; 210];
         let below = [3u32, 1, 2];
         cls[((below[2] * d[1] + below[1]) * d[0] + below[0]) as usize] = CLASS_BELOW;
-        let nodes = pack_nodes(&cls, d);
+        let nodes = pack2(&cls);
         // Seen bits pass as they are; a near event along x marks the cells at x - 1 and x + 1
         // (at the border, the one inside), one along y and z the eight around it in that plane
         // but the Below node.
@@ -192,7 +192,7 @@ mod tests {
         let (d, od) = ([8u32, 4, 4], [4u32, 2, 2]);
         let mut cls = vec![CLASS_PASS; 16];
         cls[0] = CLASS_ABOVE;
-        let nodes = pack_nodes(&cls, od);
+        let nodes = pack2(&cls);
         let m = marks(d, &[([2, 1, 1], 2 | 4 | 8)]);
         let got = cells(&seen_cells(&m, d, &nodes, od, 1), d);
         // The 26 neighbours of (2, 1, 1) but the 4 in node (0, 0, 0) (x = 1, y and z in 0..2).
