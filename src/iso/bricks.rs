@@ -137,15 +137,17 @@ pub fn leaf_faces(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
     let mut out = vec![0u8; cx * cy * cz];
     out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
         let (k, j) = (r / cy, r % cy);
-        let row = |z: usize, y: usize| &values[(z * ny + y) * nx..][..nx];
-        let (r0, r1, r2, r3) = (row(k, j), row(k, j + 1), row(k + 1, j), row(k + 1, j + 1));
+        // The codes of the 4 sample rows around this row of cells (vectorisable).
+        let codes =
+            |z: usize, y: usize| -> Vec<u8> { values[(z * ny + y) * nx..][..nx].iter().map(|&v| code(v)).collect() };
+        let (c0, c1, c2) = (codes(k, j), codes(k, j + 1), codes(k + 1, j));
+        let c3 = codes(k + 1, j + 1);
         for (x, o) in row_out.iter_mut().enumerate() {
             // x face: (x, j..j+1, k..k+1); y face: (x..x+1, j, k..k+1); z face: (x..x+1, j..j+1, k).
-            let c0 = code(r0[x]);
-            let fx = c0 & code(r1[x]) & code(r2[x]) & code(r3[x]);
-            let fy = c0 & code(r0[x + 1]) & code(r2[x]) & code(r2[x + 1]);
-            let fz = c0 & code(r0[x + 1]) & code(r1[x]) & code(r1[x + 1]);
-            *o = (fx != 0) as u8 | ((fy != 0) as u8) << 1 | ((fz != 0) as u8) << 2 | (c0 & 1) << 3;
+            let fx = c0[x] & c1[x] & c2[x] & c3[x];
+            let fy = c0[x] & c0[x + 1] & c2[x] & c2[x + 1];
+            let fz = c0[x] & c0[x + 1] & c1[x] & c1[x + 1];
+            *o = (fx != 0) as u8 | ((fy != 0) as u8) << 1 | ((fz != 0) as u8) << 2 | (c0[x] & 1) << 3;
         }
     });
     out
@@ -215,29 +217,29 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> 
 }
 
 /// The nodes as the walk reads them (iso.wgsl `node_info`): per node of `classes` (dims `dims`,
-/// x fastest), 8 bits: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
+/// x fastest), one byte: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
 /// nodes per axis, [`brick_classes`]) is skippable, bit 3 when its coarse brick is too (a
 /// skippable brick's class is that of each of its nodes); bits 4-7 its low faces (`faces`,
-/// [`leaf_faces`]: single-cell nodes only; 0 without). 4 nodes per little-endian u32 word (node
-/// `i` in byte `i % 4` of word `i / 4`): the walk's step reads one word for all.
-pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3], faces: Option<&[u8]>) -> Vec<u32> {
+/// [`leaf_faces`]: single-cell nodes only; 0 without). Padded with zeros to whole u32 words, which
+/// the walk reads (node `i` in byte `i % 4` of word `i / 4`): one read per step for all.
+pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3], faces: Option<&[u8]>) -> Vec<u8> {
     let [(fine, fd), (coarse, cd)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
     let [nx, ny] = [dims[0] as usize, dims[1] as usize];
-    let skippable = |v: &[u8], bd: [u32; 3], s: u32, i: usize| {
-        let (x, y, z) = ((i % nx) >> s, (i / nx % ny) >> s, (i / (nx * ny)) >> s);
-        v[(z * bd[1] as usize + y) * bd[0] as usize + x] != 0
-    };
-    (0..classes.len().div_ceil(4))
-        .into_par_iter()
-        .map(|w| {
-            (4 * w..(4 * w + 4).min(classes.len())).fold(0u32, |word, i| {
-                let f = skippable(&fine, fd, FINE_SHIFT, i);
-                let c = f && skippable(&coarse, cd, COARSE_SHIFT, i);
-                let fc = faces.map_or(0, |v| v[i] as u32 & 15);
-                word | ((classes[i] & 3) as u32 | (f as u32) << 2 | (c as u32) << 3 | fc << 4) << (8 * (i - 4 * w))
-            })
-        })
-        .collect()
+    let mut out = vec![0u8; classes.len().div_ceil(4) * 4];
+    out[..classes.len()].par_chunks_mut(nx).enumerate().for_each(|(r, row)| {
+        let (y, z) = (r % ny, r / ny);
+        let start = |bd: [u32; 3], s: u32| ((z >> s) * bd[1] as usize + (y >> s)) * bd[0] as usize;
+        let f = &fine[start(fd, FINE_SHIFT)..][..fd[0] as usize];
+        let c = &coarse[start(cd, COARSE_SHIFT)..][..cd[0] as usize];
+        let cls = &classes[r * nx..][..nx];
+        for (x, o) in row.iter_mut().enumerate() {
+            let fs = f[x >> FINE_SHIFT] != 0;
+            let cs = fs && c[x >> COARSE_SHIFT] != 0;
+            let face = faces.map_or(0, |v| v[r * nx + x] & 15);
+            *o = (cls[x] & 3) | (fs as u8) << 2 | (cs as u8) << 3 | face << 4;
+        }
+    });
+    out
 }
 
 /// Packs 2-bit values 16 to a little-endian u32 word (value `i` in bits `2 (i % 16)` of word `i / 16`).
@@ -405,7 +407,7 @@ mod tests {
         let dims = d.map(|x| x as u32);
         let faces: Vec<u8> = (0..v.len()).map(|i| (i % 16) as u8).collect();
         let p = pack_nodes(&v, dims, Some(&faces));
-        assert_eq!(p.len(), v.len().div_ceil(4));
+        assert_eq!(p.len(), v.len().div_ceil(4) * 4);
         let fine = brute(&v, d, FINE_SHIFT);
         let coarse = brute(&v, d, COARSE_SHIFT);
         let at = |b: &[u8], s: u32, i: usize| {
@@ -414,7 +416,7 @@ mod tests {
         };
         let mut seen = [0; 2];
         for (i, &k) in v.iter().enumerate() {
-            let byte = p[i / 4] >> (8 * (i % 4)) & 0xff;
+            let byte = p[i] as u32;
             let (f, c) = (at(&fine, FINE_SHIFT, i) != 0, at(&coarse, COARSE_SHIFT, i) != 0);
             let want = k as u32 | (f as u32) << 2 | ((f && c) as u32) << 3 | (i as u32 % 16) << 4;
             assert_eq!(byte, want, "node {i}");
@@ -423,7 +425,7 @@ mod tests {
         }
         assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
         assert_eq!(v.len() % 4, 1);
-        assert_eq!(p[p.len() - 1] >> 8, 0, "no bits past the last node");
+        assert_eq!(p[v.len()..], [0, 0, 0], "zeros past the last node");
         let q = pack2(&v);
         for (i, &k) in v.iter().enumerate() {
             assert_eq!(

@@ -67,7 +67,7 @@ impl ClassGrid {
         let words = pack_nodes(classes, dims, faces);
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
-            contents: bytemuck::cast_slice(&words),
+            contents: &words,
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
