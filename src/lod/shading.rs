@@ -53,10 +53,18 @@ pub struct Shading<'a> {
 
 /// The shading error (normal chord, unitless, see the module docs) of the triangle list `level`
 /// against the tile's fine triangles `fine`, both indexing `positions`, for a tile shaded as
-/// `shading` says. 0 for an empty level or an empty fine level.
+/// `shading` says. 0 for an empty level or an empty fine level, and for a tile whose positions
+/// all carry one normal (a flat tile), without sampling.
 pub fn shading_error(positions: &[[f32; 3]], shading: Shading<'_>, fine: &[u32], level: &[u32]) -> f32 {
     if fine.len() < 3 || level.len() < 3 {
         return 0.0;
+    }
+    // One normal for every position (a flat tile: seismic slices, planar faults): both levels
+    // interpolate that normal everywhere, on their triangles and through the grid alike.
+    if let Some((&first, rest)) = shading.normals.split_first() {
+        if first != normals::NONE && shading.normals.len() == positions.len() && rest.iter().all(|&k| k == first) {
+            return 0.0;
+        }
     }
     let p: Vec<DVec3> = positions.iter().map(|v| DVec3::from_array(v.map(f64::from))).collect();
     let n: Vec<DVec3> = shading.normals.iter().map(|&k| normals::unpack(k).unwrap_or(DVec3::ZERO)).collect();
@@ -387,6 +395,29 @@ mod tests {
         let uv: Vec<u32> = (0..pos.len()).map(|k| (k % 17) as u32 | (((k / 17) as u32) << 16)).collect();
         let grid_err = shading_error(&pos, Shading { normals: &n, grid_uv: &uv }, &fine, &coarse);
         assert!(grid_err < 0.2 * smooth_err, "{grid_err} vs {smooth_err}");
+    }
+
+    #[test]
+    fn one_normal_everywhere_is_no_error_whatever_the_level_and_two_are_measured() {
+        // A flat sheet whose level is bent far off it: with one normal for every position both
+        // levels shade alike, so the error is 0 without sampling.
+        let (pos, fine, _) = sheet(9, |x, y| 0.3 * x - 0.2 * y);
+        let (bent, _, coarse) = sheet(9, |x, _| 0.5 * x * x);
+        let mut n = smooth(&pos, &fine);
+        let first = n[0];
+        n.iter_mut().for_each(|k| *k = first);
+        let mut both = pos.clone();
+        both.extend_from_slice(&bent);
+        let mut n2 = n.clone();
+        n2.extend_from_slice(&n);
+        let shifted: Vec<u32> = coarse.iter().map(|&k| k + pos.len() as u32).collect();
+        assert_eq!(shading_error(&both, sm(&n2), &fine, &shifted), 0.0);
+        // One vertex of the bent level with another normal: measured, and not 0.
+        n2[shifted[0] as usize] = smooth(&bent, &fine)[coarse[0] as usize];
+        assert_ne!(n2[shifted[0] as usize], n[0]);
+        assert!(shading_error(&both, sm(&n2), &fine, &shifted) > 1e-3);
+        // Facet shading (no normals) of the same pair is measured too.
+        assert!(shading_error(&both, sm(&[]), &fine, &shifted) > 1e-3);
     }
 
     #[test]
