@@ -8,6 +8,7 @@ use super::GpuContext;
 use crate::error::{Error, Result};
 use crate::scene::{ObjectKind, Scene};
 use glam::DVec3;
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 /// GPU copy of a scene's geometry, keyed by [`Scene::geometry_key`].
@@ -114,8 +115,9 @@ fn upload_shading(
     let max_samples = ctx.limits.max_storage_buffer_binding_size / 8;
     let mut total = 0u64;
     let mut dims = vec![None; scene.objects().len()];
-    // The grid meshes' fine normals (small: faults), until they are written.
-    let mut grid_normals: Vec<Vec<u32>> = Vec::new();
+    // Per object in the map: its sample count and, for a grid mesh, its fine normals (small:
+    // faults), until they are written.
+    let mut parts: Vec<(usize, u64, Option<Vec<u32>>)> = Vec::new();
     let base: Vec<Option<u32>> = scene
         .objects()
         .iter()
@@ -134,12 +136,12 @@ fn upload_shading(
                 return None;
             }
             total += n;
-            grid_normals.extend(normals);
+            parts.push((oi, n, normals));
             Some((total - n) as u32)
         })
         .collect();
-    // Written in place (no staging copy where the device maps storage buffers), sample by sample
-    // from each height grid: no host copy of the whole map.
+    // Written in place (no staging copy where the device maps storage buffers), a few objects at
+    // a time: no host copy of the whole map.
     let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
         wgpu::BufferUsages::MAP_WRITE
     } else {
@@ -154,35 +156,27 @@ fn upload_shading(
     {
         let mut map = buf.slice(..).get_mapped_range_mut().map_err(map_err)?;
         let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
-        // Mapped memory is write-only: runs of 4096 samples.
-        let mut run: Vec<[u32; 2]> = Vec::with_capacity(4096);
-        let mut at = 0usize;
-        let mut flush = |run: &mut Vec<[u32; 2]>| {
-            map.slice(at * 8..(at + run.len()) * 8).copy_from_slice(bytemuck::cast_slice(run));
-            at += run.len();
-            run.clear();
-        };
-        let mut grid_normals = grid_normals.into_iter();
-        for ((o, b), d) in scene.objects().iter().zip(&base).zip(&dims) {
-            if b.is_none() {
-                continue;
-            }
-            let mut push = |w: [u32; 2]| {
-                run.push(w);
-                if run.len() == run.capacity() {
-                    flush(&mut run);
-                }
-            };
-            if d.is_some() {
+        let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
+            match normals {
                 // A grid mesh: its packed fine normal, then 0.
-                for n in grid_normals.next().expect("one per grid mesh") {
-                    push([n, 0]);
+                Some(normals) => normals.iter().map(|&n| [n, 0]).collect(),
+                None => {
+                    let mut out = Vec::new();
+                    scene.objects()[*oi]
+                        .for_each_shading_sample(|[gx, gy, z]| out.push([h(gx) | (h(gy) << 16), z.to_bits()]));
+                    out
                 }
-            } else {
-                o.for_each_shading_sample(|[gx, gy, z]| push([h(gx) | (h(gy) << 16), z.to_bits()]));
+            }
+        };
+        // As many objects at a time as there are threads, each into a vector of its own, then
+        // copied (mapped memory is write-only and stays on this thread).
+        let mut at = 0usize;
+        for batch in parts.chunks(rayon::current_num_threads().max(1)) {
+            for words in batch.par_iter().map(samples).collect::<Vec<_>>() {
+                map.slice(at * 8..(at + words.len()) * 8).copy_from_slice(bytemuck::cast_slice(&words));
+                at += words.len();
             }
         }
-        flush(&mut run);
     }
     buf.unmap();
     Ok((buf, base, dims))
@@ -313,69 +307,120 @@ impl Plan {
     /// `shading_base`: each object's first sample in the normal map; `values_base`: in the
     /// per-sample values (`SceneGeometry::sample_values`), for height fields coloured by data.
     fn new(scene: &Scene, shading_base: &[Option<u32>], values_base: &[Option<u32>]) -> Self {
-        let mut ids: std::collections::HashMap<Pattern, usize> = std::collections::HashMap::new();
-        let (mut remap, mut cidx, mut seen) = (Vec::new(), Vec::new(), Vec::new());
+        // Each tile's draws, worked out in parallel (the costly part: compacting and hashing the
+        // patterns), then numbered in tile order, so the patterns are those of a serial pass.
+        let tiles: Vec<(usize, &crate::lod::TileMesh)> =
+            scene.objects().iter().enumerate().flat_map(|(oi, o)| o.tiles.iter().map(move |t| (oi, t))).collect();
+        let work: Vec<TileWork> = tiles
+            .par_iter()
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(remap, cidx), &(oi, t)| tile_work(scene, oi, t, shading_base, values_base, remap, cidx),
+            )
+            .collect();
         let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
-        for (oi, o) in scene.objects().iter().enumerate() {
-            let axes = o.grid_axes();
-            for t in &o.tiles {
-                let lattice = match (shading_base[oi], &axes) {
-                    (Some(base), Some(g))
-                        if (t.values.is_empty() || values_base[oi].is_some())
-                            && t.normals.is_empty()
-                            && !t.is_empty() =>
-                    {
-                        o.tile_lattice(t).map(|l| (base, g, l))
-                    }
-                    _ => None,
-                };
-                let Some((base, g, l)) = lattice else {
+        // Pattern ids by hash (a list per hash, compared in full), in first-use order.
+        let mut by_hash: std::collections::HashMap<u64, Vec<usize>> = std::collections::HashMap::new();
+        for w in work {
+            match w {
+                TileWork::Own { nv, ni } => {
                     plan.runs.push(None);
                     let none = f32::from_bits(u32::MAX);
                     plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, none, 0.0], [none, 0.0, 0.0, 0.0]]);
-                    plan.nv += t.positions.len() as u64;
-                    plan.ni += t.fine.len() as u64;
-                    for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
-                        seen.clear();
-                        seen.resize(t.positions.len(), false);
-                        plan.nv +=
-                            idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
-                        plan.ni += idx.len() as u64;
-                    }
-                    continue;
-                };
-                let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
-                let mut run: Vec<usize> = draws
-                    .map(|idx| {
-                        let used = compact_indices(idx, t.positions.len(), &mut remap, &mut cidx);
-                        let key = (used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone());
-                        let next = ids.len();
-                        *ids.entry(key).or_insert(next)
-                    })
-                    .collect();
-                let next = ids.len();
-                run.push(*ids.entry(occluder_pattern(t, &l.local)).or_insert(next));
-                plan.runs.push(Some(run));
-                let corner = g.pos(l.i0, l.j0);
-                let first = l.j0 * g.nx + l.i0;
-                let k0 = base as usize + first;
-                let v0 = values_base[oi].map_or(u32::MAX, |b| b + first as u32);
-                plan.tile_grid.extend([
-                    [corner[0] as f32, corner[1] as f32, g.u[0] as f32, g.u[1] as f32],
-                    [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
-                    [f32::from_bits(v0), 0.0, 0.0, 0.0],
-                ]);
+                    plan.nv += nv;
+                    plan.ni += ni;
+                }
+                TileWork::Lattice { patterns, grid } => {
+                    let run = patterns
+                        .into_iter()
+                        .map(|(h, p)| {
+                            let ids = by_hash.entry(h).or_default();
+                            match ids.iter().find(|&&k| plan.patterns[k] == p) {
+                                Some(&k) => k,
+                                None => {
+                                    ids.push(plan.patterns.len());
+                                    plan.patterns.push(p);
+                                    plan.patterns.len() - 1
+                                }
+                            }
+                        })
+                        .collect();
+                    plan.runs.push(Some(run));
+                    plan.tile_grid.extend(grid);
+                }
             }
         }
-        let mut patterns: Vec<(usize, Pattern)> = ids.into_iter().map(|(p, k)| (k, p)).collect();
-        patterns.sort_unstable_by_key(|(k, _)| *k);
-        plan.patterns = patterns.into_iter().map(|(_, p)| p).collect();
         for (verts, idx) in &plan.patterns {
             plan.nv += verts.len() as u64;
             plan.ni += idx.len() as u64;
         }
         plan
     }
+}
+
+/// What [`Plan::new`] needs of one tile.
+enum TileWork {
+    /// Drawn from vertices of its own: the vertices and indices of its draws.
+    Own { nv: u64, ni: u64 },
+    /// A lattice tile: the patterns (with their hashes) of its fine, coarse, level and occluder
+    /// draws, and its three `tile_grid` vec4.
+    Lattice { patterns: Vec<(u64, Pattern)>, grid: [[f32; 4]; 3] },
+}
+
+/// Tile `t` of object `oi` as [`Plan::new`] counts it (`remap`, `cidx`: scratch).
+fn tile_work(
+    scene: &Scene,
+    oi: usize,
+    t: &crate::lod::TileMesh,
+    shading_base: &[Option<u32>],
+    values_base: &[Option<u32>],
+    remap: &mut Vec<u32>,
+    cidx: &mut Vec<u32>,
+) -> TileWork {
+    use std::hash::{Hash, Hasher};
+    let o = &scene.objects()[oi];
+    let lattice = match (shading_base[oi], o.grid_axes()) {
+        (Some(base), Some(g))
+            if (t.values.is_empty() || values_base[oi].is_some()) && t.normals.is_empty() && !t.is_empty() =>
+        {
+            o.tile_lattice(t).map(|l| (base, g, l))
+        }
+        _ => None,
+    };
+    let Some((base, g, l)) = lattice else {
+        let (mut nv, mut ni) = (t.positions.len() as u64, t.fine.len() as u64);
+        let mut seen = Vec::new();
+        for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
+            seen.clear();
+            seen.resize(t.positions.len(), false);
+            nv += idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
+            ni += idx.len() as u64;
+        }
+        return TileWork::Own { nv, ni };
+    };
+    let hashed = |p: Pattern| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        p.hash(&mut h);
+        (h.finish(), p)
+    };
+    let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
+    let mut patterns: Vec<(u64, Pattern)> = draws
+        .map(|idx| {
+            let used = compact_indices(idx, t.positions.len(), remap, cidx);
+            hashed((used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone()))
+        })
+        .collect();
+    patterns.push(hashed(occluder_pattern(t, &l.local)));
+    let corner = g.pos(l.i0, l.j0);
+    let first = l.j0 * g.nx + l.i0;
+    let k0 = base as usize + first;
+    let v0 = values_base[oi].map_or(u32::MAX, |b| b + first as u32);
+    let grid = [
+        [corner[0] as f32, corner[1] as f32, g.u[0] as f32, g.u[1] as f32],
+        [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
+        [f32::from_bits(v0), 0.0, 0.0, 0.0],
+    ];
+    TileWork::Lattice { patterns, grid }
 }
 
 impl SceneGeometry {
@@ -561,10 +606,9 @@ impl SceneGeometry {
             contents: bytemuck::cast_slice(&grid),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let sub_boxes = scene
-            .objects()
-            .iter()
-            .flat_map(|o| &o.tiles)
+        let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
+        let sub_boxes = tiles
+            .par_iter()
             .map(|t| {
                 let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
                 t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
