@@ -277,14 +277,27 @@ impl Renderer {
         self.geometry.as_ref().map_or(0, |g| g.bytes)
     }
 
-    /// Stage 1: uploads the scene's geometry if it changed since the last frame.
-    fn upload(&mut self, scene: &Scene) -> Result<()> {
-        if self.geometry.as_ref().is_some_and(|g| g.key == scene.geometry_key()) {
-            return Ok(());
+    /// Stage 1: uploads the scene's geometry if it changed since the last frame: only the objects
+    /// replaced since then where nothing else changed and they keep their layout (a moved slice,
+    /// [`SceneGeometry::patch`]), else all of it. Returns the objects rewritten in place (0 when
+    /// nothing changed or all was uploaded).
+    fn upload(&mut self, scene: &Scene) -> Result<u64> {
+        let key = scene.geometry_key();
+        if let Some(g) = self.geometry.as_mut() {
+            if g.key == key {
+                return Ok(0);
+            }
+            if let Some(mut ids) = (g.key.0 == key.0).then(|| scene.replaced_since(g.key.1)).flatten() {
+                ids.sort_unstable();
+                ids.dedup();
+                if g.patch(&self.ctx, scene, &ids)? {
+                    return Ok(ids.len() as u64);
+                }
+            }
         }
         self.geometry = None; // free the old buffers first
         self.geometry = Some(SceneGeometry::upload(&self.ctx, scene)?);
-        Ok(())
+        Ok(0)
     }
 
     /// The frame's camera, relative to `origin`: near/far from the visible objects' world bounds.
@@ -313,7 +326,8 @@ impl Renderer {
         // Work an interrupted frame left on the GPU finishes before this frame's clock starts.
         self.ctx.finish_pending(&opts.interrupt)?;
         let t0 = Instant::now();
-        self.upload(scene)?;
+        let patched = self.upload(scene)?;
+        let upload_ms = t0.elapsed().as_secs_f64() * 1e3;
         opts.interrupt.check()?;
         let world = scene.visible_bounds(DVec3::ZERO);
         let origin = render_origin(world, camera);
@@ -384,6 +398,8 @@ impl Renderer {
             height: out.height,
         };
         let extra = self.strategies[si].report(&report);
+        out.stats.extra.push(("upload_ms", Stat::Float(upload_ms)));
+        out.stats.extra.push(("objects_patched", Stat::Count(patched)));
         out.stats.extra.extend(extra);
         grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]), &interior);
         out.stats.extra.extend(lens_stats.unwrap_or_default());

@@ -192,3 +192,42 @@ def test_a_translucent_slice_blends_and_never_occludes(renderer_small):
     res = renderer_small(60, 60).render(s, cam, culling="three_pass", pixel_threshold=0)
     np.testing.assert_allclose(res.image[30, 30, :3], np.array([0.2, 0.6, 1.0]) * 0.5 * 255, atol=2)
     assert not res.coverage.any() and res.stats["lens_slices_drawn"] >= 1
+
+
+def test_moving_a_slice_rewrites_it_in_place_with_the_image_of_a_fresh_upload():
+    # A horizon, a fault and two slices of a random cube whose sample plane 3 has no-data samples.
+    rng = np.random.default_rng(5)
+    vals = rng.normal(size=(12, 10, 8)).astype(np.float32)
+    vals[2:6, 3:7, 3] = np.nan
+    vol = gc.Volume(vals, origin=(0, 0, -70), spacing=(10, 10, 10), order="xyz")
+    s = gc.Scene()
+    s.add_heightfield(np.full((12, 10), -75.0), origin=(0, 0), spacing=(10, 10), tiles=(2, 2))
+    xs, zs = np.meshgrid(np.linspace(0, 110, 6), np.linspace(-70, 0, 5))
+    v = np.c_[xs.ravel(), np.full(30, 85.0), zs.ravel()]
+    s.add_mesh(v, [[r * 6 + c, r * 6 + c + 1, r * 6 + c + 7] for r in range(4) for c in range(5)], kind="fault")
+    inline = s.add_slice(vol, "inline", 3, cmap="seismic")
+    tslice = s.add_slice(vol, "sample", 1, cmap="gray")
+    cam = gc.Camera.orbit(target=(55, 45, -35), azimuth=200, elevation=35, distance=300)
+    r = gc.Renderer(64, 48)
+    r.render(s, cam)
+
+    def check(culling: str, patched: int) -> None:
+        got = r.render(s, cam, culling=culling, pixel_threshold=0)
+        assert got.stats["objects_patched"] == patched
+        fresh = gc.Renderer(64, 48).render(s, cam, culling=culling, pixel_threshold=0)
+        assert fresh.stats["objects_patched"] == 0
+        np.testing.assert_array_equal(got.image, fresh.image)
+        np.testing.assert_array_equal(got.depth, fresh.depth)
+
+    s.set_slice_index(inline, 7)
+    check("none", 1)
+    s.set_slice_index(inline, 8)  # two moves of one slice and one of another between frames
+    s.set_slice_index(inline, 5)
+    s.set_slice_index(tslice, 2)
+    check("three_pass", 2)
+    assert r.render(s, cam).stats["objects_patched"] == 0  # nothing changed
+    s.set_slice_index(tslice, 3)  # the no-data colour where the samples are NaN
+    check("temporal", 1)
+    s.add_slice(vol, "crossline", 4)  # an object added: a full upload
+    s.set_slice_index(inline, 6)
+    check("none", 0)

@@ -67,6 +67,10 @@ pub struct SceneGeometry {
     /// pipeline.
     pub draw_runs: Vec<DrawRun>,
     pub bytes: u64,
+    /// Per tile drawn from vertices of its own, the vertex counts of its fine, coarse and level
+    /// draws (each its own copy, in that order); empty for lattice tiles. What [`Self::patch`]
+    /// checks a replaced object against.
+    own_vertices: Vec<Vec<u32>>,
 }
 
 /// A run of consecutive tiles that the lit pass draws with one pipeline
@@ -150,7 +154,7 @@ fn upload_shading(
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shading"),
         size: 8 * total.max(1),
-        usage: wgpu::BufferUsages::STORAGE | direct,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | direct,
         mapped_at_creation: true,
     });
     {
@@ -213,6 +217,42 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
         usage: wgpu::BufferUsages::STORAGE,
     });
     (buf, base)
+}
+
+/// The second vertex stream's words of `n` vertices (`SceneGeometry::values`): the scalar (0
+/// without values, no data as [`NO_DATA`]) and the packed normal (none without), into `out`.
+fn vertex_words(n: usize, vals: &[f32], normals: &[u32], out: &mut Vec<[u32; 2]>) {
+    out.clear();
+    out.extend((0..n).map(|k| {
+        let x = vals.get(k).map_or(0.0, |&x| if x.is_nan() { NO_DATA } else { x });
+        [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE)]
+    }));
+}
+
+/// A tile's draw (coarse proxy or LOD level) with its own compact copy of the vertices it uses:
+/// software rasterisers (llvmpipe) shade every vertex in an indexed draw's index range, so
+/// indexing into the fine vertices would make it cost as much as a fine draw.
+#[derive(Default)]
+struct CompactDraw {
+    remap: Vec<u32>,
+    idx: Vec<u32>,
+    verts: Vec<[f32; 3]>,
+    vals: Vec<f32>,
+    normals: Vec<u32>,
+}
+
+impl CompactDraw {
+    /// The draw of `indices` of tile `t` (`nrm`: the normals or grid coordinates its vertices
+    /// carry): its vertices, their values and normals, and the indices into them.
+    fn build(&mut self, t: &crate::lod::TileMesh, nrm: &[u32], indices: &[u32]) {
+        let used = compact_indices(indices, t.positions.len(), &mut self.remap, &mut self.idx);
+        self.verts.clear();
+        self.verts.extend(used.iter().map(|&k| t.positions[k as usize]));
+        self.vals.clear();
+        self.vals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
+        self.normals.clear();
+        self.normals.extend(used.iter().filter_map(|&k| nrm.get(k as usize)));
+    }
 }
 
 /// Checks that a scene of `nv` vertices and `ni` indices fits one vertex and one index buffer of
@@ -454,12 +494,15 @@ impl SceneGeometry {
         } else {
             wgpu::BufferUsages::empty()
         };
-        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | direct);
-        let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | direct);
-        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | direct);
+        // COPY_DST: an object whose geometry is replaced in place is written by `patch`.
+        let dst = wgpu::BufferUsages::COPY_DST;
+        let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | dst | direct);
+        let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | dst | direct);
+        let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | dst | direct);
         let (mut fine, mut coarse, mut tile_object, mut bbox) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut occluder = Vec::new();
         let mut levels = Vec::new();
+        let mut own_vertices: Vec<Vec<u32>> = Vec::new();
         let tile_bbox = |t: &crate::lod::TileMesh| {
             (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
         };
@@ -473,11 +516,7 @@ impl SceneGeometry {
             let mut scratch: Vec<[u32; 2]> = Vec::new();
             let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32], normals: &[u32]| {
                 vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
-                scratch.clear();
-                scratch.extend((0..data.len()).map(|k| {
-                    let x = vals.get(k).map_or(0.0, |&x| if x.is_nan() { NO_DATA } else { x });
-                    [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE)]
-                }));
+                vertex_words(data.len(), vals, normals, &mut scratch);
                 smap.slice(*v * 8..(*v + data.len()) * 8).copy_from_slice(bytemuck::cast_slice(&scratch));
                 *v += data.len();
             };
@@ -501,8 +540,7 @@ impl SceneGeometry {
                 put_v(&mut v, &cverts, &[], &[]);
                 put_i(&mut i, idx);
             }
-            let (mut remap, mut cidx) = (Vec::new(), Vec::new());
-            let (mut cvals, mut cnormals): (Vec<f32>, Vec<u32>) = (Vec::new(), Vec::new());
+            let mut cd = CompactDraw::default();
             let mut runs = plan.runs.iter();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
@@ -527,6 +565,7 @@ impl SceneGeometry {
                                 })
                                 .collect(),
                         );
+                        own_vertices.push(Vec::new());
                         continue;
                     }
                     occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
@@ -543,23 +582,19 @@ impl SceneGeometry {
                     // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
                     // indexed draw's index range, so indexing into the fine vertices would make
                     // them cost as much as a fine draw.
+                    let mut counts = vec![t.positions.len() as u32];
                     let mut compact = |indices: &[u32], v: &mut usize, i: &mut usize| {
-                        let used = compact_indices(indices, t.positions.len(), &mut remap, &mut cidx);
-                        cverts.clear();
-                        cverts.extend(used.iter().map(|&k| t.positions[k as usize]));
-                        cvals.clear();
-                        cvals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
-                        cnormals.clear();
-                        cnormals.extend(used.iter().filter_map(|&k| nrm.get(k as usize)));
+                        cd.build(t, nrm, indices);
+                        counts.push(cd.verts.len() as u32);
                         let args = DrawArgs {
-                            index_count: cidx.len() as u32,
+                            index_count: cd.idx.len() as u32,
                             instance_count: 1,
                             first_index: *i as u32,
                             base_vertex: *v as i32,
                             first_instance: tile,
                         };
-                        put_v(v, &cverts, &cvals, &cnormals);
-                        put_i(i, &cidx);
+                        put_v(v, &cd.verts, &cd.vals, &cd.normals);
+                        put_i(i, &cd.idx);
                         args
                     };
                     coarse.push(compact(&t.coarse, &mut v, &mut i));
@@ -573,6 +608,7 @@ impl SceneGeometry {
                             })
                             .collect(),
                     );
+                    own_vertices.push(counts);
                 }
             }
             debug_assert_eq!((v as u64, i as u64), (nv, ni));
@@ -585,6 +621,7 @@ impl SceneGeometry {
                     coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
                     occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
                     levels.push(Vec::new());
+                    own_vertices.push(Vec::new());
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
                 }
@@ -637,7 +674,93 @@ impl SceneGeometry {
             grid_dims,
             draw_runs,
             bytes,
+            own_vertices,
         })
+    }
+
+    /// Rewrites in place the geometry of the objects `ids` (distinct) of `scene`, whose geometry was replaced
+    /// since this upload and nothing else changed ([`Scene::replaced_since`]; a moved slice), when
+    /// each keeps its layout: not a height field, its tiles drawn from vertices of their own, and
+    /// the same number of tiles, vertices and indices in every draw (fine, coarse, levels) and of
+    /// grid normals. Their vertices, values, indices and grid normals are written through the
+    /// queue, their boxes, sub-boxes and level errors replaced; then this geometry is the scene's
+    /// (`key`). Returns false, having changed nothing, where an object's layout differs (the
+    /// caller uploads the scene).
+    pub fn patch(&mut self, ctx: &GpuContext, scene: &Scene, ids: &[u32]) -> Result<bool> {
+        let (Some(vb), Some(sb), Some(ib)) = (&self.vertices, &self.values, &self.indices) else {
+            return Ok(false);
+        };
+        if self.key.0 != scene.geometry_key().0 || self.shading_base.len() != scene.objects().len() {
+            return Ok(false);
+        }
+        // Everything is checked and packed before anything is written.
+        let mut writes: Vec<(&wgpu::Buffer, u64, Vec<u8>)> = Vec::new();
+        let mut tiles_done = Vec::new();
+        let mut cd = CompactDraw::default();
+        let mut words = Vec::new();
+        for &id in ids {
+            let Some(oi) = scene.objects().iter().position(|o| o.id == id) else { return Ok(false) };
+            let o = &scene.objects()[oi];
+            let first = self.tile_object_cpu.iter().position(|&x| x as usize == oi).unwrap_or(0);
+            let n = self.tile_object_cpu.iter().skip(first).take_while(|&&x| x as usize == oi).count();
+            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield { .. }) {
+                return Ok(false);
+            }
+            match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
+                (Some(dims), Some(base), Some((nu, nv, normals))) if dims == (nu as u32, nv as u32) => {
+                    let w: Vec<[u32; 2]> = normals.iter().map(|&n| [n, 0]).collect();
+                    writes.push((&self.shading, base as u64 * 8, bytemuck::cast_slice(&w).to_vec()));
+                }
+                (None, _, None) => {}
+                _ => return Ok(false),
+            }
+            for (k, t) in (first..first + n).zip(&o.tiles) {
+                let counts = &self.own_vertices[k];
+                let draws: Vec<(&DrawArgs, &[u32])> = std::iter::once((&self.coarse[k], &t.coarse[..]))
+                    .chain(self.levels[k].iter().map(|l| &l.args).zip(t.levels.iter().map(|l| &l.indices[..])))
+                    .collect();
+                if counts.len() != 2 + t.levels.len()
+                    || self.levels[k].len() != t.levels.len()
+                    || counts[0] as usize != t.positions.len()
+                    || self.fine[k].index_count as usize != t.fine.len()
+                {
+                    return Ok(false);
+                }
+                // A grid-shaded mesh's vertices carry their grid coordinates, as in `upload`.
+                let nrm: &[u32] = if self.grid_dims[oi].is_some() { &t.grid_uv } else { &t.normals };
+                let mut put = |args: &DrawArgs, verts: &[[f32; 3]], vals: &[f32], normals: &[u32], idx: &[u32]| {
+                    vertex_words(verts.len(), vals, normals, &mut words);
+                    let v = args.base_vertex as u64;
+                    writes.push((vb, v * 12, bytemuck::cast_slice(verts).to_vec()));
+                    writes.push((sb, v * 8, bytemuck::cast_slice(&words).to_vec()));
+                    writes.push((ib, args.first_index as u64 * 4, bytemuck::cast_slice(idx).to_vec()));
+                };
+                put(&self.fine[k], &t.positions, &t.values, nrm, &t.fine);
+                for ((args, indices), &count) in draws.into_iter().zip(&counts[1..]) {
+                    cd.build(t, nrm, indices);
+                    if cd.verts.len() != count as usize || cd.idx.len() != args.index_count as usize {
+                        return Ok(false);
+                    }
+                    put(args, &cd.verts, &cd.vals, &cd.normals, &cd.idx);
+                }
+                tiles_done.push((k, t));
+            }
+        }
+        for (buffer, offset, data) in writes {
+            if !data.is_empty() {
+                ctx.queue.write_buffer(buffer, offset, &data);
+            }
+        }
+        for (k, t) in tiles_done {
+            let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+            self.bbox[k] = (d(t.bbox_min), d(t.bbox_max));
+            self.sub_boxes[k] = t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect();
+            for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
+                (l.error, l.shading_error) = (new.error, new.shading_error);
+            }
+        }
+        self.key = scene.geometry_key();
+        Ok(true)
     }
 
     /// Squared distance from `eye` (render space) to each tile's box, with the objects' offsets

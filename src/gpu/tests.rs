@@ -281,3 +281,46 @@ fn select_handles_more_tiles_than_one_dispatch_dimension() {
         assert_eq!(got[i].first_instance, i as u32, "draw {i}");
     }
 }
+
+/// A vertical lattice of `nu` × `nv` samples at x = `x` with values varying along it.
+fn lattice(nu: usize, nv: usize, x: f64) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let pos = (0..nu * nv).map(|k| [x, (k % nu) as f64, -((k / nu) as f64)]).collect();
+    let vals = (0..nu * nv).map(|k| ((k * 7) % 5) as f64 + x).collect();
+    (pos, vals)
+}
+
+/// A lattice replaced by one of the same layout is rewritten in place (the boxes become the new
+/// one's); one of another size is not, nor is a scene where an object was added.
+#[test]
+fn a_replaced_lattice_of_the_same_layout_is_patched_and_another_is_not() {
+    use crate::scene::{AddOptions, Scene};
+    let Some((ctx, _)) = device() else { return };
+    let mut s = Scene::new();
+    let add = |s: &mut Scene, (nu, nv): (usize, usize), x: f64| {
+        let (p, v) = lattice(nu, nv, x);
+        s.add_lattice(&p, v, (nu, nv), "slice", AddOptions::new(16.0)).unwrap()
+    };
+    let id = add(&mut s, (6, 4), 0.0);
+    let mut g = SceneGeometry::upload(&ctx, &s).unwrap();
+    let w = add(&mut s, (6, 4), 5.0);
+    s.replace_lattice(id, w).unwrap();
+    let ids = s.replaced_since(g.key.1).unwrap();
+    assert_eq!(ids, vec![id]);
+    assert!(g.patch(&ctx, &s, &ids).unwrap());
+    assert_eq!(g.key, s.geometry_key());
+    let fresh = SceneGeometry::upload(&ctx, &s).unwrap();
+    assert_eq!(g.bbox, fresh.bbox);
+    assert_eq!(g.sub_boxes, fresh.sub_boxes);
+    assert_eq!((g.fine.clone(), g.coarse.clone()), (fresh.fine.clone(), fresh.coarse.clone()));
+    assert_eq!(s.replaced_since(s.geometry_key().1), Some(vec![]));
+    // Another size: left as it was, for a full upload.
+    let w = add(&mut s, (7, 4), 0.0);
+    s.replace_lattice(id, w).unwrap();
+    let before = g.key;
+    assert!(!g.patch(&ctx, &s, &s.replaced_since(before.1).unwrap()).unwrap());
+    assert_eq!(g.key, before);
+    // An object added (and not replacing one) is no replacement.
+    let k = s.geometry_key().1;
+    add(&mut s, (6, 4), 9.0);
+    assert_eq!(s.replaced_since(k), None);
+}

@@ -175,7 +175,15 @@ pub struct Scene {
     origin: Option<DVec3>,
     objects: Vec<Object>,
     next_id: u32,
+    /// The last object added: (the version it made, its id).
+    last_add: Option<(u64, u32)>,
+    /// Recent changes that only replaced one object's geometry (a moved slice): (version before,
+    /// version after, object id), oldest first, at most [`REPLACEMENTS_KEPT`].
+    replaced: Vec<(u64, u64, u32)>,
 }
+
+/// How many geometry replacements a scene remembers for [`Scene::replaced_since`].
+const REPLACEMENTS_KEPT: usize = 64;
 
 /// A copy with the same objects (ids, tiles, state) under a fresh identity: renderers key their
 /// uploaded geometry by [`Scene::geometry_key`], so a copy is never mistaken for the original
@@ -188,6 +196,8 @@ impl Clone for Scene {
             origin: self.origin,
             objects: self.objects.clone(),
             next_id: self.next_id,
+            last_add: None,
+            replaced: Vec::new(),
         }
     }
 }
@@ -260,12 +270,38 @@ impl Scene {
             origin: None,
             objects: Vec::new(),
             next_id: 0,
+            last_add: None,
+            replaced: Vec::new(),
         }
     }
 
     /// Identifies this scene and its geometry; renderers cache GPU buffers by it.
     pub fn geometry_key(&self) -> (u64, u64) {
         (self.uid, self.geometry_version)
+    }
+
+    /// The ids of the objects whose geometry was replaced (and nothing else changed: no object
+    /// added, removed or reordered) between geometry version `version` and now, in order; None
+    /// when something else changed or the changes are older than the scene remembers. An empty
+    /// list for the current version.
+    pub fn replaced_since(&self, version: u64) -> Option<Vec<u32>> {
+        let mut at = version;
+        let mut ids = Vec::new();
+        while at != self.geometry_version {
+            let &(_, to, id) = self.replaced.iter().find(|(from, _, _)| *from == at)?;
+            ids.push(id);
+            at = to;
+        }
+        Some(ids)
+    }
+
+    /// Records that the change from geometry version `from` to the current one only replaced
+    /// object `id`'s geometry.
+    pub(super) fn log_replacement(&mut self, from: u64, id: u32) {
+        if self.replaced.len() == REPLACEMENTS_KEPT {
+            self.replaced.remove(0);
+        }
+        self.replaced.push((from, self.geometry_version, id));
     }
 
     /// A reference origin for reports and serialisation: the first object's origin ever added (or
@@ -368,6 +404,7 @@ impl Scene {
             tiles,
         });
         self.geometry_version += 1;
+        self.last_add = Some((self.geometry_version, id));
         id
     }
 

@@ -504,6 +504,8 @@ impl Scene {
             origin: has_origin.then_some(origin),
             objects,
             next_id,
+            last_add: None,
+            replaced: Vec::new(),
         })
     }
 }

@@ -76,7 +76,13 @@ impl Scene {
         o.origin = new.origin;
         o.color_by = new.color_by;
         o.opacity = new.opacity;
+        // Added just before (the version its addition made): the two changes together only
+        // replaced `id`'s geometry, which a renderer may rewrite in place.
+        let just_added = self.last_add == Some((self.geometry_version, with));
         self.geometry_version += 1;
+        if just_added {
+            self.log_replacement(self.geometry_version - 2, id);
+        }
         Ok(())
     }
 }
