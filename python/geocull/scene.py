@@ -404,8 +404,9 @@ class Scene:
 
     def set_slice_index(self, id: int, index: int) -> None:
         """Move slice ``id`` to sample ``index`` along its axis: its geometry is rebuilt from the
-        volume (the other objects are untouched; the renderer re-uploads the scene's geometry on the
-        next frame). The slice keeps its id, name, colouring, visibility and offset."""
+        volume (the other objects are untouched) and a renderer's next frame rewrites only it on the
+        GPU (``stats["objects_patched"]``; the whole scene is uploaded again where objects were also
+        added or removed). The slice keeps its id, name, colouring, visibility and offset."""
         i = cv.integer(id, "id")
         if i not in self._slices:
             raise InputError(f"id: object {i} is not a slice added to this scene object (copies and "
