@@ -272,10 +272,11 @@ def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
 def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
     # Cached patches stay on the GPU between frames (appended as views reveal them); frames drawn
     # from there equal frames uploaded from scratch (cache=False), across views, both cullings,
-    # and a change of exaggeration (a new render space: the GPU copy starts again).
+    # and a change of exaggeration (a new render space: the GPU copy starts again). Uncached
+    # implicit frames extract only the cells the walk saw: the same triangles, fewer vertices.
     r = gc.Renderer(56, 48)
     v = sphere_volume(40, 0.6)
-    sizes = []
+    sizes, vertices = [], []
     for az, zs in [(0, 1.0), (120, 1.0), (240, 1.0), (60, 2.5), (0, 1.0)]:
         a, e = np.radians(az), np.radians(25.0)
         cam = gc.Camera.look_at(4 * np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), (0, 0, 0),
@@ -287,7 +288,10 @@ def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
             np.testing.assert_array_equal(kept.image, fresh.image)
             np.testing.assert_array_equal(kept.depth, fresh.depth)
             sizes.append(kept.stats["gpu_cache_bytes"])
+            if culling == "implicit":
+                vertices.append((fresh.stats["surface_vertices"], kept.stats["surface_vertices"]))
     assert min(sizes) > 0
+    assert all(f < k for f, k in vertices), vertices
     gc.iso.clear_cache(r)
     assert r.render_isosurface(v, 0.1, cam, cache=False).stats["gpu_cache_bytes"] == 0
 

@@ -189,8 +189,16 @@ struct SerialOut {
     top: Vec<u32>,
 }
 
-/// Single-threaded extraction of cells `lo..hi` (already clamped, non-empty).
-fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_planes: bool) -> SerialOut {
+/// Single-threaded extraction of cells `lo..hi` (already clamped, non-empty), of the cells
+/// `(i, j, k)` that `keep` takes (the others are left empty).
+fn extract_serial(
+    vol: &Volume,
+    w: f32,
+    lo: [usize; 3],
+    hi: [usize; 3],
+    keep_planes: bool,
+    keep: &(dyn Fn([usize; 3]) -> bool + Sync),
+) -> SerialOut {
     let tb = cases();
     let sx = hi[0] - lo[0] + 1;
     let sy = hi[1] - lo[1] + 1;
@@ -216,6 +224,9 @@ fn extract_serial(vol: &Volume, w: f32, lo: [usize; 3], hi: [usize; 3], keep_pla
             let row = vol.index(0, j, k);
             for i in lo[0]..hi[0] {
                 patch.cell_starts.push(patch.triangles.len() as u32);
+                if !keep([i, j, k]) {
+                    continue;
+                }
                 let base = row + i;
                 let mut mask = 0usize;
                 let mut nan = false;
@@ -325,7 +336,7 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     let layers = hi[2] - lo[2];
     let cells = (hi[0] - lo[0]) * (hi[1] - lo[1]) * layers;
     if cells < PARALLEL_MIN_CELLS || layers < 2 {
-        return extract_serial(vol, w, lo, hi, false).patch;
+        return extract_serial(vol, w, lo, hi, false, &|_| true).patch;
     }
     // Fixed chunking (independent of the thread count) for reproducible output.
     let nchunks = layers.min(64).min(cells / (PARALLEL_MIN_CELLS / 4)).max(2);
@@ -333,7 +344,7 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
         (0..nchunks).map(|c| (lo[2] + layers * c / nchunks, lo[2] + layers * (c + 1) / nchunks)).collect();
     let parts: Vec<SerialOut> = bounds
         .par_iter()
-        .map(|&(z0, z1)| extract_serial(vol, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true))
+        .map(|&(z0, z1)| extract_serial(vol, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true, &|_| true))
         .collect();
 
     // Weld: a chunk's bottom-plane vertices are the previous chunk's top-plane
@@ -424,6 +435,25 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
 /// Extracts one patch per node (over the node's cell box), in parallel.
 pub fn extract_nodes(vol: &Volume, w: f32, nodes: &[NodeInfo]) -> Vec<SurfacePatch> {
     nodes.par_iter().map(|n| extract(vol, w, n.cell_lo, n.cell_hi)).collect()
+}
+
+/// [`extract_nodes`] of the cells `(i, j, k)` that `keep` takes: each node's patch has the
+/// triangles (and only the vertices) of those cells, the very ones [`extract`] gives them, in the
+/// same order, and every cell of its box in `cell_starts` (the others empty). Nodes in parallel,
+/// each on one thread.
+pub fn extract_nodes_where(
+    vol: &Volume,
+    w: f32,
+    nodes: &[NodeInfo],
+    keep: &(dyn Fn([usize; 3]) -> bool + Sync),
+) -> Vec<SurfacePatch> {
+    nodes
+        .par_iter()
+        .map(|n| match clamp_box(vol, n.cell_lo, n.cell_hi) {
+            Some((lo, hi)) => extract_serial(vol, w, lo, hi, false, keep).patch,
+            None => SurfacePatch::default(),
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------------------

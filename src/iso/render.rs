@@ -553,7 +553,18 @@ impl IsoRenderer {
             p
         } else {
             stats.patches_extracted = visible.len() as u32;
-            super::march::extract_nodes(vol, w, &visible).into_iter().map(Arc::new).collect()
+            let patches = match &seen {
+                // Nothing kept for later frames: only the cells some ray entered.
+                Some((bits, mdims, shift)) => {
+                    let seen_cell = |[i, j, k]: [usize; 3]| {
+                        let m = ((k >> shift) * mdims[1] as usize + (j >> shift)) * mdims[0] as usize + (i >> shift);
+                        bits[m / 32] >> (m % 32) & 1 == 1
+                    };
+                    super::march::extract_nodes_where(vol, w, &visible, &seen_cell)
+                }
+                None => super::march::extract_nodes(vol, w, &visible),
+            };
+            patches.into_iter().map(Arc::new).collect()
         };
         stats.extract_ms = t_ex.elapsed().as_secs_f64() * 1e3;
         opts.interrupt.check()?;
@@ -562,9 +573,11 @@ impl IsoRenderer {
         let t_draw = Instant::now();
         let d = &ctx.device;
         // Of the visible nodes' patches, only the cells some ray entered before the map.
-        let ranges: Option<Vec<Vec<[u32; 2]>>> = seen.as_ref().map(|(bits, mdims, shift)| {
-            visible.par_iter().zip(&patches).map(|(n, p)| visible_ranges(p, n, bits, *mdims, *shift)).collect()
-        });
+        // (Patches extracted for this frame alone hold only those cells already.)
+        let ranges: Option<Vec<Vec<[u32; 2]>>> =
+            seen.as_ref().filter(|_| opts.use_cache).map(|(bits, mdims, shift)| {
+                visible.par_iter().zip(&patches).map(|(n, p)| visible_ranges(p, n, bits, *mdims, *shift)).collect()
+            });
         let Self { passes, targets, pool, .. } = &mut *self;
         let tg = targets.as_ref().unwrap();
         // Cached patches stay on the GPU between frames (the pool); patches extracted for this

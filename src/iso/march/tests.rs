@@ -137,11 +137,57 @@ fn per_node_matches_whole_volume() {
         }
         // serial == parallel chunked
         let cells = vol.cells();
-        let serial = extract_serial(vol, w, [0; 3], cells, false).patch;
+        let serial = extract_serial(vol, w, [0; 3], cells, false, &|_| true).patch;
         assert_eq!(serial.triangle_count(), whole.triangle_count());
         assert_eq!(tri_set(&serial), tri_set(&whole));
         assert_eq!(serial.vertex_count(), whole.vertex_count());
     }
+}
+
+/// Extracting the cells a filter keeps gives, node by node, exactly the triangles of those cells
+/// in the whole node's patch (positions, normals and order), only their vertices, and empty
+/// cells elsewhere.
+#[test]
+fn kept_cells_give_the_triangles_of_those_cells() {
+    let vol = pesco_synthetic(24);
+    let w = 0.0;
+    let tree = MinMaxOctree::build(&vol);
+    let nodes = tree.straddling_at_depth(w, tree.max_depth() - 2);
+    let keep = |[i, j, k]: [usize; 3]| (i * 7 + j * 3 + k * 5) % 4 != 0;
+    let some = extract_nodes_where(&vol, w, &nodes, &keep);
+    let whole = extract_nodes(&vol, w, &nodes);
+    let mut kept_any = 0;
+    for ((n, a), b) in nodes.iter().zip(&some).zip(&whole) {
+        assert_eq!(a.cell_starts.len(), b.cell_starts.len());
+        let mut c = 0;
+        let mut used = std::collections::BTreeSet::new();
+        for k in n.cell_lo[2]..n.cell_hi[2] {
+            for j in n.cell_lo[1]..n.cell_hi[1] {
+                for i in n.cell_lo[0]..n.cell_hi[0] {
+                    let (ta, tb) = (
+                        &a.triangles[a.cell_starts[c] as usize..a.cell_starts[c + 1] as usize],
+                        &b.triangles[b.cell_starts[c] as usize..b.cell_starts[c + 1] as usize],
+                    );
+                    c += 1;
+                    if !keep([i as usize, j as usize, k as usize]) {
+                        assert!(ta.is_empty());
+                        continue;
+                    }
+                    assert_eq!(ta.len(), tb.len());
+                    kept_any += ta.len();
+                    for (x, y) in ta.iter().zip(tb) {
+                        for (&u, &v) in x.iter().zip(y) {
+                            assert_eq!(a.positions[u as usize], b.positions[v as usize]);
+                            assert_eq!(a.normals[u as usize], b.normals[v as usize]);
+                            used.insert(v);
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(a.vertex_count(), used.len());
+    }
+    assert!(kept_any > 0);
 }
 
 #[test]
