@@ -231,3 +231,24 @@ def test_moving_a_slice_rewrites_it_in_place_with_the_image_of_a_fresh_upload():
     s.add_slice(vol, "crossline", 4)  # an object added: a full upload
     s.set_slice_index(inline, 6)
     check("none", 0)
+
+
+def test_moving_a_slice_keeps_the_horizon_trees_of_the_height_fields():
+    # Horizon culling's trees belong to their height fields: another object's change (a moved
+    # slice) rebuilds none of them, and the frame is the one a fresh renderer draws.
+    rng = np.random.default_rng(2)
+    s = gc.Scene()
+    for depth in (-30.0, -60.0):
+        s.add_heightfield(depth + rng.normal(size=(20, 20)).cumsum(0), origin=(0, 0), spacing=(6, 6), tiles=(2, 2))
+    vol = gc.Volume(rng.normal(size=(20, 20, 10)).astype(np.float32), origin=(0, 0, -90), spacing=(6, 6, 10),
+                    order="xyz")
+    sl = s.add_slice(vol, "crossline", 3)
+    cam = gc.Camera.orbit(target=(57, 57, -45), azimuth=160, elevation=20, distance=250)
+    r = gc.Renderer(48, 40)
+    assert r.render(s, cam, culling="horizon").stats["trees_built"] == 2
+    s.set_slice_index(sl, 12)
+    got = r.render(s, cam, culling="horizon")
+    assert got.stats["trees_built"] == 0
+    np.testing.assert_array_equal(got.image, gc.Renderer(48, 40).render(s, cam, culling="horizon").image)
+    s.add_heightfield(np.full((5, 5), -80.0), origin=(10, 10), spacing=(5, 5))  # a new one: its tree only
+    assert r.render(s, cam, culling="horizon").stats["trees_built"] == 1

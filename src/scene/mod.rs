@@ -59,6 +59,18 @@ pub struct Object {
     /// order objects were added in, nor on objects added or removed before.
     pub origin: DVec3,
     pub tiles: Vec<TileMesh>,
+    /// Identifies this object's geometry (kind and tiles): a fresh number whenever they are built
+    /// or replaced ([`new_geometry_stamp`]), kept by copies of the scene (the same geometry).
+    /// Caches of what is derived from one object's geometry key by it, so changes to other
+    /// objects leave them valid.
+    pub geometry_stamp: u64,
+}
+
+static NEXT_GEOMETRY_STAMP: AtomicU64 = AtomicU64::new(1);
+
+/// A number no object's geometry has had in this process ([`Object::geometry_stamp`]).
+pub fn new_geometry_stamp() -> u64 {
+    NEXT_GEOMETRY_STAMP.fetch_add(1, Ordering::Relaxed)
 }
 
 impl Object {
@@ -402,6 +414,7 @@ impl Scene {
             offset: DVec3::ZERO,
             origin,
             tiles,
+            geometry_stamp: new_geometry_stamp(),
         });
         self.geometry_version += 1;
         self.last_add = Some((self.geometry_version, id));

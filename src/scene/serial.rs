@@ -495,6 +495,7 @@ impl Scene {
                 offset,
                 origin: object_origin,
                 tiles,
+                geometry_stamp: super::new_geometry_stamp(),
             });
         }
         r.finish()?;

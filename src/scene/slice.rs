@@ -73,6 +73,7 @@ impl Scene {
         };
         let o = self.object_mut(id)?;
         o.tiles = new.tiles;
+        o.geometry_stamp = new.geometry_stamp;
         o.origin = new.origin;
         o.color_by = new.color_by;
         o.opacity = new.opacity;

@@ -30,8 +30,9 @@ use crate::lod::cos_sin_deg;
 use crate::scene::ObjectKind;
 use glam::{DMat4, DVec3, DVec4};
 
-/// Tree cache key: (scene geometry key, object id, z_scale bits).
-type TreeKey = ((u64, u64), u32, u64);
+/// Tree cache key: (scene uid, the object's geometry stamp, z_scale bits): a tree stays valid
+/// while its height field does, whatever happens to the scene's other objects (a moved slice).
+type TreeKey = (u64, u64, u64);
 
 struct Cached {
     key: TreeKey,
@@ -86,9 +87,10 @@ impl CullStrategy for Horizon {
     fn visible_set(&mut self, f: &FrameInputs<'_>, _enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
         self.frame += 1;
         let zs = f.camera.z_scale;
-        let key = f.scene.geometry_key();
-        // An older geometry of this scene cannot come back (versions only grow).
-        self.trees.retain(|c| c.key.0 .0 != key.0 || c.key.0 == key);
+        let uid = f.scene.geometry_key().0;
+        // A geometry this scene no longer holds cannot come back (stamps are never reused).
+        let live: std::collections::HashSet<u64> = f.scene.objects().iter().map(|o| o.geometry_stamp).collect();
+        self.trees.retain(|c| c.key.0 != uid || live.contains(&c.key.1));
         let mut mask = Vec::with_capacity(f.n_tiles());
         let (mut visited, mut culled, mut built, mut horizon) = (0u32, 0u32, 0u64, None);
         for o in f.scene.objects() {
@@ -96,7 +98,7 @@ impl CullStrategy for Horizon {
                 mask.extend(std::iter::repeat_n(true, o.tiles.len()));
                 continue;
             };
-            let tk: TreeKey = (key, o.id, zs.to_bits());
+            let tk: TreeKey = (uid, o.geometry_stamp, zs.to_bits());
             let idx = match self.trees.iter().position(|c| c.key == tk) {
                 Some(i) => i,
                 None => {
