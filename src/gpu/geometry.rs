@@ -348,45 +348,48 @@ impl Plan {
     /// per-sample values (`SceneGeometry::sample_values`), for height fields coloured by data.
     fn new(scene: &Scene, shading_base: &[Option<u32>], values_base: &[Option<u32>]) -> Self {
         // Each tile's draws, worked out in parallel (the costly part: compacting and hashing the
-        // patterns), then numbered in tile order, so the patterns are those of a serial pass.
+        // patterns), then numbered in tile order, so the patterns are those of a serial pass. In
+        // batches of tiles, so that only a batch's patterns are held besides the distinct ones.
         let tiles: Vec<(usize, &crate::lod::TileMesh)> =
             scene.objects().iter().enumerate().flat_map(|(oi, o)| o.tiles.iter().map(move |t| (oi, t))).collect();
-        let work: Vec<TileWork> = tiles
-            .par_iter()
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |(remap, cidx), &(oi, t)| tile_work(scene, oi, t, shading_base, values_base, remap, cidx),
-            )
-            .collect();
         let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
         // Pattern ids by hash (a list per hash, compared in full), in first-use order.
         let mut by_hash: std::collections::HashMap<u64, Vec<usize>> = std::collections::HashMap::new();
-        for w in work {
-            match w {
-                TileWork::Own { nv, ni } => {
-                    plan.runs.push(None);
-                    let none = f32::from_bits(u32::MAX);
-                    plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, none, 0.0], [none, 0.0, 0.0, 0.0]]);
-                    plan.nv += nv;
-                    plan.ni += ni;
-                }
-                TileWork::Lattice { patterns, grid } => {
-                    let run = patterns
-                        .into_iter()
-                        .map(|(h, p)| {
-                            let ids = by_hash.entry(h).or_default();
-                            match ids.iter().find(|&&k| plan.patterns[k] == p) {
-                                Some(&k) => k,
-                                None => {
-                                    ids.push(plan.patterns.len());
-                                    plan.patterns.push(p);
-                                    plan.patterns.len() - 1
+        for batch in tiles.chunks(PLAN_BATCH) {
+            let work: Vec<TileWork> = batch
+                .par_iter()
+                .map_init(
+                    || (Vec::new(), Vec::new()),
+                    |(remap, cidx), &(oi, t)| tile_work(scene, oi, t, shading_base, values_base, remap, cidx),
+                )
+                .collect();
+            for w in work {
+                match w {
+                    TileWork::Own { nv, ni } => {
+                        plan.runs.push(None);
+                        let none = f32::from_bits(u32::MAX);
+                        plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, none, 0.0], [none, 0.0, 0.0, 0.0]]);
+                        plan.nv += nv;
+                        plan.ni += ni;
+                    }
+                    TileWork::Lattice { patterns, grid } => {
+                        let run = patterns
+                            .into_iter()
+                            .map(|(h, p)| {
+                                let ids = by_hash.entry(h).or_default();
+                                match ids.iter().find(|&&k| plan.patterns[k] == p) {
+                                    Some(&k) => k,
+                                    None => {
+                                        ids.push(plan.patterns.len());
+                                        plan.patterns.push(p);
+                                        plan.patterns.len() - 1
+                                    }
                                 }
-                            }
-                        })
-                        .collect();
-                    plan.runs.push(Some(run));
-                    plan.tile_grid.extend(grid);
+                            })
+                            .collect();
+                        plan.runs.push(Some(run));
+                        plan.tile_grid.extend(grid);
+                    }
                 }
             }
         }
@@ -397,6 +400,9 @@ impl Plan {
         plan
     }
 }
+
+/// Tiles [`Plan::new`] works out at a time.
+const PLAN_BATCH: usize = 64;
 
 /// What [`Plan::new`] needs of one tile.
 enum TileWork {
