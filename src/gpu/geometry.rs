@@ -219,6 +219,17 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
     (buf, base)
 }
 
+/// A tile's box as `SceneGeometry::bbox` keeps it (f64, origin-relative).
+fn tile_bbox(t: &crate::lod::TileMesh) -> (DVec3, DVec3) {
+    (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
+}
+
+/// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them.
+fn tile_sub_boxes(t: &crate::lod::TileMesh) -> Vec<(DVec3, DVec3)> {
+    let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+    t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
+}
+
 /// The second vertex stream's words of `n` vertices (`SceneGeometry::values`): the scalar (0
 /// without values, no data as [`NO_DATA`]) and the packed normal (none without), into `out`.
 fn vertex_words(n: usize, vals: &[f32], normals: &[u32], out: &mut Vec<[u32; 2]>) {
@@ -509,9 +520,6 @@ impl SceneGeometry {
         let mut occluder = Vec::new();
         let mut levels = Vec::new();
         let mut own_vertices: Vec<Vec<u32>> = Vec::new();
-        let tile_bbox = |t: &crate::lod::TileMesh| {
-            (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
-        };
         if let (Some(vb), Some(sb), Some(ib)) = (&vb, &sb, &ib) {
             let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
             let mut smap = sb.slice(..).get_mapped_range_mut().map_err(map_err)?;
@@ -650,13 +658,7 @@ impl SceneGeometry {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
-        let sub_boxes = tiles
-            .par_iter()
-            .map(|t| {
-                let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
-                t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
-            })
-            .collect();
+        let sub_boxes = tiles.par_iter().map(|t| tile_sub_boxes(t)).collect();
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims);
         ctx.take_error()?;
@@ -758,9 +760,8 @@ impl SceneGeometry {
             }
         }
         for (k, t) in tiles_done {
-            let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
-            self.bbox[k] = (d(t.bbox_min), d(t.bbox_max));
-            self.sub_boxes[k] = t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect();
+            self.bbox[k] = tile_bbox(t);
+            self.sub_boxes[k] = tile_sub_boxes(t);
             for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
                 (l.error, l.shading_error) = (new.error, new.shading_error);
             }
