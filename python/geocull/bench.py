@@ -17,7 +17,9 @@ read-back) or VTK's ``Render()`` + ``WaitForCompletion()`` wall time. Errors aga
 ``none``: differing pixel fraction and missing tiles (tiles visible in the unculled image but not
 drawn) for geocull methods; for PyVista (shading differs) coverage agreement and relative depth
 error. Also printed: scene build time, triangles, host + GPU bytes per fine triangle, peak RSS,
-adapter. ``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
+adapter. ``--pass-triangles N`` bounds the triangles of each render pass of the scenes' renderers
+(:attr:`geocull.Renderer.pass_triangles`: driver memory against frame time on CPU drivers).
+``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
 
 ``--scene iso``: isosurfaces instead (:mod:`geocull.bench_iso`): geocull none / implicit, cold and
 warm, against PyVista flying edges + render, on the Pesco field and real volumes from PyVista's wheel.
@@ -83,6 +85,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--size", type=int, help="samples per horizon side (default 418; quick 120)")
     p.add_argument("--no-pyvista", action="store_true", help="skip the PyVista rows")
     p.add_argument("--no-horizon", action="store_true", help="skip CPU horizon culling")
+    p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
+                   "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
+                   "unbounded)")
     p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic"), default="gullfaks",
                    help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso); grid: a "
                    "faulted reservoir grid (geocull.bench_grid); seismic: the gullfaks scene with slices and a lens "
@@ -116,6 +121,7 @@ def _config(a: argparse.Namespace) -> dict[str, Any]:
             cfg[k] = v
     cfg["pyvista"] = not a.no_pyvista
     cfg["horizon"] = not a.no_horizon
+    cfg["pass_triangles"] = a.pass_triangles
     cfg["scene"] = a.scene
     if a.scene == "iso":
         from .bench_iso import VOLUMES
@@ -207,6 +213,8 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
     scene_alt = spec.build(tiles=TILES, coarse_factor=COARSE_ALT)
     task.advance(1, "bench: views")
     targets = {COARSE_FACTOR: (scene, renderer), COARSE_ALT: (scene_alt, gc.Renderer(w, h))}
+    for _, rr in targets.values():
+        rr.pass_triangles = cfg.get("pass_triangles")
     # The renderer that measured the fixed cost is no renderer of the scenes: its targets go now (the
     # device and its pipelines stay, shared by the scenes' renderers).
     del fixed_renderer, fixed_scene
@@ -425,6 +433,7 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         # the process before geocull, per fine triangle of the two scenes.
         rss_bytes_per_triangle=((rss_geocull - rss_before) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
         rss_fixed_mb=rss_fixed - rss_before,
+        pass_triangles=cfg.get("pass_triangles"),
         # The same growth above a renderer's fixed cost (driver, JIT pipelines): the scenes' own.
         rss_scene_bytes_per_triangle=((rss_geocull - rss_fixed) * 2**20 / (2 * n_tri))
         if rss_geocull and n_tri else None,
@@ -587,7 +596,8 @@ def format_table(result: dict[str, Any]) -> str:
                  f"object, two scenes and their renderers): {_f(s.get('rss_bytes_per_triangle'), '.0f')} bytes per "
                  f"fine triangle (target <= 60), of which a renderer's fixed cost (driver, JIT pipelines, "
                  f"one-tile scene) is {_f(s.get('rss_fixed_mb'), '.0f')} MiB and the scenes' own "
-                 f"{_f(s.get('rss_scene_bytes_per_triangle'), '.0f')} bytes per fine triangle")
+                 f"{_f(s.get('rss_scene_bytes_per_triangle'), '.0f')} bytes per fine triangle; "
+                 f"Renderer.pass_triangles {s.get('pass_triangles') or 'unbounded'}")
     pv = f"; PyVista {s['pyvista']}, VTK {s['vtk']}" if "pyvista" in s else ""
     lines.append(f"adapter: {s['adapter']}{pv}; {s['cpu_count']} CPU(s); wall {s['wall_s']:.0f} s")
     lines.append("columns: ms = best frame time (geocull stats total_ms: call -> GPU done; PyVista: Render + "

@@ -35,6 +35,7 @@ class RenderStats(TypedDict):
     gpu_timestamps: bool  # whether the adapter gave GPU timestamps (draw_ms is 0 without)
     upload_ms: float  # ms, wall time of the frame's geometry upload (part of total_ms; ~0 when unchanged)
     objects_patched: int  # objects whose replaced geometry was rewritten in place (a moved slice); 0 otherwise
+    draw_passes: int  # render passes of the final lit draw (Renderer.pass_triangles; 1 when unbounded)
     triangles_prepass: NotRequired[int]  # three_pass: coarse-proxy triangles drawn in the depth prepass
     prepass_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the depth prepass
     count_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the count + select passes

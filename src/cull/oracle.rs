@@ -28,7 +28,17 @@ impl CullStrategy for Oracle {
         let all = passes::args_buffer(d, "reference_args", &f.pick(f.draw_args, |_| true));
         let counts = passes::counts_buffer(d, n);
         let mut enc = f.ctx.encoder("oracle_reference");
-        f.passes.record_draw(&mut enc, f.main_targets, f.scene_bg, f.geometry, &all, false, f.outside, None);
+        f.passes.record_draw(
+            &mut enc,
+            f.main_targets,
+            f.scene_bg,
+            f.geometry,
+            &all,
+            false,
+            f.outside,
+            f.pass_breaks,
+            None,
+        );
         f.passes.record_histogram(d, &mut enc, &f.main_targets.id, (f.width, f.height), &counts, None);
         let rb = readback::copy_buffer(d, &mut enc, &counts, 4 * n.max(1) as u64);
         f.ctx.queue.submit([enc.finish()]);

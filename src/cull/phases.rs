@@ -230,7 +230,17 @@ pub fn draw_and_test_the_rest(
 ) -> Rest {
     let d = &f.ctx.device;
     let n = f.n_tiles();
-    f.passes.record_draw(enc, f.main_targets, f.scene_bg, f.geometry, first, false, f.outside, f.timestamps);
+    f.passes.record_draw(
+        enc,
+        f.main_targets,
+        f.scene_bg,
+        f.geometry,
+        first,
+        false,
+        f.outside,
+        f.pass_breaks,
+        f.timestamps,
+    );
     let t = tile_boxes(f);
     // The gates first (every gate open for them), then the boxes behind open gates.
     let gate = passes::counts_buffer_init(d, &t.gate_init);

@@ -482,6 +482,9 @@ impl Passes {
     /// clearing them first unless `load` (then it adds to what an earlier pass drew).
     /// `outside`: per object, whether this frame sees it from outside
     /// (`Scene::seen_from_outside`), so that the back faces of its closed runs are culled.
+    /// `breaks`: ascending tile indices where one render pass ends and the next begins (loading
+    /// what the earlier drew): the same image as one pass, drawn in several (see
+    /// [`pass_breaks`]). Timed as one pass (`draw_ms`: first pass's start to last pass's end).
     #[allow(clippy::too_many_arguments)]
     pub fn record_draw(
         &self,
@@ -492,24 +495,38 @@ impl Passes {
         args: &wgpu::Buffer,
         load: bool,
         outside: &[bool],
+        breaks: &[usize],
         ts: Option<&Timestamps>,
     ) {
-        let mut pass = begin(enc, "draw", targets, true, true, load, ts.and_then(|t| t.render("draw_ms")));
-        // Runs of tiles: grid meshes' with their own fragment entry point (fs_grid), height fields
-        // with a normal map with entry points of their own that carry one varying fewer and run
-        // no mesh branch (vs_field / fs_field: the 418² bench scene's frames 5-8 % faster on
-        // lavapipe, the same images), the rest with fs_main. One fs_main with the lookup behind a pipeline-overridable constant was slower
-        // on lavapipe: the reservoir grid's near frame took 40.4-40.9 ms against 37.6-39.5.
-        // Closed surfaces seen from outside skip their back faces: the reservoir grid bench's
-        // frames took about a quarter less (level 0, near 38.8 -> 28.4 ms, distant 25.1 -> 18.4).
-        for run in &geom.draw_runs {
-            let pipeline = match run.closed {
-                _ if run.grid_mesh => &self.draw_grid,
-                _ if run.field => &self.draw_field,
-                Some(o) if outside.get(o).copied().unwrap_or(false) => &self.draw_closed,
-                _ => &self.draw,
-            };
-            self.draw_range(&mut pass, pipeline, true, scene_bg, geom, args, run.tiles.clone());
+        let times = ts.and_then(|t| t.render("draw_ms"));
+        let n_passes = breaks.len() + 1;
+        for p in 0..n_passes {
+            let lo = if p == 0 { 0 } else { breaks[p - 1] };
+            let hi = breaks.get(p).copied().unwrap_or(usize::MAX);
+            let (first, last) = (p == 0, p + 1 == n_passes);
+            let times = times.as_ref().filter(|_| first || last).map(|t| wgpu::RenderPassTimestampWrites {
+                query_set: t.query_set,
+                beginning_of_pass_write_index: t.beginning_of_pass_write_index.filter(|_| first),
+                end_of_pass_write_index: t.end_of_pass_write_index.filter(|_| last),
+            });
+            let mut pass = begin(enc, "draw", targets, true, true, load || p > 0, times);
+            // Runs of tiles: grid meshes' with their own fragment entry point (fs_grid), height fields
+            // with a normal map with entry points of their own that carry one varying fewer and run
+            // no mesh branch (vs_field / fs_field: the 418² bench scene's frames 5-8 % faster on
+            // lavapipe, the same images), the rest with fs_main. One fs_main with the lookup behind a pipeline-overridable constant was slower
+            // on lavapipe: the reservoir grid's near frame took 40.4-40.9 ms against 37.6-39.5.
+            // Closed surfaces seen from outside skip their back faces: the reservoir grid bench's
+            // frames took about a quarter less (level 0, near 38.8 -> 28.4 ms, distant 25.1 -> 18.4).
+            for run in &geom.draw_runs {
+                let pipeline = match run.closed {
+                    _ if run.grid_mesh => &self.draw_grid,
+                    _ if run.field => &self.draw_field,
+                    Some(o) if outside.get(o).copied().unwrap_or(false) => &self.draw_closed,
+                    _ => &self.draw,
+                };
+                let tiles = run.tiles.start.max(lo)..run.tiles.end.min(hi);
+                self.draw_range(&mut pass, pipeline, true, scene_bg, geom, args, tiles);
+            }
         }
     }
 
@@ -830,4 +847,27 @@ impl Passes {
             ],
         })
     }
+}
+
+/// Where to break a lit draw into render passes of at most `max_triangles` triangles each
+/// (`per_tile`: each tile's index count, an upper bound of what it draws): ascending tile indices,
+/// each the first tile of a new pass; empty when `max_triangles` is `None` or everything fits.
+/// A tile larger than the bound gets a pass of its own.
+///
+/// Why: a CPU driver (lavapipe, llvmpipe) bins a pass's triangles into memory it holds until
+/// the pass is rasterised; at the end of a pass it rasterises what it binned, so a bound on one
+/// pass's triangles bounds that memory (see `Renderer::set_pass_triangles`).
+pub fn pass_breaks(per_tile: impl IntoIterator<Item = u32>, max_triangles: Option<u64>) -> Vec<usize> {
+    let Some(max) = max_triangles else { return Vec::new() };
+    let mut breaks = Vec::new();
+    let mut acc = 0u64;
+    for (i, indices) in per_tile.into_iter().enumerate() {
+        let t = indices as u64 / 3;
+        if acc > 0 && t > 0 && acc + t > max {
+            breaks.push(i);
+            acc = 0;
+        }
+        acc += t;
+    }
+    breaks
 }

@@ -324,3 +324,18 @@ fn a_replaced_lattice_of_the_same_layout_is_patched_and_another_is_not() {
     add(&mut s, (6, 4), 9.0);
     assert_eq!(s.replaced_since(k), None);
 }
+
+#[test]
+fn pass_breaks_bound_each_pass_by_its_triangles() {
+    use super::passes::pass_breaks;
+    // Index counts of five tiles: 3, 3, 1, 4 and 0 triangles.
+    let tiles = [9u32, 9, 3, 12, 0];
+    assert!(pass_breaks(tiles, None).is_empty());
+    assert!(pass_breaks(tiles, Some(11)).is_empty(), "everything fits one pass");
+    assert_eq!(pass_breaks(tiles, Some(6)), vec![2], "3 + 3, then 1 + 4 + 0 (5 <= 6)");
+    assert_eq!(pass_breaks(tiles, Some(4)), vec![1, 3], "3 | 3 + 1 | 4 + 0");
+    // A tile over the bound gets a pass of its own, and no pass is empty.
+    assert_eq!(pass_breaks(tiles, Some(1)), vec![1, 2, 3], "each non-empty tile alone; the empty one joins the last");
+    assert_eq!(pass_breaks([30u32, 3], Some(2)), vec![1]);
+    assert!(pass_breaks([0u32; 4], Some(1)).is_empty());
+}

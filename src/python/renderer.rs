@@ -108,6 +108,18 @@ impl PyRenderer {
             Ok(())
         })
     }
+    #[getter]
+    fn pass_triangles(&self, py: Python<'_>) -> PyResult<Option<u64>> {
+        with_lock(py, &self.inner, |r| Ok(r.pass_triangles()))
+    }
+    #[setter]
+    fn set_pass_triangles(&self, py: Python<'_>, max: Option<i64>) -> PyResult<()> {
+        with_lock(py, &self.inner, |r| {
+            let max = max.map(|m| int_in(m, "pass_triangles", 1, i64::MAX)).transpose()?;
+            r.set_pass_triangles(max.map(|m| m as u64))?;
+            Ok(())
+        })
+    }
 
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (scene, camera, culling, pixel_threshold, prepass_scale, conservative, predict_errors, lod, max_pixel_error, grid_lod, alpha, lam))]
