@@ -170,6 +170,9 @@ struct TriangleGrid {
     /// Per cell, its first entry in `items` (CSR; one more than the number of cells).
     start: Vec<u32>,
     items: Vec<u32>,
+    /// Per triangle, its bounding box: a triangle whose box lies no nearer than the best so far
+    /// is skipped without the closest-point test.
+    boxes: Vec<(DVec3, DVec3)>,
 }
 
 impl TriangleGrid {
@@ -192,19 +195,18 @@ impl TriangleGrid {
             h *= 1.5;
             dims = dims_of(h);
         }
-        let mut grid = Self { lo, h, dims, start: Vec::new(), items: Vec::new() };
-        let ncell = dims.iter().product::<usize>();
-        let mut count = vec![0u32; ncell + 1];
-        let ranges: Vec<([usize; 3], [usize; 3])> = tris
+        let boxes: Vec<(DVec3, DVec3)> = tris
             .iter()
             .map(|t| {
-                let (a, b) =
-                    t.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(a, b), &k| {
-                        (a.min(p[k]), b.max(p[k]))
-                    });
-                (grid.cell(a), grid.cell(b))
+                t.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(a, b), &k| {
+                    (a.min(p[k]), b.max(p[k]))
+                })
             })
             .collect();
+        let mut grid = Self { lo, h, dims, start: Vec::new(), items: Vec::new(), boxes: Vec::new() };
+        let ncell = dims.iter().product::<usize>();
+        let mut count = vec![0u32; ncell + 1];
+        let ranges: Vec<([usize; 3], [usize; 3])> = boxes.iter().map(|&(a, b)| (grid.cell(a), grid.cell(b))).collect();
         for (c0, c1) in &ranges {
             grid.for_cells(*c0, *c1, |c| count[c + 1] += 1);
         }
@@ -221,6 +223,7 @@ impl TriangleGrid {
         }
         grid.start = count;
         grid.items = items;
+        grid.boxes = boxes;
         grid
     }
 
@@ -275,8 +278,24 @@ impl TriangleGrid {
                         if d.into_iter().max() != Some(r) {
                             continue;
                         }
+                        // A cell whose box lies no nearer than the best triangle so far holds
+                        // no nearer one: skip it (the same answer, ties included, as the scan
+                        // keeps the first of equally near triangles).
+                        if let Some((bd, _, _)) = best {
+                            let cell_lo = self.lo + DVec3::new(x as f64, y as f64, z as f64) * self.h;
+                            let gap = (cell_lo - q).max(q - (cell_lo + DVec3::splat(self.h))).max(DVec3::ZERO);
+                            if gap.length_squared() >= bd {
+                                continue;
+                            }
+                        }
                         let cell = (z * self.dims[1] + y) * self.dims[0] + x;
                         for &k in &self.items[self.start[cell] as usize..self.start[cell + 1] as usize] {
+                            if let Some((bd, _, _)) = best {
+                                let (blo, bhi) = self.boxes[k as usize];
+                                if (blo - q).max(q - bhi).max(DVec3::ZERO).length_squared() >= bd {
+                                    continue;
+                                }
+                            }
                             let t = &tris[k as usize];
                             let (d2, b) = closest_on_triangle(q, p[t[0]], p[t[1]], p[t[2]]);
                             if best.is_none_or(|(bd, _, _)| d2 < bd) {
@@ -458,6 +477,20 @@ mod tests {
         };
         for _ in 0..500 {
             let q = DVec3::new(rnd() * 26.0 - 3.0, rnd() * 26.0 - 3.0, rnd() * 8.0 - 4.0);
+            let (k, b) = grid.closest(&p, &tris, q).unwrap();
+            let t = tris[k];
+            let got = (q - (b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]])).length_squared();
+            let want =
+                tris.iter().map(|t| closest_on_triangle(q, p[t[0]], p[t[1]], p[t[2]]).0).fold(f64::INFINITY, f64::min);
+            assert!((got - want).abs() <= 1e-9 * (1.0 + want), "{q}: {got} vs {want}");
+        }
+        // A soup of random triangles, slivers spanning many cells among them: the cells and
+        // triangles skipped by their boxes never hide the closest one.
+        let p: Vec<DVec3> = (0..300).map(|_| DVec3::new(rnd() * 10.0, rnd() * 10.0, rnd() * 2.0)).collect();
+        let tris: Vec<[usize; 3]> = (0..100).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let grid = TriangleGrid::new(&p, &tris);
+        for _ in 0..2000 {
+            let q = DVec3::new(rnd() * 14.0 - 2.0, rnd() * 14.0 - 2.0, rnd() * 6.0 - 2.0);
             let (k, b) = grid.closest(&p, &tris, q).unwrap();
             let t = tris[k];
             let got = (q - (b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]])).length_squared();
