@@ -296,6 +296,16 @@ def _field(pd: Any, key: str) -> Any:
         return None
 
 
+
+def surface_of(ds: Any) -> Any:
+    """The outer surface of a PyVista dataset (``extract_surface`` with VTK's dataset-surface
+    filter, the default of PyVista < 0.47, named there so that newer versions neither warn nor
+    change it)."""
+    try:
+        return ds.extract_surface(algorithm="dataset_surface")
+    except TypeError:  # PyVista < 0.47 has no `algorithm`
+        return ds.extract_surface()
+
 def mesh_arrays(x: Any, arg: str = "vertices") -> MeshArrays | None:
     """The triangles of a mesh object, or None when ``x`` is not one (an array, a list, ...).
 
@@ -308,10 +318,7 @@ def mesh_arrays(x: Any, arg: str = "vertices") -> MeshArrays | None:
     if isinstance(x, np.ndarray | list | tuple):
         return None
     if not hasattr(x, "faces") and hasattr(x, "extract_surface") and hasattr(x, "points"):
-        try:  # a PyVista dataset other than PolyData (e.g. an UnstructuredGrid)
-            x = x.extract_surface(algorithm="dataset_surface")
-        except TypeError:  # PyVista < 0.47 has no `algorithm`
-            x = x.extract_surface()
+        x = surface_of(x)  # a PyVista dataset other than PolyData (e.g. an UnstructuredGrid)
     if hasattr(x, "points") and hasattr(x, "faces") and hasattr(x, "triangulate"):
         n_lines, n_verts = int(getattr(x, "n_lines", 0) or 0), int(getattr(x, "n_verts", 0) or 0)
         if n_lines or n_verts:

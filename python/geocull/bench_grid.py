@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ._convert import surface_of
 from .report import best_frame
 
 __all__ = ["run", "format_table", "level_table"]
@@ -80,7 +81,7 @@ def _pyvista_surface(g: dict[str, np.ndarray]) -> tuple[Any, float]:
     cells = np.hstack([np.full((n, 1), 8, np.int64), inv.reshape(n, 8).astype(np.int64)]).ravel()
     ug = pv.UnstructuredGrid(cells, np.full(n, pv.CellType.HEXAHEDRON, np.uint8), pts)
     t = time.perf_counter()
-    surf = ug.extract_surface(algorithm="dataset_surface").triangulate()
+    surf = surface_of(ug).triangulate()
     return surf, (time.perf_counter() - t) * 1e3
 
 

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._convert import surface_of
 from ._errors import GeocullError
 
 if TYPE_CHECKING:
@@ -163,10 +164,7 @@ def from_polydata(
     if pd is None:
         raise _input_error(f"polydata: cannot interpret {type(polydata).__name__} as a PyVista dataset")
     if not isinstance(pd, pv.PolyData):
-        try:
-            pd = pd.extract_surface(algorithm="dataset_surface")
-        except TypeError:  # PyVista < 0.47 has no `algorithm`
-            pd = pd.extract_surface()
+        pd = surface_of(pd)
     if not pd.is_all_triangles:
         pd = pd.triangulate()
     faces = np.asarray(pd.faces, dtype=np.int64)
