@@ -107,6 +107,8 @@ pub struct Volume {
     pub spacing: [f64; 3],
     /// Degrees counter-clockwise (seen from +z) about the vertical through `origin`; 0 = axis-aligned.
     pub rotation: f64,
+    /// [`Volume::finite_range`], computed on first use (the samples never change).
+    range: std::sync::OnceLock<Option<[f64; 2]>>,
 }
 
 impl Volume {
@@ -134,7 +136,7 @@ impl Volume {
                 format!("component {i} is {d}; expected a finite number > 0")
             })?;
         }
-        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing, rotation: 0.0 })
+        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing, rotation: 0.0, range: Default::default() })
     }
 
     /// The same volume rotated by `rotation` degrees counter-clockwise about the vertical through
@@ -404,9 +406,23 @@ impl Volume {
         (pos, vals, (nu, nv))
     }
 
-    /// Every sample's value, in the volume's units (NaN = no data).
-    pub fn sample_values(&self) -> impl Iterator<Item = f64> + '_ {
-        self.values.iter().map(|&x| self.value(x))
+    /// The smallest and largest finite sample values, in the volume's units; None when no
+    /// sample is finite. Computed once per volume (in parallel, on the f32 residuals: `value` is
+    /// monotonic, so their extremes give the values' extremes exactly).
+    pub fn finite_range(&self) -> Option<[f64; 2]> {
+        *self.range.get_or_init(|| {
+            let extremes = |(a, b): (f32, f32), (c, d): (f32, f32)| (a.min(c), b.max(d));
+            let (lo, hi) = self
+                .values
+                .par_chunks(1 << 16)
+                .map(|c| {
+                    c.iter()
+                        .filter(|v| v.is_finite())
+                        .fold((f32::INFINITY, f32::NEG_INFINITY), |m, &v| extremes(m, (v, v)))
+                })
+                .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), extremes);
+            (lo <= hi).then(|| [self.value(lo), self.value(hi)])
+        })
     }
 
     /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).
@@ -459,6 +475,25 @@ pub fn sphere_field(n: usize, radius: f64) -> Volume {
 mod tests {
     use super::*;
     use crate::scene::Scene;
+
+    #[test]
+    fn finite_range_is_the_extremes_of_the_finite_values() {
+        // f64 samples around 1e8 (stored as residuals about an offset), NaNs among them, more
+        // than one parallel chunk.
+        let n = (70, 50, 40);
+        let vals: Vec<f64> = (0..n.0 * n.1 * n.2)
+            .map(|k| if k % 7 == 3 { f64::NAN } else { 1e8 + ((k * 7919) % 1000) as f64 - 500.0 })
+            .collect();
+        let v = Volume::from_f64(&vals, n, [0.0; 3], [1.0; 3]).unwrap();
+        let want = vals
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| [a.min(x), b.max(x)]);
+        assert_eq!(v.finite_range(), Some(want));
+        assert_eq!(v.finite_range(), Some(want), "cached");
+        let nan = Volume::new(vec![f32::NAN; 8].into(), (2, 2, 2), [0.0; 3], [1.0; 3]).unwrap();
+        assert_eq!(nan.finite_range(), None);
+    }
 
     #[test]
     fn volume_new_validates() {

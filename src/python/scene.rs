@@ -68,7 +68,7 @@ fn coloring(c: Option<ColoringArgs<'_>>, shape: &[usize], what: &str) -> PyResul
 /// then share their colours).
 fn volume_clim(c: &mut ColorByArg, vol: &crate::iso::Volume) -> crate::Result<()> {
     if c.clim.is_none() {
-        c.clim = Some(crate::scene::color::resolve_clim(None, vol.sample_values())?);
+        c.clim = Some(crate::scene::color::resolve_clim(None, vol.finite_range().into_iter().flatten())?);
     }
     Ok(())
 }
