@@ -161,12 +161,13 @@ impl TileMesh {
     /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless
     /// `coarse` is given; levels by simplification unless set, with their shading error measured
     /// unless the tile is `fine_shaded` (a height field's: the lit pass shades it from its fine
-    /// surface at every level).
+    /// surface at every level). A tile coloured by data (`values`) gets no levels: its object
+    /// keeps its full resolution (`Scene::push`), so none would be drawn.
     fn finish(mut self, coarse_factor: f32, coarse: Option<(Vec<u32>, f32)>, fine_shaded: bool) -> Self {
         self.compute_bbox();
         let (c, e) = coarse.unwrap_or_else(|| simplify::coarse_indices(&self.positions, &self.fine, coarse_factor));
         (self.coarse, self.proxy_error) = (c.into(), e);
-        if self.levels.is_empty() && !self.fine.is_empty() {
+        if self.levels.is_empty() && !self.fine.is_empty() && self.values.is_empty() {
             let shading = (!fine_shaded).then_some(levels::Shading { normals: &self.normals, grid_uv: &self.grid_uv });
             self.levels = levels::simplified_levels(&self.positions, &self.fine, shading);
         }
