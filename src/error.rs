@@ -83,10 +83,14 @@ pub fn object_id(v: i64) -> Result<u32> {
 ///
 /// Progress rides along: a hook may carry a progress callback ([`Interrupt::with_progress`]),
 /// which [`Interrupt::run_parallel`]'s polling loop calls on the same calling thread with the
-/// number of items the job's workers have finished so far ([`Work::item_done`]); it returns
-/// true to stop the work, like the hook (the binding's callback raised).
+/// number of items the job's workers have finished so far ([`Work::item_done`]) and their total
+/// where the job has said it ([`Work::set_total`]; 0 = not said); it returns true to stop the
+/// work, like the hook (the binding's callback raised).
 #[derive(Clone, Default)]
-pub struct Interrupt(Option<Arc<dyn Fn() -> bool + Send + Sync>>, Option<Arc<dyn Fn(usize) -> bool + Send + Sync>>);
+pub struct Interrupt(
+    Option<Arc<dyn Fn() -> bool + Send + Sync>>,
+    Option<Arc<dyn Fn(usize, usize) -> bool + Send + Sync>>,
+);
 
 impl std::fmt::Debug for Interrupt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -95,12 +99,13 @@ impl std::fmt::Debug for Interrupt {
 }
 
 /// What the workers of a parallel build share with the polling thread: the stop flag (the
-/// `&AtomicBool` the tile loops read, through `Deref`) and the count of finished items (tiles)
-/// that progress reports.
+/// `&AtomicBool` the tile loops read, through `Deref`), the count of finished items (tiles)
+/// that progress reports, and their total once the job knows it.
 #[derive(Debug, Default)]
 pub struct Work {
     stop: AtomicBool,
     done: AtomicUsize,
+    total: AtomicUsize,
 }
 
 impl std::ops::Deref for Work {
@@ -142,6 +147,15 @@ impl Work {
     pub fn done(&self) -> usize {
         self.done.load(Ordering::Relaxed)
     }
+    /// The job will finish `n` items in all (for progress, where the caller could not know it
+    /// beforehand: an isosurface's tiles exist only once it is extracted).
+    pub fn set_total(&self, n: usize) {
+        self.total.store(n, Ordering::Relaxed);
+    }
+    /// The total set by [`Self::set_total`]; 0 when not set.
+    pub fn total(&self) -> usize {
+        self.total.load(Ordering::Relaxed)
+    }
 }
 
 impl Interrupt {
@@ -153,17 +167,18 @@ impl Interrupt {
         Self(Some(Arc::new(stop)), None)
     }
 
-    /// This hook with a progress callback: `progress(done)` is called while
+    /// This hook with a progress callback: `progress(done, total)` is called while
     /// [`Self::run_parallel`] waits (every [`Self::POLL`], on the calling thread) with the items
-    /// finished so far; true stops the work as the hook does.
-    pub fn with_progress(self, progress: impl Fn(usize) -> bool + Send + Sync + 'static) -> Self {
+    /// finished so far and their total (0 until the job sets it); true stops the work as the
+    /// hook does.
+    pub fn with_progress(self, progress: impl Fn(usize, usize) -> bool + Send + Sync + 'static) -> Self {
         let stop = self.0.unwrap_or_else(|| Arc::new(|| false));
         Self(Some(stop), Some(Arc::new(progress)))
     }
 
-    /// Calls the progress callback (if any) with `done`; true = stop.
-    fn report(&self, done: usize) -> bool {
-        self.1.as_ref().is_some_and(|p| p(done))
+    /// Calls the progress callback (if any) with `done` and `total`; true = stop.
+    fn report(&self, done: usize, total: usize) -> bool {
+        self.1.as_ref().is_some_and(|p| p(done, total))
     }
 
     /// Whether there is a hook at all (without one, nothing needs polling).
@@ -200,7 +215,7 @@ impl Interrupt {
             });
             // Until the job reports (or its thread dies: the channel disconnects).
             while let Err(mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(Self::POLL) {
-                if !stop.load(Ordering::Relaxed) && (self.check().is_err() || self.report(stop.done())) {
+                if !stop.load(Ordering::Relaxed) && (self.check().is_err() || self.report(stop.done(), stop.total())) {
                     stop.store(true, Ordering::Relaxed);
                 }
             }
@@ -293,13 +308,16 @@ mod tests {
         let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
         let s = seen.clone();
         let caller = std::thread::current().id();
-        let hook = Interrupt::default().with_progress(move |done| {
+        let hook = Interrupt::default().with_progress(move |done, total| {
             assert_eq!(std::thread::current().id(), caller);
-            s.lock().unwrap().push(done);
+            assert!(total == 0 || total == 6, "{total}");
+            s.lock().unwrap().push((done, total));
             false
         });
         let n = hook
             .run_parallel(|work| {
+                std::thread::sleep(Duration::from_millis(40));
+                work.set_total(6);
                 for _ in 0..6 {
                     std::thread::sleep(Duration::from_millis(15));
                     work.item_done();
@@ -309,8 +327,12 @@ mod tests {
             .unwrap();
         assert_eq!(n, 6);
         let seen = seen.lock().unwrap().clone();
-        assert!(!seen.is_empty() && seen.windows(2).all(|w| w[0] <= w[1]) && seen.iter().all(|&d| d <= 6), "{seen:?}");
-        let stopper = Interrupt::default().with_progress(|done| done >= 1);
+        assert!(
+            !seen.is_empty() && seen.windows(2).all(|w| w[0] <= w[1]) && seen.iter().all(|&(d, _)| d <= 6),
+            "{seen:?}"
+        );
+        assert!(seen.iter().any(|&(_, t)| t == 6), "the total reaches the callback: {seen:?}");
+        let stopper = Interrupt::default().with_progress(|done, _| done >= 1);
         let r = stopper.run_parallel(|work| {
             while !work.load(Ordering::Relaxed) {
                 work.item_done();

@@ -131,3 +131,29 @@ def test_scene_spec_build_reports_every_object():
     marks = np.cumsum(w)[:-1] / sum(w)
     assert all(any(abs(f - m) < 1e-9 for f in fr) for m in marks), (fr, marks)
     assert any("object 2/" in m for _, m in seen)
+
+
+def test_isosurface_build_reports_fractions_of_the_tiles_it_extracted():
+    # Its tiles exist only once the surface is extracted: the core gives the total then, and
+    # the fractions reported are multiples of 1 / (the object's tiles), not of the estimate.
+    from geocull.data import pesco_synthetic
+
+    vals, origin, spacing = pesco_synthetic(64)
+    vol = gc.Volume(vals, origin=origin, spacing=spacing)
+    seen, cb = recorder()
+    s = gc.Scene()
+    oid = s.add_isosurface(vol, 0.0, progress=cb)
+    fr = check_fractions(seen)
+    n = int(np.sum(s.tile_table()["object"] == oid))
+    mid = [f for f in fr if 0.0 < f < 0.999999]
+    assert n > 20 and mid and all(abs(f * n - round(f * n)) < 1e-6 for f in mid), (n, fr)
+
+
+def test_the_cores_total_replaces_the_estimate():
+    seen, cb = recorder()
+    with _progress.task(cb, 1, "x") as t:
+        t(0, 0)  # total not known yet: the estimate stands
+        t(3, 10)
+        t(4)
+    fr = check_fractions(seen)
+    assert fr[1:-1] == [pytest.approx(0.3), pytest.approx(0.4)], fr  # (a repeated 0.0 is not reported)

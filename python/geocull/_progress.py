@@ -152,8 +152,12 @@ class Task:
         """``n`` more units finished."""
         self.update(self.done + n, message)
 
-    def __call__(self, done: int) -> None:
-        """The core's report: ``done`` tiles finished (called from its polling loop)."""
+    def __call__(self, done: int, total: int = 0) -> None:
+        """The core's report: ``done`` tiles finished of ``total`` (called from its polling
+        loop; ``total`` 0 = not known there, this task's own total stands; else it replaces it:
+        an isosurface's tiles are only known once it is extracted)."""
+        if total > 0:
+            self.total = float(total)
         self.update(done)
 
     def __enter__(self) -> Task:

@@ -285,6 +285,7 @@ class Scene:
         color: ArrayLike | None = None,
         cmap: Any = None,
         clim: ArrayLike | None = None,
+        progress: ProgressLike = None,
     ) -> int:
         """Add the isosurface ``volume == isovalue`` (a salt body, in the volume's units) as an
         object of the scene (kind "isosurface"): the welded, crack-free marching-cubes surface of
@@ -293,14 +294,17 @@ class Scene:
         with the other objects and culled by them like any mesh (three_pass hides a salt body under a
         horizon). ``color`` a flat colour, or ``cmap`` / ``clim`` to colour it by z (default: the
         palette colour). :meth:`Renderer.render_isosurface` stays the single-object path with the
-        volume's own implicit occluders. Returns the object id."""
+        volume's own implicit occluders. ``progress`` as for :meth:`add_heightfield` (the fraction
+        of tiles built, once the surface is extracted). Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
         c = None if cmap is None and clim is None else cv.coloring("z", None, cmap, clim, None, 1)
         k = None if tiles is None else cv.integer(tiles, "tiles")
-        return self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
-                                      cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), c)
+        with _progress.task(progress, k or 1, "add_isosurface: tiles"):  # total set by the core
+            return self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
+                                          cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
+                                          c)
 
     def add_lens(
         self,

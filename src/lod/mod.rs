@@ -422,6 +422,7 @@ pub fn tile_mesh(
     if stop.load(Ordering::Relaxed) {
         return Vec::new();
     }
+    stop.set_total(n);
     // Faces of each cluster, in input order.
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); n];
     for (f, &c) in ids.iter().enumerate() {

@@ -50,8 +50,9 @@ impl From<Error> for PyErr {
 ///
 /// Progress: when a `geocull._progress.Task` is active on this thread (`with task(...)`, see
 /// python/geocull/_progress.py), the hook carries it, and parallel builds call it with the count
-/// of tiles finished, on this thread with the GIL taken for a moment (`Interrupt::with_progress`);
-/// an exception it raises stops the work and is raised here.
+/// of tiles finished and their total (0 where the job does not say it, and the task's own total
+/// stands), on this thread with the GIL taken for a moment (`Interrupt::with_progress`); an
+/// exception it raises stops the work and is raised here.
 pub(crate) fn run_interruptible<T: Send>(
     py: Python<'_>,
     f: impl FnOnce(Interrupt) -> crate::Result<T> + Send,
@@ -67,11 +68,13 @@ pub(crate) fn run_interruptible<T: Send>(
     });
     if let Some(task) = active_progress(py)? {
         let slot = raised.clone();
-        hook = hook.with_progress(move |done| match Python::attach(|py| task.call1(py, (done,)).map(|_| ())) {
-            Ok(()) => false,
-            Err(e) => {
-                *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
-                true
+        hook = hook.with_progress(move |done, total| {
+            match Python::attach(|py| task.call1(py, (done, total)).map(|_| ())) {
+                Ok(()) => false,
+                Err(e) => {
+                    *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                    true
+                }
             }
         });
     }
