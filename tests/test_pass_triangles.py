@@ -71,3 +71,6 @@ def test_bad_bounds_are_refused_and_none_restores_one_pass():
     assert r.pass_triangles == 7
     r.pass_triangles = None
     assert r.pass_triangles is None
+    assert gc.Renderer(16, 12, pass_triangles=5).pass_triangles == 5
+    with pytest.raises(gc.InputError, match="pass_triangles"):
+        gc.Renderer(16, 12, pass_triangles=0)

@@ -85,12 +85,17 @@ class Renderer:
     render from different threads at once. Worker processes: start them with multiprocessing's
     "spawn" or "forkserver" method (scenes, cameras and volumes pickle); a process forked after
     its parent opened a renderer can build scenes but gets a DeviceError for a renderer (the
-    driver's threads do not survive fork())."""
+    driver's threads do not survive fork()). ``pass_triangles``: see :attr:`pass_triangles`
+    (driver memory against frame time on CPU drivers; default unbounded)."""
 
-    def __init__(self, width: int = 1280, height: int = 1024, backend: str = "auto") -> None:
+    def __init__(
+        self, width: int = 1280, height: int = 1024, backend: str = "auto", pass_triangles: int | None = None
+    ) -> None:
         if not isinstance(backend, str):
             raise InputError(f"backend: {backend!r} is not a string")
         self._r = _geocull.Renderer(cv.integer(width, "width"), cv.integer(height, "height"), backend)
+        if pass_triangles is not None:
+            self.pass_triangles = pass_triangles
 
     @property
     def width(self) -> int:
