@@ -280,7 +280,7 @@ impl Renderer {
     /// one pass. The image is the same. On a CPU driver (lavapipe, llvmpipe) the triangles binned
     /// for a pass stay in memory until its end, as many of the driver's 36 MB bins as its
     /// rasteriser threads lag behind: a bound caps that memory (the 3.9 M-triangle benchmark
-    /// frame: 420 -> 280 MiB at 300,000) for ~15 % more frame time there (each pass waits for
+    /// frame: 420 -> 280 MiB at 300,000) for 20-40 % more frame time there (each pass waits for
     /// its rasterisation). On a GPU it costs a little and saves nothing.
     pub fn pass_triangles(&self) -> Option<u64> {
         self.pass_triangles

@@ -151,7 +151,7 @@ class Renderer:
         (lavapipe, llvmpipe) keeps the triangles it bins for a pass until the pass ends (in 36 MB
         blocks, as many as its rasteriser threads lag behind), so a frame of millions of
         triangles holds hundreds of MiB: a bound caps that (the 3.9 M-triangle benchmark frame
-        at 1280x1024: peak 420 -> 280 MiB at 300_000) for about 15 % more frame time there. The
+        at 1280x1024: peak 420 -> 280 MiB at 300_000) for 20-40 % more frame time there. The
         bound counts the triangles of the chosen levels of the tiles a pass may draw, culled or
         not. On a GPU it saves nothing. It applies to :meth:`render`; :meth:`render_isosurface`
         draws its surface in one pass (there the driver's run-ahead is ~40 MiB at 512x512)."""
