@@ -96,7 +96,8 @@ fn slice_len((nx, ny, nz): (usize, usize, usize)) -> Result<usize> {
 /// in the volume's own units.
 #[derive(Clone, Debug)]
 pub struct Volume {
-    /// Residuals `value - offset` (NaN = no data).
+    /// Residuals `value - offset` (NaN = no data). Fixed once the volume is in use: replacing
+    /// them (tests do, before anything else) would leave [`Volume::finite_range`] stale.
     pub values: Arc<[f32]>,
     /// The f64 value every residual is relative to.
     pub offset: f64,
