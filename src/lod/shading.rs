@@ -283,8 +283,7 @@ impl TriangleGrid {
                         // keeps the first of equally near triangles).
                         if let Some((bd, _, _)) = best {
                             let cell_lo = self.lo + DVec3::new(x as f64, y as f64, z as f64) * self.h;
-                            let gap = (cell_lo - q).max(q - (cell_lo + DVec3::splat(self.h))).max(DVec3::ZERO);
-                            if gap.length_squared() >= bd {
+                            if box_gap2(q, cell_lo, cell_lo + DVec3::splat(self.h)) >= bd {
                                 continue;
                             }
                         }
@@ -292,7 +291,7 @@ impl TriangleGrid {
                         for &k in &self.items[self.start[cell] as usize..self.start[cell + 1] as usize] {
                             if let Some((bd, _, _)) = best {
                                 let (blo, bhi) = self.boxes[k as usize];
-                                if (blo - q).max(q - bhi).max(DVec3::ZERO).length_squared() >= bd {
+                                if box_gap2(q, blo, bhi) >= bd {
                                     continue;
                                 }
                             }
@@ -314,6 +313,11 @@ impl TriangleGrid {
         }
         best.map(|(_, k, b)| (k, b))
     }
+}
+
+/// Squared distance from `q` to the box `lo..=hi` (0 inside).
+fn box_gap2(q: DVec3, lo: DVec3, hi: DVec3) -> f64 {
+    (q.clamp(lo, hi) - q).length_squared()
 }
 
 /// Squared distance from `q` to the triangle (a, b, c) and the barycentrics of the closest point
@@ -475,14 +479,18 @@ mod tests {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        for _ in 0..500 {
-            let q = DVec3::new(rnd() * 26.0 - 3.0, rnd() * 26.0 - 3.0, rnd() * 8.0 - 4.0);
-            let (k, b) = grid.closest(&p, &tris, q).unwrap();
+        // The grid's answer is as near as the nearest of all triangles.
+        let check = |grid: &TriangleGrid, p: &[DVec3], tris: &[[usize; 3]], q: DVec3| {
+            let (k, b) = grid.closest(p, tris, q).unwrap();
             let t = tris[k];
             let got = (q - (b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]])).length_squared();
             let want =
                 tris.iter().map(|t| closest_on_triangle(q, p[t[0]], p[t[1]], p[t[2]]).0).fold(f64::INFINITY, f64::min);
             assert!((got - want).abs() <= 1e-9 * (1.0 + want), "{q}: {got} vs {want}");
+        };
+        for _ in 0..500 {
+            let q = DVec3::new(rnd() * 26.0 - 3.0, rnd() * 26.0 - 3.0, rnd() * 8.0 - 4.0);
+            check(&grid, &p, &tris, q);
         }
         // A soup of random triangles, slivers spanning many cells among them: the cells and
         // triangles skipped by their boxes never hide the closest one.
@@ -491,12 +499,7 @@ mod tests {
         let grid = TriangleGrid::new(&p, &tris);
         for _ in 0..2000 {
             let q = DVec3::new(rnd() * 14.0 - 2.0, rnd() * 14.0 - 2.0, rnd() * 6.0 - 2.0);
-            let (k, b) = grid.closest(&p, &tris, q).unwrap();
-            let t = tris[k];
-            let got = (q - (b[0] * p[t[0]] + b[1] * p[t[1]] + b[2] * p[t[2]])).length_squared();
-            let want =
-                tris.iter().map(|t| closest_on_triangle(q, p[t[0]], p[t[1]], p[t[2]]).0).fold(f64::INFINITY, f64::min);
-            assert!((got - want).abs() <= 1e-9 * (1.0 + want), "{q}: {got} vs {want}");
+            check(&grid, &p, &tris, q);
         }
     }
 
