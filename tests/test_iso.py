@@ -116,9 +116,11 @@ def test_sphere_back_half_culled_and_image_equal(renderer):
         back = side < -0.4
         assert back.sum() > 10
         assert not res.tile_drawn[back].any()
-        # Every front node with surface pixels in the reference is drawn.
+        # Front nodes are drawn. A few may not be: rays stop right behind the surface they cross
+        # (a face's contour), so a node whose only triangles are slivers that cover no pixel
+        # centre is never entered; the image equality above shows that none of them is seen.
         front = side > 0.3
-        assert res.tile_drawn[front].all()
+        assert res.tile_drawn[front].mean() > 0.95
         # The map never claims a depth nearer than the true surface.
         m = res.occlusion_map
         proven = np.isfinite(m)
@@ -267,6 +269,47 @@ def test_float64_values_keep_their_precision_about_a_large_mean(renderer):
     np.testing.assert_array_equal(res.image, ref.image)
     with pytest.raises(gc.InputError, match="^isovalue"):
         renderer.render_isosurface(big, 1e300, cam)
+
+
+def contour_bricks(vals, w, b=4):
+    """The walk's contour bricks by their definition: (bricks of b^3 cells, those holding a cell
+    whose corners are not all on one side of w)."""
+    a = vals >= w
+    cz, cy, cx = (n - 1 for n in vals.shape)
+    same = np.ones((cz, cy, cx), bool)
+    for dz in (0, 1):
+        for dy in (0, 1):
+            for dx in (0, 1):
+                same &= a[dz:dz + cz, dy:dy + cy, dx:dx + cx] == a[:-1, :-1, :-1]
+    bz, by, bx = (-(-n // b) for n in (cz, cy, cx))
+    passable = np.zeros((bz * b, by * b, bx * b), bool)
+    passable[:cz, :cy, :cx] = ~same
+    return bz * by * bx, int(passable.reshape(bz, b, by, b, bx, b).any(axis=(1, 3, 5)).sum())
+
+
+def test_contour_bricks_kept_on_the_gpu_where_the_surface_is_dense():
+    # The walk places the contour of the faces it crosses from the samples of the bricks of 4^3
+    # cells that hold surface (a word per brick, 125 samples per brick with surface), kept with
+    # the class grid: made by the first implicit frame with single-cell occluders, dropped with
+    # the caches; by default only where at least half the bricks hold surface (a wavy field, not
+    # a small sphere); coarser occluders and "none" make none.
+    r = gc.Renderer(48, 40)
+    cam, _ = cam_around(30.0)
+    z, y, x, h = grid(24)
+    wavy = (np.sin(7 * x) + np.cos(6 * y + 2 * x) + 0.8 * np.sin(9 * z) - 0.2).astype(np.float32)
+    small = (np.sqrt(x * x + y * y + z * z) - 0.3).astype(np.float32)
+    for vals, dense in [(wavy, True), (small, False)]:
+        v = gc.Volume(vals, origin=(-1, -1, -1), spacing=(h, h, h))
+        bricks, stored = contour_bricks(vals, 0.0)
+        assert (stored >= bricks / 2) == dense, (stored, bricks)
+        expected = 4 * (bricks + 125 * stored) if dense else 0
+        md = v.max_depth()
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == 0
+        assert r.render_isosurface(v, 0.0, cam, occluder_depth=md - 1).stats["gpu_contour_bytes"] == 0
+        assert r.render_isosurface(v, 0.0, cam).stats["gpu_contour_bytes"] == expected
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == expected
+        gc.iso.clear_cache(r)
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == 0
 
 
 def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
@@ -487,7 +530,7 @@ def test_setup_is_reported_apart_from_the_frame():
 # ---- Random volumes: the walk's cell and face occluders never cull a visible triangle
 
 hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 # GEOCULL_ISO_EXAMPLES (default 60) random cases; GEOCULL_FUZZ_RANDOM=1 draws new ones.
@@ -500,6 +543,13 @@ CULLED: list[int] = []
 @given(seed=st.integers(0, 2**32 - 1), shape=st.tuples(*[st.integers(6, 14)] * 3), smooth=st.sampled_from([0, 1, 3]),
        nan=st.sampled_from([0.0, 0.02, 0.2]), on_iso=st.sampled_from([0.0, 0.1]), elev=st.floats(-85.0, 85.0),
        az=st.floats(0.0, 360.0), dist=st.floats(0.3, 4.0), ortho=st.booleans())
+# A ray 0.0003 cells inside a face bordering NaN cells crossed the surface next to its boundary
+# edge, where the rasteriser put the pixel beyond the edge: the walk's proofs keep a cell away
+# from NaN (bricks::dilate_nan).
+@example(seed=14, shape=(14, 11, 14), smooth=3, nan=0.02, on_iso=0.0, elev=0.0, az=0.0, dist=2.265625, ortho=False)
+# An axis-aligned orthographic view whose pixel row runs along the box's top face: the walk took
+# the ray's zero z direction for a tiny upward one and left the box at its first cell.
+@example(seed=0, shape=(13, 6, 10), smooth=0, nan=0.0, on_iso=0.0, elev=0.0, az=0.0, dist=1.0, ortho=True)
 def _random_volume_renders_as_none(seed, shape, smooth, nan, on_iso, elev, az, dist, ortho):
     """Noise (thin sheets, ambiguous faces), smoothed noise (blobs), NaN samples and samples on the
     isovalue itself; cameras outside, at the border and inside: implicit's image equals none's."""

@@ -105,7 +105,7 @@ class IsoStats(TypedDict):
     nodes_straddling: int  # nodes at cull_depth that may hold surface (= len(nodes))
     occluder_boxes_below: int  # nodes at occluder_depth wholly below the isovalue (NaN-free), in the map's grid
     occluder_boxes_above: int  # nodes at occluder_depth wholly above the isovalue (NaN-free), in the map's grid
-    occluder_nodes_nan: int  # nodes at occluder_depth with a NaN sample: never occluders, they stop the map's walk
+    occluder_nodes_nan: int  # nodes at occluder_depth with a NaN sample or touching one: they stop the map's walk
     occluder_depth: int  # octree depth of the occluder nodes used
     cull_depth: int  # octree depth of the nodes tested and extracted
     max_depth: int  # octree depth of the single-cell leaves
@@ -123,6 +123,7 @@ class IsoStats(TypedDict):
     readback_ms: float  # ms, wall time to copy image and depth back
     cache_bytes: int  # bytes the renderer's isosurface caches hold after the frame (<= its iso_cache_budget)
     gpu_cache_bytes: int  # bytes of the cached patches kept on the GPU between frames (<= about 2 x their own)
+    gpu_contour_bytes: int  # bytes of the implicit walk's contour bricks on the GPU (surface bricks' samples; or 0)
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

@@ -22,7 +22,9 @@ struct Globals {
 // marks the cells across it (iso/seen.rs), so rounding never skips one. A cull node is visible
 // when one of its cells is seen (counted on the CPU).
 // Classes (`node_info`): 0 = may hold surface (passable), 1 = Below, 2 = Above, 3 = has a NaN
-// sample (outside the domain: resets the walk).
+// sample (outside the domain: resets the walk). With single cells the faces the ray crosses
+// count too: a uniform face (its corners all below or above) by its class bits, any face point
+// by the face's contour when the samples are bound (`contour_side`).
 struct MapParams {
     // The pixel's ray, affine in its NDC (x, y), built in f64 on the host: origin on the near
     // plane `ray_o + x ray_ox + y ray_oy`, direction `ray_d + x ray_dx + y ray_dy`.
@@ -46,17 +48,26 @@ struct MapParams {
     size: vec4<u32>,
     // xyz: occluder nodes per axis; w: unused.
     occ_dims: vec4<u32>,
-    // Unused (the cull nodes are counted on the CPU).
-    cull_dims: vec4<u32>,
+    // The faces' contours (single cells, `CONTOURS`): x = where the sample blocks start in
+    // `contour_data` (the walk finds the side of the surface of every face point it crosses in a
+    // brick that holds surface); y, z: contour bricks along x and y; w: the isovalue's bits (f32).
+    contour: vec4<u32>,
     // Skip bricks (iso/bricks.rs): x, y: log2 of the fine and the coarse bricks' size in occluder
     // nodes (x = 0: no skipping; the nodes' flags say which bricks are skippable); z, w: unused.
     bricks: vec4<u32>,
 }
 
+// Whether the walk places the faces' contours (`contour_data` bound): a pipeline constant, so the
+// walk without them carries none of their code (a CPU rasteriser runs it for every lane).
+override CONTOURS: bool = false;
+
 @group(1) @binding(0) var<uniform> mp: MapParams;
 @group(1) @binding(1) var<storage, read> classes: array<u32>;
 @group(1) @binding(2) var<storage, read_write> map_out: array<f32>;
 @group(1) @binding(3) var<storage, read_write> cells_seen: array<atomic<u32>>;
+// The contour bricks (iso/bricks.rs `contour_bricks`): per brick of 4³ cells (x fastest) the
+// index of its block of 5³ samples (f32 bits, x fastest) or 0xffffffff, then the blocks.
+@group(1) @binding(4) var<storage, read> contour_data: array<u32>;
 
 // Marks march cell `c` in `cells_seen` (4 bits per cell, 8 per word): bit 0 = seen (it may hold
 // surface and the ray entered it); bits 1-3 = a near event along x, y, z (the ray entered it
@@ -85,6 +96,90 @@ fn node_info(c: vec3<i32>) -> u32 {
     return (classes[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu;
 }
 
+// The side of the marching-cubes surface of point `uv` (in [0, 1]^2) of a cell face whose corners
+// (u, v) = (0, 0), (1, 0), (0, 1), (1, 1) have the values `f` minus the isovalue: 1 = below,
+// 2 = above, 0 = not known. A corner is above when its value is >= the isovalue (march/cases.rs).
+// The surface meets the face only along its contour: segments between the crossing points of
+// the face's edges, placed as the extraction places its vertices (`t = f_a / (f_a - f_b)` from
+// the lower corner). Known: the whole face when no edge crosses; the corner's side inside the
+// triangle a corner cuts off (both its edges cross: the odd corner of a face with one corner
+// unlike the others, or any corner of an ambiguous face, whose triangles do not depend on how
+// the extraction joins the face's centre); the rest of the face when one corner is cut off; each
+// side of the one segment across a face with two corners on each side. Not known: the middle
+// of an ambiguous face, a face with a corner at the isovalue (its vertices may sit on that
+// corner), or a point whose ray passes within `m` (grid units) of a segment's line: the
+// rasteriser's rounding may put its pixel on either side. (A ray that grazes the face passes
+// that near a segment far from where it meets the face: `ray` is its direction in grid units,
+// along u, v and the face's normal; a point `g` from the line within the face is `g |n| /
+// sqrt(n^2 + p^2)` from it across space, `n` and `p` the ray's components along the face's
+// normal and the line's normal in the face.)
+fn contour_side(f: vec4<f32>, uv: vec2<f32>, ray: vec3<f32>, m: f32) -> u32 {
+    let k = select(vec4<u32>(1u), vec4<u32>(2u), f >= vec4<f32>(0.0));
+    // The edges v = 0 (corners 0-1), v = 1 (2-3), u = 0 (0-2), u = 1 (1-3), from their lower corner.
+    let ea = vec4<f32>(f.x, f.z, f.x, f.y);
+    let eb = vec4<f32>(f.y, f.w, f.z, f.w);
+    let cr = (ea >= vec4<f32>(0.0)) != (eb >= vec4<f32>(0.0));
+    let t = select(vec4<f32>(0.5), ea / (ea - eb), cr);
+    let u = uv.x;
+    let v = uv.y;
+    // Each corner's triangle in coordinates mirrored to put the corner at the origin: signed
+    // distance from the segment between its crossings (negative on the corner's side).
+    let px = vec4<f32>(u, 1.0 - u, u, 1.0 - u);
+    let py = vec4<f32>(v, v, 1.0 - v, 1.0 - v);
+    let tx = vec4<f32>(t.x, 1.0 - t.x, t.y, 1.0 - t.y);
+    let ty = vec4<f32>(t.z, t.w, 1.0 - t.z, 1.0 - t.w);
+    // Each line as `G = 0` with `G` affine in (u, v) and gradient `q`: a point is known when
+    // `G^2 n^2 > m^2 (n^2 |q|^2 + (q . ray)^2)` (no root taken), on the side of `G`'s sign.
+    let n2 = ray.z * ray.z;
+    let m2 = m * m;
+    let g = px * ty + py * tx - tx * ty;
+    let qr = ty * vec4<f32>(ray.x, -ray.x, ray.x, -ray.x) + tx * vec4<f32>(ray.y, ray.y, -ray.y, -ray.y);
+    let far = g * g * n2 > m2 * (n2 * (tx * tx + ty * ty) + qr * qr);
+    let both = vec4<bool>(cr.x && cr.z, cr.x && cr.w, cr.y && cr.z, cr.y && cr.w);
+    let cut = select(vec4<u32>(0u), vec4<u32>(1u), both);
+    let inside = both & far & (g < vec4<f32>(0.0));
+    var r = select(select(select(select(0u, k.w, inside.w), k.z, inside.z), k.y, inside.y), k.x, inside.x);
+    // One corner cut off: beyond its segment lies the other side.
+    let odd = dot(cut, vec4<u32>(1u)) == 1u;
+    r = select(r, 3u - dot(cut, k), odd && any(both & far & (g > vec4<f32>(0.0))));
+    // Two corners on each side: one segment, from (0, t.z) to (1, t.w) or from (t.x, 0) to (t.y, 1).
+    let sv = t.w - t.z;
+    let su = t.y - t.x;
+    let gv = v - t.z - u * sv;
+    let gu = u - t.x - v * su;
+    let qv = ray.y - sv * ray.x;
+    let qu = ray.x - su * ray.y;
+    let far_v = gv * gv * n2 > m2 * (n2 * (1.0 + sv * sv) + qv * qv);
+    let far_u = gu * gu * n2 > m2 * (n2 * (1.0 + su * su) + qu * qu);
+    let across_v = cr.z && cr.w && !cr.x && !cr.y && far_v;
+    let across_u = cr.x && cr.y && !cr.z && !cr.w && far_u;
+    r = select(r, select(k.z, k.x, gv < 0.0), across_v);
+    r = select(r, select(k.y, k.x, gu < 0.0), across_u);
+    r = select(r, k.x, !any(cr));
+    return select(r, 0u, any(f == vec4<f32>(0.0)));
+}
+
+// The side of the surface (`contour_side`) of the point `gp` (grid units) of the face the walk
+// crossed along axis `a` into cell `c` (`up`: moving up that axis, so it is the cell's low face),
+// the ray's direction `dg` (grid units); 4 (unknown to this test) when the cell's brick holds no
+// passable cell: its faces are uniform (the class bits settle them) or touch NaN.
+fn face_side(c: vec3<i32>, a: i32, up: bool, gp: vec3<f32>, dg: vec3<f32>) -> u32 {
+    let b = (a + 1) % 3;
+    let e = (a + 2) % 3;
+    let cu = vec3<u32>(c);
+    let cb = cu >> vec3<u32>(2u);
+    let block = contour_data[(cb.z * mp.contour.z + cb.y) * mp.contour.y + cb.x];
+    // The face's low corner in the brick's block of 5³ samples.
+    var q = cu & vec3<u32>(3u);
+    q[a] += select(1u, 0u, up);
+    let st = vec3<u32>(1u, 5u, 25u);
+    let i = mp.contour.x + select(block, 0u, block == 0xffffffffu) * 125u + dot(q, st);
+    let sample = vec4<u32>(contour_data[i], contour_data[i + st[b]], contour_data[i + st[e]], contour_data[i + st[b] + st[e]]);
+    let f = bitcast<vec4<f32>>(sample) - vec4<f32>(bitcast<f32>(mp.contour.w));
+    let side = contour_side(f, vec2<f32>(gp[b] - f32(c[b]), gp[e] - f32(c[e])), vec3<f32>(dg[b], dg[e], dg[a]), mp.hi.w);
+    return select(side, 4u, block == 0xffffffffu);
+}
+
 // Where the ray leaves cell `c` across each axis (the DDA's next crossings), `t0 + c dt` with the
 // ray's constants from `ray_exits`: a function of the cell alone, so a brick jump lands in the
 // state the cell-by-cell walk would reach, bit for bit. (Two per-ray vectors rather than the
@@ -104,7 +199,11 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
     // From the near plane along the pixel's ray (t = 0 at the near plane).
     let o = mp.ray_o.xyz + ndc.x * mp.ray_ox.xyz + ndc.y * mp.ray_oy.xyz;
     var d = mp.ray_d.xyz + ndc.x * mp.ray_dx.xyz + ndc.y * mp.ray_dy.xyz;
-    d = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
+    // Along an axis the ray runs parallel to, it never leaves its cell (below: the crossings at
+    // 1e30); a tiny direction would make a ray lying on a plane, say the box's top face in an
+    // axis-aligned orthographic view, leave its cell at once and the walk end there.
+    let parallel = abs(d) < vec3<f32>(1e-30);
+    d = select(d, vec3<f32>(1e-30), parallel);
     let inv = 1.0 / d;
     // The walk covers the box widened by the marking margin: a ray that passes just outside it
     // still marks the border cells (the rasteriser's snapping may cover its pixel with their
@@ -126,9 +225,14 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         let stp = select(vec3<i32>(-1), vec3<i32>(1), d > vec3<f32>(0.0));
         // exits(c) = (lo + (c + ahead) node - o) inv, ahead = 1 along the axes the ray advances.
         let ahead = select(vec3<f32>(0.0), vec3<f32>(1.0), d > vec3<f32>(0.0));
-        let xt0 = (mp.lo.xyz + ahead * mp.node.xyz - o) * inv;
-        let xdt = mp.node.xyz * inv;
+        let xt0 = select((mp.lo.xyz + ahead * mp.node.xyz - o) * inv, vec3<f32>(1e30), parallel);
+        let xdt = select(mp.node.xyz * inv, vec3<f32>(0.0), parallel);
         var tnext = exits(c, xt0, xdt);
+        // The ray in grid units (march cells): `gp = og + t dg`.
+        let dg = d / mp.node.xyz;
+        let og = (o - mp.lo.xyz) / mp.node.xyz;
+        // The box's far planes in grid units (march cells may overhang it).
+        let ext = (mp.hi.xyz - mp.lo.xyz) / mp.node.xyz;
         var last = 0u;
         var t_enter = t0;
         var crossed = -1;
@@ -146,29 +250,46 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             // marked: this cell lies behind it and is not marked. The face's class: uniform (bit
             // 4 + axis of the node that owns it as its low face) and the side of that node's low
             // corner, which every one of its low faces holds (bit 7).
-            let owner = select(prev_info, info, stp[clamp(crossed, 0, 2)] > 0);
-            let uniform = ((owner >> (4u + u32(clamp(crossed, 0, 2)))) & 1u) == 1u;
-            let face_seen = mp.size.z == 1u && stepped && uniform && t_enter > in0 && t_enter < in1;
-            let fk = select(0u, select(2u, 1u, (owner & 128u) != 0u), face_seen);
-            var stop = fk != 0u && last != 0u && last != fk;
+            let ax = clamp(crossed, 0, 2);
+            let up = stp[ax] > 0;
+            let owner = select(prev_info, info, up);
+            let uniform = ((owner >> (4u + u32(ax))) & 1u) == 1u;
+            let face_in = mp.size.z == 1u && stepped && t_enter > in0 && t_enter < in1;
+            let gp = fma(dg, vec3<f32>(t_enter), og);
+            var fk = select(0u, select(2u, 1u, (owner & 128u) != 0u), face_in && uniform);
+            // With the samples at hand, any face point's side (a mixed face's too): the walk stops
+            // right behind the surface instead of at the next uniform face.
+            if (CONTOURS && face_in) {
+                let side = face_side(c, ax, up, gp, dg);
+                fk = select(side, fk, side == 4u);
+            }
+            // The surface has a boundary on the box's faces, and a ray within rounding distance
+            // of it may be drawn past it: no proof ends at a point within the margin of a box
+            // face, and none starts before a cell that may hold surface entered there. (A ray's
+            // distance to a plane is linear, so a crossing that near a box face lies in a cell
+            // entered or left that near it; uniform cells hold no surface, so skip bricks stay
+            // exact.)
+            let at_box = any((abs(gp) < vec3<f32>(mp.hi.w)) | (abs(gp - ext) < vec3<f32>(mp.hi.w)));
+            var stop = fk != 0u && last != 0u && last != fk && !at_box;
             last = select(last, fk, fk != 0u);
             // Below / Above cells (uniform, NaN-free) hold no triangle: the others need their bit.
             // Where the entry point lies within `hi.w` of a grid plane other than the one just
             // crossed (whose other side the walk has marked), the ray may have skipped a cell
             // beside it by rounding: a near event, resolved on the CPU. (One mark per step and no
             // neighbour loop here: a CPU rasteriser runs every branch of the loop for every lane.)
-            let gp = (o + d * t_enter - mp.lo.xyz) / mp.node.xyz;
             let close = abs(gp - floor(gp + 0.5)) < vec3<f32>(mp.hi.w) & (vec3<i32>(0, 1, 2) != vec3<i32>(crossed));
             let nb = select(vec3<u32>(0u), vec3<u32>(2u, 4u, 8u), close);
             let bits = select(0u, 1u, (k == 0u || k == 3u) && !stop) | nb.x | nb.y | nb.z;
             if (bits != 0u) {
                 mark_cell(c, bits);
             }
-            // A NaN cell, or a cell met only in the margin outside the box, breaks every pair.
-            if (k == 3u || min(min(tnext.x, tnext.y), tnext.z) <= in0 || t_enter >= in1) {
+            // A NaN cell (or one next to NaN, `bricks::dilate_nan`), a cell that may hold surface
+            // entered within the margin of the box's faces, or one met only in the margin outside
+            // the box, breaks every pair.
+            if (k == 3u || (at_box && k == 0u) || min(min(tnext.x, tnext.y), tnext.z) <= in0 || t_enter >= in1) {
                 last = 0u;
             } else if (k != 0u) {
-                stop = stop || (last != 0u && last != k);
+                stop = stop || (last != 0u && last != k && !at_box);
                 last = k;
             }
             if (stop) {

@@ -388,6 +388,15 @@ impl MinMaxOctree {
         (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_faces(&self.values, self.samples, w))
     }
 
+    /// The walk's contour bricks ([`super::bricks::contour_bricks`]) with a block for each of
+    /// `bricks`, the nodes 2 levels above the cells that straddle the isovalue: a brick with a
+    /// passable cell has samples on both sides of it or at it, so its node straddles. (At most 4
+    /// cells per axis: the root, brick 0.)
+    pub fn contour_bricks(&self, bricks: &[NodeInfo]) -> (Vec<u32>, usize) {
+        let blocks: Vec<[u32; 3]> = bricks.iter().map(|n| [n.ix, n.iy, n.iz]).collect();
+        super::bricks::contour_bricks(&self.values, self.samples, &blocks)
+    }
+
     /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
     /// materialising the nodes (single-cell depths of a 128³ volume have 2 M of them).
     pub fn map_at_depth<T: Send>(&self, depth: u32, f: impl Fn(f32, f32, bool) -> T + Sync) -> Vec<T> {

@@ -52,12 +52,26 @@ pub(super) struct ClassGrid {
     pub(super) classes: Vec<u32>,
     /// Whether the nodes carry their low faces' classes (single cells, iso.wgsl `node_info`).
     pub(super) faces: bool,
+    /// Single cells: the contour bricks ([`super::bricks::contour_bricks`]) and where their blocks
+    /// start, when the walk places the faces' contours (`IsoOptions::face_contours`); `None` for
+    /// coarser nodes, without contours, or when they exceed one storage binding.
+    pub(super) contour: Option<(wgpu::Buffer, u32)>,
+    /// The `IsoOptions::face_contours` the grid was made for.
+    pub(super) contour_policy: Option<bool>,
 }
 
 impl ClassGrid {
     /// Packs `classes` (x fastest, then y, z; `dims` per axis) with their skip bricks' flags and
     /// their low `faces`' classes (single cells only), 2 to a word, and uploads them.
-    pub(super) fn new(d: &wgpu::Device, key: (u32, u32), dims: [u32; 3], classes: &[u8], faces: Option<&[u8]>) -> Self {
+    pub(super) fn new(
+        d: &wgpu::Device,
+        key: (u32, u32),
+        dims: [u32; 3],
+        classes: &[u8],
+        faces: Option<&[u8]>,
+        contour: Option<(Vec<u32>, usize)>,
+        contour_policy: Option<bool>,
+    ) -> Self {
         // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
         let n = classes
             .par_chunks(1 << 16)
@@ -71,8 +85,28 @@ impl ClassGrid {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
-        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, classes: pack2(classes), faces: faces.is_some() }
+        // (Without a brick that holds surface the walk has nothing to read.)
+        let contour = contour
+            .filter(|(words, at)| words.len() > *at)
+            .and_then(|(words, at)| Some((storage_buffer(d, "iso_contour", &words)?, at as u32)));
+        let faces = faces.is_some();
+        let classes = pack2(classes);
+        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, classes, faces, contour, contour_policy }
     }
+}
+
+/// A read-only storage buffer holding `words`, or `None` when they exceed one storage binding.
+fn storage_buffer(d: &wgpu::Device, label: &str, words: &[u32]) -> Option<wgpu::Buffer> {
+    let bytes = std::mem::size_of_val(words) as u64;
+    let limits = d.limits();
+    if bytes > limits.max_storage_buffer_binding_size || bytes > limits.max_buffer_size {
+        return None;
+    }
+    Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(words),
+        usage: wgpu::BufferUsages::STORAGE,
+    }))
 }
 
 /// Uniforms of the map pass (iso.wgsl `MapParams`).
@@ -93,7 +127,9 @@ pub(super) struct MapParams {
     pub(super) dims: [u32; 4],
     pub(super) size: [u32; 4],
     pub(super) occ_dims: [u32; 4],
-    pub(super) cull_dims: [u32; 4],
+    /// `[where the contour blocks start (0: none bound), bricks along x, along y, isovalue bits]`
+    /// (iso.wgsl `contour`).
+    pub(super) contour: [u32; 4],
     pub(super) bricks: [u32; 4],
 }
 
@@ -118,8 +154,11 @@ impl Space {
 pub(super) struct IsoPasses {
     pub(super) globals_layout: wgpu::BindGroupLayout,
     pub(super) map_layout: wgpu::BindGroupLayout,
-    pub(super) map_pipeline: wgpu::ComputePipeline,
+    /// The walk without and with the faces' contours.
+    pub(super) map_pipelines: [wgpu::ComputePipeline; 2],
     pub(super) surf_pipeline: wgpu::RenderPipeline,
+    /// Bound in place of the contour bricks when a class grid has none (a binding cannot be empty).
+    pub(super) no_contour: wgpu::Buffer,
 }
 
 fn buffer_entry(
@@ -154,6 +193,7 @@ impl IsoPasses {
                 buffer_entry(1, cs, ro),
                 buffer_entry(2, cs, rw),
                 buffer_entry(3, cs, rw),
+                buffer_entry(4, cs, ro),
             ],
         });
         let shader = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -186,13 +226,20 @@ impl IsoPasses {
             front_face: wgpu::FrontFace::Ccw,
             ..Default::default()
         };
-        let map_pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("iso_map"),
-            layout: Some(&pl_map),
-            module: &shader,
-            entry_point: Some("cs_map"),
-            compilation_options: Default::default(),
-            cache: None,
+        // The walk with and without the faces' contours (iso.wgsl `CONTOURS`): a CPU rasteriser
+        // pays for code that no lane runs, so the walk without them leaves it out.
+        let map_pipelines = [false, true].map(|contours| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(if contours { "iso_map_contours" } else { "iso_map" }),
+                layout: Some(&pl_map),
+                module: &shader,
+                entry_point: Some("cs_map"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("CONTOURS", f64::from(u8::from(contours)))],
+                    ..Default::default()
+                },
+                cache: None,
+            })
         });
         const SURF_ATTRS: [wgpu::VertexAttribute; 2] = [
             wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 },
@@ -227,7 +274,13 @@ impl IsoPasses {
             multiview_mask: None,
             cache: None,
         });
-        Self { globals_layout, map_layout, map_pipeline, surf_pipeline }
+        let no_contour = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso_no_contour"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        Self { globals_layout, map_layout, map_pipelines, surf_pipeline, no_contour }
     }
 }
 
@@ -321,6 +374,11 @@ pub(super) fn march(
             wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 3, resource: cells.as_entire_binding() },
+            // (Read by the walk with contours only.)
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: grid.contour.as_ref().map_or(&iso.no_contour, |c| &c.0).as_entire_binding(),
+            },
         ],
     });
     let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_march") });
@@ -328,7 +386,7 @@ pub(super) fn march(
     {
         let mut p =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_march"), timestamp_writes: None });
-        p.set_pipeline(&iso.map_pipeline);
+        p.set_pipeline(&iso.map_pipelines[usize::from(grid.contour.is_some())]);
         p.set_bind_group(0, globals_bg, &[]);
         p.set_bind_group(1, &bg, &[]);
         p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);

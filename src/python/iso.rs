@@ -205,6 +205,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("readbacks", s.readbacks)?;
     st.set_item("cache_bytes", s.cache_bytes)?;
     st.set_item("gpu_cache_bytes", s.gpu_cache_bytes)?;
+    st.set_item("gpu_contour_bytes", s.gpu_contour_bytes)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
@@ -246,6 +247,7 @@ fn render_isosurface<'py>(
             return_map,
             cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
             space_skipping: true,
+            face_contours: None,
             interrupt,
         };
         lock(r).render_isosurface(v, &tree, isovalue, c, &opts)
