@@ -539,8 +539,11 @@ impl IsoRenderer {
             stats.occluder_nodes_nan = grid.n_nan;
             // The walk steps through cells of the finer of the two depths.
             let md_march = occ_depth.max(cull_depth);
-            // Single cells as march cells: the walk places the contour of the faces it crosses.
-            let contour = grid.contour.as_ref().filter(|_| md_march == occ_depth);
+            // The walk places the contour of the faces it crosses (`passes::march` picks its
+            // pipeline by the same test): a grid has contour bricks only with single-cell
+            // occluders, whose cells the walk then steps through.
+            let contour = grid.contour.as_ref();
+            debug_assert!(contour.is_none() || md_march == occ_depth);
             let cell = (1u64 << (maxd - md_march)) as f64;
             let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
             let march_dims = tree.dims_at_depth(md_march).expect("depth checked");
