@@ -484,19 +484,13 @@ impl IsoRenderer {
                 // the samples of the bricks that hold surface, for the contours of mixed faces.
                 let faces = if occ_depth == tree.max_depth() { tree.leaf_faces(w) } else { None };
                 let contour = if faces.is_some() && policy != Some(false) {
-                    // (At the default cull depth the bricks are the candidate nodes themselves.)
+                    // (At the default cull depth the cache hands back the candidate nodes.)
                     let brick_depth = maxd.saturating_sub(CONTOUR_SHIFT);
-                    let own;
-                    let bricks = if cull_depth == brick_depth {
-                        &candidates
-                    } else {
-                        own = iso.straddling(tree, w, brick_depth, list_budget);
-                        &own
-                    };
+                    let bricks = iso.straddling(tree, w, brick_depth, list_budget);
                     let n = tree.dims_at_depth(brick_depth).expect("brick depth <= max depth");
                     let dense =
                         bricks.len() as f64 >= CONTOUR_MIN_DENSITY * n.iter().map(|&v| v as f64).product::<f64>();
-                    (policy == Some(true) || dense).then(|| tree.contour_bricks(bricks))
+                    (policy == Some(true) || dense).then(|| tree.contour_bricks(&bricks))
                 } else {
                     None
                 };
