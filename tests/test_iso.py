@@ -116,11 +116,11 @@ def test_sphere_back_half_culled_and_image_equal(renderer):
         back = side < -0.4
         assert back.sum() > 10
         assert not res.tile_drawn[back].any()
-        # Front nodes are drawn. A few may not be: rays stop right behind the surface they cross
-        # (a face's contour), so a node whose only triangles are slivers that cover no pixel
-        # centre is never entered; the image equality above shows that none of them is seen.
+        # Every front node with surface pixels in the reference is drawn. (The sphere's surface is
+        # sparse, so the walk places no contours; with them, rays stop right behind the surface
+        # and a node whose only triangles are slivers covering no pixel centre may go undrawn.)
         front = side > 0.3
-        assert res.tile_drawn[front].mean() > 0.95
+        assert res.tile_drawn[front].all()
         # The map never claims a depth nearer than the true surface.
         m = res.occlusion_map
         proven = np.isfinite(m)
