@@ -1,7 +1,7 @@
 //! The walk's view-independent inputs, computed on the CPU once per (isovalue, occluder depth):
-//! the class of every occluder node ([`node_classes`], [`leaf_classes`] for single cells) and the
-//! skip bricks built over them ([`brick_classes`]); and the occluder boxes themselves
-//! ([`occluder_nodes`], for inspection: the walk reads the classes).
+//! the class of every occluder node ([`node_classes`]; [`leaf_nodes`] for single cells, with
+//! their faces' classes) and the skip bricks built over them ([`brick_classes`]); and the
+//! occluder boxes themselves ([`occluder_nodes`], for inspection: the walk reads the classes).
 //!
 //! **Skip bricks.** A brick is a block of `2^s` occluder nodes per axis. Its class is Below (or
 //! Above) when every node of the brick *and of the one-node ring around it* (clipped to the grid)
@@ -22,9 +22,6 @@ pub(super) const CLASS_BELOW: u8 = 1;
 pub(super) const CLASS_ABOVE: u8 = 2;
 pub(super) const CLASS_NAN: u8 = 3;
 
-/// A brick reduction's mark for "not all of one class".
-const MIXED: u8 = u8::MAX;
-
 /// Bricks of the fine skip level: `2^FINE_SHIFT` occluder nodes per axis.
 pub(super) const FINE_SHIFT: u32 = 2;
 /// Bricks of the coarse skip level: `2^COARSE_SHIFT` occluder nodes per axis.
@@ -32,11 +29,12 @@ pub(super) const COARSE_SHIFT: u32 = 4;
 
 /// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
 /// (NaN-free by [`classify_range`]), NaN (any NaN sample: outside the domain), else passable.
-/// Single cells (`depth == tree.max_depth()`) go through [`leaf_classes`], the same classes
+/// Single cells (`depth == tree.max_depth()`) go through [`leaf_nodes`], the same classes
 /// straight from the samples.
 pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u8> {
     if depth == tree.max_depth() {
-        if let Some(c) = tree.leaf_classes(w) {
+        if let Some(mut c) = tree.leaf_nodes(w) {
+            c.iter_mut().for_each(|k| *k &= 3);
             return c;
         }
     }
@@ -85,75 +83,73 @@ pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>
     (below, above)
 }
 
-/// The class of every cell of a volume with `samples` samples per axis (x fastest), from its 8
-/// corners: NaN when one is NaN, Below when all are `< w`, Above when all are `> w`, else
-/// passable (what [`node_classes`] gives at the leaves, row by row instead of cell by cell).
-pub fn leaf_classes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
-    let [nx, ny, nz] = samples;
-    let (cx, cy, cz) = (nx - 1, ny - 1, nz - 1);
-    // Per sample: bit 0 below, bit 1 above, bit 2 NaN.
-    let code = |v: f32| (v < w) as u8 | ((v > w) as u8) << 1 | (v.is_nan() as u8) << 2;
-    let mut out = vec![0u8; cx * cy * cz];
-    out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
-        let (k, j) = (r / cy, r % cy);
-        let row = |z: usize, y: usize| &values[(z * ny + y) * nx..][..nx];
-        let (r0, r1, r2, r3) = (row(k, j), row(k, j + 1), row(k + 1, j), row(k + 1, j + 1));
-        // Per column of 4 samples: the AND and the OR of their codes (vectorisable).
-        let mut and4 = vec![0u8; nx];
-        let mut or4 = vec![0u8; nx];
-        for x in 0..nx {
-            let c = [code(r0[x]), code(r1[x]), code(r2[x]), code(r3[x])];
-            and4[x] = c[0] & c[1] & c[2] & c[3];
-            or4[x] = c[0] | c[1] | c[2] | c[3];
+/// The class and the low faces of every cell of a volume with `samples` samples per axis (x
+/// fastest), one byte per cell as the walk reads it (iso.wgsl `node_info`, without the skip
+/// bricks' bits 2-3, which [`pack_nodes`] adds):
+/// - bits 0-1, the class from the cell's 8 corners: NaN when one is NaN, Below when all are `< w`,
+///   Above when all are `> w`, else passable (what [`node_classes`] gives at the leaves);
+/// - bits 4, 5, 6: the cell's low x, y, z face (the face at its lowest x, y, z) is uniform, its 4
+///   corners all `< w` or all `> w`; bit 7: the cell's low corner (on all three faces) is `< w`,
+///   so a uniform face is Below or Above by that corner. A face whose corners are all on one side
+///   has no crossing edge, so no marching-cubes triangle touches it: the whole face lies on that
+///   side of the surface, as a Below / Above cell does (the walk's finer occluders, see
+///   `super::render`). Corners that are NaN or equal to `w` make no face uniform.
+///
+/// One pass over the samples, in slabs of a few layers of cells: each sample is coded once per
+/// slab (and the codes of two sample layers stay in cache), where the class and the faces used to
+/// be two passes coding each sample eight times.
+pub fn leaf_nodes(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
+    let [nx, ny, _] = samples;
+    let (cx, cy, cz) = (nx - 1, ny - 1, samples[2] - 1);
+    // Per sample: bit 0 below, bit 1 above, bit 2 NaN (a NaN is neither below nor above).
+    let code = |v: f32| (v < w) as u32 | ((v > w) as u32) << 1 | (v.is_nan() as u32) << 2;
+    let coded = |z: usize, out: &mut [u8]| {
+        for (o, &v) in out.iter_mut().zip(&values[z * nx * ny..][..nx * ny]) {
+            *o = code(v) as u8;
         }
-        for (x, o) in row_out.iter_mut().enumerate() {
-            let (a, r) = (and4[x] & and4[x + 1], or4[x] | or4[x + 1]);
-            *o = if r & 4 != 0 {
-                CLASS_NAN
-            } else if a & 1 != 0 {
-                CLASS_BELOW
-            } else if a & 2 != 0 {
-                CLASS_ABOVE
-            } else {
-                CLASS_PASS
-            };
+    };
+    const SLAB: usize = 4;
+    let mut out = vec![0u8; cx * cy * cz];
+    out.par_chunks_mut(cx * cy * SLAB).enumerate().for_each(|(slab, cells)| {
+        // The codes of the sample layers below and above the layer of cells.
+        let (mut lo, mut hi) = (vec![0u8; nx * ny], vec![0u8; nx * ny]);
+        let mut cols = vec![0u32; nx];
+        coded(slab * SLAB, &mut lo);
+        for (dk, layer) in cells.chunks_mut(cx * cy).enumerate() {
+            coded(slab * SLAB + dk + 1, &mut hi);
+            for (j, row_out) in layer.chunks_mut(cx).enumerate() {
+                // The sample rows (k, j), (k, j + 1), (k + 1, j), (k + 1, j + 1) around the row.
+                let (c0, c1) = (&lo[j * nx..][..nx], &lo[(j + 1) * nx..][..nx]);
+                let (c2, c3) = (&hi[j * nx..][..nx], &hi[(j + 1) * nx..][..nx]);
+                // Per column of 4 samples (x): byte 0 the AND of their codes (the low x face of
+                // the cell at x), byte 1 that of the samples at y = j, byte 2 at z = k, bits
+                // 24-26 the OR, bit 31 the below bit of the sample (x, j, k); a cell combines two
+                // columns. (Zipped slices of one length: no bounds checks; the loops vectorise.)
+                let quads = c0.iter().zip(c1).zip(c2.iter().zip(c3));
+                for (col, ((&a, &b), (&c, &d))) in cols.iter_mut().zip(quads) {
+                    let (a, b, c, d) = (a as u32, b as u32, c as u32, d as u32);
+                    *col = (a & b & c & d) | (a & c) << 8 | (a & b) << 16 | (a | b | c | d) << 24 | (a & 1) << 31;
+                }
+                // Faces: x = (x, j..j+1, k..k+1); y = (x..x+1, j, k..k+1); z = (x..x+1,
+                // j..j+1, k). A NaN's code has neither bit 0 nor 1: the AND of a cell with one
+                // is 0 there.
+                let some = |v: u32| (v | v >> 1) & 1;
+                for ((o, &l), &h) in row_out.iter_mut().zip(&cols[..cx]).zip(&cols[1..]) {
+                    let and = l & h;
+                    let nan = ((l | h) >> 26) & 1;
+                    let class = (and & 3) | (nan * 3);
+                    let faces = some(l & 3) | some(and >> 8 & 3) << 1 | some(and >> 16 & 3) << 2 | (l >> 31) << 3;
+                    *o = (class | faces << 4) as u8;
+                }
+            }
+            std::mem::swap(&mut lo, &mut hi);
         }
     });
     out
 }
 
-/// Every cell's three low faces (the faces at its lowest x, y and z) of a volume with `samples`
-/// samples per axis (x fastest): bits 0, 1, 2 set when that face's 4 corners are all `< w` or
-/// all `> w`, bit 3 when the cell's low corner (on all three faces) is `< w`: a face's class is
-/// then Below or Above by that corner. A face whose corners are all on one side has no crossing
-/// edge, so no marching-cubes triangle touches it: the whole face lies on that side of the
-/// surface, as a Below / Above cell does (the walk's finer occluders, see `super::render`).
-/// Corners that are NaN or equal to `w` make no face uniform.
-pub fn leaf_faces(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
-    let [nx, ny, nz] = samples;
-    let (cx, cy, cz) = (nx - 1, ny - 1, nz - 1);
-    // Per sample: bit 0 below, bit 1 above (neither for NaN or w itself).
-    let code = |v: f32| (v < w) as u8 | ((v > w) as u8) << 1;
-    let mut out = vec![0u8; cx * cy * cz];
-    out.par_chunks_mut(cx).enumerate().for_each(|(r, row_out)| {
-        let (k, j) = (r / cy, r % cy);
-        // The codes of the 4 sample rows around this row of cells (vectorisable).
-        let codes =
-            |z: usize, y: usize| -> Vec<u8> { values[(z * ny + y) * nx..][..nx].iter().map(|&v| code(v)).collect() };
-        let (c0, c1, c2) = (codes(k, j), codes(k, j + 1), codes(k + 1, j));
-        let c3 = codes(k + 1, j + 1);
-        for (x, o) in row_out.iter_mut().enumerate() {
-            // x face: (x, j..j+1, k..k+1); y face: (x..x+1, j, k..k+1); z face: (x..x+1, j..j+1, k).
-            let fx = c0[x] & c1[x] & c2[x] & c3[x];
-            let fy = c0[x] & c0[x + 1] & c2[x] & c2[x + 1];
-            let fz = c0[x] & c0[x + 1] & c1[x] & c1[x + 1];
-            *o = (fx != 0) as u8 | ((fy != 0) as u8) << 1 | ((fz != 0) as u8) << 2 | (c0[x] & 1) << 3;
-        }
-    });
-    out
-}
-
-/// Makes every node of `classes` (dims `dims`, x fastest) that shares a face, an edge or a corner
+/// Makes every node of `classes` (dims `dims`, x fastest; the class in bits 0-1, the other bits
+/// are kept) that shares a face, an edge or a corner
 /// with a NaN node NaN too, for the walk: the surface has a boundary on the faces of NaN nodes,
 /// and a ray that passes within rounding distance of that boundary may be drawn past it, so a
 /// proof (a segment from one side of the surface to the other) must keep a node away from NaN.
@@ -162,12 +158,14 @@ pub fn leaf_faces(values: &[f32], samples: [usize; 3], w: f32) -> Vec<u8> {
 /// Returns how many nodes became NaN.
 pub fn dilate_nan(classes: &mut [u8], dims: [u32; 3]) -> usize {
     let d = dims.map(|v| v as usize);
-    if !classes.contains(&CLASS_NAN) {
+    let nan = |k: u8| k & 3 == CLASS_NAN;
+    // (A fold rather than `any`, which stops early but does not vectorise.)
+    if !classes.par_chunks(1 << 16).any(|c| c.iter().fold(false, |a, &k| a | nan(k))) {
         return 0;
     }
     // Separable: a node is within one node of a NaN node (26-neighbourhood) iff it is along x of
     // a node within one along y of a node within one along z of one.
-    let mut m: Vec<bool> = classes.iter().map(|&k| k == CLASS_NAN).collect();
+    let mut m: Vec<bool> = classes.par_iter().map(|&k| nan(k)).collect();
     let strides = [1, d[0], d[0] * d[1]];
     for (a, &st) in strides.iter().enumerate() {
         let src = m.clone();
@@ -177,9 +175,9 @@ pub fn dilate_nan(classes: &mut [u8], dims: [u32; 3]) -> usize {
         });
     }
     let mut n = 0;
-    for (k, &nan) in classes.iter_mut().zip(&m) {
-        if nan && *k != CLASS_NAN {
-            *k = CLASS_NAN;
+    for (k, &to_nan) in classes.iter_mut().zip(&m) {
+        if to_nan && !nan(*k) {
+            *k |= CLASS_NAN;
             n += 1;
         }
     }
@@ -225,98 +223,153 @@ pub fn contour_bricks(values: &[f32], samples: [usize; 3], blocks: &[[u32; 3]]) 
     (words, nb)
 }
 
-/// `dst[i]` stays where it equals `src[i]`, else becomes [`MIXED`].
-fn common(dst: &mut [u8], src: &[u8]) {
-    for (a, &b) in dst.iter_mut().zip(src) {
-        *a = if *a == b { *a } else { MIXED };
-    }
+/// ORs `src` into `dst`.
+fn or_into(dst: &mut [u8], src: &[u8]) {
+    dst.iter_mut().zip(src).for_each(|(a, &b)| *a |= b);
 }
 
 /// Reduces `v` (dims `d`, x fastest) along `axis` to blocks of `b` entries, each widened by
-/// `ring` entries on both sides (clipped): the common value of the block, or [`MIXED`].
-fn reduce_axis(v: &[u8], d: [usize; 3], axis: usize, b: usize, ring: usize) -> (Vec<u8>, [usize; 3]) {
+/// `ring` entries on both sides (clipped): the OR of the block's entries, each taken as
+/// `bit(entry)`.
+fn reduce_axis(
+    v: &[u8],
+    d: [usize; 3],
+    axis: usize,
+    b: usize,
+    ring: usize,
+    bit: impl Fn(u8) -> u8 + Sync,
+) -> (Vec<u8>, [usize; 3]) {
     let mut od = d;
     od[axis] = d[axis].div_ceil(b);
     let range = |bi: usize| (bi * b).saturating_sub(ring)..(bi * b + b + ring).min(d[axis]);
     let mut out = vec![0u8; od[0] * od[1] * od[2]];
     let row = |y: usize, z: usize| &v[(z * d[1] + y) * d[0]..][..d[0]];
     // One output row (along x) at a time.
-    out.par_chunks_mut(od[0]).enumerate().for_each(|(i, o)| {
-        let (y, z) = (i % od[1], i / od[1]);
-        match axis {
-            0 => {
-                let r = row(y, z);
-                for (bi, o) in o.iter_mut().enumerate() {
-                    let mut x = range(bi);
-                    let first = r[x.next().unwrap()];
-                    *o = if x.all(|x| r[x] == first) { first } else { MIXED };
+    out.par_chunks_mut(od[0]).enumerate().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(m, wide), (i, o)| {
+            let (y, z) = (i % od[1], i / od[1]);
+            match axis {
+                0 => {
+                    // Along x in whole-row passes (a brick at a time runs a short loop per brick):
+                    // the row's bits, widened by the ring (each entry ORed with its neighbours),
+                    // then ORed over each brick's run.
+                    m.clear();
+                    m.extend(row(y, z).iter().map(|&k| bit(k)));
+                    for _ in 0..ring {
+                        wide.clear();
+                        wide.extend_from_slice(m);
+                        let n = m.len();
+                        or_into(&mut wide[1..], &m[..n - 1]);
+                        or_into(&mut wide[..n - 1], &m[1..]);
+                        std::mem::swap(m, wide);
+                    }
+                    let or = |run: &[u8]| run.iter().fold(0, |a, &k| a | k);
+                    if b == 4 {
+                        let (quads, tail) = m.as_chunks::<4>();
+                        o.iter_mut().zip(quads).for_each(|(o, q)| *o = q[0] | q[1] | q[2] | q[3]);
+                        if !tail.is_empty() {
+                            o[quads.len()] = or(tail);
+                        }
+                    } else {
+                        o.iter_mut().zip(m.chunks(b)).for_each(|(o, run)| *o = or(run));
+                    }
                 }
+                1 => range(y).for_each(|y| o.iter_mut().zip(row(y, z)).for_each(|(a, &k)| *a |= bit(k))),
+                _ => range(z).for_each(|z| o.iter_mut().zip(row(y, z)).for_each(|(a, &k)| *a |= bit(k))),
             }
-            1 => {
-                let mut ys = range(y);
-                o.copy_from_slice(row(ys.next().unwrap(), z));
-                ys.for_each(|y| common(o, row(y, z)));
-            }
-            _ => {
-                let mut zs = range(z);
-                o.copy_from_slice(row(y, zs.next().unwrap()));
-                zs.for_each(|z| common(o, row(y, z)));
-            }
-        }
-    });
+        },
+    );
     (out, od)
 }
 
-/// Reduces `v` (dims `d`) to blocks of `b`³ widened by `ring` (see [`reduce_axis`]).
-fn reduce(v: &[u8], d: [usize; 3], b: usize, ring: usize) -> (Vec<u8>, [usize; 3]) {
-    let (x, dx) = reduce_axis(v, d, 0, b, ring);
-    let (y, dy) = reduce_axis(&x, dx, 1, b, ring);
-    reduce_axis(&y, dy, 2, b, ring)
+/// Reduces `v` (dims `d`) to blocks of `b`³ widened by `ring`: the OR of `bit(entry)` over each
+/// block (see [`reduce_axis`]).
+fn reduce(
+    v: &[u8],
+    d: [usize; 3],
+    b: usize,
+    ring: usize,
+    bit: impl Fn(u8) -> u8 + Sync + Copy,
+) -> (Vec<u8>, [usize; 3]) {
+    let (x, dx) = reduce_axis(v, d, 0, b, ring, bit);
+    let (y, dy) = reduce_axis(&x, dx, 1, b, ring, |k| k);
+    reduce_axis(&y, dy, 2, b, ring, |k| k)
 }
 
-/// The skip bricks of the class grid `classes` (dims `dims`) at two levels: bricks of
-/// `2^fine` and `2^coarse` nodes per axis (`coarse > fine`), each Below / Above when it and its
-/// one-node ring are all of that class, else 0. Returns the two grids (x fastest) and their dims.
+/// The skip bricks of the class grid `classes` (dims `dims`; the class in bits 0-1, the other
+/// bits ignored) at two levels: bricks of `2^fine` and `2^coarse` nodes per axis (`coarse >
+/// fine`), each Below / Above when it and its one-node ring are all of that class, else 0.
+/// Returns the two grids (x fastest) and their dims.
 pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> [(Vec<u8>, [u32; 3]); 2] {
     let d = dims.map(|v| v as usize);
-    let (f, fd) = reduce(classes, d, 1 << fine, 1);
+    // The classes present in each brick, as a bitmask (bit k: class k): separable, an OR.
+    let (f, fd) = reduce(classes, d, 1 << fine, 1, |k| 1 << (k & 3));
     // A coarse brick's ring is the union of its fine bricks' rings: reduce without widening.
-    let (c, cd) = reduce(&f, fd, 1 << (coarse - fine), 0);
-    let clean = |v: Vec<u8>| -> Vec<u8> {
-        v.into_iter().map(|k| if k == CLASS_BELOW || k == CLASS_ABOVE { k } else { 0 }).collect()
+    let (c, cd) = reduce(&f, fd, 1 << (coarse - fine), 0, |k| k);
+    let class = |v: Vec<u8>| -> Vec<u8> {
+        let (below, above) = (1 << CLASS_BELOW, 1 << CLASS_ABOVE);
+        v.into_par_iter()
+            .map(|m| {
+                if m == below {
+                    CLASS_BELOW
+                } else if m == above {
+                    CLASS_ABOVE
+                } else {
+                    0
+                }
+            })
+            .collect()
     };
-    [(clean(f), fd.map(|v| v as u32)), (clean(c), cd.map(|v| v as u32))]
+    [(class(f), fd.map(|v| v as u32)), (class(c), cd.map(|v| v as u32))]
 }
 
-/// The nodes as the walk reads them (iso.wgsl `node_info`): per node of `classes` (dims `dims`,
-/// x fastest), one byte: its class (bits 0-1); bit 2 set when its fine skip brick (`2^FINE_SHIFT`
-/// nodes per axis, [`brick_classes`]) is skippable, bit 3 when its coarse brick is too (a
-/// skippable brick's class is that of each of its nodes); bits 4-7 its low faces (`faces`,
-/// [`leaf_faces`]: single-cell nodes only; 0 without). Padded with zeros to whole u32 words, which
-/// the walk reads (node `i` in byte `i % 4` of word `i / 4`): one read per step for all.
-pub(super) fn pack_nodes(classes: &[u8], dims: [u32; 3], faces: Option<&[u8]>) -> Vec<u8> {
-    let [(fine, fd), (coarse, cd)] = brick_classes(classes, dims, FINE_SHIFT, COARSE_SHIFT);
+/// Completes the nodes as the walk reads them (iso.wgsl `node_info`), in place: `nodes` (dims
+/// `dims`, x fastest) holds one byte per node with its class in bits 0-1, bits 2-3 clear, and
+/// its low faces in bits 4-7 ([`leaf_nodes`]: single-cell nodes only; 0 without); this sets bit 2
+/// when the node's fine skip brick (`2^FINE_SHIFT` nodes per axis, [`brick_classes`]) is
+/// skippable, bit 3 when its coarse brick is too (a skippable brick's class is that of each of
+/// its nodes). The walk reads node `i` in byte `i % 4` of word `i / 4`: one read per step for
+/// all (the upload pads the last word).
+pub(super) fn pack_nodes(nodes: &mut [u8], dims: [u32; 3]) {
+    let [(fine, fd), (coarse, cd)] = brick_classes(nodes, dims, FINE_SHIFT, COARSE_SHIFT);
     let [nx, ny] = [dims[0] as usize, dims[1] as usize];
-    let mut out = vec![0u8; classes.len().div_ceil(4) * 4];
-    out[..classes.len()].par_chunks_mut(nx).enumerate().for_each(|(r, row)| {
+    nodes.par_chunks_mut(nx).enumerate().for_each(|(r, row)| {
         let (y, z) = (r % ny, r / ny);
         let start = |bd: [u32; 3], s: u32| ((z >> s) * bd[1] as usize + (y >> s)) * bd[0] as usize;
         let f = &fine[start(fd, FINE_SHIFT)..][..fd[0] as usize];
         let c = &coarse[start(cd, COARSE_SHIFT)..][..cd[0] as usize];
-        let cls = &classes[r * nx..][..nx];
-        for (x, o) in row.iter_mut().enumerate() {
-            let fs = f[x >> FINE_SHIFT] != 0;
-            let cs = fs && c[x >> COARSE_SHIFT] != 0;
-            let face = faces.map_or(0, |v| v[r * nx + x] & 15);
-            *o = (cls[x] & 3) | (fs as u8) << 2 | (cs as u8) << 3 | face << 4;
+        // A fine brick's run of nodes along x at a time.
+        for (b, run) in row.chunks_mut(1 << FINE_SHIFT).enumerate() {
+            let fs = f[b] != 0;
+            let cs = fs && c[b >> (COARSE_SHIFT - FINE_SHIFT)] != 0;
+            let bits = (fs as u8) << 2 | (cs as u8) << 3;
+            run.iter_mut().for_each(|o| *o |= bits);
+        }
+    });
+}
+
+/// Packs the 2-bit values in bits 0-1 of `v` (the other bits ignored) 16 to a little-endian u32
+/// word (value `i` in bits `2 (i % 16)` of word `i / 16`).
+pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
+    // 8 values at a time: their bytes masked to 2 bits, then gathered pairwise into 16 bits.
+    let gather8 = |b: &[u8]| {
+        let mut x = u64::from_le_bytes(b.try_into().unwrap()) & 0x0303_0303_0303_0303;
+        x = (x | x >> 6) & 0x000f_000f_000f_000f;
+        x = (x | x >> 12) & 0x0000_00ff_0000_00ff;
+        ((x | x >> 24) & 0xffff) as u32
+    };
+    let mut out = vec![0u32; v.len().div_ceil(16)];
+    out.par_chunks_mut(1 << 12).zip(v.par_chunks(16 << 12)).for_each(|(o, c)| {
+        let mut words = c.chunks_exact(16);
+        for (w, s) in o.iter_mut().zip(&mut words) {
+            *w = gather8(&s[..8]) | gather8(&s[8..]) << 16;
+        }
+        if let Some(w) = o.get_mut(c.len() / 16) {
+            *w = words.remainder().iter().enumerate().fold(0u32, |w, (i, &k)| w | (k as u32 & 3) << (2 * i));
         }
     });
     out
-}
-
-/// Packs 2-bit values 16 to a little-endian u32 word (value `i` in bits `2 (i % 16)` of word `i / 16`).
-pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
-    v.par_chunks(16).map(|c| c.iter().enumerate().fold(0u32, |w, (i, &k)| w | (k as u32 & 3) << (2 * i))).collect()
 }
 
 /// The class (`CLASS_*`) of node `p` of the classes packed by [`pack2`] (grid `dims`).
@@ -380,7 +433,7 @@ mod tests {
     }
 
     #[test]
-    fn leaf_classes_match_the_octree() {
+    fn leaf_node_classes_match_the_octree() {
         let mut vol = super::super::sphere_field(13, 0.5);
         let mut v: Vec<f32> = vol.values.to_vec();
         for i in (0..v.len()).step_by(211) {
@@ -396,13 +449,14 @@ mod tests {
                 Class::Above => CLASS_ABOVE,
                 _ => CLASS_PASS,
             });
-            assert_eq!(leaf_classes(&vol.values, [vol.nx, vol.ny, vol.nz], w), slow);
+            let leaves = leaf_nodes(&vol.values, [vol.nx, vol.ny, vol.nz], w);
+            assert_eq!(leaves.iter().map(|&k| k & 15).collect::<Vec<_>>(), slow, "classes, bits 2-3 clear");
             assert_eq!(node_classes(&tree, w, md), slow);
         }
     }
 
     #[test]
-    fn leaf_faces_match_their_corners() {
+    fn leaf_node_faces_match_their_corners() {
         let mut vol = super::super::sphere_field(11, 0.5);
         let mut v: Vec<f32> = vol.values.to_vec();
         for i in (0..v.len()).step_by(97) {
@@ -413,8 +467,8 @@ mod tests {
         let (nx, ny, nz) = (vol.nx, vol.ny, vol.nz);
         let s = |x: usize, y: usize, z: usize| vol.values[(z * ny + y) * nx + x];
         for w in [0.0f32, 0.3] {
-            let got = leaf_faces(&vol.values, [nx, ny, nz], w);
-            let cls = leaf_classes(&vol.values, [nx, ny, nz], w);
+            let leaves = leaf_nodes(&vol.values, [nx, ny, nz], w);
+            let (got, cls): (Vec<u8>, Vec<u8>) = leaves.iter().map(|&k| (k >> 4, k & 3)).unzip();
             let class = |c: [f32; 4]| {
                 if c.iter().all(|&v| v < w) {
                     1
@@ -424,7 +478,7 @@ mod tests {
                     0
                 }
             };
-            // A face's class from leaf_faces' bits: uniform, and the side of the low corner.
+            // A face's class from leaf_nodes' bits: uniform, and the side of the low corner.
             let decode = |b: u8, a: u32| match (b >> a & 1, b >> 3 & 1) {
                 (0, _) => 0,
                 (_, 1) => 1,
@@ -478,7 +532,11 @@ mod tests {
         c[idx(6, 5, 4)] = CLASS_NAN;
         c[idx(4, 0, 0)] = CLASS_PASS;
         let orig = c.clone();
+        // Bits 4-7 (a leaf's faces) ride along untouched.
+        let mut with_faces: Vec<u8> = c.iter().enumerate().map(|(i, &k)| k | ((i % 16) as u8) << 4).collect();
         let changed = dilate_nan(&mut c, d);
+        assert_eq!(dilate_nan(&mut with_faces, d), changed);
+        assert!(with_faces.iter().enumerate().all(|(i, &k)| k == c[i] | ((i % 16) as u8) << 4));
         let mut expect = 0;
         for z in 0..d[2] {
             for y in 0..d[1] {
@@ -514,7 +572,7 @@ mod tests {
                 }
             })
             .collect();
-        let classes = leaf_classes(&values, s, 0.0);
+        let classes: Vec<u8> = leaf_nodes(&values, s, 0.0).iter().map(|&k| k & 3).collect();
         let passable = |bx: usize, by: usize, bz: usize| {
             (0..4).any(|z| {
                 (0..4).any(|y| {
@@ -565,9 +623,9 @@ mod tests {
             (0..d[0] * d[1] * d[2]).map(|i| if i / (d[0] * d[1]) < 10 { CLASS_BELOW } else { CLASS_ABOVE }).collect();
         v[(30 * d[1] + 5) * d[0] + 5] = CLASS_PASS;
         let dims = d.map(|x| x as u32);
-        let faces: Vec<u8> = (0..v.len()).map(|i| (i % 16) as u8).collect();
-        let p = pack_nodes(&v, dims, Some(&faces));
-        assert_eq!(p.len(), v.len().div_ceil(4) * 4);
+        // Faces in bits 4-7 (pack_nodes keeps them, and reads only the class bits).
+        let mut p: Vec<u8> = v.iter().enumerate().map(|(i, &k)| k | ((i % 16) as u8) << 4).collect();
+        pack_nodes(&mut p, dims);
         let fine = brute(&v, d, FINE_SHIFT);
         let coarse = brute(&v, d, COARSE_SHIFT);
         let at = |b: &[u8], s: u32, i: usize| {
@@ -584,8 +642,9 @@ mod tests {
             seen[1] += c as u32;
         }
         assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
-        assert_eq!(v.len() % 4, 1);
-        assert_eq!(p[v.len()..], [0, 0, 0], "zeros past the last node");
+        assert_ne!(v.len() % 16, 0, "pack2's last word is partial");
+        // pack2 reads the class bits of the packed nodes as of the classes alone.
+        assert_eq!(pack2(&p), pack2(&v));
         let q = pack2(&v);
         for (i, &k) in v.iter().enumerate() {
             assert_eq!(

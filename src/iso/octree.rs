@@ -376,16 +376,11 @@ impl MinMaxOctree {
             .collect()
     }
 
-    /// The map pass's class of every single cell at isovalue `w` (see `super::bricks`), straight
-    /// from the samples; `None` when the leaves are stored levels (then use [`Self::map_at_depth`]).
-    pub fn leaf_classes(&self, w: f32) -> Option<Vec<u8>> {
-        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_classes(&self.values, self.samples, w))
-    }
-
-    /// The classes of every single cell's low faces at isovalue `w` ([`super::bricks::leaf_faces`]);
-    /// `None` when the leaves are stored levels.
-    pub fn leaf_faces(&self, w: f32) -> Option<Vec<u8>> {
-        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_faces(&self.values, self.samples, w))
+    /// The map pass's class and low faces of every single cell at isovalue `w`
+    /// ([`super::bricks::leaf_nodes`]), straight from the samples; `None` when the leaves are
+    /// stored levels (then use [`Self::map_at_depth`]).
+    pub fn leaf_nodes(&self, w: f32) -> Option<Vec<u8>> {
+        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
     }
 
     /// The walk's contour bricks ([`super::bricks::contour_bricks`]) with a block for each of

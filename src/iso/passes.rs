@@ -61,27 +61,29 @@ pub(super) struct ClassGrid {
 }
 
 impl ClassGrid {
-    /// Packs `classes` (x fastest, then y, z; `dims` per axis) with their skip bricks' flags and
-    /// their low `faces`' classes (single cells only), 2 to a word, and uploads them.
+    /// Completes `nodes` (x fastest, then y, z; `dims` per axis; the class in bits 0-1 and, for
+    /// single cells (`faces`), the low faces' classes in bits 4-7, [`super::bricks::leaf_nodes`])
+    /// with their skip bricks' flags and uploads them, one byte per node.
     pub(super) fn new(
         d: &wgpu::Device,
         key: (u32, u32),
         dims: [u32; 3],
-        classes: &[u8],
-        faces: Option<&[u8]>,
+        mut nodes: Vec<u8>,
+        faces: bool,
         contour: Option<(Vec<u32>, usize)>,
         contour_policy: Option<bool>,
     ) -> Self {
         // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
-        let n = classes
+        let n = nodes
             .par_chunks(1 << 16)
-            .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v == k) as u32).sum::<u32>()))
+            .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v & 3 == k) as u32).sum::<u32>()))
             .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
         let [n_below, n_above, n_nan] = n;
-        let words = pack_nodes(classes, dims, faces);
+        let classes = pack2(&nodes);
+        pack_nodes(&mut nodes, dims);
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
-            contents: &words,
+            contents: &nodes,
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
@@ -89,8 +91,6 @@ impl ClassGrid {
         let contour = contour
             .filter(|(words, at)| words.len() > *at)
             .and_then(|(words, at)| Some((storage_buffer(d, "iso_contour", &words)?, at as u32)));
-        let faces = faces.is_some();
-        let classes = pack2(classes);
         Self { key, buffer, dims, bricks, n_below, n_above, n_nan, classes, faces, contour, contour_policy }
     }
 }

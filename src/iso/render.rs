@@ -5,8 +5,9 @@
 //!
 //! 1. **Classes** (view independent, cached per isovalue and occluder depth, kept on the GPU):
 //!    every node at `occluder_depth` is *Below* (`max < w`, no NaN), *Above* (`min > w`, no NaN),
-//!    *NaN* (some sample is NaN), or passable (it may hold surface); 4 bits per node with its
-//!    skip bricks' flags (step 3; [`super::bricks::pack_nodes`]).
+//!    *NaN* (some sample is NaN), or passable (it may hold surface); a byte per node with its
+//!    skip bricks' flags (step 3; [`super::bricks::pack_nodes`]) and, for single cells, its low
+//!    faces' classes ([`super::bricks::leaf_nodes`], one pass over the samples for both).
 //! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z; the pixel rays
 //!    are built in f64, as an origin and a direction affine in the pixel's NDC): the pixel's ray
 //!    walks the class grid near to far (3-D DDA) and stops at the first node of one class met
@@ -30,7 +31,7 @@
 //!    **Faces.** With single-cell occluders the walk also reads the faces it crosses: a cell
 //!    face whose 4 corners are all below (above) has no crossing edge, so no triangle touches it
 //!    and the whole face lies on the below (above) side, as a Below (Above) cell does
-//!    ([`super::bricks::leaf_faces`]). A face of the other class than the last class seen proves
+//!    ([`super::bricks::leaf_nodes`]). A face of the other class than the last class seen proves
 //!    the crossing before it, so the walk stops there and leaves the cell behind it unmarked.
 //!    Thin sheets and aliased regions hold few uniform cells but many uniform faces: on the Pesco
 //!    field 128³ this draws 21-28 % fewer triangles (frog 12 %, channels 3 %).
@@ -482,8 +483,9 @@ impl IsoRenderer {
                 let dims = tree.dims_at_depth(occ_depth).expect("occ_depth <= max depth");
                 // Single cells carry their faces' classes too (finer occluders for the walk), and
                 // the samples of the bricks that hold surface, for the contours of mixed faces.
-                let faces = if occ_depth == tree.max_depth() { tree.leaf_faces(w) } else { None };
-                let contour = if faces.is_some() && policy != Some(false) {
+                let leaves = if occ_depth == tree.max_depth() { tree.leaf_nodes(w) } else { None };
+                let faces = leaves.is_some();
+                let contour = if faces && policy != Some(false) {
                     // (At the default cull depth the cache hands back the candidate nodes.)
                     let brick_depth = maxd.saturating_sub(CONTOUR_SHIFT);
                     let bricks = iso.straddling(tree, w, brick_depth, list_budget);
@@ -494,9 +496,9 @@ impl IsoRenderer {
                 } else {
                     None
                 };
-                let mut classes = node_classes(tree, w, occ_depth);
-                dilate_nan(&mut classes, dims);
-                iso.classes = Some(ClassGrid::new(d, key, dims, &classes, faces.as_deref(), contour, policy));
+                let mut nodes = leaves.unwrap_or_else(|| node_classes(tree, w, occ_depth));
+                dilate_nan(&mut nodes, dims);
+                iso.classes = Some(ClassGrid::new(d, key, dims, nodes, faces, contour, policy));
             }
         }
         let iso: &IsoRenderer = &*iso;
