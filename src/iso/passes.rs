@@ -63,12 +63,13 @@ pub(super) struct ClassGrid {
 impl ClassGrid {
     /// Completes `nodes` (x fastest, then y, z; `dims` per axis; the class in bits 0-1 and, for
     /// single cells (`faces`), the low faces' classes in bits 4-7, [`super::bricks::leaf_nodes`])
-    /// with their skip bricks' flags and uploads them, one byte per node.
+    /// with their skip bricks' flags and uploads them, one byte per node in bricks of 4³
+    /// ([`super::bricks::pack_nodes`]).
     pub(super) fn new(
         d: &wgpu::Device,
         key: (u32, u32),
         dims: [u32; 3],
-        mut nodes: Vec<u8>,
+        nodes: Vec<u8>,
         faces: bool,
         contour: Option<(Vec<u32>, usize)>,
         contour_policy: Option<bool>,
@@ -80,10 +81,11 @@ impl ClassGrid {
             .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
         let [n_below, n_above, n_nan] = n;
         let classes = pack2(&nodes);
-        pack_nodes(&mut nodes, dims);
+        let bricked = pack_nodes(&nodes, dims);
+        drop(nodes);
         let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_classes"),
-            contents: &nodes,
+            contents: &bricked,
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
