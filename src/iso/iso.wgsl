@@ -163,25 +163,32 @@ fn contour_side(f: vec4<f32>, uv: vec2<f32>, ray: vec3<f32>, m: f32) -> u32 {
     return select(r, 0u, any(f == vec4<f32>(0.0)));
 }
 
+// The index of the contour brick (4³ cells) holding cell `c` in `contour_data`'s table.
+fn contour_brick(c: vec3<i32>) -> u32 {
+    let cb = vec3<u32>(c) >> vec3<u32>(2u);
+    return (cb.z * mp.contour.z + cb.y) * mp.contour.y + cb.x;
+}
+
 // The side of the surface (`contour_side`) of the point `gp` (grid units) of the face the walk
 // crossed along axis `a` into cell `c` (`up`: moving up that axis, so it is the cell's low face),
-// the ray's direction `dg` (grid units); 4 (unknown to this test) when the cell's brick holds no
-// passable cell: its faces are uniform (the class bits settle them) or touch NaN.
-fn face_side(c: vec3<i32>, a: i32, up: bool, gp: vec3<f32>, dg: vec3<f32>) -> u32 {
+// the ray's direction `dg` (grid units), `block` the entry of the cell's contour brick; 4
+// (unknown to this test) when the brick holds no passable cell: its faces are uniform (the class
+// bits settle them) or touch NaN. (lavapipe reads a storage buffer lane by lane, each read
+// costing a round per lane: the samples are read only by the lanes that need them.)
+fn face_side(c: vec3<i32>, a: i32, up: bool, gp: vec3<f32>, dg: vec3<f32>, block: u32) -> u32 {
+    if (block == 0xffffffffu) {
+        return 4u;
+    }
     let b = (a + 1) % 3;
     let e = (a + 2) % 3;
-    let cu = vec3<u32>(c);
-    let cb = cu >> vec3<u32>(2u);
-    let block = contour_data[(cb.z * mp.contour.z + cb.y) * mp.contour.y + cb.x];
     // The face's low corner in the brick's block of 5³ samples.
-    var q = cu & vec3<u32>(3u);
+    var q = vec3<u32>(c) & vec3<u32>(3u);
     q[a] += select(1u, 0u, up);
     let st = vec3<u32>(1u, 5u, 25u);
-    let i = mp.contour.x + select(block, 0u, block == 0xffffffffu) * 125u + dot(q, st);
+    let i = mp.contour.x + block * 125u + dot(q, st);
     let sample = vec4<u32>(contour_data[i], contour_data[i + st[b]], contour_data[i + st[e]], contour_data[i + st[b] + st[e]]);
     let f = bitcast<vec4<f32>>(sample) - vec4<f32>(bitcast<f32>(mp.contour.w));
-    let side = contour_side(f, vec2<f32>(gp[b] - f32(c[b]), gp[e] - f32(c[e])), vec3<f32>(dg[b], dg[e], dg[a]), mp.hi.w);
-    return select(side, 4u, block == 0xffffffffu);
+    return contour_side(f, vec2<f32>(gp[b] - f32(c[b]), gp[e] - f32(c[e])), vec3<f32>(dg[b], dg[e], dg[a]), mp.hi.w);
 }
 
 // Where the ray leaves cell `c` across each axis (the DDA's next crossings), `t0 + c dt` with the
@@ -245,6 +252,9 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
         // brick's class, which changes nothing).
         var prev_info = 0u;
         var stepped = false;
+        // The contour brick last read (`contour_brick`) and its entry.
+        var brick_at = 0xffffffffu;
+        var brick = 0xffffffffu;
         loop {
             let info = node_info(c);
             let k = info & 3u;
@@ -263,8 +273,15 @@ fn cs_map(@builtin(global_invocation_id) gid: vec3<u32>) {
             var fk = select(0u, select(2u, 1u, (owner & 128u) != 0u), face_in && uniform);
             // With the samples at hand, any face point's side (a mixed face's too): the walk stops
             // right behind the surface instead of at the next uniform face.
-            if (CONTOURS && face_in) {
-                let side = face_side(c, ax, up, gp, dg);
+            // (A uniform face's contour is its class: only mixed faces need their samples. The
+            // brick's entry is read again only when the walk enters another brick.)
+            if (CONTOURS && face_in && !uniform) {
+                let cb = contour_brick(c);
+                if (cb != brick_at) {
+                    brick = contour_data[cb];
+                    brick_at = cb;
+                }
+                let side = face_side(c, ax, up, gp, dg, brick);
                 fk = select(side, fk, side == 4u);
             }
             // The surface has a boundary on the box's faces, and a ray within rounding distance
