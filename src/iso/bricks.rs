@@ -191,6 +191,12 @@ pub(super) const CONTOUR_SAMPLES: usize = (1 << CONTOUR_SHIFT) + 1;
 /// A contour brick without samples.
 pub(super) const NO_BLOCK: u32 = u32::MAX;
 
+/// The contour bricks per axis of a volume with `samples` samples per axis: its cells in bricks
+/// of `2^CONTOUR_SHIFT`, the last one per axis partial (the table of [`contour_bricks`], x fastest).
+pub(super) fn contour_grid(samples: [usize; 3]) -> [usize; 3] {
+    samples.map(|n| (n - 1).div_ceil(1 << CONTOUR_SHIFT))
+}
+
 /// The samples the walk reads to place the contour of each face it crosses (iso.wgsl
 /// `face_side`), for a volume of `samples` samples per axis: per brick of 4³ cells (x fastest) one
 /// word, the index of its block of 5³ samples (its cells' corners, x fastest, as f32 bits; past
@@ -202,9 +208,9 @@ pub(super) const NO_BLOCK: u32 = u32::MAX;
 /// the words and the number of bricks (where the blocks start). Surface bricks only: the frog
 /// tissues' 32 M samples need 19 MB instead of 128.
 pub fn contour_bricks(values: &[f32], samples: [usize; 3], blocks: &[[u32; 3]]) -> (Vec<u32>, usize) {
-    let [nx, ny, nz] = samples;
+    let [nx, ny, _] = samples;
     let b = 1usize << CONTOUR_SHIFT;
-    let bd = [nx - 1, ny - 1, nz - 1].map(|c| c.div_ceil(b));
+    let bd = contour_grid(samples);
     let nb = bd[0] * bd[1] * bd[2];
     let n = CONTOUR_SAMPLES;
     let mut words = vec![NO_BLOCK; nb + blocks.len() * n * n * n];

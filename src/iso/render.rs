@@ -124,7 +124,7 @@ use glam::{DMat4, DVec3, DVec4, Mat4};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{dilate_nan, CONTOUR_SHIFT};
+use super::bricks::{contour_grid, dilate_nan, CONTOUR_SHIFT};
 pub use super::bricks::{node_classes, occluder_nodes};
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{MinMaxOctree, NodeInfo};
@@ -580,8 +580,8 @@ impl IsoRenderer {
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
                 contour: match contour {
                     Some((_, at)) => {
-                        let bricks = |n: usize| (n as u32 - 1).div_ceil(1 << CONTOUR_SHIFT);
-                        [*at, bricks(vol.nx), bricks(vol.ny), w.to_bits()]
+                        let [bx, by, _] = contour_grid([vol.nx, vol.ny, vol.nz]);
+                        [*at, bx as u32, by as u32, w.to_bits()]
                     }
                     None => [0; 4],
                 },
