@@ -30,7 +30,8 @@ def test_bench_iso_tiny_json(tmp_path):
         if r["method"] == "implicit":
             assert r["differing_pixel_fraction"] == 0.0  # conservative
             assert r["faces"] <= rows[keys.index(("none", r["temperature"]))]["faces"]
-            assert r["readbacks"] == 1
+            # the compute walk reads its marks back; the host's walk (on a CPU adapter) needs none
+            assert r["walk"] in ("gpu", "cpu") and r["readbacks"] == (1 if r["walk"] == "gpu" else 0)
         if r["method"] == "pyvista":  # VTK flying edges: the same surface within 2 %
             assert abs(r["faces_ratio"] - 1.0) < 0.02
     assert s["per_method"]["pesco/none_cold"]["ratio_to_none"] == 1.0

@@ -11,6 +11,8 @@ import geocull as gc
 from geocull import data
 
 W = H = 96
+# Where the implicit walk runs: a compute pass, or the host's cores (the same walk step for step).
+WALKS = ("gpu", "cpu")
 
 
 @pytest.fixture(scope="module")
@@ -70,6 +72,23 @@ def test_bad_arguments(renderer):
         renderer.render_isosurface(v, 0.0, cam, cull_depth=v.max_depth() + 1)
     with pytest.raises(gc.InputError, match="isovalue"):
         renderer.render_isosurface(v, float("nan"), cam)
+    with pytest.raises(gc.InputError, match="walk"):
+        renderer.render_isosurface(v, 0.0, cam, walk="gpus")
+    with pytest.raises(gc.InputError, match="walk"):
+        renderer.render_isosurface(v, 0.0, cam, walk=1)  # type: ignore[arg-type]
+
+
+def test_walk_runs_where_asked_and_auto_picks_the_host_on_a_cpu_adapter(renderer):
+    v = sphere_volume(16)
+    cam, _ = cam_around(30)
+    on_cpu = "Cpu," in renderer.adapter_info
+    assert renderer.render_isosurface(v, 0.0, cam, culling="none").stats["walk"] == "none"
+    assert renderer.render_isosurface(v, 0.0, cam).stats["walk"] == ("cpu" if on_cpu else "gpu")
+    for w in WALKS:
+        res = renderer.render_isosurface(v, 0.0, cam, walk=w)
+        assert res.stats["walk"] == w
+        # the host's walk needs no submission and no read-back before the draw
+        assert (res.stats["submissions"], res.stats["readbacks"]) == ((1, 0) if w == "cpu" else (2, 1))
 
 
 # ---- Known answers
@@ -98,7 +117,13 @@ def test_sphere_back_half_culled_and_image_equal(renderer):
         # Fine occluders (single cells) and nodes of 2 cells: the back half is hidden except near
         # the silhouette, where rays only graze the region below w.
         res = renderer.render_isosurface(v, 0.0, cam, culling="implicit", occluder_depth=md,
-                                         cull_depth=md - 1, return_map=True)
+                                         cull_depth=md - 1, return_map=True, walk="gpu")
+        host = renderer.render_isosurface(v, 0.0, cam, culling="implicit", occluder_depth=md,
+                                          cull_depth=md - 1, return_map=True, walk="cpu")
+        # the host's walk sees the same cells and proves the same map (to the shader's rounding)
+        np.testing.assert_array_equal(host.tile_pixels, res.tile_pixels)
+        np.testing.assert_array_equal(host.image, ref.image)
+        np.testing.assert_allclose(host.occlusion_map, res.occlusion_map, rtol=1e-5)
         s = res.stats
         # The image is identical: the method is conservative.
         assert np.array_equal(res.image, ref.image)
@@ -287,7 +312,8 @@ def contour_bricks(vals, w, b=4):
     return bz * by * bx, int(passable.reshape(bz, b, by, b, bx, b).any(axis=(1, 3, 5)).sum())
 
 
-def test_contour_bricks_kept_on_the_gpu_where_the_surface_is_dense():
+@pytest.mark.parametrize("walk", WALKS)
+def test_contour_bricks_kept_where_the_walk_runs_where_the_surface_is_dense(walk):
     # The walk places the contour of the faces it crosses from the samples of the bricks of 4^3
     # cells that hold surface (a word per brick, 125 samples per brick with surface), kept with
     # the class grid: made by the first implicit frame with single-cell occluders, dropped with
@@ -304,12 +330,12 @@ def test_contour_bricks_kept_on_the_gpu_where_the_surface_is_dense():
         assert (stored >= bricks / 2) == dense, (stored, bricks)
         expected = 4 * (bricks + 125 * stored) if dense else 0
         md = v.max_depth()
-        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == 0
-        assert r.render_isosurface(v, 0.0, cam, occluder_depth=md - 1).stats["gpu_contour_bytes"] == 0
-        assert r.render_isosurface(v, 0.0, cam).stats["gpu_contour_bytes"] == expected
-        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == expected
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["contour_bytes"] == 0
+        assert r.render_isosurface(v, 0.0, cam, occluder_depth=md - 1, walk=walk).stats["contour_bytes"] == 0
+        assert r.render_isosurface(v, 0.0, cam, walk=walk).stats["contour_bytes"] == expected
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["contour_bytes"] == expected
         gc.iso.clear_cache(r)
-        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["gpu_contour_bytes"] == 0
+        assert r.render_isosurface(v, 0.0, cam, culling="none").stats["contour_bytes"] == 0
 
 
 def test_patches_kept_on_the_gpu_draw_what_a_fresh_upload_draws():
@@ -388,14 +414,15 @@ def nan_slab_volume(n=40):
     return gc.Volume(vals, spacing=(h, h, h))
 
 
-def test_nan_slab_does_not_hide_what_none_shows(renderer):
+@pytest.mark.parametrize("walk", WALKS)
+def test_nan_slab_does_not_hide_what_none_shows(renderer, walk):
     v = nan_slab_volume()
     md = v.max_depth()
     cam = gc.Camera.look_at((4.0, 0.5, 0.5), (0.0, 0.5, 0.5), up=(0, 0, 1), fov_y=30.0)
     ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
     assert np.isfinite(ref.depth).sum() > 100  # the blob is seen
     for od, cd in ((md, md - 1), (md - 1, md - 2), (md - 2, md - 3)):
-        res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd, return_map=True)
+        res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd, return_map=True, walk=walk)
         np.testing.assert_array_equal(res.image, ref.image)
         assert res.stats["occluder_nodes_nan"] > 0 and res.stats["occluder_boxes_above"] > 0
         # nothing is proven through the slab: where the map holds, it lies behind the blob's surface
@@ -418,8 +445,9 @@ def test_nodes_with_nan_are_not_occluders():
     assert res.stats["occluder_boxes_above"] == 0 and res.stats["occluder_nodes_nan"] == 8
 
 
+@pytest.mark.parametrize("walk", WALKS)
 @pytest.mark.parametrize("border", [1, 3])
-def test_nan_borders_implicit_equals_none(renderer, border):
+def test_nan_borders_implicit_equals_none(renderer, border, walk):
     vals, origin, spacing = data.pesco_synthetic(40)
     vals = vals.copy()
     for ax in range(3):
@@ -434,7 +462,7 @@ def test_nan_borders_implicit_equals_none(renderer, border):
         cam, _ = cam_around(az, 25.0, dist=30.0)
         ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
         for od, cd in ((md - 1, md - 2), (md, md - 1)):
-            res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd)
+            res = renderer.render_isosurface(v, 0.0, cam, occluder_depth=od, cull_depth=cd, walk=walk)
             np.testing.assert_array_equal(res.image, ref.image)
         # the border stops no proof inside: the hidden part is still culled
         assert res.stats["surface_triangles"] < 0.9 * ref.stats["surface_triangles"]
@@ -457,8 +485,9 @@ def bricky_volume():
     return gc.Volume(vals, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.0, 1.0))
 
 
+@pytest.mark.parametrize("walk", WALKS)
 @pytest.mark.parametrize("projection", ["perspective", "orthographic"])
-def test_space_skipping_keeps_implicit_equal_to_none(renderer, projection):
+def test_space_skipping_keeps_implicit_equal_to_none(renderer, projection, walk):
     v = bricky_volume()
     md = v.max_depth()
     c = (23.5, 17.5, 19.5)
@@ -468,7 +497,7 @@ def test_space_skipping_keeps_implicit_equal_to_none(renderer, projection):
         cam = gc.Camera.look_at(eye, c, up=(0, 1, 0.3), fov_y=45.0, projection=projection, ortho_height=60.0)
         ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
         for cd in (None, md, md - 3):
-            res = renderer.render_isosurface(v, 0.0, cam, cull_depth=cd)
+            res = renderer.render_isosurface(v, 0.0, cam, cull_depth=cd, walk=walk)
             np.testing.assert_array_equal(res.image, ref.image)
             np.testing.assert_array_equal(res.depth, ref.depth)
             culled += res.stats["surface_triangles"] < ref.stats["surface_triangles"]
@@ -521,9 +550,9 @@ def test_setup_is_reported_apart_from_the_frame():
     a = r.render_isosurface(v, 0.0, cam)
     b = r.render_isosurface(v, 0.0, cam)
     assert a.stats["setup_ms"] > 0 and b.stats["setup_ms"] == 0
-    # one submission for the map and the first node test, one per further level, one for the draw
-    s = b.stats
-    assert s["readbacks"] >= 1 and s["submissions"] == s["readbacks"] + 1
+    # one submission and one read-back for the compute walk (none for the host's), one for the draw
+    s = r.render_isosurface(v, 0.0, cam, walk="gpu").stats
+    assert s["readbacks"] == 1 and s["submissions"] == 2
     assert r.render_isosurface(v, 0.0, cam, culling="none").stats["readbacks"] == 0
 
 
@@ -569,9 +598,10 @@ def _random_volume_renders_as_none(seed, shape, smooth, nan, on_iso, elev, az, d
                             projection="orthographic" if ortho else "perspective", ortho_height=float(size.max()) * 1.2)
     r = gc.Renderer(48, 40)
     ref = r.render_isosurface(v, 0.0, cam, culling="none")
-    res = r.render_isosurface(v, 0.0, cam)
-    np.testing.assert_array_equal(res.image, ref.image)
-    np.testing.assert_array_equal(res.depth, ref.depth)
+    for walk in WALKS:
+        res = r.render_isosurface(v, 0.0, cam, walk=walk)
+        np.testing.assert_array_equal(res.image, ref.image)
+        np.testing.assert_array_equal(res.depth, ref.depth)
     CULLED.append(ref.stats["surface_triangles"] - res.stats["surface_triangles"])
 
 

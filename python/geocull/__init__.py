@@ -22,7 +22,16 @@ from typing import Any as _Any
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
 from .camera import Camera, Projection
 from .iso import extract_isosurface
-from .renderer import CULLING_MODES, ISO_CULLING_MODES, CullingMode, GridLodMode, IsoCullingMode, LodMode, Renderer
+from .renderer import (
+    CULLING_MODES,
+    ISO_CULLING_MODES,
+    CullingMode,
+    GridLodMode,
+    IsoCullingMode,
+    IsoWalk,
+    LodMode,
+    Renderer,
+)
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume, VolumeOrder, ZPositive
@@ -60,6 +69,7 @@ __all__ = [
     "ISO_CULLING_MODES",
     "CullingMode",
     "IsoCullingMode",
+    "IsoWalk",
     "LodMode",
     "GridLodMode",
     "RenderStats",

@@ -177,7 +177,7 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
                 row.update(faces=int(s["surface_triangles"]), faces_ratio=s["surface_triangles"] /
                            max(1, ref.stats["surface_triangles"]), nodes_visible=int(s["nodes_visible"]),
                            nodes_straddling=int(s["nodes_straddling"]), readbacks=int(s["readbacks"]),
-                           setup_ms=float(s["setup_ms"]),
+                           setup_ms=float(s["setup_ms"]), walk=str(s["walk"]),
                            differing_pixel_fraction=image_error(res.image, ref.image)["differing_pixel_fraction"])
             else:
                 assert pv_mesh is not None
@@ -239,8 +239,9 @@ def format_table(result: dict[str, Any]) -> str:
         lines.append(f"  {k:<24} mean {m['mean_ms']:>8.1f} ms  x none {_f(m['ratio_to_none'], '.3f')}  "
                      f"x pyvista {_f(m['ratio_to_pyvista'], '.3f')}  faces x none {_f(m['faces_ratio'], '.3f')}  "
                      f"max diff px {100 * m['max_differing_pixel_fraction']:.4f} %")
+    walks = "/".join(sorted({str(r["walk"]) for r in result["rows"] if r.get("walk") not in (None, "none")}))
     lines.append("columns: ms = frame time (geocull stats total_ms; PyVista: contour (cold only) + Render + "
                  "WaitForCompletion, MSAA off); cold = no patch cache / contour in the frame; warm = patches cached "
                  "/ mesh already extracted; rb = read-backs inside the frame; diff px = pixels differing from geocull "
-                 f"none. Wall {s['wall_s']:.0f} s.")
+                 f"none; implicit's walk ran on the {walks or 'none'}. Wall {s['wall_s']:.0f} s.")
     return "\n".join(lines)

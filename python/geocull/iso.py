@@ -44,12 +44,12 @@ from numpy.typing import ArrayLike
 from . import _convert as cv
 from . import _geocull
 from .camera import Camera
-from .renderer import ISO_CULLING_MODES, IsoCullingMode, Renderer
+from .renderer import ISO_CULLING_MODES, IsoCullingMode, IsoWalk, Renderer
 from .results import IsoResult
 from .volume import Volume
 
 __all__ = ["Volume", "render_isosurface", "extract_isosurface", "clear_cache", "set_cache_budget", "cache_budget",
-           "ISO_CULLING_MODES", "IsoCullingMode"]
+           "ISO_CULLING_MODES", "IsoCullingMode", "IsoWalk"]
 
 
 def render_isosurface(
@@ -63,6 +63,7 @@ def render_isosurface(
     color: ArrayLike = (0.85, 0.72, 0.45),
     cache: bool = True,
     return_map: bool = False,
+    walk: IsoWalk = "auto",
 ) -> IsoResult:
     """Render the isosurface ``volume == isovalue`` seen by ``camera`` with ``renderer``.
 
@@ -75,7 +76,8 @@ def render_isosurface(
     """
     cv.expect_instance(renderer, Renderer, "renderer")
     return renderer.render_isosurface(volume, isovalue, camera, culling, occluder_depth=occluder_depth,
-                                      cull_depth=cull_depth, color=color, cache=cache, return_map=return_map)
+                                      cull_depth=cull_depth, color=color, cache=cache, return_map=return_map,
+                                      walk=walk)
 
 
 def extract_isosurface(volume: Volume, isovalue: float) -> tuple[np.ndarray, np.ndarray]:

@@ -17,7 +17,8 @@ from .results import IsoResult, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume
 
-__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "LodMode", "GridLodMode"]
+__all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "IsoWalk", "LodMode",
+           "GridLodMode"]
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
@@ -31,6 +32,10 @@ IsoCullingMode = Literal["implicit", "none"]
 
 #: The same names at runtime, in that order.
 ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
+
+#: Where :meth:`Renderer.render_isosurface`'s implicit walk runs ("auto": on the host's cores when the
+#: adapter is a CPU itself, such as lavapipe or llvmpipe, else on the GPU).
+IsoWalk = Literal["auto", "gpu", "cpu"]
 
 #: Level-of-detail choice of :meth:`Renderer.render` (``lod=``).
 LodMode = Literal["full", "screen_error"]
@@ -270,6 +275,7 @@ class Renderer:
         color: ArrayLike = (0.85, 0.72, 0.45),
         cache: bool = True,
         return_map: bool = False,
+        walk: IsoWalk = "auto",
     ) -> IsoResult:
         """Render the isosurface ``volume == isovalue`` seen by ``camera`` into an :class:`IsoResult`
         (image (H, W, 4), depth (H, W), per-node arrays; see there).
@@ -283,7 +289,11 @@ class Renderer:
         color: (r, g, b) in [0, 1].  cache: reuse patches extracted by earlier frames (per volume,
         isovalue and node); False extracts afresh (for timing).  return_map: also return the occlusion
         map as ``result.occlusion_map`` ((H, W) distance along the view axis, inf where nothing is
-        proven).
+        proven).  walk: where the implicit walk (map and cells seen, one ray per pixel) runs: "gpu"
+        (a compute pass), "cpu" (the host's cores, the same walk step for step) or "auto" (default:
+        "cpu" when the adapter is a CPU itself, lavapipe or llvmpipe, whose compute passes run the
+        walk's every branch on every SIMD lane; else "gpu"). Both give the same image and cells
+        seen; ``stats["walk"]`` says where it ran.
 
         The result's ``tile_pixels`` / ``tile_drawn`` are per *node*: one entry per node at
         ``cull_depth`` that may hold surface (``result.nodes``: (n, 4) [depth, ix, iy, iz]) — the
@@ -306,8 +316,10 @@ class Renderer:
         od = None if occluder_depth is None else cv.integer(occluder_depth, "occluder_depth")
         cd = None if cull_depth is None else cv.integer(cull_depth, "cull_depth")
         c = cv.vec3(color, "color")
+        if not isinstance(walk, str):
+            raise InputError(f"walk: {walk!r} is not a string")
         d = _geocull.render_isosurface(self._r, volume._v, w, camera._c, culling, od, cd, c,
-                                       bool(cache), bool(return_map))
+                                       bool(cache), bool(return_map), walk)
         res = IsoResult(d, culling)
         lo, hi = volume.bounds  # one box: cheap enough to test every frame
         _warn_if_nearer_than_near(np.array([lo]), np.array([hi]), camera, res.near)

@@ -8,7 +8,7 @@ and column 0 at its left; depths are distances along the camera's view axis in w
 
 import struct
 import zlib
-from typing import TYPE_CHECKING, Generic, NotRequired, TypedDict, TypeVar, cast
+from typing import TYPE_CHECKING, Generic, Literal, NotRequired, TypedDict, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -123,7 +123,8 @@ class IsoStats(TypedDict):
     readback_ms: float  # ms, wall time to copy image and depth back
     cache_bytes: int  # bytes the renderer's isosurface caches hold after the frame (<= its iso_cache_budget)
     gpu_cache_bytes: int  # bytes of the cached patches kept on the GPU between frames (<= about 2 x their own)
-    gpu_contour_bytes: int  # bytes of the implicit walk's contour bricks on the GPU (surface bricks' samples; or 0)
+    contour_bytes: int  # bytes of the implicit walk's contour bricks, where it runs (surface bricks' samples; or 0)
+    walk: Literal["gpu", "cpu", "none"]  # where the implicit walk ran ("none": culling="none", no walk)
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

@@ -38,6 +38,7 @@ mod passes;
 mod pool;
 pub mod render;
 mod seen;
+mod walk;
 /// The extraction's former name (marching tetrahedra), kept for paths that use it.
 pub use march as tetra;
 

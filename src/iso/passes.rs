@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{pack2, pack_nodes, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
+use super::bricks::{pack2, pack_nodes, skip_bricks, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -35,12 +35,11 @@ pub(super) struct Targets {
     pub(super) map: wgpu::Buffer,
 }
 
-/// The class grid of one (isovalue, occluder depth), on the GPU: 16 bits per node, its class,
-/// whether its two levels of skip bricks are skippable and its low faces' classes
-/// ([`super::bricks::pack_nodes`]).
+/// The class grid of one (isovalue, occluder depth): one byte per node, its class, whether its two
+/// levels of skip bricks are skippable and its low faces' classes ([`super::bricks::pack_nodes`]),
+/// with the contour bricks, where the walk runs ([`WalkData`]).
 pub(super) struct ClassGrid {
     pub(super) key: (u32, u32),
-    pub(super) buffer: wgpu::Buffer,
     pub(super) dims: [u32; 3],
     /// `[fine shift, coarse shift, 0, 0]` (iso.wgsl `bricks`).
     pub(super) bricks: [u32; 4],
@@ -52,19 +51,53 @@ pub(super) struct ClassGrid {
     pub(super) classes: Vec<u32>,
     /// Whether the nodes carry their low faces' classes (single cells, iso.wgsl `node_info`).
     pub(super) faces: bool,
-    /// Single cells: the contour bricks ([`super::bricks::contour_bricks`]) and where their blocks
-    /// start, when the walk places the faces' contours (`IsoOptions::face_contours`); `None` for
-    /// coarser nodes, without contours, or when they exceed one storage binding.
-    pub(super) contour: Option<(wgpu::Buffer, u32)>,
+    /// What the walk reads, on the GPU or on the host.
+    pub(super) data: WalkData,
     /// The `IsoOptions::face_contours` the grid was made for.
     pub(super) contour_policy: Option<bool>,
+}
+
+/// What the walk reads: the nodes in bricks of 4³ and, for single cells with contours
+/// (`IsoOptions::face_contours`), the contour bricks ([`super::bricks::contour_bricks`]) and
+/// where their blocks start (`None` for coarser nodes, without contours, or, on the GPU, when
+/// they exceed one storage binding).
+pub(super) enum WalkData {
+    /// For the compute walk ([`march`]).
+    Gpu { nodes: wgpu::Buffer, contour: Option<(wgpu::Buffer, u32)> },
+    /// For the host's walk (`super::walk`), with the skippable bricks' bytes
+    /// ([`super::bricks::skip_bricks`]).
+    Host { nodes: Vec<u8>, skip: Vec<u8>, contour: Option<(Vec<u32>, u32)> },
+}
+
+impl WalkData {
+    /// Where the contour blocks start, when the walk has contour bricks.
+    pub(super) fn contour_at(&self) -> Option<u32> {
+        match self {
+            WalkData::Gpu { contour, .. } => contour.as_ref().map(|c| c.1),
+            WalkData::Host { contour, .. } => contour.as_ref().map(|c| c.1),
+        }
+    }
+
+    /// Bytes of the contour bricks held for the walk.
+    pub(super) fn contour_bytes(&self) -> u64 {
+        match self {
+            WalkData::Gpu { contour, .. } => contour.as_ref().map_or(0, |c| c.0.size()),
+            WalkData::Host { contour, .. } => contour.as_ref().map_or(0, |c| 4 * c.0.len() as u64),
+        }
+    }
+
+    pub(super) fn on_host(&self) -> bool {
+        matches!(self, WalkData::Host { .. })
+    }
 }
 
 impl ClassGrid {
     /// Completes `nodes` (x fastest, then y, z; `dims` per axis; the class in bits 0-1 and, for
     /// single cells (`faces`), the low faces' classes in bits 4-7, [`super::bricks::leaf_nodes`])
-    /// with their skip bricks' flags and uploads them, one byte per node in bricks of 4³
-    /// ([`super::bricks::pack_nodes`]).
+    /// with their skip bricks' flags, one byte per node in bricks of 4³
+    /// ([`super::bricks::pack_nodes`]), and keeps them where the walk runs: uploaded for the
+    /// compute walk, in host memory for the host's (`host`).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn new(
         d: &wgpu::Device,
         key: (u32, u32),
@@ -73,6 +106,7 @@ impl ClassGrid {
         faces: bool,
         contour: Option<(Vec<u32>, usize)>,
         contour_policy: Option<bool>,
+        host: bool,
     ) -> Self {
         // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
         let n = nodes
@@ -83,17 +117,22 @@ impl ClassGrid {
         let classes = pack2(&nodes);
         let bricked = pack_nodes(&nodes, dims);
         drop(nodes);
-        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("iso_classes"),
-            contents: &bricked,
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
         // (Without a brick that holds surface the walk has nothing to read.)
-        let contour = contour
-            .filter(|(words, at)| words.len() > *at)
-            .and_then(|(words, at)| Some((storage_buffer(d, "iso_contour", &words)?, at as u32)));
-        Self { key, buffer, dims, bricks, n_below, n_above, n_nan, classes, faces, contour, contour_policy }
+        let contour = contour.filter(|(words, at)| words.len() > *at);
+        let data = if host {
+            let skip = skip_bricks(&bricked);
+            WalkData::Host { nodes: bricked, skip, contour: contour.map(|(words, at)| (words, at as u32)) }
+        } else {
+            let nodes = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("iso_classes"),
+                contents: &bricked,
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let contour = contour.and_then(|(words, at)| Some((storage_buffer(d, "iso_contour", &words)?, at as u32)));
+            WalkData::Gpu { nodes, contour }
+        };
+        let bricks = [FINE_SHIFT, COARSE_SHIFT, 0, 0];
+        Self { key, dims, bricks, n_below, n_above, n_nan, classes, faces, data, contour_policy }
     }
 }
 
@@ -353,6 +392,9 @@ pub(super) fn march(
     params: &wgpu::Buffer,
     n_cells: usize,
 ) -> Result<Vec<u32>> {
+    let WalkData::Gpu { nodes, contour } = &grid.data else {
+        return Err(Error::Device("the class grid is not on the GPU".into()));
+    };
     let d = &ctx.device;
     let words = n_cells.div_ceil(8).max(1);
     let size = 4 * words as u64;
@@ -373,13 +415,13 @@ pub(super) fn march(
         layout: &iso.map_layout,
         entries: &[
             wgpu::BindGroupEntry { binding: 0, resource: params.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: grid.buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: nodes.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: tg.map.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 3, resource: cells.as_entire_binding() },
             // (Read by the walk with contours only.)
             wgpu::BindGroupEntry {
                 binding: 4,
-                resource: grid.contour.as_ref().map_or(&iso.no_contour, |c| &c.0).as_entire_binding(),
+                resource: contour.as_ref().map_or(&iso.no_contour, |c| &c.0).as_entire_binding(),
             },
         ],
     });
@@ -388,7 +430,7 @@ pub(super) fn march(
     {
         let mut p =
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("iso_march"), timestamp_writes: None });
-        p.set_pipeline(&iso.map_pipelines[usize::from(grid.contour.is_some())]);
+        p.set_pipeline(&iso.map_pipelines[usize::from(contour.is_some())]);
         p.set_bind_group(0, globals_bg, &[]);
         p.set_bind_group(1, &bg, &[]);
         p.dispatch_workgroups(tg.width.div_ceil(8), tg.height.div_ceil(8), 1);

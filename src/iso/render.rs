@@ -3,12 +3,14 @@
 //! [`IsoRenderer::render`] (through `Renderer::render_isosurface`) draws the isosurface `f = w` of a [`Volume`], extracting surface
 //! only inside octree nodes that can be seen:
 //!
-//! 1. **Classes** (view independent, cached per isovalue and occluder depth, kept on the GPU):
+//! 1. **Classes** (view independent, cached per isovalue and occluder depth, kept where the walk
+//!    runs):
 //!    every node at `occluder_depth` is *Below* (`max < w`, no NaN), *Above* (`min > w`, no NaN),
 //!    *NaN* (some sample is NaN), or passable (it may hold surface); a byte per node with its
 //!    skip bricks' flags (step 3; [`super::bricks::pack_nodes`]) and, for single cells, its low
 //!    faces' classes ([`super::bricks::leaf_nodes`], one pass over the samples for both).
-//! 2. **Occlusion map** (one compute pass, one invocation per pixel, reverse-Z; the pixel rays
+//! 2. **Occlusion map** (one compute pass, one invocation per pixel, or the same walk on the
+//!    host's cores, [`IsoWalk`], below; reverse-Z; the pixel rays
 //!    are built in f64, as an origin and a direction affine in the pixel's NDC): the pixel's ray
 //!    walks the class grid near to far (3-D DDA) and stops at the first node of one class met
 //!    after a node of the other class with no NaN node in between; `M(p)` is the depth of that
@@ -116,6 +118,16 @@
 //! Depths count from the root (0) as in the octree; the leaves (single cells) are at
 //! `tree.max_depth()`. A volume of 256³ samples has 255 cells per axis and max depth 8, matching
 //! the paper's numbering for its 256³ volume; for a 128³ volume subtract 1 to compare node sizes.
+//!
+//! **Where the walk runs** ([`IsoWalk`]). On a GPU the walk is a compute pass. On an adapter
+//! that is a CPU itself (lavapipe, llvmpipe) `IsoWalk::Auto` runs the same walk on the host's
+//! cores instead ([`super::walk`], a task per image row): lavapipe runs the shader 8 lanes at a
+//! time with every branch of the loop taken for every lane and reads storage buffers lane by lane,
+//! where the host steps each ray by itself, takes only its own branches and reads node bytes with
+//! plain loads, and a table of the skippable bricks' bytes ([`super::bricks::skip_bricks`],
+//! 1/64 of the nodes) keeps a brick jump's read in the caches. The two walks see the same cells
+//! and prove the same map (to the shader's rounding, `walk.rs` tests); the host's needs no
+//! submission or read-back before the draw.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -128,9 +140,12 @@ use super::bricks::{contour_grid, dilate_nan, CONTOUR_SHIFT};
 pub use super::bricks::{node_classes, occluder_nodes};
 use super::march::{PatchCache, SurfacePatch, DEFAULT_CACHE_BUDGET};
 use super::octree::{MinMaxOctree, NodeInfo};
-use super::passes::{draw_pooled, draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets};
+use super::passes::{
+    draw_pooled, draw_surface, march, ClassGrid, Globals, IsoPasses, MapParams, Space, Targets, WalkData,
+};
 use super::pool::SurfacePool;
 use super::seen::{cells_seen, seen_cells, visible_ranges};
+use super::walk::{walk, WalkGrid};
 use super::Volume;
 use crate::camera::Camera;
 use crate::error::{ensure, input_err, Interrupt, Result};
@@ -170,6 +185,37 @@ impl IsoCulling {
     }
 }
 
+/// Where the implicit walk (the occlusion map and the cells seen) runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IsoWalk {
+    /// On the host when the adapter is a CPU itself (lavapipe, llvmpipe), else on the GPU.
+    Auto,
+    /// A compute pass (iso.wgsl `cs_map`), one invocation per pixel.
+    Gpu,
+    /// On the host's cores (`iso::walk`), one task per image row: the same walk step for step.
+    Cpu,
+}
+
+impl IsoWalk {
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "gpu" => Ok(Self::Gpu),
+            "cpu" => Ok(Self::Cpu),
+            _ => Err(input_err("walk", format!("unknown walk {s:?}; expected \"auto\", \"gpu\" or \"cpu\""))),
+        }
+    }
+
+    /// Whether the walk runs on the host with adapter `info`.
+    pub fn on_host(self, info: &wgpu::AdapterInfo) -> bool {
+        match self {
+            Self::Auto => info.device_type == wgpu::DeviceType::Cpu,
+            Self::Gpu => false,
+            Self::Cpu => true,
+        }
+    }
+}
+
 /// Options of one isosurface frame.
 #[derive(Clone, Debug)]
 pub struct IsoOptions {
@@ -197,6 +243,9 @@ pub struct IsoOptions {
     /// nodes of 4³ cells that straddle the isovalue are at least [`CONTOUR_MIN_DENSITY`] of
     /// them. All give the unculled image; contours draw fewer triangles.
     pub face_contours: Option<bool>,
+    /// Where the walk runs (`IsoWalk::Auto`: on the host when the adapter is a CPU). Both walks
+    /// give the same map, cells seen and image.
+    pub walk: IsoWalk,
     /// Polled between the stages of the frame (map, each level of node tests, extraction); when
     /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
     pub interrupt: Interrupt,
@@ -214,6 +263,7 @@ impl Default for IsoOptions {
             cache_budget: DEFAULT_CACHE_BUDGET,
             space_skipping: true,
             face_contours: None,
+            walk: IsoWalk::Auto,
             interrupt: Interrupt::default(),
         }
     }
@@ -274,10 +324,14 @@ pub struct IsoStats {
     /// Bytes of the cached patches' copy kept on the GPU between frames (vertices and triangles;
     /// at most about twice those the cache holds).
     pub gpu_cache_bytes: u64,
-    /// Bytes of the walk's contour bricks kept on the GPU with the class grid (single-cell
-    /// occluders: one word per brick of 4³ cells, 125 samples per brick that holds surface; 0
-    /// without them: no implicit frame yet, coarser occluders, or more than one storage binding).
-    pub gpu_contour_bytes: u64,
+    /// Bytes of the walk's contour bricks kept with the class grid, on the GPU or on the host
+    /// where the walk runs (single-cell occluders: one word per brick of 4³ cells, 125 samples per
+    /// brick that holds surface; 0 without them: no implicit frame yet, coarser occluders, or, on
+    /// the GPU, more than one storage binding).
+    pub contour_bytes: u64,
+    /// Where this frame's walk ran: `Some(true)` on the host, `Some(false)` on the GPU, `None`
+    /// without one (culling = none).
+    pub walk_on_host: Option<bool>,
 }
 
 /// One rendered isosurface frame as host arrays.
@@ -474,11 +528,16 @@ impl IsoRenderer {
         let candidates = iso.straddling(tree, w, cull_depth, list_budget);
         let implicit = opts.culling == IsoCulling::Implicit;
         let t_occ = Instant::now();
+        let host = opts.walk.on_host(&ctx.info);
         if implicit {
-            // View independent: the node classes at the occluder depth (kept on the GPU).
+            // View independent: the node classes at the occluder depth (kept where the walk runs).
             let key = (norm_bits(w), occ_depth);
             let policy = opts.face_contours;
-            if iso.classes.as_ref().is_none_or(|g| g.key != key || g.contour_policy != policy) {
+            if iso
+                .classes
+                .as_ref()
+                .is_none_or(|g| g.key != key || g.contour_policy != policy || g.data.on_host() != host)
+            {
                 iso.classes = None;
                 let dims = tree.dims_at_depth(occ_depth).expect("occ_depth <= max depth");
                 // Single cells carry their faces' classes too (finer occluders for the walk), and
@@ -498,7 +557,7 @@ impl IsoRenderer {
                 };
                 let mut nodes = leaves.unwrap_or_else(|| node_classes(tree, w, occ_depth));
                 dilate_nan(&mut nodes, dims);
-                iso.classes = Some(ClassGrid::new(d, key, dims, nodes, faces, contour, policy));
+                iso.classes = Some(ClassGrid::new(d, key, dims, nodes, faces, contour, policy, host));
             }
         }
         let iso: &IsoRenderer = &*iso;
@@ -526,6 +585,8 @@ impl IsoRenderer {
         // `seen`: the march cells some ray entered before the map (bits), their grid, and the shift
         // from volume cells to march cells.
         let mut seen: Option<(Vec<u32>, [u32; 3], u32)> = None;
+        // The host walk's map (reverse-Z depth per pixel).
+        let mut host_map: Option<Vec<f32>> = None;
         let visible: Vec<NodeInfo> = if !implicit {
             candidates.to_vec()
         } else {
@@ -538,7 +599,7 @@ impl IsoRenderer {
             // The walk places the contour of the faces it crosses (`passes::march` picks its
             // pipeline by the same test): a grid has contour bricks only with single-cell
             // occluders, whose cells the walk then steps through.
-            let contour = grid.contour.as_ref();
+            let contour = grid.data.contour_at();
             debug_assert!(contour.is_none() || md_march == occ_depth);
             let cell = (1u64 << (maxd - md_march)) as f64;
             let size = DVec3::new(vol.spacing[0] * cell, vol.spacing[1] * cell, vol.spacing[2] * cell * space.z_scale);
@@ -579,29 +640,41 @@ impl IsoRenderer {
                 size: [height, md_march - occ_depth, u32::from(grid.faces && md_march == occ_depth), 1],
                 occ_dims: [grid.dims[0], grid.dims[1], grid.dims[2], 0],
                 contour: match contour {
-                    Some((_, at)) => {
+                    Some(at) => {
                         let [bx, by, _] = contour_grid([vol.nx, vol.ny, vol.nz]);
-                        [*at, bx as u32, by as u32, w.to_bits()]
+                        [at, bx as u32, by as u32, w.to_bits()]
                     }
                     None => [0; 4],
                 },
                 bricks: if opts.space_skipping { grid.bricks } else { [0; 4] },
             };
-            let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("iso_map_params"),
-                contents: bytemuck::bytes_of(&p),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
             stats.occluder_ms = t_occ.elapsed().as_secs_f64() * 1e3;
             let t_cull = Instant::now();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
-            let marks = march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?;
+            let marks = match &grid.data {
+                WalkData::Host { nodes, skip, contour } => {
+                    let view_proj = Mat4::from_cols_array_2d(&globals.view_proj);
+                    let data = WalkGrid { nodes, skip, contour: contour.as_ref().map(|c| c.0.as_slice()) };
+                    let (marks, map) = walk(&p, &view_proj, &data, width, height, n_cells);
+                    host_map = Some(map);
+                    marks
+                }
+                WalkData::Gpu { .. } => {
+                    let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("iso_map_params"),
+                        contents: bytemuck::bytes_of(&p),
+                        usage: wgpu::BufferUsages::UNIFORM,
+                    });
+                    stats.submissions += 1;
+                    stats.readbacks += 1;
+                    march(ctx, &iso.passes, tg, &globals_bg, grid, &params, n_cells)?
+                }
+            };
+            stats.walk_on_host = Some(host);
             let bits = seen_cells(&marks, march_dims, &grid.classes, grid.dims, md_march - occ_depth);
             let shift = maxd - md_march;
             let counts: Vec<u32> = candidates.par_iter().map(|n| cells_seen(n, &bits, march_dims, shift)).collect();
             seen = Some((bits, march_dims, shift));
-            stats.submissions += 1;
-            stats.readbacks += 1;
             opts.interrupt.check()?;
             stats.nodes_tested = candidates.len() as u32;
             stats.nodes_tested_cull_depth = candidates.len() as u32;
@@ -677,7 +750,7 @@ impl IsoRenderer {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_readback") });
         let color_rb = ReadbackTexture::new(d, &mut enc, &tg.color_tex, width, height, 4, wgpu::TextureAspect::All);
         let depth_rb = ctx.read_depth(&mut enc, &tg.depth_tex);
-        let map_rb = (opts.return_map && implicit).then(|| {
+        let map_rb = (opts.return_map && implicit && host_map.is_none()).then(|| {
             let b = d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("iso_map_rb"),
                 size: tg.map.size(),
@@ -700,6 +773,8 @@ impl IsoRenderer {
             let raw: Vec<f32> =
                 bytemuck::cast_slice(&m.slice(..).get_mapped_range().map_err(crate::gpu::map_err)?).to_vec();
             map_out = Some(lin(raw));
+        } else if let Some(m) = host_map.filter(|_| opts.return_map) {
+            map_out = Some(lin(m));
         } else if opts.return_map {
             map_out = Some(vec![f32::INFINITY; (width * height) as usize]);
         }
@@ -710,7 +785,7 @@ impl IsoRenderer {
         self.pool.trim();
         stats.cache_bytes = self.cache_bytes() as u64;
         stats.gpu_cache_bytes = self.pool.bytes();
-        stats.gpu_contour_bytes = self.classes.as_ref().and_then(|g| g.contour.as_ref()).map_or(0, |c| c.0.size());
+        stats.contour_bytes = self.classes.as_ref().map_or(0, |g| g.data.contour_bytes());
         Ok(IsoOutput {
             width,
             height,

@@ -7,7 +7,7 @@ use super::{lock, run, run_interruptible};
 use crate::error::{input_err, int_in};
 use crate::iso::layout::{self, AxisOrder, ZPositive};
 use crate::iso::mesh::isosurface_mesh;
-use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput};
+use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput, IsoWalk};
 use crate::iso::{MinMaxOctree, Volume};
 use numpy::ndarray::{Array1, Array2, Array3, ArrayView3, Axis};
 use numpy::{IntoPyArray, PyReadonlyArray3};
@@ -205,7 +205,15 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("readbacks", s.readbacks)?;
     st.set_item("cache_bytes", s.cache_bytes)?;
     st.set_item("gpu_cache_bytes", s.gpu_cache_bytes)?;
-    st.set_item("gpu_contour_bytes", s.gpu_contour_bytes)?;
+    st.set_item("contour_bytes", s.contour_bytes)?;
+    st.set_item(
+        "walk",
+        match s.walk_on_host {
+            Some(true) => "cpu",
+            Some(false) => "gpu",
+            None => "none",
+        },
+    )?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
@@ -216,7 +224,7 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
 
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (renderer, volume, isovalue, camera, culling, occluder_depth, cull_depth, color, cache, return_map))]
+#[pyo3(signature = (renderer, volume, isovalue, camera, culling, occluder_depth, cull_depth, color, cache, return_map, walk))]
 fn render_isosurface<'py>(
     py: Python<'py>,
     renderer: PyRef<'py, PyRenderer>,
@@ -229,6 +237,7 @@ fn render_isosurface<'py>(
     color: (f64, f64, f64),
     cache: bool,
     return_map: bool,
+    walk: String,
 ) -> PyResult<Bound<'py, PyDict>> {
     let tree = volume.tree(py)?;
     let r = &renderer.inner;
@@ -236,6 +245,7 @@ fn render_isosurface<'py>(
     let (v, c) = (&volume.inner, &camera.inner);
     let out = run_interruptible(py, move |interrupt| {
         let culling = IsoCulling::parse(&culling)?;
+        let walk = IsoWalk::parse(&walk)?;
         let depth = |d: Option<i64>, arg| d.map(|d| int_in(d, arg, 0, 64).map(|d| d as u32)).transpose();
         let (occluder_depth, cull_depth) = (depth(occluder_depth, "occluder_depth")?, depth(cull_depth, "cull_depth")?);
         let opts = IsoOptions {
@@ -248,6 +258,7 @@ fn render_isosurface<'py>(
             cache_budget: usize::try_from(budget).unwrap_or(usize::MAX),
             space_skipping: true,
             face_contours: None,
+            walk,
             interrupt,
         };
         lock(r).render_isosurface(v, &tree, isovalue, c, &opts)

@@ -1,0 +1,506 @@
+//! The map pass's walk on the host: iso.wgsl `cs_map`, step for step, for adapters that are
+//! CPUs themselves (lavapipe, llvmpipe). Its contract is the shader's: per pixel, the occlusion
+//! map's depth (reverse-Z, 0 where nothing is proven) and the 4-bit marks of the march cells the
+//! ray entered (`passes::march`), which `seen::seen_cells` resolves alike.
+//!
+//! Why a second copy of the walk: a CPU rasteriser runs the shader on SIMD lanes with every
+//! branch of the loop taken for every lane, and reads storage buffers one lane at a time; the
+//! same walk compiled for the host's cores steps each ray by itself, takes only its own branches
+//! and reads the node bytes with plain loads. The two are kept alike by the tests
+//! (`tests/test_iso.py`: both walks against `culling = "none"`; here, marks compared on random
+//! volumes). Crossings use unfused multiply-adds (the shader's `fma`): what matters is that a
+//! brick jump and single steps compute them alike, which they do within each walk.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use glam::{BVec3, IVec3, Mat4, UVec3, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::passes::MapParams;
+
+/// What the walk reads: the occluder nodes (one byte each in bricks of 4³, `bricks::pack_nodes`)
+/// and, with contours, the contour bricks' words (`bricks::contour_bricks`: the table, then the
+/// sample blocks from `MapParams::contour[0]`).
+pub(super) struct WalkGrid<'a> {
+    pub(super) nodes: &'a [u8],
+    /// Per brick of 4³ nodes, the byte of each of its nodes when it is a skippable brick, else 0
+    /// (`bricks::skip_bricks`).
+    pub(super) skip: &'a [u8],
+    pub(super) contour: Option<&'a [u32]>,
+}
+
+/// The walk of every pixel of a `width` × `height` image: `(marks, map)`, the marks of the
+/// `n_cells` march cells (8 per word, as `passes::march` returns them) and the map's depth per
+/// pixel (row-major, row 0 = top). `view_proj` is the frame's (f32, as the shader's `Globals`).
+pub(super) fn walk(
+    p: &MapParams,
+    view_proj: &Mat4,
+    grid: &WalkGrid,
+    width: u32,
+    height: u32,
+    n_cells: usize,
+) -> (Vec<u32>, Vec<f32>) {
+    let marks: Vec<AtomicU32> = (0..n_cells.div_ceil(8).max(1)).map(|_| AtomicU32::new(0)).collect();
+    let mut map = vec![0.0f32; (width * height) as usize];
+    let w = Walker::new(p, view_proj, grid, &marks);
+    map.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            *out = w.ray(x as u32, y as u32);
+        }
+    });
+    (marks.into_iter().map(AtomicU32::into_inner).collect(), map)
+}
+
+fn v3(v: [f32; 4]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+/// `floor` per component without a libm call (the baseline x86-64 target has no rounding
+/// instruction): truncation, one less where it rounded up; values beyond i32 are left as they are
+/// (they are integers already, or the walk's margins do not reach them).
+#[inline]
+fn floor3(v: Vec3) -> Vec3 {
+    let f = |x: f32| {
+        let t = x as i32 as f32;
+        let t = t - f32::from(u8::from(t > x));
+        if x.abs() < 2.0e9 {
+            t
+        } else {
+            x
+        }
+    };
+    Vec3::new(f(v.x), f(v.y), f(v.z))
+}
+
+fn pick(m: BVec3, a: Vec3, b: Vec3) -> Vec3 {
+    Vec3::select(m, a, b)
+}
+
+/// Per-frame constants of the walk.
+struct Walker<'a> {
+    p: &'a MapParams,
+    view_proj: &'a Mat4,
+    grid: &'a WalkGrid<'a>,
+    marks: &'a [AtomicU32],
+    lo: Vec3,
+    hi: Vec3,
+    node: Vec3,
+    dims: IVec3,
+    margin: f32,
+    contours: bool,
+}
+
+impl<'a> Walker<'a> {
+    fn new(p: &'a MapParams, view_proj: &'a Mat4, grid: &'a WalkGrid<'a>, marks: &'a [AtomicU32]) -> Self {
+        Walker {
+            p,
+            view_proj,
+            grid,
+            marks,
+            lo: v3(p.lo),
+            hi: v3(p.hi),
+            node: v3(p.node),
+            dims: IVec3::new(p.dims[0] as i32, p.dims[1] as i32, p.dims[2] as i32),
+            margin: p.hi[3],
+            contours: grid.contour.is_some() && p.contour[0] != 0,
+        }
+    }
+
+    /// iso.wgsl `mark_cell`.
+    #[inline]
+    fn mark_cell(&self, c: IVec3, bits: u32) {
+        if self.p.size[3] == 1 {
+            let [x, y, z] = c.to_array().map(|v| v as usize);
+            let i = (z * self.p.dims[1] as usize + y) * self.p.dims[0] as usize + x;
+            let b = bits << ((i & 7) * 4);
+            let word = &self.marks[i >> 3];
+            if word.load(Ordering::Relaxed) & b != b {
+                word.fetch_or(b, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// iso.wgsl `node_info`, from the skippable bricks' table where it holds the node.
+    #[inline]
+    fn node_info(&self, c: IVec3) -> u32 {
+        let u = c.as_uvec3() >> self.p.size[1];
+        let nbx = ((self.p.occ_dims[0] + 3) >> 2) as usize;
+        let nby = ((self.p.occ_dims[1] + 3) >> 2) as usize;
+        let b = (u >> 2u32).to_array().map(|v| v as usize);
+        let l = u & UVec3::splat(3);
+        let bi = (b[2] * nby + b[1]) * nbx + b[0];
+        let t = self.grid.skip[bi];
+        if t != 0 {
+            return t as u32;
+        }
+        self.grid.nodes[(bi << 6) | ((l.z << 4) | (l.y << 2) | l.x) as usize] as u32
+    }
+
+    /// iso.wgsl `contour_brick`.
+    fn contour_brick(&self, c: IVec3) -> usize {
+        let cb = (c.as_uvec3() >> 2u32).to_array().map(|v| v as usize);
+        (cb[2] * self.p.contour[2] as usize + cb[1]) * self.p.contour[1] as usize + cb[0]
+    }
+
+    /// iso.wgsl `face_side`.
+    fn face_side(&self, c: IVec3, a: usize, up: bool, gp: Vec3, dg: Vec3, block: u32) -> u32 {
+        if block == u32::MAX {
+            return 4;
+        }
+        let data = self.grid.contour.unwrap();
+        let b = (a + 1) % 3;
+        let e = (a + 2) % 3;
+        let mut q = c.as_uvec3() & UVec3::splat(3);
+        q[a] += if up { 0 } else { 1 };
+        let st = UVec3::new(1, 5, 25);
+        let i = self.p.contour[0] as usize + block as usize * 125 + q.dot(st) as usize;
+        let (sb, se) = (st[b] as usize, st[e] as usize);
+        let iso = f32::from_bits(self.p.contour[3]);
+        let f = [data[i], data[i + sb], data[i + se], data[i + sb + se]].map(|s| f32::from_bits(s) - iso);
+        contour_side(f, [gp[b] - c[b] as f32, gp[e] - c[e] as f32], [dg[b], dg[e], dg[a]], self.margin)
+    }
+
+    /// iso.wgsl `exits`.
+    #[inline]
+    fn exits(c: IVec3, t0: Vec3, dt: Vec3) -> Vec3 {
+        c.as_vec3() * dt + t0
+    }
+
+    /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes.
+    fn ray(&self, x: u32, y: u32) -> f32 {
+        let p = self.p;
+        let (w, h) = (p.dims[3], p.size[0]);
+        let ndc = [(x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0];
+        let o = v3(p.ray_o) + ndc[0] * v3(p.ray_ox) + ndc[1] * v3(p.ray_oy);
+        let mut d = v3(p.ray_d) + ndc[0] * v3(p.ray_dx) + ndc[1] * v3(p.ray_dy);
+        let parallel = d.abs().cmplt(Vec3::splat(1e-30));
+        d = pick(parallel, Vec3::splat(1e-30), d);
+        let inv = 1.0 / d;
+        let (lo, hi, node, dims) = (self.lo, self.hi, self.node, self.dims);
+        let margin = self.margin * node;
+        let ta = (lo - o) * inv;
+        let tb = (hi - o) * inv;
+        let in0 = ta.x.min(tb.x).max(ta.y.min(tb.y)).max(ta.z.min(tb.z).max(0.0));
+        let in1 = ta.x.max(tb.x).min(ta.y.max(tb.y)).min(ta.z.max(tb.z));
+        let tmin = ta.min(tb) - (margin * inv).abs();
+        let tmax = ta.max(tb) + (margin * inv).abs();
+        let t0 = tmin.x.max(tmin.y).max(tmin.z.max(0.0));
+        let t1 = tmax.x.min(tmax.y).min(tmax.z);
+        if t0 >= t1 || t0.is_nan() || t1.is_nan() {
+            return 0.0;
+        }
+        let pt = o + d * t0;
+        let mut c = ((pt - lo) / node).floor().clamp(Vec3::ZERO, (dims - 1).as_vec3()).as_ivec3();
+        let fwd = d.cmpgt(Vec3::ZERO);
+        let stp = IVec3::select(fwd, IVec3::ONE, IVec3::NEG_ONE);
+        let ahead = pick(fwd, Vec3::ONE, Vec3::ZERO);
+        let xt0 = pick(parallel, Vec3::splat(1e30), (lo + ahead * node - o) * inv);
+        let xdt = pick(parallel, Vec3::ZERO, node * inv);
+        let mut tnext = Self::exits(c, xt0, xdt);
+        // 1 / |dt| (+inf along a parallel axis, whose crossings are at 1e30).
+        let rdt = 1.0 / xdt.abs();
+        let dg = d / node;
+        let og = (o - lo) / node;
+        let ext = (hi - lo) / node;
+        let hw = self.margin;
+        let single = p.size[2] == 1;
+        let mut last = 0u32;
+        let mut t_enter = t0;
+        let mut crossed: i32 = -1;
+        let mut prev_info = 0u32;
+        let mut stepped = false;
+        let mut brick_at = usize::MAX;
+        let mut brick = u32::MAX;
+        loop {
+            let info = self.node_info(c);
+            let k = info & 3;
+            let ax = crossed.clamp(0, 2) as usize;
+            let up = stp[ax] > 0;
+            let owner = if up { info } else { prev_info };
+            let uniform = (owner >> (4 + ax as u32)) & 1 == 1;
+            let face_in = single && stepped && t_enter > in0 && t_enter < in1;
+            let gp = dg * t_enter + og;
+            let mut fk = if face_in && uniform {
+                if owner & 128 != 0 {
+                    1
+                } else {
+                    2
+                }
+            } else {
+                0
+            };
+            if self.contours && face_in && !uniform {
+                let cb = self.contour_brick(c);
+                if cb != brick_at {
+                    brick = self.grid.contour.unwrap()[cb];
+                    brick_at = cb;
+                }
+                let side = self.face_side(c, ax, up, gp, dg, brick);
+                if side != 4 {
+                    fk = side;
+                }
+            }
+            let at_box = gp.abs().cmplt(Vec3::splat(hw)).any() || (gp - ext).abs().cmplt(Vec3::splat(hw)).any();
+            let mut stop = fk != 0 && last != 0 && last != fk && !at_box;
+            if fk != 0 {
+                last = fk;
+            }
+            let close = (gp - floor3(gp + 0.5)).abs().cmplt(Vec3::splat(hw));
+            // Near events: bits 1-3 (the crossed axis's plane is behind the ray).
+            let behind = u32::from(crossed >= 0) * (2 << crossed.max(0));
+            // (In a skippable brick every cell around is of the brick's class: nothing to mark.)
+            let near = (close.bitmask() << 1) & !behind & if info & 4 != 0 { 0 } else { !0 };
+            let bits = u32::from((k == 0 || k == 3) && !stop) | near;
+            if bits != 0 {
+                self.mark_cell(c, bits);
+            }
+            if k == 3 || (at_box && k == 0) || tnext.min_element() <= in0 || t_enter >= in1 {
+                last = 0;
+            } else if k != 0 {
+                stop = stop || (last != 0 && last != k && !at_box);
+                last = k;
+            }
+            if stop {
+                let q = o + d * (t_enter + p.lo[3] / d.length());
+                let clip = *self.view_proj * Vec4::new(q.x, q.y, q.z, 1.0);
+                return (clip.z / clip.w).clamp(0.0, 1.0);
+            }
+            let skip = p.bricks[0] != 0 && last == k && k != 0 && info & 4 != 0;
+            let tx;
+            let a;
+            if !skip {
+                // One cell: its exits are `tnext`; only axis `a` advances (the shader's closed
+                // form gives n = 0 for the others).
+                let a01 = usize::from(tnext.y < tnext.x);
+                a = if tnext.z < tnext.x.min(tnext.y) { 2 } else { a01 };
+                tx = tnext[a];
+                if tx >= t1 {
+                    return 0.0;
+                }
+                c[a] += stp[a];
+                tnext[a] = c[a] as f32 * xdt[a] + xt0[a];
+            } else {
+                let s = p.size[1] + if info & 8 != 0 { p.bricks[1] } else { p.bricks[0] };
+                let blo = (c >> s as i32) << s as i32;
+                let e = IVec3::select(stp.cmpgt(IVec3::ZERO), (blo + IVec3::splat((1 << s) - 1)).min(dims - 1), blo);
+                let xe = Self::exits(e, xt0, xdt);
+                let a01 = usize::from(xe.y < xe.x);
+                a = if xe.z < xe.x.min(xe.y) { 2 } else { a01 };
+                tx = xe[a];
+                if tx >= t1 {
+                    return 0.0;
+                }
+                let most = (e - c).abs();
+                let mut n = IVec3::ZERO;
+                for i in 0..3 {
+                    if i == a {
+                        continue;
+                    }
+                    let lower = i < a;
+                    // ceil((tx - tnext) / |dt|) within [0, most] (`max` drops a NaN).
+                    let est = ((tx - tnext[i]) * rdt[i]).max(0.0).min(most[i] as f32);
+                    let mut ni = est as i32;
+                    ni += i32::from((ni as f32) < est);
+                    let xb = (c[i] + (ni - 1) * stp[i]) as f32 * xdt[i] + xt0[i];
+                    if ni > 0 && !(xb < tx || (xb == tx && lower)) {
+                        ni -= 1;
+                    }
+                    let xn = (c[i] + ni * stp[i]) as f32 * xdt[i] + xt0[i];
+                    if ni < most[i] && (xn < tx || (xn == tx && lower)) {
+                        ni += 1;
+                    }
+                    n[i] = ni;
+                }
+                c += n * stp;
+                c[a] = e[a] + stp[a];
+                tnext = Self::exits(c, xt0, xdt);
+            }
+            t_enter = tx;
+            crossed = a as i32;
+            prev_info = info;
+            stepped = !skip;
+            if c.cmplt(IVec3::ZERO).any() || c.cmpge(dims).any() {
+                return 0.0;
+            }
+        }
+    }
+}
+
+/// iso.wgsl `contour_side`: the side of the surface (1 = below, 2 = above, 0 = not known) of
+/// point `uv` of a face whose corners (0, 0), (1, 0), (0, 1), (1, 1) have the values `f` minus
+/// the isovalue; `ray` the ray's direction along u, v and the face's normal; `m` the margin.
+fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
+    if f.contains(&0.0) {
+        return 0;
+    }
+    let k = f.map(|v| if v >= 0.0 { 2u32 } else { 1 });
+    let ea = [f[0], f[2], f[0], f[1]];
+    let eb = [f[1], f[3], f[2], f[3]];
+    let cr: [bool; 4] = std::array::from_fn(|i| (ea[i] >= 0.0) != (eb[i] >= 0.0));
+    let t: [f32; 4] = std::array::from_fn(|i| if cr[i] { ea[i] / (ea[i] - eb[i]) } else { 0.5 });
+    if !cr.iter().any(|&b| b) {
+        return k[0];
+    }
+    let [u, v] = uv;
+    let px = [u, 1.0 - u, u, 1.0 - u];
+    let py = [v, v, 1.0 - v, 1.0 - v];
+    let tx = [t[0], 1.0 - t[0], t[1], 1.0 - t[1]];
+    let ty = [t[2], t[3], 1.0 - t[2], 1.0 - t[3]];
+    let n2 = ray[2] * ray[2];
+    let m2 = m * m;
+    let sx = [ray[0], -ray[0], ray[0], -ray[0]];
+    let sy = [ray[1], ray[1], -ray[1], -ray[1]];
+    let both = [cr[0] && cr[2], cr[0] && cr[3], cr[1] && cr[2], cr[1] && cr[3]];
+    let mut g = [0.0f32; 4];
+    let mut far = [false; 4];
+    for i in 0..4 {
+        g[i] = px[i] * ty[i] + py[i] * tx[i] - tx[i] * ty[i];
+        let qr = ty[i] * sx[i] + tx[i] * sy[i];
+        far[i] = g[i] * g[i] * n2 > m2 * (n2 * (tx[i] * tx[i] + ty[i] * ty[i]) + qr * qr);
+    }
+    let mut r = 0;
+    for i in (0..4).rev() {
+        if both[i] && far[i] && g[i] < 0.0 {
+            r = k[i];
+        }
+    }
+    let n_cut = both.iter().filter(|&&b| b).count();
+    if n_cut == 1 && (0..4).any(|i| both[i] && far[i] && g[i] > 0.0) {
+        let kc: u32 = (0..4).filter(|&i| both[i]).map(|i| k[i]).sum();
+        r = 3 - kc;
+    }
+    let sv = t[3] - t[2];
+    let su = t[1] - t[0];
+    let gv = v - t[2] - u * sv;
+    let gu = u - t[0] - v * su;
+    let qv = ray[1] - sv * ray[0];
+    let qu = ray[0] - su * ray[1];
+    let far_v = gv * gv * n2 > m2 * (n2 * (1.0 + sv * sv) + qv * qv);
+    let far_u = gu * gu * n2 > m2 * (n2 * (1.0 + su * su) + qu * qu);
+    if cr[2] && cr[3] && !cr[0] && !cr[1] && far_v {
+        r = if gv < 0.0 { k[0] } else { k[2] };
+    }
+    if cr[0] && cr[1] && !cr[2] && !cr[3] && far_u {
+        r = if gu < 0.0 { k[0] } else { k[1] };
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::camera::{Camera, Projection};
+    use crate::gpu::GpuContext;
+    use crate::iso::render::{IsoCulling, IsoOptions, IsoRenderer, IsoWalk};
+    use crate::iso::{MinMaxOctree, Volume};
+
+    /// Deterministic noise in [-1, 1] (a hash of the index).
+    fn noise(i: usize, seed: u64) -> f32 {
+        let mut x = (i as u64 ^ seed).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        x ^= x >> 29;
+        x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        x ^= x >> 32;
+        (x as f64 / u64::MAX as f64 * 2.0 - 1.0) as f32
+    }
+
+    /// The host's walk and the compute pass give the same cells seen (per node), the same map to
+    /// a few ulps (the shader's fused multiply-adds) and the unculled image, on a dense wavy
+    /// field (contours), smoothed noise with NaN samples and samples on the isovalue, and a
+    /// sphere; single-cell and coarser occluders, perspective and orthographic views.
+    #[test]
+    fn host_walk_matches_the_compute_walk() {
+        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
+        let mut r = IsoRenderer::new(&ctx);
+        let wavy = Volume::from_fn((37, 33, 29), [0.0; 3], [1.0, 1.0, 0.5], |x, y, z| {
+            ((0.41 * x).sin() + (0.33 * y + 0.13 * x).cos() + (0.67 * z).sin() * 0.8 - 0.2) as f32
+        })
+        .unwrap();
+        let (nx, ny, nz) = (23, 19, 17);
+        let mut v: Vec<f32> = (0..nx * ny * nz).map(|i| noise(i, 7)).collect();
+        for _ in 0..2 {
+            let at = |i: usize, j: usize, k: usize| v[(k * ny + j) * nx + i];
+            let mut s = v.clone();
+            for k in 1..nz {
+                for j in 1..ny {
+                    for i in 1..nx {
+                        s[(k * ny + j) * nx + i] =
+                            (at(i, j, k) + at(i - 1, j, k) + at(i, j - 1, k) + at(i, j, k - 1)) / 4.0;
+                    }
+                }
+            }
+            v = s;
+        }
+        for (i, x) in v.iter_mut().enumerate() {
+            let h = noise(i, 11);
+            if h > 0.97 {
+                *x = f32::NAN;
+            } else if h < -0.95 {
+                *x = 0.0;
+            }
+        }
+        let noisy = Volume::new(Arc::from(v), (nx, ny, nz), [0.0; 3], [1.0; 3]).unwrap();
+        let sphere = crate::iso::sphere_field(24, 0.6);
+        let mut compared = 0;
+        for vol in [&wavy, &noisy, &sphere] {
+            let tree = MinMaxOctree::build(vol);
+            let md = tree.max_depth();
+            let size = [vol.nx, vol.ny, vol.nz].map(|n| n as f64 - 1.0);
+            let c = [0, 1, 2].map(|a| vol.origin[a] + 0.5 * size[a] * vol.spacing[a]);
+            let span = (0..3).map(|a| size[a] * vol.spacing[a]).fold(0.0, f64::max);
+            for (dir, proj) in [
+                ([2.0, 1.3, 0.9], Projection::Perspective),
+                ([-0.8, 2.1, -1.2], Projection::Perspective),
+                ([0.3, -0.2, 3.0], Projection::Orthographic),
+            ] {
+                let eye = [0, 1, 2].map(|a| c[a] + dir[a] * span);
+                let cam =
+                    Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(1.2 * span), 1.0).unwrap();
+                let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
+                let none = r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &none_opts).unwrap();
+                for occluder_depth in [Some(md), Some(md - 1)] {
+                    let mut frame = |walk| {
+                        let opts = IsoOptions { occluder_depth, walk, return_map: true, ..Default::default() };
+                        r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &opts).unwrap()
+                    };
+                    let (gpu, host) = (frame(IsoWalk::Gpu), frame(IsoWalk::Cpu));
+                    assert_eq!(gpu.stats.walk_on_host, Some(false));
+                    assert_eq!(host.stats.walk_on_host, Some(true));
+                    assert_eq!(host.node_pixels, gpu.node_pixels, "{eye:?} {occluder_depth:?}");
+                    assert_eq!(host.image, none.image, "{eye:?} {occluder_depth:?}");
+                    assert_eq!(gpu.image, none.image, "{eye:?} {occluder_depth:?}");
+                    assert_eq!(host.depth, none.depth);
+                    for (a, b) in host.map.unwrap().iter().zip(gpu.map.as_ref().unwrap()) {
+                        assert!(a == b || (a - b).abs() <= 1e-5 * a.abs(), "map {a} against {b}");
+                    }
+                    compared += gpu.node_pixels.iter().filter(|&&n| n > 0).count();
+                }
+            }
+        }
+        assert!(compared > 1000, "the walks saw cells to compare ({compared})");
+    }
+
+    /// `contour_side` on faces whose answer is known: uniform faces, a corner cut off, a segment
+    /// across, a corner on the isovalue, and a point too near the segment for the margin.
+    #[test]
+    fn contour_side_known_faces() {
+        let straight = [0.0, 0.0, 1.0];
+        assert_eq!(contour_side([-1.0; 4], [0.5, 0.5], straight, 0.01), 1);
+        assert_eq!(contour_side([1.0; 4], [0.3, 0.9], straight, 0.01), 2);
+        // Corner (0, 0) above, cut off at u = v = 0.5: inside its triangle above, beyond it below.
+        let f = [1.0, -1.0, -1.0, -1.0];
+        assert_eq!(contour_side(f, [0.1, 0.1], straight, 0.01), 2);
+        assert_eq!(contour_side(f, [0.8, 0.8], straight, 0.01), 1);
+        assert_eq!(contour_side(f, [0.2, 0.2], straight, 0.01), 2);
+        assert_eq!(contour_side(f, [0.251, 0.251], straight, 0.01), 0, "within the margin of the segment");
+        // Two corners on each side: the segment from (0.25, 0) to (0.75, 1).
+        let f = [1.0, -3.0, 3.0, -1.0];
+        assert_eq!(contour_side(f, [0.1, 0.5], straight, 0.01), 2);
+        assert_eq!(contour_side(f, [0.9, 0.5], straight, 0.01), 1);
+        // A corner on the isovalue: not known.
+        assert_eq!(contour_side([0.0, 1.0, 1.0, 1.0], [0.9, 0.9], straight, 0.01), 0);
+        // Ambiguous face (opposite corners alike): its middle is not known.
+        assert_eq!(contour_side([1.0, -1.0, -1.0, 1.0], [0.5, 0.5], straight, 0.01), 0);
+    }
+}
