@@ -120,10 +120,13 @@ def test_sphere_back_half_culled_and_image_equal(renderer):
                                          cull_depth=md - 1, return_map=True, walk="gpu")
         host = renderer.render_isosurface(v, 0.0, cam, culling="implicit", occluder_depth=md,
                                           cull_depth=md - 1, return_map=True, walk="cpu")
-        # the host's walk sees the same cells and proves the same map (to the shader's rounding)
-        np.testing.assert_array_equal(host.tile_pixels, res.tile_pixels)
+        # the host's walk also places contours on this sparse surface (the compute walk only on
+        # dense ones): the same image, from a subset of the cells the compute walk saw
         np.testing.assert_array_equal(host.image, ref.image)
-        np.testing.assert_allclose(host.occlusion_map, res.occlusion_map, rtol=1e-5)
+        assert (host.tile_pixels <= res.tile_pixels).all()
+        assert host.stats["surface_triangles"] <= res.stats["surface_triangles"]
+        hm = host.occlusion_map
+        assert (ref.depth[np.isfinite(hm)] <= hm[np.isfinite(hm)] * (1 + 1e-5)).all()
         s = res.stats
         # The image is identical: the method is conservative.
         assert np.array_equal(res.image, ref.image)
@@ -313,12 +316,13 @@ def contour_bricks(vals, w, b=4):
 
 
 @pytest.mark.parametrize("walk", WALKS)
-def test_contour_bricks_kept_where_the_walk_runs_where_the_surface_is_dense(walk):
+def test_contour_bricks_kept_where_the_walk_runs(walk):
     # The walk places the contour of the faces it crosses from the samples of the bricks of 4^3
     # cells that hold surface (a word per brick, 125 samples per brick with surface), kept with
     # the class grid: made by the first implicit frame with single-cell occluders, dropped with
-    # the caches; by default only where at least half the bricks hold surface (a wavy field, not
-    # a small sphere); coarser occluders and "none" make none.
+    # the caches; by default for the compute walk only where at least half the bricks hold surface
+    # (a wavy field, not a small sphere), always for the host's; coarser occluders and "none" make
+    # none.
     r = gc.Renderer(48, 40)
     cam, _ = cam_around(30.0)
     z, y, x, h = grid(24)
@@ -328,7 +332,8 @@ def test_contour_bricks_kept_where_the_walk_runs_where_the_surface_is_dense(walk
         v = gc.Volume(vals, origin=(-1, -1, -1), spacing=(h, h, h))
         bricks, stored = contour_bricks(vals, 0.0)
         assert (stored >= bricks / 2) == dense, (stored, bricks)
-        expected = 4 * (bricks + 125 * stored) if dense else 0
+        # (the host's walk places contours wherever the surface is)
+        expected = 4 * (bricks + 125 * stored) if dense or walk == "cpu" else 0
         md = v.max_depth()
         assert r.render_isosurface(v, 0.0, cam, culling="none").stats["contour_bytes"] == 0
         assert r.render_isosurface(v, 0.0, cam, occluder_depth=md - 1, walk=walk).stats["contour_bytes"] == 0

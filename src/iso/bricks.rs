@@ -26,6 +26,9 @@ pub(super) const CLASS_NAN: u8 = 3;
 pub(super) const FINE_SHIFT: u32 = 2;
 /// Bricks of the coarse skip level: `2^COARSE_SHIFT` occluder nodes per axis.
 pub(super) const COARSE_SHIFT: u32 = 4;
+/// Bricks of the host walk's third skip level: `2^HUGE_SHIFT` occluder nodes per axis
+/// ([`huge_bricks`]).
+pub(super) const HUGE_SHIFT: u32 = 6;
 
 /// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
 /// (NaN-free by [`classify_range`]), NaN (any NaN sample: outside the domain), else passable.
@@ -377,6 +380,15 @@ pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3]) -> Vec<u8> {
 pub(super) fn skip_bricks(bricked: &[u8]) -> Vec<u8> {
     const _: () = assert!(FINE_SHIFT == 2);
     bricked.par_chunks(64).map(|b| if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) { b[0] } else { 0 }).collect()
+}
+
+/// The host walk's third level of skip bricks, `2^HUGE_SHIFT` nodes per axis: Below / Above
+/// where the brick and its one-node ring are all of that class, else 0 (x fastest), and their
+/// dims; from `nodes` as [`pack_nodes`] takes them. A ray in empty space jumps up to 64 cells at
+/// once where the coarse level stops every 16 (on the frog most of the walk's steps are jumps).
+pub(super) fn huge_bricks(nodes: &[u8], dims: [u32; 3]) -> (Vec<u8>, [u32; 3]) {
+    let [_, huge] = brick_classes(nodes, dims, COARSE_SHIFT, HUGE_SHIFT);
+    huge
 }
 
 /// Where [`pack_nodes`] puts node `p` of a grid of `dims` nodes: brick `p / 4` (x fastest over

@@ -9,7 +9,9 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{pack2, pack_nodes, skip_bricks, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT};
+use super::bricks::{
+    huge_bricks, pack2, pack_nodes, skip_bricks, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT,
+};
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
@@ -65,8 +67,9 @@ pub(super) enum WalkData {
     /// For the compute walk ([`march`]).
     Gpu { nodes: wgpu::Buffer, contour: Option<(wgpu::Buffer, u32)> },
     /// For the host's walk (`super::walk`), with the skippable bricks' bytes
-    /// ([`super::bricks::skip_bricks`]).
-    Host { nodes: Vec<u8>, skip: Vec<u8>, contour: Option<(Vec<u32>, u32)> },
+    /// ([`super::bricks::skip_bricks`]) and its third level of skip bricks
+    /// ([`super::bricks::huge_bricks`]).
+    Host { nodes: Vec<u8>, skip: Vec<u8>, huge: (Vec<u8>, [u32; 3]), contour: Option<(Vec<u32>, u32)> },
 }
 
 impl WalkData {
@@ -116,12 +119,14 @@ impl ClassGrid {
         let [n_below, n_above, n_nan] = n;
         let classes = pack2(&nodes);
         let bricked = pack_nodes(&nodes, dims);
+        let huge = host.then(|| huge_bricks(&nodes, dims));
         drop(nodes);
         // (Without a brick that holds surface the walk has nothing to read.)
         let contour = contour.filter(|(words, at)| words.len() > *at);
         let data = if host {
             let skip = skip_bricks(&bricked);
-            WalkData::Host { nodes: bricked, skip, contour: contour.map(|(words, at)| (words, at as u32)) }
+            let huge = huge.unwrap_or_default();
+            WalkData::Host { nodes: bricked, skip, huge, contour: contour.map(|(words, at)| (words, at as u32)) }
         } else {
             let nodes = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("iso_classes"),

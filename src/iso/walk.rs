@@ -7,15 +7,25 @@
 //! branch of the loop taken for every lane, and reads storage buffers one lane at a time; the
 //! same walk compiled for the host's cores steps each ray by itself, takes only its own branches
 //! and reads the node bytes with plain loads. The two are kept alike by the tests
-//! (`tests/test_iso.py`: both walks against `culling = "none"`; here, marks compared on random
-//! volumes). Crossings use unfused multiply-adds (the shader's `fma`): what matters is that a
+//! (`tests/test_iso.py`: both walks against `culling = "none"`; here, the cells seen per node and
+//! the maps compared on a wavy field, noise with NaN samples, a sphere and a volume with whole
+//! 64³ bricks). Crossings use unfused multiply-adds (the shader's `fma`): what matters is that a
 //! brick jump and single steps compute them alike, which they do within each walk.
+//!
+//! What only the host's walk does, each exact (the cells seen and the map are the shader's):
+//! nodes of skippable bricks come from a table of their bytes (`bricks::skip_bricks`, cached
+//! where the 32 MB of the frog's nodes are not); a cell of a skippable brick marks no near
+//! event (every cell around it is of the brick's class, so the event would mark nothing); and
+//! a coarse jump extends to a third level of skip bricks, 64³ nodes with their ring
+//! (`bricks::huge_bricks`), through which the cell-by-cell walk would mark nothing and never
+//! stop, as through the two levels the shader knows.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::{BVec3, IVec3, Mat4, UVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::bricks::HUGE_SHIFT;
 use super::passes::MapParams;
 
 /// What the walk reads: the occluder nodes (one byte each in bricks of 4³, `bricks::pack_nodes`)
@@ -26,6 +36,9 @@ pub(super) struct WalkGrid<'a> {
     /// Per brick of 4³ nodes, the byte of each of its nodes when it is a skippable brick, else 0
     /// (`bricks::skip_bricks`).
     pub(super) skip: &'a [u8],
+    /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::huge_bricks`): a
+    /// brick's class where it and its ring are all of it, else 0; and their dims.
+    pub(super) huge: (&'a [u8], [u32; 3]),
     pub(super) contour: Option<&'a [u32]>,
 }
 
@@ -134,6 +147,14 @@ impl<'a> Walker<'a> {
             return t as u32;
         }
         self.grid.nodes[(bi << 6) | ((l.z << 4) | (l.y << 2) | l.x) as usize] as u32
+    }
+
+    /// The class of the third-level skip brick holding march cell `c` when it is skippable, else 0.
+    #[inline]
+    fn huge_class(&self, c: IVec3) -> u32 {
+        let (classes, [hx, hy, _]) = self.grid.huge;
+        let u = (c.as_uvec3() >> (self.p.size[1] + HUGE_SHIFT)).to_array().map(|v| v as usize);
+        classes.get((u[2] * hy as usize + u[1]) * hx as usize + u[0]).map_or(0, |&k| k as u32)
     }
 
     /// iso.wgsl `contour_brick`.
@@ -280,7 +301,13 @@ impl<'a> Walker<'a> {
                 c[a] += stp[a];
                 tnext[a] = c[a] as f32 * xdt[a] + xt0[a];
             } else {
-                let s = p.size[1] + if info & 8 != 0 { p.bricks[1] } else { p.bricks[0] };
+                // (A coarse brick in a skippable third-level brick: that one's exit.)
+                let level = match info & 8 != 0 {
+                    true if self.huge_class(c) == k => HUGE_SHIFT,
+                    true => p.bricks[1],
+                    false => p.bricks[0],
+                };
+                let s = p.size[1] + level;
                 let blo = (c >> s as i32) << s as i32;
                 let e = IVec3::select(stp.cmpgt(IVec3::ZERO), (blo + IVec3::splat((1 << s) - 1)).min(dims - 1), blo);
                 let xe = Self::exits(e, xt0, xdt);
@@ -459,9 +486,13 @@ mod tests {
                     Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(1.2 * span), 1.0).unwrap();
                 let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
                 let none = r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &none_opts).unwrap();
-                for occluder_depth in [Some(md), Some(md - 1)] {
+                // (Contours chosen explicitly: by default the host's walk places them on any
+                // surface, the compute walk only on dense ones.)
+                for (occluder_depth, face_contours) in [(md, false), (md, true), (md - 1, false)] {
                     let mut frame = |walk| {
-                        let opts = IsoOptions { occluder_depth, walk, return_map: true, ..Default::default() };
+                        let (occluder_depth, face_contours) = (Some(occluder_depth), Some(face_contours));
+                        let opts =
+                            IsoOptions { occluder_depth, face_contours, walk, return_map: true, ..Default::default() };
                         r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &opts).unwrap()
                     };
                     let (gpu, host) = (frame(IsoWalk::Gpu), frame(IsoWalk::Cpu));
@@ -479,6 +510,65 @@ mod tests {
             }
         }
         assert!(compared > 1000, "the walks saw cells to compare ({compared})");
+    }
+
+    /// Jumps of the third skip level (64³ cells) land where the compute walk's steps do: a
+    /// volume below a plane and above it, with blobs of the other class at a few places and a
+    /// NaN slab, large enough for whole 64³ bricks (and their rings) of each class.
+    #[test]
+    fn huge_jumps_see_what_the_compute_walk_sees() {
+        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
+        let mut r = IsoRenderer::new(&ctx);
+        let blobs = [[70.0, 66.0, 40.0], [20.0, 100.0, 100.0], [130.5, 64.0, 66.5], [64.0, 20.0, 90.0]];
+        let mut vol = Volume::from_fn((150, 140, 136), [0.0; 3], [1.0; 3], |x, y, z| {
+            let bump: f64 = blobs
+                .iter()
+                .map(|b| (-((x - b[0]).powi(2) + (y - b[1]).powi(2) + (z - b[2]).powi(2)) / 8.0).exp())
+                .sum();
+            let base = if z > 66.5 { 1.0 } else { -1.0 };
+            (base * (1.0 - 2.5 * bump)) as f32
+        })
+        .unwrap();
+        let mut v = vol.values.to_vec();
+        for k in 100..110 {
+            for j in 0..40 {
+                for i in 0..150 {
+                    v[(k * 140 + j) * 150 + i] = f32::NAN;
+                }
+            }
+        }
+        vol = Volume::new(Arc::from(v), (150, 140, 136), [0.0; 3], [1.0; 3]).unwrap();
+        let tree = MinMaxOctree::build(&vol);
+        let md = tree.max_depth();
+        let dims = tree.dims_at_depth(md).unwrap();
+        let mut nodes = tree.leaf_nodes(0.0).unwrap();
+        crate::iso::bricks::dilate_nan(&mut nodes, dims);
+        let (huge, _) = crate::iso::bricks::huge_bricks(&nodes, dims);
+        for k in [1, 2] {
+            assert!(huge.contains(&k), "whole 64³ bricks of class {k}");
+        }
+        let c = [75.0, 70.0, 68.0];
+        for (eye, proj) in [
+            ([300.0, 210.0, 190.0], Projection::Perspective),
+            ([-120.0, 40.0, -60.0], Projection::Perspective),
+            ([75.5, 70.0, 400.0], Projection::Orthographic),
+        ] {
+            let cam = Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(200.0), 1.0).unwrap();
+            let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
+            let none = r.render(&ctx, 64, 56, &vol, &tree, 0.0, &cam, &none_opts).unwrap();
+            let mut frame = |walk| {
+                let opts = IsoOptions { walk, return_map: true, face_contours: Some(true), ..Default::default() };
+                r.render(&ctx, 64, 56, &vol, &tree, 0.0, &cam, &opts).unwrap()
+            };
+            let (gpu, host) = (frame(IsoWalk::Gpu), frame(IsoWalk::Cpu));
+            assert_eq!(host.node_pixels, gpu.node_pixels, "{eye:?}");
+            assert_eq!(host.image, none.image, "{eye:?}");
+            assert_eq!(gpu.image, none.image, "{eye:?}");
+            for (a, b) in host.map.unwrap().iter().zip(gpu.map.as_ref().unwrap()) {
+                assert!(a == b || (a - b).abs() <= 1e-5 * a.abs(), "map {a} against {b}");
+            }
+            assert!(host.stats.surface_triangles < none.stats.surface_triangles, "{eye:?}");
+        }
     }
 
     /// `contour_side` on faces whose answer is known: uniform faces, a corner cut off, a segment
