@@ -292,8 +292,9 @@ class Renderer:
         proven).  walk: where the implicit walk (map and cells seen, one ray per pixel) runs: "gpu"
         (a compute pass), "cpu" (the host's cores, the same walk step for step) or "auto" (default:
         "cpu" when the adapter is a CPU itself, lavapipe or llvmpipe, whose compute passes run the
-        walk's every branch on every SIMD lane; else "gpu"). Both give the same image and cells
-        seen; ``stats["walk"]`` says where it ran.
+        walk's every branch on every SIMD lane; else "gpu"). Both give the same image (the host's
+        walk also stops at the surface's contours on sparse surfaces, so it may draw fewer
+        triangles); ``stats["walk"]`` says where it ran.
 
         The result's ``tile_pixels`` / ``tile_drawn`` are per *node*: one entry per node at
         ``cull_depth`` that may hold surface (``result.nodes``: (n, 4) [depth, ix, iy, iz]) — the

@@ -126,9 +126,10 @@
 //! time with every branch of the loop taken for every lane and reads storage buffers lane by lane,
 //! where the host steps each ray by itself, takes only its own branches and reads node bytes with
 //! plain loads, and a table of the skippable bricks' bytes ([`super::bricks::skip_bricks`],
-//! 1/64 of the nodes) keeps a brick jump's read in the caches. The two walks see the same cells
-//! and prove the same map (to the shader's rounding, `walk.rs` tests); the host's needs no
-//! submission or read-back before the draw.
+//! 1/64 of the nodes) keeps a brick jump's read in the caches; it also jumps a third level of
+//! skip bricks and places contours on every surface (`IsoOptions::face_contours`). With the same
+//! contour choice the two walks see the same cells and prove the same map (to the shader's
+//! rounding, `walk.rs` tests); the host's needs no submission or read-back before the draw.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -249,7 +250,8 @@ pub struct IsoOptions {
     /// image; contours draw fewer triangles.
     pub face_contours: Option<bool>,
     /// Where the walk runs (`IsoWalk::Auto`: on the host when the adapter is a CPU). Both walks
-    /// give the same map, cells seen and image.
+    /// give the unculled image, and the same map and cells seen with the same `face_contours`
+    /// choice (by default the host's also places contours on sparse surfaces: fewer cells).
     pub walk: IsoWalk,
     /// Polled between the stages of the frame (map, each level of node tests, extraction); when
     /// it fires, `render` returns `Error::Interrupted` and the caches stay valid.
