@@ -393,8 +393,8 @@ pub(super) fn huge_bricks(nodes: &[u8], dims: [u32; 3]) -> (Vec<u8>, [u32; 3]) {
 
 /// Where [`pack_nodes`] puts node `p` of a grid of `dims` nodes: brick `p / 4` (x fastest over
 /// `ceil(dims / 4)` bricks), 64 bytes each, node `p % 4` inside (x fastest). (iso.wgsl
-/// `node_info` computes the same.)
-#[cfg(test)]
+/// `node_info` computes the same; the host's walk calls this.)
+#[inline]
 pub(super) fn brick_index(dims: [u32; 3], p: [u32; 3]) -> usize {
     let nb = dims.map(|v| v.div_ceil(4) as usize);
     let [b, l] = [p.map(|v| (v / 4) as usize), p.map(|v| (v % 4) as usize)];

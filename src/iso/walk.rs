@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use glam::{BVec3, IVec3, Mat4, UVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::bricks::HUGE_SHIFT;
+use super::bricks::{brick_index, HUGE_SHIFT};
 use super::passes::MapParams;
 
 /// What the walk reads: the occluder nodes (one byte each in bricks of 4³, `bricks::pack_nodes`)
@@ -85,6 +85,13 @@ fn floor3(v: Vec3) -> Vec3 {
     Vec3::new(f(v.x), f(v.y), f(v.z))
 }
 
+/// Where the ray leaves cell index `c` along one axis, `t0 + c dt` (unfused): every crossing the
+/// walk compares, single steps' and brick jumps' alike, comes from here, so they agree bit for bit.
+#[inline]
+fn exit(c: i32, t0: f32, dt: f32) -> f32 {
+    c as f32 * dt + t0
+}
+
 fn pick(m: BVec3, a: Vec3, b: Vec3) -> Vec3 {
     Vec3::select(m, a, b)
 }
@@ -136,17 +143,13 @@ impl<'a> Walker<'a> {
     /// iso.wgsl `node_info`, from the skippable bricks' table where it holds the node.
     #[inline]
     fn node_info(&self, c: IVec3) -> u32 {
-        let u = c.as_uvec3() >> self.p.size[1];
-        let nbx = ((self.p.occ_dims[0] + 3) >> 2) as usize;
-        let nby = ((self.p.occ_dims[1] + 3) >> 2) as usize;
-        let b = (u >> 2u32).to_array().map(|v| v as usize);
-        let l = u & UVec3::splat(3);
-        let bi = (b[2] * nby + b[1]) * nbx + b[0];
-        let t = self.grid.skip[bi];
-        if t != 0 {
-            return t as u32;
+        let [x, y, z, _] = self.p.occ_dims;
+        let i = brick_index([x, y, z], (c.as_uvec3() >> self.p.size[1]).to_array());
+        // (Its brick is byte `i / 64`'s.)
+        match self.grid.skip[i >> 6] {
+            0 => self.grid.nodes[i] as u32,
+            t => t as u32,
         }
-        self.grid.nodes[(bi << 6) | ((l.z << 4) | (l.y << 2) | l.x) as usize] as u32
     }
 
     /// The class of the third-level skip brick holding march cell `c` when it is skippable, else 0.
@@ -181,10 +184,10 @@ impl<'a> Walker<'a> {
         contour_side(f, [gp[b] - c[b] as f32, gp[e] - c[e] as f32], [dg[b], dg[e], dg[a]], self.margin)
     }
 
-    /// iso.wgsl `exits`.
+    /// iso.wgsl `exits`: where the ray leaves cell `c` across each axis, [`exit`] per axis.
     #[inline]
     fn exits(c: IVec3, t0: Vec3, dt: Vec3) -> Vec3 {
-        c.as_vec3() * dt + t0
+        Vec3::new(exit(c.x, t0.x, dt.x), exit(c.y, t0.y, dt.y), exit(c.z, t0.z, dt.z))
     }
 
     /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes.
@@ -299,7 +302,7 @@ impl<'a> Walker<'a> {
                     return 0.0;
                 }
                 c[a] += stp[a];
-                tnext[a] = c[a] as f32 * xdt[a] + xt0[a];
+                tnext[a] = exit(c[a], xt0[a], xdt[a]);
             } else {
                 // (A coarse brick in a skippable third-level brick: that one's exit.)
                 let level = match info & 8 != 0 {
@@ -328,11 +331,11 @@ impl<'a> Walker<'a> {
                     let est = ((tx - tnext[i]) * rdt[i]).max(0.0).min(most[i] as f32);
                     let mut ni = est as i32;
                     ni += i32::from((ni as f32) < est);
-                    let xb = (c[i] + (ni - 1) * stp[i]) as f32 * xdt[i] + xt0[i];
+                    let xb = exit(c[i] + (ni - 1) * stp[i], xt0[i], xdt[i]);
                     if ni > 0 && !(xb < tx || (xb == tx && lower)) {
                         ni -= 1;
                     }
-                    let xn = (c[i] + ni * stp[i]) as f32 * xdt[i] + xt0[i];
+                    let xn = exit(c[i] + ni * stp[i], xt0[i], xdt[i]);
                     if ni < most[i] && (xn < tx || (xn == tx && lower)) {
                         ni += 1;
                     }
