@@ -22,7 +22,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use glam::{BVec3, IVec3, Mat4, UVec3, Vec3, Vec4};
+use glam::{BVec3, IVec3, Mat4, UVec3, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::bricks::{brick_index, HUGE_SHIFT};
@@ -66,23 +66,6 @@ pub(super) fn walk(
 
 fn v3(v: [f32; 4]) -> Vec3 {
     Vec3::new(v[0], v[1], v[2])
-}
-
-/// `floor` per component without a libm call (the baseline x86-64 target has no rounding
-/// instruction): truncation, one less where it rounded up; values beyond i32 are left as they are
-/// (they are integers already, or the walk's margins do not reach them).
-#[inline]
-fn floor3(v: Vec3) -> Vec3 {
-    let f = |x: f32| {
-        let t = x as i32 as f32;
-        let t = t - f32::from(u8::from(t > x));
-        if x.abs() < 2.0e9 {
-            t
-        } else {
-            x
-        }
-    };
-    Vec3::new(f(v.x), f(v.y), f(v.z))
 }
 
 /// Where the ray leaves cell index `c` along one axis, `t0 + c dt` (unfused): every crossing the
@@ -167,7 +150,7 @@ impl<'a> Walker<'a> {
     }
 
     /// iso.wgsl `face_side`.
-    fn face_side(&self, c: IVec3, a: usize, up: bool, gp: Vec3, dg: Vec3, block: u32) -> u32 {
+    fn face_side(&self, c: IVec3, a: usize, up: bool, gp: Vec3A, dg: Vec3A, block: u32) -> u32 {
         if block == u32::MAX {
             return 4;
         }
@@ -223,10 +206,13 @@ impl<'a> Walker<'a> {
         let mut tnext = Self::exits(c, xt0, xdt);
         // 1 / |dt| (+inf along a parallel axis, whose crossings are at 1e30).
         let rdt = 1.0 / xdt.abs();
-        let dg = d / node;
-        let og = (o - lo) / node;
-        let ext = (hi - lo) / node;
+        // (SIMD vectors for the per-step point arithmetic: each lane rounds as the scalar
+        // operation does, so the results are the same bits.)
+        let dg = Vec3A::from(d / node);
+        let og = Vec3A::from((o - lo) / node);
+        let ext = Vec3A::from((hi - lo) / node);
         let hw = self.margin;
+        let hw3 = Vec3A::splat(hw);
         let single = p.size[2] == 1;
         let mut last = 0u32;
         let mut t_enter = t0;
@@ -264,12 +250,12 @@ impl<'a> Walker<'a> {
                     fk = side;
                 }
             }
-            let at_box = gp.abs().cmplt(Vec3::splat(hw)).any() || (gp - ext).abs().cmplt(Vec3::splat(hw)).any();
+            let at_box = (gp.abs().cmplt(hw3) | (gp - ext).abs().cmplt(hw3)).any();
             let mut stop = fk != 0 && last != 0 && last != fk && !at_box;
             if fk != 0 {
                 last = fk;
             }
-            let close = (gp - floor3(gp + 0.5)).abs().cmplt(Vec3::splat(hw));
+            let close = (gp - (gp + 0.5).floor()).abs().cmplt(hw3);
             // Near events: bits 1-3 (the crossed axis's plane is behind the ray).
             let behind = u32::from(crossed >= 0) * (2 << crossed.max(0));
             // (In a skippable brick every cell around is of the brick's class: nothing to mark.)
@@ -360,44 +346,42 @@ impl<'a> Walker<'a> {
 /// point `uv` of a face whose corners (0, 0), (1, 0), (0, 1), (1, 1) have the values `f` minus
 /// the isovalue; `ray` the ray's direction along u, v and the face's normal; `m` the margin.
 fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
-    if f.contains(&0.0) {
+    // (The four corners' terms in SIMD lanes: each lane rounds as the scalar operation would.)
+    let fv = Vec4::from_array(f);
+    if fv.cmpeq(Vec4::ZERO).any() {
         return 0;
     }
-    let k = f.map(|v| if v >= 0.0 { 2u32 } else { 1 });
-    let ea = [f[0], f[2], f[0], f[1]];
-    let eb = [f[1], f[3], f[2], f[3]];
-    let cr: [bool; 4] = std::array::from_fn(|i| (ea[i] >= 0.0) != (eb[i] >= 0.0));
-    let t: [f32; 4] = std::array::from_fn(|i| if cr[i] { ea[i] / (ea[i] - eb[i]) } else { 0.5 });
-    if !cr.iter().any(|&b| b) {
-        return k[0];
+    let k = |i: u32| if f[i as usize] >= 0.0 { 2u32 } else { 1 };
+    // Edges (corner pairs) 0-1, 2-3, 0-2, 1-3; crossed where their corners' signs differ.
+    let ea = Vec4::new(f[0], f[2], f[0], f[1]);
+    let eb = Vec4::new(f[1], f[3], f[2], f[3]);
+    let cr = ea.cmpge(Vec4::ZERO) ^ eb.cmpge(Vec4::ZERO);
+    let crm = cr.bitmask();
+    if crm == 0 {
+        return k(0);
     }
+    let t = Vec4::select(cr, ea / (ea - eb), Vec4::splat(0.5)).to_array();
     let [u, v] = uv;
-    let px = [u, 1.0 - u, u, 1.0 - u];
-    let py = [v, v, 1.0 - v, 1.0 - v];
-    let tx = [t[0], 1.0 - t[0], t[1], 1.0 - t[1]];
-    let ty = [t[2], t[3], 1.0 - t[2], 1.0 - t[3]];
+    let px = Vec4::new(u, 1.0 - u, u, 1.0 - u);
+    let py = Vec4::new(v, v, 1.0 - v, 1.0 - v);
+    let tx = Vec4::new(t[0], 1.0 - t[0], t[1], 1.0 - t[1]);
+    let ty = Vec4::new(t[2], t[3], 1.0 - t[2], 1.0 - t[3]);
     let n2 = ray[2] * ray[2];
     let m2 = m * m;
-    let sx = [ray[0], -ray[0], ray[0], -ray[0]];
-    let sy = [ray[1], ray[1], -ray[1], -ray[1]];
-    let both = [cr[0] && cr[2], cr[0] && cr[3], cr[1] && cr[2], cr[1] && cr[3]];
-    let mut g = [0.0f32; 4];
-    let mut far = [false; 4];
-    for i in 0..4 {
-        g[i] = px[i] * ty[i] + py[i] * tx[i] - tx[i] * ty[i];
-        let qr = ty[i] * sx[i] + tx[i] * sy[i];
-        far[i] = g[i] * g[i] * n2 > m2 * (n2 * (tx[i] * tx[i] + ty[i] * ty[i]) + qr * qr);
-    }
-    let mut r = 0;
-    for i in (0..4).rev() {
-        if both[i] && far[i] && g[i] < 0.0 {
-            r = k[i];
-        }
-    }
-    let n_cut = both.iter().filter(|&&b| b).count();
-    if n_cut == 1 && (0..4).any(|i| both[i] && far[i] && g[i] > 0.0) {
-        let kc: u32 = (0..4).filter(|&i| both[i]).map(|i| k[i]).sum();
-        r = 3 - kc;
+    let sx = Vec4::new(ray[0], -ray[0], ray[0], -ray[0]);
+    let sy = Vec4::new(ray[1], ray[1], -ray[1], -ray[1]);
+    // Corner i's cut (both its edges crossed): corners 0, 1, 2, 3 own edges (0, 2), (0, 3), (1, 2), (1, 3).
+    let c = |e: u32| crm >> e & 1;
+    let both = c(0) & c(2) | (c(0) & c(3)) << 1 | (c(1) & c(2)) << 2 | (c(1) & c(3)) << 3;
+    let g = px * ty + py * tx - tx * ty;
+    let qr = ty * sx + tx * sy;
+    let far = (g * g * n2).cmpgt(m2 * (n2 * (tx * tx + ty * ty) + qr * qr)).bitmask();
+    // In a cut-off corner's triangle (g < 0), far enough from its segment: that corner's side
+    // (the lowest such corner).
+    let inside = both & far & g.cmplt(Vec4::ZERO).bitmask();
+    let mut r = if inside != 0 { k(inside.trailing_zeros()) } else { 0 };
+    if both.count_ones() == 1 && both & far & g.cmpgt(Vec4::ZERO).bitmask() != 0 {
+        r = 3 - k(both.trailing_zeros());
     }
     let sv = t[3] - t[2];
     let su = t[1] - t[0];
@@ -407,11 +391,12 @@ fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
     let qu = ray[0] - su * ray[1];
     let far_v = gv * gv * n2 > m2 * (n2 * (1.0 + sv * sv) + qv * qv);
     let far_u = gu * gu * n2 > m2 * (n2 * (1.0 + su * su) + qu * qu);
-    if cr[2] && cr[3] && !cr[0] && !cr[1] && far_v {
-        r = if gv < 0.0 { k[0] } else { k[2] };
+    // One segment across the face: between edges 2-3 (v), or edges 0-1 (u).
+    if crm == 0b1100 && far_v {
+        r = if gv < 0.0 { k(0) } else { k(2) };
     }
-    if cr[0] && cr[1] && !cr[2] && !cr[3] && far_u {
-        r = if gu < 0.0 { k[0] } else { k[1] };
+    if crm == 0b0011 && far_u {
+        r = if gu < 0.0 { k(0) } else { k(1) };
     }
     r
 }
