@@ -223,10 +223,13 @@ pub fn contour_bricks(values: &[f32], samples: [usize; 3], blocks: &[[u32; 3]]) 
     }
     data.par_chunks_mut(n * n * n).zip(blocks).for_each(|(out, p)| {
         let o = p.map(|v| v as usize * b);
-        for (q, w) in out.iter_mut().enumerate() {
-            let s = [q % n, q / n % n, q / (n * n)];
-            let s = [0, 1, 2].map(|a| (o[a] + s[a]).min(samples[a] - 1));
-            *w = values[(s[2] * ny + s[1]) * nx + s[0]].to_bits();
+        // Row by row (x fastest), each sample index clamped to the volume.
+        for (r, row) in out.chunks_exact_mut(n).enumerate() {
+            let [y, z] = [(o[1] + r % n).min(ny - 1), (o[2] + r / n).min(samples[2] - 1)];
+            let src = &values[(z * ny + y) * nx..][..nx];
+            for (i, w) in row.iter_mut().enumerate() {
+                *w = src[(o[0] + i).min(nx - 1)].to_bits();
+            }
         }
     });
     (words, nb)
