@@ -27,8 +27,12 @@ pub(super) const FINE_SHIFT: u32 = 2;
 /// Bricks of the coarse skip level: `2^COARSE_SHIFT` occluder nodes per axis.
 pub(super) const COARSE_SHIFT: u32 = 4;
 /// Bricks of the host walk's third skip level: `2^HUGE_SHIFT` occluder nodes per axis
-/// ([`huge_bricks`]).
+/// ([`pack_nodes`] with `huge`).
 pub(super) const HUGE_SHIFT: u32 = 6;
+
+/// One level of skip bricks ([`brick_classes`]): a byte per brick (x fastest), and the bricks
+/// per axis.
+pub type BrickLevel = (Vec<u8>, [u32; 3]);
 
 /// The classes of the nodes at `depth` (x fastest, then y, z) for the map pass: Below / Above
 /// (NaN-free by [`classify_range`]), NaN (any NaN sample: outside the domain), else passable.
@@ -318,19 +322,15 @@ fn reduce(
 }
 
 /// The skip bricks of the class grid `classes` (dims `dims`; the class in bits 0-1, the other
-/// bits ignored) at two levels: bricks of `2^fine` and `2^coarse` nodes per axis (`coarse >
-/// fine`), each Below / Above when it and its one-node ring are all of that class, else 0.
-/// Returns the two grids (x fastest) and their dims.
-pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> [(Vec<u8>, [u32; 3]); 2] {
-    let d = dims.map(|v| v as usize);
-    // The classes present in each brick, as a bitmask (bit k: class k): separable, an OR.
-    let (f, fd) = reduce(classes, d, 1 << fine, 1, |k| 1 << (k & 3));
-    // A coarse brick's ring is the union of its fine bricks' rings: reduce without widening.
-    let (c, cd) = reduce(&f, fd, 1 << (coarse - fine), 0, |k| k);
-    let class = |v: Vec<u8>| -> Vec<u8> {
+/// bits ignored) at one level per shift of `shifts` (increasing): bricks of `2^shift` nodes per
+/// axis, each Below / Above when it and its one-node ring are all of that class, else 0. Returns
+/// the grids (x fastest) and their dims, one per shift. Each level after the first is reduced
+/// from the one before, not from the nodes: a brick's ring is the union of its sub-bricks' rings.
+pub fn brick_classes(classes: &[u8], dims: [u32; 3], shifts: &[u32]) -> Vec<BrickLevel> {
+    let class = |v: &[u8]| -> Vec<u8> {
         let (below, above) = (1 << CLASS_BELOW, 1 << CLASS_ABOVE);
-        v.into_par_iter()
-            .map(|m| {
+        v.par_iter()
+            .map(|&m| {
                 if m == below {
                     CLASS_BELOW
                 } else if m == above {
@@ -341,7 +341,18 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> 
             })
             .collect()
     };
-    [(class(f), fd.map(|v| v as u32)), (class(c), cd.map(|v| v as u32))]
+    // The classes present in each brick, as a bitmask (bit k: class k): separable, an OR.
+    let mut level: Option<(Vec<u8>, [usize; 3], u32)> = None;
+    let mut out = Vec::with_capacity(shifts.len());
+    for &s in shifts {
+        let (m, md) = match &level {
+            None => reduce(classes, dims.map(|v| v as usize), 1 << s, 1, |k| 1 << (k & 3)),
+            Some((prev, pd, ps)) => reduce(prev, *pd, 1 << (s - ps), 0, |k| k),
+        };
+        out.push((class(&m), md.map(|v| v as u32)));
+        level = Some((m, md, s));
+    }
+    out
 }
 
 /// The nodes as the walk reads them (iso.wgsl `node_info`), from `nodes` (dims `dims`, x
@@ -355,8 +366,17 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], fine: u32, coarse: u32) -> 
 /// neighbouring node, which a linear layout puts a row or a slice (up to hundreds of KB) away: on
 /// a CPU rasteriser each lane's read then missed the caches (the walk's hottest instruction on
 /// the frog's 32 MB grid); in bricks most steps stay in a line already read.
-pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3]) -> Vec<u8> {
-    let [(fine, fd), (coarse, cd)] = brick_classes(nodes, dims, FINE_SHIFT, COARSE_SHIFT);
+///
+/// With `huge`, also returns the third level of skip bricks (`2^HUGE_SHIFT` nodes per axis,
+/// [`brick_classes`]), which only the host's walk reads: a ray in empty space jumps up to 64
+/// cells at once where the coarse level stops every 16 (on the frog most of the walk's steps are
+/// jumps). It is reduced from the coarse level's bricks.
+pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3], huge: bool) -> (Vec<u8>, Option<BrickLevel>) {
+    let shifts = [FINE_SHIFT, COARSE_SHIFT, HUGE_SHIFT];
+    let mut levels = brick_classes(nodes, dims, &shifts[..if huge { 3 } else { 2 }]).into_iter();
+    let (fine, fd) = levels.next().expect("the fine level");
+    let (coarse, cd) = levels.next().expect("the coarse level");
+    let huge = levels.next();
     let [nx, ny, nz] = dims.map(|v| v as usize);
     let nb = dims.map(|v| v.div_ceil(4) as usize);
     let mut out = vec![0u8; nb[0] * nb[1] * nb[2] * 64];
@@ -379,7 +399,7 @@ pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3]) -> Vec<u8> {
             }
         }
     });
-    out
+    (out, huge)
 }
 
 /// Per brick of [`pack_nodes`]' output (64 bytes, 4³ nodes), the byte all its nodes hold when it
@@ -391,15 +411,6 @@ pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3]) -> Vec<u8> {
 pub(super) fn skip_bricks(bricked: &[u8]) -> Vec<u8> {
     const _: () = assert!(FINE_SHIFT == 2);
     bricked.par_chunks(64).map(|b| if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) { b[0] } else { 0 }).collect()
-}
-
-/// The host walk's third level of skip bricks, `2^HUGE_SHIFT` nodes per axis: Below / Above
-/// where the brick and its one-node ring are all of that class, else 0 (x fastest), and their
-/// dims; from `nodes` as [`pack_nodes`] takes them. A ray in empty space jumps up to 64 cells at
-/// once where the coarse level stops every 16 (on the frog most of the walk's steps are jumps).
-pub(super) fn huge_bricks(nodes: &[u8], dims: [u32; 3]) -> (Vec<u8>, [u32; 3]) {
-    let [_, huge] = brick_classes(nodes, dims, COARSE_SHIFT, HUGE_SHIFT);
-    huge
 }
 
 /// Where [`pack_nodes`] puts node `p` of a grid of `dims` nodes: brick `p / 4` (x fastest over
@@ -487,7 +498,7 @@ mod tests {
                 cls[rnd() % n] = (rnd() % 4) as u8;
             }
             let dims = d.map(|v| v as u32);
-            let [(f, fd), (c, cd)] = brick_classes(&cls, dims, 1, 3);
+            let [(f, fd), (c, cd)]: [_; 2] = brick_classes(&cls, dims, &[1, 3]).try_into().unwrap();
             assert_eq!(f, brute(&cls, d, 1), "{d:?}");
             assert_eq!(c, brute(&cls, d, 3), "{d:?}");
             assert_eq!(fd, d.map(|v| v.div_ceil(2) as u32));
@@ -688,7 +699,7 @@ mod tests {
         let dims = d.map(|x| x as u32);
         // Faces in bits 4-7 (pack_nodes keeps them, and reads only the class bits).
         let leaves: Vec<u8> = v.iter().enumerate().map(|(i, &k)| k | ((i % 16) as u8) << 4).collect();
-        let p = pack_nodes(&leaves, dims);
+        let (p, _) = pack_nodes(&leaves, dims, false);
         assert_eq!(p.len(), 10 * 6 * 11 * 64, "whole bricks of 4³ nodes");
         let fine = brute(&v, d, FINE_SHIFT);
         let coarse = brute(&v, d, COARSE_SHIFT);
@@ -772,7 +783,8 @@ mod walk_tests {
         let tree = crate::iso::MinMaxOctree::build(&vol);
         let md = tree.max_depth();
         let cls = node_classes(&tree, 0.0, md);
-        let [(f, _), (c, _)] = brick_classes(&cls, tree.dims_at_depth(md).unwrap(), FINE_SHIFT, COARSE_SHIFT);
+        let [(f, _), (c, _)]: [_; 2] =
+            brick_classes(&cls, tree.dims_at_depth(md).unwrap(), &[FINE_SHIFT, COARSE_SHIFT]).try_into().unwrap();
         for (k, v) in [(CLASS_BELOW, &f), (CLASS_ABOVE, &f), (CLASS_BELOW, &c), (CLASS_ABOVE, &c)] {
             assert!(v.contains(&k), "the volume has skippable bricks of class {k} at both levels");
         }

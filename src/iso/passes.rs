@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::bricks::{
-    huge_bricks, pack2, pack_nodes, skip_bricks, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT,
+    pack2, pack_nodes, skip_bricks, BrickLevel, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT,
 };
 use super::march::SurfacePatch;
 use crate::error::{Error, Result};
@@ -68,8 +68,8 @@ pub(super) enum WalkData {
     Gpu { nodes: wgpu::Buffer, contour: Option<(wgpu::Buffer, u32)> },
     /// For the host's walk (`super::walk`), with the skippable bricks' bytes
     /// ([`super::bricks::skip_bricks`]) and its third level of skip bricks
-    /// ([`super::bricks::huge_bricks`]).
-    Host { nodes: Vec<u8>, skip: Vec<u8>, huge: (Vec<u8>, [u32; 3]), contour: Option<(Vec<u32>, u32)> },
+    /// ([`super::bricks::pack_nodes`] with `huge`).
+    Host { nodes: Vec<u8>, skip: Vec<u8>, huge: BrickLevel, contour: Option<(Vec<u32>, u32)> },
 }
 
 impl WalkData {
@@ -118,8 +118,7 @@ impl ClassGrid {
             .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
         let [n_below, n_above, n_nan] = n;
         let classes = pack2(&nodes);
-        let bricked = pack_nodes(&nodes, dims);
-        let huge = host.then(|| huge_bricks(&nodes, dims));
+        let (bricked, huge) = pack_nodes(&nodes, dims, host);
         drop(nodes);
         // (Without a brick that holds surface the walk has nothing to read.)
         let contour = contour.filter(|(words, at)| words.len() > *at);

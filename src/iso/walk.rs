@@ -17,7 +17,7 @@
 //! where the 32 MB of the frog's nodes are not); a cell of a skippable brick marks no near
 //! event (every cell around it is of the brick's class, so the event would mark nothing); and
 //! a coarse jump extends to a third level of skip bricks, 64³ nodes with their ring
-//! (`bricks::huge_bricks`), through which the cell-by-cell walk would mark nothing and never
+//! (`bricks::pack_nodes` with `huge`), through which the cell-by-cell walk would mark nothing and never
 //! stop, as through the two levels the shader knows.
 
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -36,7 +36,7 @@ pub(super) struct WalkGrid<'a> {
     /// Per brick of 4³ nodes, the byte of each of its nodes when it is a skippable brick, else 0
     /// (`bricks::skip_bricks`).
     pub(super) skip: &'a [u8],
-    /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::huge_bricks`): a
+    /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::pack_nodes` with `huge`): a
     /// brick's class where it and its ring are all of it, else 0; and their dims.
     pub(super) huge: (&'a [u8], [u32; 3]),
     pub(super) contour: Option<&'a [u32]>,
@@ -531,7 +531,7 @@ mod tests {
         let dims = tree.dims_at_depth(md).unwrap();
         let mut nodes = tree.leaf_nodes(0.0).unwrap();
         crate::iso::bricks::dilate_nan(&mut nodes, dims);
-        let (huge, _) = crate::iso::bricks::huge_bricks(&nodes, dims);
+        let (huge, _) = crate::iso::bricks::pack_nodes(&nodes, dims, true).1.unwrap();
         for k in [1, 2] {
             assert!(huge.contains(&k), "whole 64³ bricks of class {k}");
         }
