@@ -17,8 +17,8 @@
 //! where the 32 MB of the frog's nodes are not); a cell of a skippable brick marks no near
 //! event (every cell around it is of the brick's class, so the event would mark nothing); and
 //! a coarse jump extends to a third level of skip bricks, 64³ nodes with their ring
-//! (`bricks::pack_nodes` with `huge`), through which the cell-by-cell walk would mark nothing and never
-//! stop, as through the two levels the shader knows.
+//! (`bricks::pack_nodes` with `huge`), through which the cell-by-cell walk would mark nothing
+//! and never stop, as through the two levels the shader knows.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -36,8 +36,8 @@ pub(super) struct WalkGrid<'a> {
     /// Per brick of 4³ nodes, the byte of each of its nodes when it is a skippable brick, else 0
     /// (`bricks::skip_bricks`).
     pub(super) skip: &'a [u8],
-    /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::pack_nodes` with `huge`): a
-    /// brick's class where it and its ring are all of it, else 0; and their dims.
+    /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::pack_nodes` with
+    /// `huge`): a brick's class where it and its ring are all of it, else 0; and their dims.
     pub(super) huge: (&'a [u8], [u32; 3]),
     pub(super) contour: Option<&'a [u32]>,
 }
@@ -370,7 +370,8 @@ fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
     let m2 = m * m;
     let sx = Vec4::new(ray[0], -ray[0], ray[0], -ray[0]);
     let sy = Vec4::new(ray[1], ray[1], -ray[1], -ray[1]);
-    // Corner i's cut (both its edges crossed): corners 0, 1, 2, 3 own edges (0, 2), (0, 3), (1, 2), (1, 3).
+    // Corner i is cut off when both its edges are crossed: corners 0, 1, 2, 3 lie on edges
+    // (0, 2), (0, 3), (1, 2), (1, 3).
     let c = |e: u32| crm >> e & 1;
     let both = c(0) & c(2) | (c(0) & c(3)) << 1 | (c(1) & c(2)) << 2 | (c(1) & c(3)) << 3;
     let g = px * ty + py * tx - tx * ty;
@@ -391,7 +392,8 @@ fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
     let qu = ray[0] - su * ray[1];
     let far_v = gv * gv * n2 > m2 * (n2 * (1.0 + sv * sv) + qv * qv);
     let far_u = gu * gu * n2 > m2 * (n2 * (1.0 + su * su) + qu * qu);
-    // One segment across the face: between edges 2-3 (v), or edges 0-1 (u).
+    // One segment across the face: from edge 2 to edge 3 (corner pairs 0-2 and 1-3; its sides
+    // are low and high v), or from edge 0 to edge 1 (pairs 0-1 and 2-3; low and high u).
     if crm == 0b1100 && far_v {
         r = if gv < 0.0 { k(0) } else { k(2) };
     }
