@@ -24,12 +24,16 @@ def test_bench_iso_tiny_json(tmp_path):
     rows, s = d["rows"], d["summary"]
     assert s["mode"] == "tiny" and s["views"] == 1 and s["n"] == 24
     keys = [(r["method"], r["temperature"]) for r in rows]
-    assert sorted(keys) == sorted((m, t) for m in ("none", "implicit", "pyvista") for t in ("cold", "warm"))
+    assert sorted(keys) == sorted((m, t) for m in ("none", "implicit", "oracle", "pyvista") for t in ("cold", "warm"))
     for r in rows:
         assert r["total_ms"] > 0 and r["ratio_to_none"] > 0 and r["faces"] > 0
-        if r["method"] == "implicit":
+        if r["method"] in ("implicit", "oracle"):
             assert r["differing_pixel_fraction"] == 0.0  # conservative
             assert r["faces"] <= rows[keys.index(("none", r["temperature"]))]["faces"]
+        if r["method"] == "oracle":  # the fewest cells a conservative culling of cells can draw
+            assert r["faces"] <= rows[keys.index(("implicit", r["temperature"]))]["faces"]
+            assert r["walk"] == "none" and r["readbacks"] == 0
+        if r["method"] == "implicit":
             # the compute walk reads its marks back; the host's walk (on a CPU adapter) needs none
             assert r["walk"] in ("gpu", "cpu") and r["readbacks"] == (1 if r["walk"] == "gpu" else 0)
         if r["method"] == "pyvista":  # VTK flying edges: the same surface within 2 %

@@ -561,6 +561,27 @@ def test_setup_is_reported_apart_from_the_frame():
     assert r.render_isosurface(v, 0.0, cam, culling="none").stats["readbacks"] == 0
 
 
+@pytest.mark.parametrize("projection", ["perspective", "orthographic"])
+def test_oracle_draws_fewest_cells_and_the_same_image(renderer, projection):
+    """culling="oracle" on a rotated survey grid with vertical exaggeration and a NaN border (the
+    pixel rays turned and scaled as the frame's): none's image, fewer triangles than implicit."""
+    z, y, x, h = grid(28)
+    vals = (np.sin(3 * x) * np.cos(2 * y) + 0.8 * z).astype(np.float32)
+    vals[:, :, :2] = np.nan
+    v = gc.Volume(vals, origin=(431000.0, 6780000.0, -1.0), spacing=(h, h, h), rotation=30.0)
+    c = np.array([431000.0, 6780000.0, 0.0])
+    cam = gc.Camera.look_at(c + (3.0, -2.0, 2.5), c, up=(0, 0, 1), fov_y=40.0, projection=projection,
+                            ortho_height=3.0, z_scale=2.0)
+    ref = renderer.render_isosurface(v, 0.0, cam, culling="none")
+    imp = renderer.render_isosurface(v, 0.0, cam, culling="implicit")
+    orc = renderer.render_isosurface(v, 0.0, cam, culling="oracle")
+    np.testing.assert_array_equal(orc.image, ref.image)
+    np.testing.assert_array_equal(orc.depth, ref.depth)
+    assert (ref.depth < np.inf).mean() > 0.2
+    assert 0 < orc.stats["surface_triangles"] < imp.stats["surface_triangles"] < ref.stats["surface_triangles"]
+    assert orc.stats["cull_ms"] == 0.0 and orc.stats["readbacks"] == 0
+
+
 # ---- Random volumes: the walk's cell and face occluders never cull a visible triangle
 
 hypothesis = pytest.importorskip("hypothesis")
@@ -586,7 +607,8 @@ CULLED: list[int] = []
 @example(seed=0, shape=(13, 6, 10), smooth=0, nan=0.0, on_iso=0.0, elev=0.0, az=0.0, dist=1.0, ortho=True)
 def _random_volume_renders_as_none(seed, shape, smooth, nan, on_iso, elev, az, dist, ortho):
     """Noise (thin sheets, ambiguous faces), smoothed noise (blobs), NaN samples and samples on the
-    isovalue itself; cameras outside, at the border and inside: implicit's image equals none's."""
+    isovalue itself; cameras outside, at the border and inside: implicit's image equals none's, and
+    so does the oracle's (its cells read back from none's depth)."""
     rng = np.random.default_rng(seed)
     vals = rng.normal(size=shape[::-1])
     for _ in range(smooth):
@@ -607,6 +629,8 @@ def _random_volume_renders_as_none(seed, shape, smooth, nan, on_iso, elev, az, d
         res = r.render_isosurface(v, 0.0, cam, walk=walk)
         np.testing.assert_array_equal(res.image, ref.image)
         np.testing.assert_array_equal(res.depth, ref.depth)
+    orc = r.render_isosurface(v, 0.0, cam, culling="oracle")
+    np.testing.assert_array_equal(orc.image, ref.image)
     CULLED.append(ref.stats["surface_triangles"] - res.stats["surface_triangles"])
 
 

@@ -5,8 +5,10 @@ For every volume (the Pesco et al. synthetic field, and real volumes shipped ins
 labels; nothing is downloaded) and every view (``--views``, default 8, orbiting the volume at 1.4
 diagonals, elevation ±25°), in one process and one run, after a warm-up frame per method:
 
-- geocull ``none`` (every octree node that may hold surface: the reference image) and ``implicit``
-  (occlusion map of implicit occluders, only visible nodes extracted), each *cold* (``cache=False``
+- geocull ``none`` (every octree node that may hold surface: the reference image), ``implicit``
+  (occlusion map of implicit occluders, only visible nodes extracted) and ``oracle`` (only the cells
+  holding a visible point of none's image, read from it untimed: the least that culling whole cells
+  can draw, so implicit's distance to it is what its walk and its extra cells cost), each *cold* (``cache=False``
   on a renderer of its own whose caches are cleared first: every patch extracted and uploaded in
   the frame) and *warm* (patches cached, and kept on the GPU, by the earlier frames of the same
   view); frame time = ``stats["total_ms"]`` (call → GPU done; read-back and one-time setup excluded);
@@ -145,7 +147,7 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
                 return res.stats["total_ms"]
             return job
 
-        modes: tuple[IsoCullingMode, ...] = ("none", "implicit")
+        modes: tuple[IsoCullingMode, ...] = ("none", "implicit", "oracle")
         first = {c: r.render_isosurface(vol, iso, cam, c, occluder_depth=od, cull_depth=cd) for c in modes}
         ref = first["none"]
         jobs: list[tuple[str, Any]] = [(f"{c}_{t}", geo(c, t == "warm")) for c in modes for t in ("cold", "warm")]

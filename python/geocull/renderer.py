@@ -27,8 +27,9 @@ CullingMode = Literal["none", "three_pass", "oracle", "horizon", "frustum", "tem
 #: Culling modes :meth:`Renderer.render` accepts, in the core's order (its registry).
 CULLING_MODES: tuple[str, ...] = tuple(_geocull.culling_modes())
 
-#: Culling modes of :meth:`Renderer.render_isosurface` ("implicit": implicit occluders; "none": the reference).
-IsoCullingMode = Literal["implicit", "none"]
+#: Culling modes of :meth:`Renderer.render_isosurface` ("implicit": implicit occluders; "none": the reference;
+#: "oracle": the visible cells of the reference, the lower bound for benchmarks).
+IsoCullingMode = Literal["implicit", "none", "oracle"]
 
 #: The same names at runtime, in that order.
 ISO_CULLING_MODES: tuple[str, ...] = get_args(IsoCullingMode)
@@ -282,8 +283,10 @@ class Renderer:
 
         isovalue: a finite number, in the volume's value units.
         culling: one of :data:`ISO_CULLING_MODES`: "implicit" (occlusion map of implicit occluders,
-        extract only visible nodes) or "none" (extract and draw every node that may hold surface:
-        the reference).
+        extract only visible nodes), "none" (extract and draw every node that may hold surface:
+        the reference) or "oracle" (for benchmarks: renders "none" first, untimed, and draws only
+        the cells that hold a pixel's surface point in it, within 0.05 cells of their faces: the
+        least that a culling drawing whole cells, as "implicit" does, can draw; the same image).
         occluder_depth: octree depth of the occluder nodes (root = 0; default max_depth: single cells).
         cull_depth: octree depth of the nodes tested and extracted (default max_depth - 2).
         color: (r, g, b) in [0, 1].  cache: reuse patches extracted by earlier frames (per volume,

@@ -34,6 +34,7 @@ pub mod layout;
 pub mod march;
 pub mod mesh;
 pub mod octree;
+mod oracle;
 mod passes;
 mod pool;
 pub mod render;
@@ -471,6 +472,38 @@ pub fn sphere_field(n: usize, radius: f64) -> Volume {
     let h = 2.0 / (n - 1) as f64;
     Volume::from_fn((n, n, n), [-1.0; 3], [h; 3], |x, y, z| ((x * x + y * y + z * z).sqrt() - radius) as f32)
         .expect("valid sphere volume")
+}
+
+/// Three cameras about `vol`'s box for the walk's tests, each with the direction of its eye from
+/// the box centre (in box spans): two perspective views from opposite sides, below and above,
+/// and an orthographic one from almost straight above.
+#[cfg(test)]
+pub(crate) fn test_views(vol: &Volume) -> Vec<([f64; 3], crate::camera::Camera)> {
+    use crate::camera::{Camera, Projection};
+    let size = [vol.nx, vol.ny, vol.nz].map(|n| n as f64 - 1.0);
+    let c = [0, 1, 2].map(|a| vol.origin[a] + 0.5 * size[a] * vol.spacing[a]);
+    let span = (0..3).map(|a| size[a] * vol.spacing[a]).fold(0.0, f64::max);
+    [
+        ([2.0, 1.3, 0.9], Projection::Perspective),
+        ([-0.8, 2.1, -1.2], Projection::Perspective),
+        ([0.3, -0.2, 3.0], Projection::Orthographic),
+    ]
+    .into_iter()
+    .map(|(dir, proj)| {
+        let eye = [0, 1, 2].map(|a| c[a] + dir[a] * span);
+        (dir, Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(1.2 * span), 1.0).unwrap())
+    })
+    .collect()
+}
+
+/// A dense wavy field for the walk's tests (37 × 33 × 29 samples, z spacing 0.5): sheets of
+/// surface across the whole volume at isovalue 0, most bricks straddling it.
+#[cfg(test)]
+pub(crate) fn wavy_field() -> Volume {
+    Volume::from_fn((37, 33, 29), [0.0; 3], [1.0, 1.0, 0.5], |x, y, z| {
+        ((0.41 * x).sin() + (0.33 * y + 0.13 * x).cos() + (0.67 * z).sin() * 0.8 - 0.2) as f32
+    })
+    .expect("valid wavy volume")
 }
 
 #[cfg(test)]

@@ -13,10 +13,11 @@ use super::bricks::{
     pack2, pack_nodes, skip_bricks, BrickLevel, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT,
 };
 use super::march::SurfacePatch;
+use crate::camera::{FrameCamera, Projection};
 use crate::error::{Error, Result};
 use crate::gpu::targets::{texture, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::gpu::{map_err, GpuContext};
-use glam::DVec3;
+use glam::{DMat4, DVec3, DVec4};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -193,6 +194,44 @@ impl Space {
         let r = DVec3::from_array(p) - self.origin;
         DVec3::new(r.x, r.y, r.z * self.z_scale)
     }
+}
+
+/// The pixel rays of a frame in f64, in the volume's grid frame (`Space`, turned by the volume's
+/// rotation): for NDC `(x, y)` the points `near[0] + x near[1] + y near[2]` on the near plane and
+/// `far[0] + x far[1] + y far[2]` on a plane beyond the volume's box.
+pub(super) struct PixelRays {
+    pub(super) near: [DVec3; 3],
+    pub(super) far: [DVec3; 3],
+    /// Distances along the view axis of the two planes (the near plane's is the camera's near).
+    pub(super) near_dist: f64,
+    pub(super) far_dist: f64,
+}
+
+/// The pixel rays of `view_proj` (grid frame to clip space) for camera frame `fc` and a volume box
+/// `lo..hi` (render units). A point on a plane of constant depth is affine in the pixel's NDC
+/// (x, y), so the two planes' points at three NDC corners give every ray. (The f32 inverse of the
+/// view-projection loses the rays when the near plane is tiny, as it is for an eye beside the
+/// volume's box: the walk then followed other lines than the rasteriser's and missed visible
+/// cells.)
+pub(super) fn pixel_rays(view_proj: &DMat4, fc: &FrameCamera, lo: DVec3, hi: DVec3) -> PixelRays {
+    let inv = view_proj.inverse();
+    let unproject = |x: f64, y: f64, z: f64| {
+        let q = inv * DVec4::new(x, y, z, 1.0);
+        q.truncate() / q.w
+    };
+    let extent = (hi - lo).length().max(fc.near);
+    // (In f32, as the depth buffer is: the far plane's distance is then the frame's own.)
+    let z_far = match fc.projection {
+        Projection::Perspective => (fc.near / (fc.near + extent)) as f32,
+        Projection::Orthographic => 0.5,
+    };
+    let far_dist = fc.linear_depth(z_far) as f64;
+    let z_far = z_far as f64;
+    let plane = |z: f64| {
+        let p0 = unproject(0.0, 0.0, z);
+        [p0, unproject(1.0, 0.0, z) - p0, unproject(0.0, 1.0, z) - p0]
+    };
+    PixelRays { near: plane(1.0), far: plane(z_far), near_dist: fc.near, far_dist }
 }
 
 /// Bind-group layouts and pipelines of the isosurface passes.

@@ -430,10 +430,7 @@ mod tests {
     fn host_walk_matches_the_compute_walk() {
         let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
         let mut r = IsoRenderer::new(&ctx);
-        let wavy = Volume::from_fn((37, 33, 29), [0.0; 3], [1.0, 1.0, 0.5], |x, y, z| {
-            ((0.41 * x).sin() + (0.33 * y + 0.13 * x).cos() + (0.67 * z).sin() * 0.8 - 0.2) as f32
-        })
-        .unwrap();
+        let wavy = crate::iso::wavy_field();
         let (nx, ny, nz) = (23, 19, 17);
         let mut v: Vec<f32> = (0..nx * ny * nz).map(|i| noise(i, 7)).collect();
         for _ in 0..2 {
@@ -463,17 +460,7 @@ mod tests {
         for vol in [&wavy, &noisy, &sphere] {
             let tree = MinMaxOctree::build(vol);
             let md = tree.max_depth();
-            let size = [vol.nx, vol.ny, vol.nz].map(|n| n as f64 - 1.0);
-            let c = [0, 1, 2].map(|a| vol.origin[a] + 0.5 * size[a] * vol.spacing[a]);
-            let span = (0..3).map(|a| size[a] * vol.spacing[a]).fold(0.0, f64::max);
-            for (dir, proj) in [
-                ([2.0, 1.3, 0.9], Projection::Perspective),
-                ([-0.8, 2.1, -1.2], Projection::Perspective),
-                ([0.3, -0.2, 3.0], Projection::Orthographic),
-            ] {
-                let eye = [0, 1, 2].map(|a| c[a] + dir[a] * span);
-                let cam =
-                    Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(1.2 * span), 1.0).unwrap();
+            for (eye, cam) in crate::iso::test_views(vol) {
                 let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
                 let none = r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &none_opts).unwrap();
                 // (Contours chosen explicitly: by default the host's walk places them on any
