@@ -749,11 +749,10 @@ impl IsoRenderer {
             visible
         };
         stats.nodes_visible = visible.len() as u32;
-        let node_drawn: Vec<bool> = if opts.culling != IsoCulling::None {
-            let set: std::collections::HashSet<(u32, u32, u32)> = visible.iter().map(|n| (n.ix, n.iy, n.iz)).collect();
-            candidates.iter().map(|n| set.contains(&(n.ix, n.iy, n.iz))).collect()
-        } else {
-            vec![true; candidates.len()]
+        // (A culled frame's visible nodes are the candidates with a cell seen, in their order.)
+        let node_drawn: Vec<bool> = match opts.culling {
+            IsoCulling::None => vec![true; candidates.len()],
+            _ => node_pixels.iter().map(|&c| c > 0).collect(),
         };
 
         // ---- Marching cubes in the visible nodes (cached per node).
