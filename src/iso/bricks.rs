@@ -413,6 +413,54 @@ pub(super) fn skip_bricks(bricked: &[u8]) -> Vec<u8> {
     bricked.par_chunks(64).map(|b| if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) { b[0] } else { 0 }).collect()
 }
 
+/// Per brick of [`skip_bricks`] (`bdims` bricks per axis, x fastest), how far skippable bricks
+/// of its class reach about it: the largest `r` (at most 255) such that every brick of the grid
+/// within `r - 1` bricks of it (Chebyshev distance) is a skippable brick of its class, 0 where it
+/// is not skippable. The host's walk jumps such a box of `2 r - 1` bricks per axis whole: the
+/// ring of the box lies in the rings of its bricks, so it is of the class too. (Two raster passes
+/// over the 26 neighbours: exact for the chessboard distance.)
+pub(super) fn skip_reach(skip: &[u8], bdims: [u32; 3]) -> Vec<u8> {
+    let [nx, ny, nz] = bdims.map(|v| v as i64);
+    let mut r: Vec<u8> = skip.iter().map(|&b| if b == 0 { 0 } else { 255 }).collect();
+    let at = |x: i64, y: i64, z: i64| ((z * ny + y) * nx + x) as usize;
+    let mut pass = |zs: Vec<i64>, ys: Vec<i64>, xs: Vec<i64>, back: bool| {
+        for &z in &zs {
+            for &y in &ys {
+                for &x in &xs {
+                    let i = at(x, y, z);
+                    if r[i] == 0 {
+                        continue;
+                    }
+                    let k = skip[i] & 3;
+                    let mut best = r[i];
+                    for dz in -1..=1i64 {
+                        for dy in -1..=1i64 {
+                            for dx in -1..=1i64 {
+                                // The neighbours already visited in this pass's order.
+                                let d = (dz * 3 + dy) * 3 + dx;
+                                if (d < 0) == back || d == 0 {
+                                    continue;
+                                }
+                                let (qx, qy, qz) = (x + dx, y + dy, z + dz);
+                                if qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny || qz >= nz {
+                                    continue;
+                                }
+                                let j = at(qx, qy, qz);
+                                let v = if skip[j] & 3 == k { r[j] } else { 0 };
+                                best = best.min(v.saturating_add(1));
+                            }
+                        }
+                    }
+                    r[i] = best;
+                }
+            }
+        }
+    };
+    pass((0..nz).collect(), (0..ny).collect(), (0..nx).collect(), false);
+    pass((0..nz).rev().collect(), (0..ny).rev().collect(), (0..nx).rev().collect(), true);
+    r
+}
+
 /// Where [`pack_nodes`] puts node `p` of a grid of `dims` nodes: brick `p / 4` (x fastest over
 /// `ceil(dims / 4)` bricks), 64 bytes each, node `p % 4` inside (x fastest). (iso.wgsl
 /// `node_info` computes the same; the host's walk calls this.)
@@ -504,6 +552,46 @@ mod tests {
             assert_eq!(fd, d.map(|v| v.div_ceil(2) as u32));
             assert_eq!(cd, d.map(|v| v.div_ceil(8) as u32));
         }
+    }
+
+    /// `skip_reach` against its definition on random grids of skippable bricks (two classes, and
+    /// gaps), with large uniform blocks so that reaches grow past a few bricks.
+    #[test]
+    fn skip_reach_matches_its_definition() {
+        let d = [13u32, 9, 11];
+        let n = (d[0] * d[1] * d[2]) as usize;
+        let mut seed = 7u64;
+        let mut rand = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 33) as u32
+        };
+        let mut most = 0;
+        for round in 0..6 {
+            let mut skip = vec![0u8; n];
+            for (i, b) in skip.iter_mut().enumerate() {
+                let [x, y, z] = [i as u32 % d[0], i as u32 / d[0] % d[1], i as u32 / (d[0] * d[1])];
+                // A block of class 1 and one of class 2, holes scattered over both.
+                let k = if x < 7 { 1 } else { 2 };
+                let hole = rand() % 100 < [0, 2, 5, 10, 30, 60][round] || (y == 4 && z == 5 && round % 2 == 1);
+                *b = if hole { 0 } else { 4 | k };
+            }
+            let r = skip_reach(&skip, d);
+            for (i, &ri) in r.iter().enumerate() {
+                let p = [i as u32 % d[0], i as u32 / d[0] % d[1], i as u32 / (d[0] * d[1])].map(|v| v as i64);
+                // The largest r: every brick within r - 1 (in the grid) skippable of this class.
+                let fits = |r: i64| {
+                    (0..n).all(|j| {
+                        let q = [j as u32 % d[0], j as u32 / d[0] % d[1], j as u32 / (d[0] * d[1])].map(|v| v as i64);
+                        let far = (0..3).map(|a| (q[a] - p[a]).abs()).max().unwrap() > r - 1;
+                        far || (skip[j] != 0 && skip[j] & 3 == skip[i] & 3)
+                    })
+                };
+                let want = if skip[i] == 0 { 0 } else { (1..=255).take_while(|&r| fits(r)).last().unwrap_or(0) };
+                assert_eq!(ri as i64, want, "round {round} brick {p:?}");
+                most = most.max(want);
+            }
+        }
+        assert!(most >= 4, "reaches of several bricks seen ({most})");
     }
 
     #[test]

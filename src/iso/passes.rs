@@ -10,7 +10,8 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use super::bricks::{
-    pack2, pack_nodes, skip_bricks, BrickLevel, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT, FINE_SHIFT,
+    pack2, pack_nodes, skip_bricks, skip_reach, BrickLevel, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT,
+    FINE_SHIFT,
 };
 use super::march::SurfacePatch;
 use crate::camera::{FrameCamera, Projection};
@@ -68,9 +69,9 @@ pub(super) enum WalkData {
     /// For the compute walk ([`march`]).
     Gpu { nodes: wgpu::Buffer, contour: Option<(wgpu::Buffer, u32)> },
     /// For the host's walk (`super::walk`), with the skippable bricks' bytes
-    /// ([`super::bricks::skip_bricks`]) and its third level of skip bricks
-    /// ([`super::bricks::pack_nodes`] with `huge`).
-    Host { nodes: Vec<u8>, skip: Vec<u8>, huge: BrickLevel, contour: Option<(Vec<u32>, u32)> },
+    /// ([`super::bricks::skip_bricks`]), how far each reaches ([`super::bricks::skip_reach`]) and
+    /// its third level of skip bricks ([`super::bricks::pack_nodes`] with `huge`).
+    Host { nodes: Vec<u8>, skip: Vec<u8>, reach: Vec<u8>, huge: BrickLevel, contour: Option<(Vec<u32>, u32)> },
 }
 
 impl WalkData {
@@ -125,8 +126,10 @@ impl ClassGrid {
         let contour = contour.filter(|(words, at)| words.len() > *at);
         let data = if host {
             let skip = skip_bricks(&bricked);
+            let reach = skip_reach(&skip, dims.map(|v| v.div_ceil(4)));
             let huge = huge.unwrap_or_default();
-            WalkData::Host { nodes: bricked, skip, huge, contour: contour.map(|(words, at)| (words, at as u32)) }
+            let contour = contour.map(|(words, at)| (words, at as u32));
+            WalkData::Host { nodes: bricked, skip, reach, huge, contour }
         } else {
             let nodes = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("iso_classes"),

@@ -716,10 +716,10 @@ impl IsoRenderer {
             let t_cull = Instant::now();
             let n_cells = march_dims.iter().map(|&v| v as usize).product();
             let marks = match &grid.data {
-                WalkData::Host { nodes, skip, huge, contour } => {
+                WalkData::Host { nodes, skip, reach, huge, contour } => {
                     let view_proj = Mat4::from_cols_array_2d(&globals.view_proj);
                     let contour = contour.as_ref().map(|c| c.0.as_slice());
-                    let data = WalkGrid { nodes, skip, huge: (&huge.0, huge.1), contour };
+                    let data = WalkGrid { nodes, skip, reach, huge: (&huge.0, huge.1), contour };
                     let (marks, map) = walk(&p, &view_proj, &data, width, height, n_cells);
                     host_map = Some(map);
                     marks

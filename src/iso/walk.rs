@@ -18,7 +18,9 @@
 //! event (every cell around it is of the brick's class, so the event would mark nothing); and
 //! a coarse jump extends to a third level of skip bricks, 64³ nodes with their ring
 //! (`bricks::pack_nodes` with `huge`), through which the cell-by-cell walk would mark nothing
-//! and never stop, as through the two levels the shader knows.
+//! and never stop, as through the two levels the shader knows; and where the ray leaves it
+//! later, a jump takes instead the box of skippable bricks of the class about the current one
+//! (`bricks::skip_reach`, a Chebyshev distance over the bricks: not aligned as the levels are).
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -39,6 +41,9 @@ pub(super) struct WalkGrid<'a> {
     /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::pack_nodes` with
     /// `huge`): a brick's class where it and its ring are all of it, else 0; and their dims.
     pub(super) huge: (&'a [u8], [u32; 3]),
+    /// Per skippable brick of 4³ nodes, how far bricks of its class reach about it
+    /// (`bricks::skip_reach`: a box of `2 r - 1` bricks per axis), else 0; empty: none.
+    pub(super) reach: &'a [u8],
     pub(super) contour: Option<&'a [u32]>,
 }
 
@@ -141,6 +146,18 @@ impl<'a> Walker<'a> {
         let (classes, [hx, hy, _]) = self.grid.huge;
         let u = (c.as_uvec3() >> (self.p.size[1] + HUGE_SHIFT)).to_array().map(|v| v as usize);
         classes.get((u[2] * hy as usize + u[1]) * hx as usize + u[0]).map_or(0, |&k| k as u32)
+    }
+
+    /// [`WalkGrid::reach`] of the brick of 4³ nodes holding march cell `c` (0 without the table).
+    #[inline]
+    fn reach(&self, c: IVec3) -> i32 {
+        if self.grid.reach.is_empty() {
+            return 0;
+        }
+        let [x, y, _, _] = self.p.occ_dims;
+        let b = (c.as_uvec3() >> (self.p.size[1] + 2)).to_array().map(|v| v as usize);
+        let (bx, by) = (x.div_ceil(4) as usize, y.div_ceil(4) as usize);
+        self.grid.reach[(b[2] * by + b[1]) * bx + b[0]] as i32
     }
 
     /// iso.wgsl `contour_brick`.
@@ -298,8 +315,22 @@ impl<'a> Walker<'a> {
                 };
                 let s = p.size[1] + level;
                 let blo = (c >> s as i32) << s as i32;
-                let e = IVec3::select(stp.cmpgt(IVec3::ZERO), (blo + IVec3::splat((1 << s) - 1)).min(dims - 1), blo);
-                let xe = Self::exits(e, xt0, xdt);
+                let bhi = blo + IVec3::splat((1 << s) - 1);
+                let mut e = IVec3::select(stp.cmpgt(IVec3::ZERO), bhi.min(dims - 1), blo);
+                let mut xe = Self::exits(e, xt0, xdt);
+                // (A box of bricks of the class about this one, when the ray leaves it later.)
+                let r = self.reach(c);
+                if r >= 2 {
+                    let half = (r - 1) << (p.size[1] + 2);
+                    let b = (c >> (p.size[1] as i32 + 2)) << (p.size[1] as i32 + 2);
+                    let (rlo, rhi) =
+                        ((b - IVec3::splat(half)).max(IVec3::ZERO), b + IVec3::splat(half + (4 << p.size[1]) - 1));
+                    let re = IVec3::select(stp.cmpgt(IVec3::ZERO), rhi.min(dims - 1), rlo);
+                    let rxe = Self::exits(re, xt0, xdt);
+                    if rxe.min_element() > xe.min_element() {
+                        (e, xe) = (re, rxe);
+                    }
+                }
                 let a01 = usize::from(xe.y < xe.x);
                 a = if xe.z < xe.x.min(xe.y) { 2 } else { a01 };
                 tx = xe[a];
@@ -489,8 +520,9 @@ mod tests {
         assert!(compared > 1000, "the walks saw cells to compare ({compared})");
     }
 
-    /// Jumps of the third skip level (64³ cells) land where the compute walk's steps do: a
-    /// volume below a plane and above it, with blobs of the other class at a few places and a
+    /// Jumps of the third skip level (64³ cells) and across boxes of skippable bricks
+    /// (`skip_reach`; thousands of them in these views) land where the compute walk's steps do:
+    /// a volume below a plane and above it, with blobs of the other class at a few places and a
     /// NaN slab, large enough for whole 64³ bricks (and their rings) of each class.
     #[test]
     fn huge_jumps_see_what_the_compute_walk_sees() {
