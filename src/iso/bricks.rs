@@ -413,52 +413,55 @@ pub(super) fn skip_bricks(bricked: &[u8]) -> Vec<u8> {
     bricked.par_chunks(64).map(|b| if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) { b[0] } else { 0 }).collect()
 }
 
+/// The most [`skip_reach`] gives: a box of up to 29 bricks per axis (116 nodes).
+pub(super) const REACH_CAP: u8 = 15;
+
 /// Per brick of [`skip_bricks`] (`bdims` bricks per axis, x fastest), how far skippable bricks
-/// of its class reach about it: the largest `r` (at most 255) such that every brick of the grid
-/// within `r - 1` bricks of it (Chebyshev distance) is a skippable brick of its class, 0 where it
-/// is not skippable. The host's walk jumps such a box of `2 r - 1` bricks per axis whole: the
-/// ring of the box lies in the rings of its bricks, so it is of the class too. (Two raster passes
-/// over the 26 neighbours: exact for the chessboard distance.)
+/// of its class reach about it: the largest `r` (at most [`REACH_CAP`]) such that every brick of
+/// the grid within `r - 1` bricks of it (Chebyshev distance) is a skippable brick of its class, 0
+/// where it is not skippable. The host's walk jumps such a box of `2 r - 1` bricks per axis whole:
+/// the ring of the box lies in the rings of its bricks, so it is of the class too.
+///
+/// A cube is the sum of three segments, so the reach is found an axis at a time: with `f` the
+/// reach over the axes done so far, the reach over one more is `min over d of max(|d|, f(p + d e))`
+/// (`f` counting 0 at a brick of another class, the grid's outside not counting): a brick `d` away
+/// bounds the reach to `|d|` unless its own reach is larger. Rows and slices at a time, so the
+/// compiler vectorises the bytes.
 pub(super) fn skip_reach(skip: &[u8], bdims: [u32; 3]) -> Vec<u8> {
-    let [nx, ny, nz] = bdims.map(|v| v as i64);
-    let mut r: Vec<u8> = skip.iter().map(|&b| if b == 0 { 0 } else { 255 }).collect();
-    let at = |x: i64, y: i64, z: i64| ((z * ny + y) * nx + x) as usize;
-    let mut pass = |zs: Vec<i64>, ys: Vec<i64>, xs: Vec<i64>, back: bool| {
-        for &z in &zs {
-            for &y in &ys {
-                for &x in &xs {
-                    let i = at(x, y, z);
-                    if r[i] == 0 {
-                        continue;
-                    }
-                    let k = skip[i] & 3;
-                    let mut best = r[i];
-                    for dz in -1..=1i64 {
-                        for dy in -1..=1i64 {
-                            for dx in -1..=1i64 {
-                                // The neighbours already visited in this pass's order.
-                                let d = (dz * 3 + dy) * 3 + dx;
-                                if (d < 0) == back || d == 0 {
-                                    continue;
-                                }
-                                let (qx, qy, qz) = (x + dx, y + dy, z + dz);
-                                if qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny || qz >= nz {
-                                    continue;
-                                }
-                                let j = at(qx, qy, qz);
-                                let v = if skip[j] & 3 == k { r[j] } else { 0 };
-                                best = best.min(v.saturating_add(1));
-                            }
-                        }
-                    }
-                    r[i] = best;
-                }
-            }
+    let [nx, ny, _] = bdims.map(|v| v as usize);
+    // The class of a skippable brick (1 or 2), 0 for the others.
+    let cls: Vec<u8> = skip.iter().map(|&b| if b == 0 { 0 } else { b & 3 }).collect();
+    // `o` bounded by the bricks `f` (classes `cn`) `d` away from those of classes `c`.
+    let bound = |o: &mut [u8], c: &[u8], f: &[u8], cn: &[u8], d: u8| {
+        for (((o, &c), &f), &cn) in o.iter_mut().zip(c).zip(f).zip(cn) {
+            *o = (*o).min(if c == cn { f } else { 0 }.max(d));
         }
     };
-    pass((0..nz).collect(), (0..ny).collect(), (0..nx).collect(), false);
-    pass((0..nz).rev().collect(), (0..ny).rev().collect(), (0..nx).rev().collect(), true);
-    r
+    let f: Vec<u8> = cls.iter().map(|&k| if k == 0 { 0 } else { REACH_CAP }).collect();
+    // Along x, row by row.
+    let mut fx = f.clone();
+    fx.par_chunks_mut(nx).zip(f.par_chunks(nx)).zip(cls.par_chunks(nx)).for_each(|((o, f), c)| {
+        for d in 1..(REACH_CAP as usize).min(nx) {
+            bound(&mut o[d..], &c[d..], &f[..nx - d], &c[..nx - d], d as u8);
+            bound(&mut o[..nx - d], &c[..nx - d], &f[d..], &c[d..], d as u8);
+        }
+    });
+    // Along y (rows of a slice) and z (slices): whole rows / slices at a time.
+    let along = |f: &[u8], part: usize, len: usize| -> Vec<u8> {
+        let mut out = f.to_vec();
+        out.par_chunks_mut(part).enumerate().for_each(|(i, o)| {
+            let at = i % len;
+            let own = &cls[i * part..(i + 1) * part];
+            for d in 1..(REACH_CAP as usize).min(len) {
+                for j in [at.checked_sub(d).map(|_| i - d), (at + d < len).then_some(i + d)].into_iter().flatten() {
+                    bound(o, own, &f[j * part..(j + 1) * part], &cls[j * part..(j + 1) * part], d as u8);
+                }
+            }
+        });
+        out
+    };
+    let fy = along(&fx, nx, ny);
+    along(&fy, nx * ny, bdims[2] as usize)
 }
 
 /// Where [`pack_nodes`] puts node `p` of a grid of `dims` nodes: brick `p / 4` (x fastest over
@@ -586,7 +589,8 @@ mod tests {
                         far || (skip[j] != 0 && skip[j] & 3 == skip[i] & 3)
                     })
                 };
-                let want = if skip[i] == 0 { 0 } else { (1..=255).take_while(|&r| fits(r)).last().unwrap_or(0) };
+                let want =
+                    if skip[i] == 0 { 0 } else { (1..=REACH_CAP as i64).take_while(|&r| fits(r)).last().unwrap_or(0) };
                 assert_eq!(ri as i64, want, "round {round} brick {p:?}");
                 most = most.max(want);
             }
