@@ -139,8 +139,8 @@
 //! pixels' rays about the point are added and the frame drawn again, at most [`ORACLE_TRIES`]
 //! times; only the last frame's own extraction and draw are timed. What `Implicit` costs beyond
 //! it is its walk and the cells it marks that no pixel shows: on the Pesco field 128³ at 512²
-//! (warm, this machine's lavapipe) the oracle drew 0.09 of the triangles in 0.18-0.19 of the unculled
-//! frame's time, the implicit walk 0.18 in 0.53-0.54.
+//! (warm, this machine's lavapipe) the oracle drew 0.09 of the triangles in 0.18-0.19 of the
+//! unculled frame's time, the implicit walk 0.18 in 0.53-0.54.
 
 use std::sync::Arc;
 use std::time::Instant;
