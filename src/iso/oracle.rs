@@ -1,13 +1,13 @@
 //! `culling = "oracle"` for isosurfaces: the cells that hold a visible point of the unculled
-//! image, the lower bound of any culling that draws whole cells (as `implicit` does), for
+//! image, about the least that any culling drawing whole cells (as `implicit` does) can draw, for
 //! benchmarks. `IsoRenderer::render` renders the unculled image first (untimed) and reads each
 //! pixel's surface point back from its depth ([`visible_cells`]). The point can lie in the wrong
 //! cell: on a triangle seen nearly edge-on, the rasteriser's sub-pixel snapping moves the depth of
 //! a pixel a long way along its ray. So the oracle's frame is compared with the unculled one, and
 //! at every pixel that differs the cells along the ray about the point are taken too, over a
 //! reach four times longer at each try ([`widen_where_wrong`]), until the images agree (or
-//! [`ORACLE_TRIES`] frames have been drawn: the bench's diff column would show it). Each try's
-//! work outside its draw is untimed: an oracle knows its cells.
+//! [`ORACLE_TRIES`] frames have been drawn: the bench's diff column would show it). Only the last
+//! frame's extraction and draw are timed: an oracle knows its cells.
 
 use glam::DVec3;
 use rayon::prelude::*;
