@@ -6,12 +6,13 @@ labels; nothing is downloaded) and every view (``--views``, default 8, orbiting 
 diagonals, elevation ±25°), in one process and one run, after a warm-up frame per method:
 
 - geocull ``none`` (every octree node that may hold surface: the reference image), ``implicit``
-  (occlusion map of implicit occluders, only visible nodes extracted) and ``oracle`` (only the cells
-  holding a visible point of none's image, read from it untimed: the least that culling whole cells
-  can draw, so implicit's distance to it is what its walk and its extra cells cost), each *cold* (``cache=False``
-  on a renderer of its own whose caches are cleared first: every patch extracted and uploaded in
-  the frame) and *warm* (patches cached, and kept on the GPU, by the earlier frames of the same
-  view); frame time = ``stats["total_ms"]`` (call → GPU done; read-back and one-time setup excluded);
+  (occlusion map of implicit occluders, only visible nodes extracted) and ``oracle`` (only the
+  cells holding a visible point of none's image, read from it untimed: about the least that
+  culling whole cells can draw, so implicit's distance to it is what its walk and its extra cells
+  cost), each *cold* (``cache=False`` on a renderer of its own whose caches are cleared first:
+  every patch extracted and uploaded in the frame) and *warm* (patches cached, and kept on the
+  GPU, by the earlier frames of the same view); frame time = ``stats["total_ms"]`` (call → GPU
+  done; read-back and one-time setup excluded);
 - PyVista: ``contour(method="flying_edges")`` + an off-screen render with MSAA off. Cold = the
   contour's wall time + a render of its mesh in an already set-up plotter; warm = the render alone.
 

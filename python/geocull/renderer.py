@@ -285,8 +285,9 @@ class Renderer:
         culling: one of :data:`ISO_CULLING_MODES`: "implicit" (occlusion map of implicit occluders,
         extract only visible nodes), "none" (extract and draw every node that may hold surface:
         the reference) or "oracle" (for benchmarks: renders "none" first, untimed, and draws only
-        the cells that hold a pixel's surface point in it, within 0.05 cells of their faces: the
-        least that a culling drawing whole cells, as "implicit" does, can draw; the same image).
+        the cells that hold a pixel's surface point in it, with those within 0.05 cells of it, and
+        along the pixel's ray where the image would differ: about the least that a culling drawing
+        whole cells, as "implicit" does, can draw; the same image).
         occluder_depth: octree depth of the occluder nodes (root = 0; default max_depth: single cells).
         cull_depth: octree depth of the nodes tested and extracted (default max_depth - 2).
         color: (r, g, b) in [0, 1].  cache: reuse patches extracted by earlier frames (per volume,
