@@ -434,7 +434,7 @@ pub(super) fn skip_reach(skip: &[u8], bdims: [u32; 3]) -> Vec<u8> {
     // `o` bounded by the bricks `f` (classes `cn`) `d` away from those of classes `c`.
     let bound = |o: &mut [u8], c: &[u8], f: &[u8], cn: &[u8], d: u8| {
         for (((o, &c), &f), &cn) in o.iter_mut().zip(c).zip(f).zip(cn) {
-            *o = (*o).min(if c == cn { f } else { 0 }.max(d));
+            *o = (*o).min((if c == cn { f } else { 0 }).max(d));
         }
     };
     let f: Vec<u8> = cls.iter().map(|&k| if k == 0 { 0 } else { REACH_CAP }).collect();
