@@ -89,6 +89,12 @@ def test_walk_runs_where_asked_and_auto_picks_the_host_on_a_cpu_adapter(renderer
         assert res.stats["walk"] == w
         # the host's walk needs no submission and no read-back before the draw
         assert (res.stats["submissions"], res.stats["readbacks"]) == ((1, 0) if w == "cpu" else (2, 1))
+        # it counts its rays (those entering the box, at most one per pixel) and their steps
+        s = res.stats
+        if w == "cpu":
+            assert 0 < s["walk_rays"] <= W * H and s["walk_steps"] >= s["walk_rays"]
+        else:
+            assert (s["walk_rays"], s["walk_steps"]) == (0, 0)
 
 
 # ---- Known answers

@@ -125,6 +125,8 @@ class IsoStats(TypedDict):
     gpu_cache_bytes: int  # bytes of the cached patches kept on the GPU between frames (<= about 2 x their own)
     contour_bytes: int  # bytes of the implicit walk's contour bricks, where it runs (surface bricks' samples; or 0)
     walk: Literal["gpu", "cpu", "none"]  # where the implicit walk ran ("none": culling="none", no walk)
+    walk_rays: int  # host walk: pixel rays that entered the volume's box; 0 when walk != "cpu" (not counted)
+    walk_steps: int  # host walk: their steps (a cell entered or a jump across empty bricks); 0 when walk != "cpu"
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

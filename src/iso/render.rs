@@ -366,6 +366,11 @@ pub struct IsoStats {
     /// Where this frame's walk ran: `Some(true)` on the host, `Some(false)` on the GPU, `None`
     /// without one (culling = none).
     pub walk_on_host: Option<bool>,
+    /// The host's walk: the pixel rays that entered the volume's box and the steps they took (a
+    /// cell entered or a jump across skippable bricks: `walk::WalkCounts`). 0 where the walk ran on
+    /// the GPU (not counted there) or there was none.
+    pub walk_rays: u64,
+    pub walk_steps: u64,
 }
 
 /// One rendered isosurface frame as host arrays.
@@ -720,7 +725,9 @@ impl IsoRenderer {
                     let view_proj = Mat4::from_cols_array_2d(&globals.view_proj);
                     let contour = contour.as_ref().map(|c| c.0.as_slice());
                     let data = WalkGrid { nodes, skip, reach, huge: (&huge.0, huge.1), contour };
-                    let (marks, map) = walk(&p, &view_proj, &data, width, height, n_cells);
+                    let (marks, map, counts) = walk(&p, &view_proj, &data, width, height, n_cells);
+                    stats.walk_rays = counts.rays;
+                    stats.walk_steps = counts.steps;
                     host_map = Some(map);
                     marks
                 }

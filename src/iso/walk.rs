@@ -47,9 +47,19 @@ pub(super) struct WalkGrid<'a> {
     pub(super) contour: Option<&'a [u32]>,
 }
 
-/// The walk of every pixel of a `width` × `height` image: `(marks, map)`, the marks of the
-/// `n_cells` march cells (8 per word, as `passes::march` returns them) and the map's depth per
-/// pixel (row-major, row 0 = top). `view_proj` is the frame's (f32, as the shader's `Globals`).
+/// What a walk did: the rays that entered the volume's box (with its margin) and the steps they
+/// took, a step being one cell entered or one jump across skippable bricks (each ray's first cell
+/// counting one).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WalkCounts {
+    pub rays: u64,
+    pub steps: u64,
+}
+
+/// The walk of every pixel of a `width` × `height` image: `(marks, map, counts)`, the marks of the
+/// `n_cells` march cells (8 per word, as `passes::march` returns them), the map's depth per
+/// pixel (row-major, row 0 = top) and what the walk did. `view_proj` is the frame's (f32, as the
+/// shader's `Globals`).
 pub(super) fn walk(
     p: &MapParams,
     view_proj: &Mat4,
@@ -57,16 +67,25 @@ pub(super) fn walk(
     width: u32,
     height: u32,
     n_cells: usize,
-) -> (Vec<u32>, Vec<f32>) {
+) -> (Vec<u32>, Vec<f32>, WalkCounts) {
     let marks: Vec<AtomicU32> = (0..n_cells.div_ceil(8).max(1)).map(|_| AtomicU32::new(0)).collect();
     let mut map = vec![0.0f32; (width * height) as usize];
     let w = Walker::new(p, view_proj, grid, &marks);
-    map.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.iter_mut().enumerate() {
-            *out = w.ray(x as u32, y as u32);
-        }
-    });
-    (marks.into_iter().map(AtomicU32::into_inner).collect(), map)
+    let counts = map
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .map(|(y, row)| {
+            let mut c = WalkCounts::default();
+            for (x, out) in row.iter_mut().enumerate() {
+                let mut steps = 0;
+                *out = w.ray(x as u32, y as u32, &mut steps);
+                c.rays += u64::from(steps > 0);
+                c.steps += u64::from(steps);
+            }
+            c
+        })
+        .reduce(WalkCounts::default, |a, b| WalkCounts { rays: a.rays + b.rays, steps: a.steps + b.steps });
+    (marks.into_iter().map(AtomicU32::into_inner).collect(), map, counts)
 }
 
 fn v3(v: [f32; 4]) -> Vec3 {
@@ -190,8 +209,9 @@ impl<'a> Walker<'a> {
         Vec3::new(exit(c.x, t0.x, dt.x), exit(c.y, t0.y, dt.y), exit(c.z, t0.z, dt.z))
     }
 
-    /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes.
-    fn ray(&self, x: u32, y: u32) -> f32 {
+    /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes and counts its
+    /// `steps` (none when it misses the box).
+    fn ray(&self, x: u32, y: u32, steps: &mut u32) -> f32 {
         let p = self.p;
         let (w, h) = (p.dims[3], p.size[0]);
         let ndc = [(x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0];
@@ -239,6 +259,7 @@ impl<'a> Walker<'a> {
         let mut brick_at = usize::MAX;
         let mut brick = u32::MAX;
         loop {
+            *steps += 1;
             let info = self.node_info(c);
             let k = info & 3;
             let ax = crossed.clamp(0, 2) as usize;
@@ -578,6 +599,49 @@ mod tests {
             }
             assert!(host.stats.surface_triangles < none.stats.surface_triangles, "{eye:?}");
         }
+    }
+
+    /// The walk's counts on a scene whose answer is known: a horizontal plane between sample
+    /// layers 2 and 3 of 8, seen straight down and orthographically over the middle of the box (6 × 4
+    /// of its 7 × 7 cells), so that every pixel's ray enters the box; cell by cell (no skipping) each takes the 4 cells
+    /// above the surface, the one holding it and the one below, where its face proves the crossing
+    /// (6 steps). Jumping skippable bricks takes fewer; the GPU's walk counts nothing.
+    #[test]
+    fn walk_counts_on_a_plane_seen_from_above() {
+        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
+        let mut r = IsoRenderer::new(&ctx);
+        let vol = Volume::from_fn((8, 8, 8), [0.0; 3], [1.0; 3], |_, _, z| (z - 2.5) as f32).unwrap();
+        let tree = MinMaxOctree::build(&vol);
+        let cam = Camera::look_at(
+            [3.5, 3.5, 50.0],
+            [3.5, 3.5, 0.0],
+            [0.0, 1.0, 0.0],
+            40.0,
+            None,
+            None,
+            Projection::Orthographic,
+            Some(4.0),
+            1.0,
+        )
+        .unwrap();
+        let (w, h) = (24, 16);
+        let frame = |r: &mut IsoRenderer, walk, space_skipping| {
+            let opts = IsoOptions { walk, space_skipping, ..Default::default() };
+            r.render(&ctx, w, h, &vol, &tree, 0.0, &cam, &opts).unwrap().stats
+        };
+        let cells = frame(&mut r, IsoWalk::Cpu, false);
+        assert_eq!(cells.walk_rays, u64::from(w * h));
+        assert_eq!(cells.walk_steps, 6 * u64::from(w * h));
+        let skipping = frame(&mut r, IsoWalk::Cpu, true);
+        assert_eq!(skipping.walk_rays, u64::from(w * h));
+        assert!(skipping.walk_steps <= cells.walk_steps, "{} steps", skipping.walk_steps);
+        let gpu = frame(&mut r, IsoWalk::Gpu, false);
+        assert_eq!((gpu.walk_rays, gpu.walk_steps), (0, 0));
+        let none = r
+            .render(&ctx, w, h, &vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() })
+            .unwrap()
+            .stats;
+        assert_eq!((none.walk_rays, none.walk_steps), (0, 0));
     }
 
     /// `contour_side` on faces whose answer is known: uniform faces, a corner cut off, a segment

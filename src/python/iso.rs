@@ -214,6 +214,8 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
             None => "none",
         },
     )?;
+    st.set_item("walk_rays", s.walk_rays)?;
+    st.set_item("walk_steps", s.walk_steps)?;
     // Names shared with scene frames, so generic code (RenderResult.__repr__) works.
     st.set_item("triangles_drawn", s.surface_triangles)?;
     st.set_item("tiles_drawn", s.nodes_visible)?;
