@@ -159,6 +159,20 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
                             ref.near, ref.far, (0.0, 0.0, 0.0), 1e-4)
             st.render()  # warm-up: context, shaders, upload
             jobs.append(("pyvista_warm", st.render))
+        # Cores busy per call: the process's CPU time (all its threads: the host's walk, lavapipe's
+        # or llvmpipe's) over the call's wall time; on a CPU adapter the share of the machine a frame
+        # takes, which its time alone does not say.
+        cores: dict[str, list[float]] = {}
+
+        def busy(key: str, fn: Any, out: dict[str, list[float]] = cores) -> Any:
+            def job() -> float:
+                c0, t0 = time.process_time(), time.perf_counter()
+                ms = fn()
+                out.setdefault(key, []).append((time.process_time() - c0) / max(1e-9, time.perf_counter() - t0))
+                return ms
+            return job
+
+        jobs = [(k, busy(k, fn)) for k, fn in jobs]
         try:
             times = report.timed_rounds(jobs, int(cfg["repeats"]))
         finally:
@@ -172,6 +186,9 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
             row: dict[str, Any] = dict(volume=name, view=vname, method=method, temperature=temp, total_ms=best[key],
                                        median_ms=statistics.median(times[key]),
                                        ratio_to_none=best[key] / best[f"none_{temp}"],
+                                       # (The oracle's call renders `none` first, untimed: not its frame's.)
+                                       cores=(statistics.median(cores[key])
+                                              if key in cores and method != "oracle" else None),
                                        ratio_to_pyvista=(best[key] / best[f"pyvista_{temp}"]
                                                          if f"pyvista_{temp}" in best else None))
             if method in first:
@@ -180,7 +197,8 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
                 row.update(faces=int(s["surface_triangles"]), faces_ratio=s["surface_triangles"] /
                            max(1, ref.stats["surface_triangles"]), nodes_visible=int(s["nodes_visible"]),
                            nodes_straddling=int(s["nodes_straddling"]), readbacks=int(s["readbacks"]),
-                           setup_ms=float(s["setup_ms"]), walk=str(s["walk"]),
+                           setup_ms=float(s["setup_ms"]), walk=str(s["walk"]), walk_rays=int(s["walk_rays"]),
+                           walk_steps=int(s["walk_steps"]),
                            differing_pixel_fraction=image_error(res.image, ref.image)["differing_pixel_fraction"])
             else:
                 assert pv_mesh is not None
@@ -206,8 +224,10 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     for m in per.values():
         rs = m.pop("rows")
         m.update(mean_ms=sum(x["total_ms"] for x in rs) / len(rs),
-                 **{k: _gmean(x[k] for x in rs) for k in ("ratio_to_none", "ratio_to_pyvista", "faces_ratio")},
-                 max_differing_pixel_fraction=max((x.get("differing_pixel_fraction") or 0.0) for x in rs))
+                 **{k: _gmean(x[k] for x in rs) for k in ("ratio_to_none", "ratio_to_pyvista", "faces_ratio", "cores")},
+                 max_differing_pixel_fraction=max((x.get("differing_pixel_fraction") or 0.0) for x in rs),
+                 walk_steps_per_ray=(sum(x["walk_steps"] for x in rs) / sum(x["walk_rays"] for x in rs)
+                                     if all(x.get("walk_rays") for x in rs) else None))
     return dict(summary=dict(mode=cfg["mode"], width=cfg["width"], height=cfg["height"], repeats=cfg["repeats"],
                              views=cfg["iso_views"], n=cfg["iso_n"], adapter=gc.Renderer(8, 8).adapter_info,
                              wall_s=time.perf_counter() - t0, per_method=per), rows=rows)
@@ -226,25 +246,31 @@ def format_table(result: dict[str, Any]) -> str:
     s = result["summary"]
     lines = [f"geocull bench --scene iso ({s['mode']}): {s['width']}x{s['height']}, {s['views']} view(s) per volume, "
              f"best of {s['repeats']} round(s) after a warm-up; {s['adapter']}", ""]
-    hdr = (f"{'volume':<9} {'view':<12} {'method':<9} {'temp':<5} {'ms':>8} {'x none':>7} {'x pv':>6} "
+    hdr = (f"{'volume':<9} {'view':<12} {'method':<9} {'temp':<5} {'ms':>8} {'cores':>5} {'x none':>7} {'x pv':>6} "
            f"{'faces':>10} {'x none':>6} {'nodes':>13} {'rb':>3} {'diff px %':>9}")
     lines += [hdr, "-" * len(hdr)]
     for r in result["rows"]:
         nodes = f"{r['nodes_visible']}/{r['nodes_straddling']}" if "nodes_visible" in r else "–"
         dpf = r.get("differing_pixel_fraction")
         lines.append(f"{r['volume']:<9} {r['view']:<12} {r['method']:<9} {r['temperature']:<5} {r['total_ms']:>8.1f} "
+                     f"{_f(r['cores'], '.2f'):>5} "
                      f"{r['ratio_to_none']:>7.3f} {_f(r['ratio_to_pyvista'], '.3f'):>6} {r['faces']:>10,} "
                      f"{r['faces_ratio']:>6.3f} {nodes:>13} {_f(r.get('readbacks'), 'd'):>3} "
                      f"{_f(None if dpf is None else 100 * dpf, '.4f'):>9}")
     lines += ["", "per volume and method, geometric mean over views "
               "(mean ms; ratios of frame times, same view, same run):"]
     for k, m in s["per_method"].items():
-        lines.append(f"  {k:<24} mean {m['mean_ms']:>8.1f} ms  x none {_f(m['ratio_to_none'], '.3f')}  "
+        lines.append(f"  {k:<24} mean {m['mean_ms']:>8.1f} ms  cores {_f(m['cores'], '.2f')}  "
+                     f"x none {_f(m['ratio_to_none'], '.3f')}  "
                      f"x pyvista {_f(m['ratio_to_pyvista'], '.3f')}  faces x none {_f(m['faces_ratio'], '.3f')}  "
-                     f"max diff px {100 * m['max_differing_pixel_fraction']:.4f} %")
+                     f"max diff px {100 * m['max_differing_pixel_fraction']:.4f} %"
+                     + (f"  walk {m['walk_steps_per_ray']:.1f} steps/ray" if m["walk_steps_per_ray"] else ""))
     walks = "/".join(sorted({str(r["walk"]) for r in result["rows"] if r.get("walk") not in (None, "none")}))
     lines.append("columns: ms = frame time (geocull stats total_ms; PyVista: contour (cold only) + Render + "
-                 "WaitForCompletion, MSAA off); cold = no patch cache / contour in the frame; warm = patches cached "
-                 "/ mesh already extracted; rb = read-backs inside the frame; diff px = pixels differing from geocull "
-                 f"none; implicit's walk ran on the {walks or 'none'}. Wall {s['wall_s']:.0f} s.")
+                 "WaitForCompletion, MSAA off); cores = the process's CPU time over the wall time of the call (all "
+                 "threads; median over rounds; not measured for the oracle, whose call renders none first, nor for "
+                 "PyVista cold); cold = no patch cache / contour in the frame; warm = patches cached / mesh already "
+                 "extracted; rb = read-backs inside the frame; diff px = pixels differing from geocull none; "
+                 f"implicit's walk ran on the {walks or 'none'} (steps/ray: the host walk's cells entered and brick "
+                 f"jumps per ray entering the box). Wall {s['wall_s']:.0f} s.")
     return "\n".join(lines)
