@@ -307,7 +307,8 @@ class Renderer:
         whether it was extracted and drawn. ``stats``: :class:`IsoStats`
         (surface_triangles, nodes_tested, nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
-        (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, gpu_cache_bytes, ...).
+        (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, gpu_cache_bytes,
+        walk_rays / walk_steps (the host's walk: rays entering the volume's box and their steps), ...).
         Patches are kept within :attr:`iso_cache_budget` bytes, and their vertices and triangles
         stay on the GPU between frames (``gpu_cache_bytes``, at most about twice theirs).
 
