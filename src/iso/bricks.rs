@@ -371,7 +371,11 @@ pub fn brick_classes(classes: &[u8], dims: [u32; 3], shifts: &[u32]) -> Vec<Bric
 /// [`brick_classes`]), which only the host's walk reads: a ray in empty space jumps up to 64
 /// cells at once where the coarse level stops every 16 (on the frog most of the walk's steps are
 /// jumps). It is reduced from the coarse level's bricks.
-pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3], huge: bool) -> (Vec<u8>, Option<BrickLevel>) {
+///
+/// With `huge` (the host's walk), also returns the skip table, [`skip_byte`] per brick (else empty), made
+/// from each row of bricks right after it is written, while it is in the caches: a pass over the
+/// whole grid afterwards read the frog's 32 MB again (12 ms of its cold frame).
+pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3], huge: bool) -> (Vec<u8>, Vec<u8>, Option<BrickLevel>) {
     let shifts = [FINE_SHIFT, COARSE_SHIFT, HUGE_SHIFT];
     let mut levels = brick_classes(nodes, dims, &shifts[..if huge { 3 } else { 2 }]).into_iter();
     let (fine, fd) = levels.next().expect("the fine level");
@@ -380,9 +384,13 @@ pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3], huge: bool) -> (Vec<u8>, 
     let [nx, ny, nz] = dims.map(|v| v as usize);
     let nb = dims.map(|v| v.div_ceil(4) as usize);
     let mut out = vec![0u8; nb[0] * nb[1] * nb[2] * 64];
+    let mut skip = vec![0u8; if huge.is_some() { nb[0] * nb[1] * nb[2] } else { 0 }];
+    // (Empty without the table: one empty chunk per row of bricks.)
+    let skip_rows = skip.chunks_mut(nb[0].max(1)).map(Some).chain(std::iter::repeat_with(|| None));
+    let rows: Vec<_> = out.chunks_mut(nb[0] * 64).zip(skip_rows).collect();
     // One row of bricks (along x) at a time: 4 x 4 rows of nodes, each in runs of 4 (a fine
     // skip brick's run: FINE_SHIFT = 2, the same 4 nodes as a brick's row).
-    out.par_chunks_mut(nb[0] * 64).enumerate().for_each(|(r, bricks)| {
+    rows.into_par_iter().enumerate().for_each(|(r, (bricks, skip))| {
         let (by, bz) = (r % nb[1], r / nb[1]);
         for (z, y) in (4 * bz..(4 * bz + 4).min(nz)).flat_map(|z| (4 * by..(4 * by + 4).min(ny)).map(move |y| (z, y))) {
             let start = |bd: [u32; 3], s: u32| ((z >> s) * bd[1] as usize + (y >> s)) * bd[0] as usize;
@@ -398,25 +406,32 @@ pub(super) fn pack_nodes(nodes: &[u8], dims: [u32; 3], huge: bool) -> (Vec<u8>, 
                 dst.iter_mut().zip(run).for_each(|(o, &k)| *o = k | bits);
             }
         }
+        if let Some(skip) = skip {
+            skip.iter_mut().zip(bricks.chunks(64)).for_each(|(s, b)| *s = skip_byte(b));
+        }
     });
-    (out, huge)
+    (out, skip, huge)
 }
 
-/// Per brick of [`pack_nodes`]' output (64 bytes, 4³ nodes), the byte all its nodes hold when it
-/// is a skippable fine brick (bit 2 set; every node then holds the same byte: the brick's class,
-/// its skip flags and, for single cells, faces all uniform on the class's side), else 0: the
-/// host's walk reads a node of a skippable brick from this table, which stays in the caches
-/// where the nodes (32 MB on the frog) do not. (Requires the fine skip bricks to be the
-/// storage bricks: `FINE_SHIFT` = 2.)
-pub(super) fn skip_bricks(bricked: &[u8]) -> Vec<u8> {
+/// The skip table's entry of one brick of [`pack_nodes`]' output (its 64 bytes, 4³ nodes): the
+/// byte all its nodes hold when it is a skippable fine brick (bit 2 set; every node then holds the
+/// same byte: the brick's class, its skip flags and, for single cells, faces all uniform on the
+/// class's side), else 0. The host's walk reads a node of a skippable brick from this table (one
+/// byte per brick, [`pack_nodes`] with `huge`), which stays in the caches where the nodes (32 MB
+/// on the frog) do not. (Requires the fine skip bricks to be the storage bricks: `FINE_SHIFT` = 2.)
+pub(super) fn skip_byte(b: &[u8]) -> u8 {
     const _: () = assert!(FINE_SHIFT == 2);
-    bricked.par_chunks(64).map(|b| if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) { b[0] } else { 0 }).collect()
+    if b[0] & 4 != 0 && b.iter().all(|&v| v == b[0]) {
+        b[0]
+    } else {
+        0
+    }
 }
 
 /// The most [`skip_reach`] gives: a box of up to 29 bricks per axis (116 nodes).
 pub(super) const REACH_CAP: u8 = 15;
 
-/// Per brick of [`skip_bricks`] (`bdims` bricks per axis, x fastest), how far skippable bricks
+/// Per brick of the skip table ([`skip_byte`]; `bdims` bricks per axis, x fastest), how far skippable bricks
 /// of its class reach about it: the largest `r` (at most [`REACH_CAP`]) such that every brick of
 /// the grid within `r - 1` bricks of it (Chebyshev distance) is a skippable brick of its class, 0
 /// where it is not skippable. The host's walk jumps such a box of `2 r - 1` bricks per axis whole:
@@ -495,6 +510,20 @@ pub(super) fn pack2(v: &[u8]) -> Vec<u32> {
         }
     });
     out
+}
+
+/// How many of the classes packed by [`pack2`] are Below, Above and NaN, in that order (the
+/// padding of the last word reads as passable, `CLASS_PASS` = 0): a population count per word
+/// instead of three comparisons per node byte.
+pub(super) fn class_counts(words: &[u32]) -> [u32; 3] {
+    const _: () = assert!(CLASS_PASS == 0 && CLASS_BELOW == 1 && CLASS_ABOVE == 2 && CLASS_NAN == 3);
+    let count = |c: &[u32]| {
+        c.iter().fold([0u32; 3], |[b, a, n], &w| {
+            let (lo, hi) = (w & 0x5555_5555, w >> 1 & 0x5555_5555);
+            [b + (lo & !hi).count_ones(), a + (hi & !lo).count_ones(), n + (lo & hi).count_ones()]
+        })
+    };
+    words.par_chunks(1 << 14).map(count).reduce(|| [0; 3], |x, y| [0, 1, 2].map(|i| x[i] + y[i]))
 }
 
 /// The class (`CLASS_*`) of node `p` of the classes packed by [`pack2`] (grid `dims`).
@@ -791,7 +820,8 @@ mod tests {
         let dims = d.map(|x| x as u32);
         // Faces in bits 4-7 (pack_nodes keeps them, and reads only the class bits).
         let leaves: Vec<u8> = v.iter().enumerate().map(|(i, &k)| k | ((i % 16) as u8) << 4).collect();
-        let (p, _) = pack_nodes(&leaves, dims, false);
+        let (p, skip, _) = pack_nodes(&leaves, dims, false);
+        assert!(skip.is_empty(), "no skip table without `huge`");
         assert_eq!(p.len(), 10 * 6 * 11 * 64, "whole bricks of 4³ nodes");
         let fine = brute(&v, d, FINE_SHIFT);
         let coarse = brute(&v, d, COARSE_SHIFT);
@@ -817,6 +847,31 @@ mod tests {
         assert_ne!(v.len() % 16, 0, "pack2's last word is partial");
         // pack2 reads the class bits of the nodes as of the classes alone.
         assert_eq!(pack2(&leaves), pack2(&v));
+        // class_counts counts the packed classes as the bytes say (the padding not counted).
+        let mut v2 = v.clone();
+        for (i, k) in v2.iter_mut().enumerate() {
+            if i % 7 == 3 {
+                *k = CLASS_NAN;
+            }
+        }
+        let want = [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| v2.iter().filter(|&&x| x == k).count() as u32);
+        assert!(want.iter().all(|&n| n > 0));
+        assert_eq!(class_counts(&pack2(&v2)), want);
+        // The skip table (with `huge`) holds per brick the byte all its nodes hold when it is a
+        // skippable fine brick: here those whose faces depend on the class alone, as leaf nodes'
+        // do, the others 0 (their nodes' bytes differ).
+        let alike: Vec<u8> = v.iter().map(|&k| k | (k & 1) << 7 | 0x70).collect();
+        for (nodes, some) in [(&alike, true), (&leaves, false)] {
+            let (p, skip, huge) = pack_nodes(nodes, dims, true);
+            assert!(huge.is_some());
+            assert_eq!(skip.len(), p.len() / 64);
+            for (b, (&s, brick)) in skip.iter().zip(p.chunks(64)).enumerate() {
+                let all_alike = brick.iter().all(|&x| x == brick[0]);
+                let want = if brick[0] & 4 != 0 && all_alike { brick[0] } else { 0 };
+                assert_eq!(s, want, "brick {b}");
+            }
+            assert_eq!(skip.iter().any(|&s| s != 0), some);
+        }
         let q = pack2(&v);
         for (i, &k) in v.iter().enumerate() {
             assert_eq!(

@@ -9,10 +9,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
-use super::bricks::{
-    pack2, pack_nodes, skip_bricks, skip_reach, BrickLevel, CLASS_ABOVE, CLASS_BELOW, CLASS_NAN, COARSE_SHIFT,
-    FINE_SHIFT,
-};
+use super::bricks::{class_counts, pack2, pack_nodes, skip_reach, BrickLevel, COARSE_SHIFT, FINE_SHIFT};
 use super::march::SurfacePatch;
 use crate::camera::{FrameCamera, Projection};
 use crate::error::{Error, Result};
@@ -69,7 +66,7 @@ pub(super) enum WalkData {
     /// For the compute walk ([`march`]).
     Gpu { nodes: wgpu::Buffer, contour: Option<(wgpu::Buffer, u32)> },
     /// For the host's walk (`super::walk`), with the skippable bricks' bytes
-    /// ([`super::bricks::skip_bricks`]), how far each reaches ([`super::bricks::skip_reach`]) and
+    /// ([`super::bricks::skip_byte`]), how far each reaches ([`super::bricks::skip_reach`]) and
     /// its third level of skip bricks ([`super::bricks::pack_nodes`] with `huge`).
     Host { nodes: Vec<u8>, skip: Vec<u8>, reach: Vec<u8>, huge: BrickLevel, contour: Option<(Vec<u32>, u32)> },
 }
@@ -113,19 +110,13 @@ impl ClassGrid {
         contour_policy: Option<bool>,
         host: bool,
     ) -> Self {
-        // Per chunk, sums of comparisons (vectorisable; an indexed histogram is not).
-        let n = nodes
-            .par_chunks(1 << 16)
-            .map(|c| [CLASS_BELOW, CLASS_ABOVE, CLASS_NAN].map(|k| c.iter().map(|&v| (v & 3 == k) as u32).sum::<u32>()))
-            .reduce(|| [0; 3], |a, b| [0, 1, 2].map(|i| a[i] + b[i]));
-        let [n_below, n_above, n_nan] = n;
         let classes = pack2(&nodes);
-        let (bricked, huge) = pack_nodes(&nodes, dims, host);
+        let [n_below, n_above, n_nan] = class_counts(&classes);
+        let (bricked, skip, huge) = pack_nodes(&nodes, dims, host);
         drop(nodes);
         // (Without a brick that holds surface the walk has nothing to read.)
         let contour = contour.filter(|(words, at)| words.len() > *at);
         let data = if host {
-            let skip = skip_bricks(&bricked);
             let reach = skip_reach(&skip, dims.map(|v| v.div_ceil(4)));
             let huge = huge.unwrap_or_default();
             let contour = contour.map(|(words, at)| (words, at as u32));

@@ -125,7 +125,7 @@
 //! cores instead ([`super::walk`], a task per image row): lavapipe runs the shader 8 lanes at a
 //! time with every branch of the loop taken for every lane and reads storage buffers lane by lane,
 //! where the host steps each ray by itself, takes only its own branches and reads node bytes with
-//! plain loads, and a table of the skippable bricks' bytes ([`super::bricks::skip_bricks`],
+//! plain loads, and a table of the skippable bricks' bytes ([`super::bricks::skip_byte`],
 //! 1/64 of the nodes) keeps a brick jump's read in the caches; it also jumps a third level of
 //! skip bricks and places contours on every surface (`IsoOptions::face_contours`). With the same
 //! contour choice the two walks see the same cells and prove the same map (to the shader's

@@ -13,7 +13,7 @@
 //! brick jump and single steps compute them alike, which they do within each walk.
 //!
 //! What only the host's walk does, each exact (the cells seen and the map are the shader's):
-//! nodes of skippable bricks come from a table of their bytes (`bricks::skip_bricks`, cached
+//! nodes of skippable bricks come from a table of their bytes (`bricks::skip_byte`, cached
 //! where the 32 MB of the frog's nodes are not); a cell of a skippable brick marks no near
 //! event (every cell around it is of the brick's class, so the event would mark nothing); and
 //! a coarse jump extends to a third level of skip bricks, 64³ nodes with their ring
@@ -36,7 +36,7 @@ use super::passes::MapParams;
 pub(super) struct WalkGrid<'a> {
     pub(super) nodes: &'a [u8],
     /// Per brick of 4³ nodes, the byte of each of its nodes when it is a skippable brick, else 0
-    /// (`bricks::skip_bricks`).
+    /// (`bricks::skip_byte`).
     pub(super) skip: &'a [u8],
     /// The third level of skip bricks (`2^HUGE_SHIFT` nodes per axis, `bricks::pack_nodes` with
     /// `huge`): a brick's class where it and its ring are all of it, else 0; and their dims.
@@ -573,7 +573,7 @@ mod tests {
         let dims = tree.dims_at_depth(md).unwrap();
         let mut nodes = tree.leaf_nodes(0.0).unwrap();
         crate::iso::bricks::dilate_nan(&mut nodes, dims);
-        let (huge, _) = crate::iso::bricks::pack_nodes(&nodes, dims, true).1.unwrap();
+        let (huge, _) = crate::iso::bricks::pack_nodes(&nodes, dims, true).2.unwrap();
         for k in [1, 2] {
             assert!(huge.contains(&k), "whole 64³ bricks of class {k}");
         }
