@@ -103,9 +103,22 @@ pub struct LevelDraw {
 }
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
-/// travels as the most negative f32, which the lit pass tests for (`s < -1e37`) and which any
-/// interpolation with it keeps below that (a triangle touching no data is no data).
+/// travels as the most negative f32, which the lit pass tests for (`s < -1e31`). The other
+/// scalars go up clamped to ±`scene::color::SCALAR_LIMIT` (1e30, [`scalar_word`]), so an
+/// interpolation with no data of weight above 3e-8 stays below the test: a triangle touching no
+/// data is no data to its corners (with data up to 3.4e38 it was only where that weight passed 3 %,
+/// and a sliver by each valid corner took the colour map's low end).
 pub const NO_DATA: f32 = -f32::MAX;
+
+/// A scalar as the lit pass receives it: NaN as [`NO_DATA`], the others clamped to ±1e30.
+fn scalar_word(x: f32) -> f32 {
+    const LIMIT: f32 = crate::scene::color::SCALAR_LIMIT as f32;
+    if x.is_nan() {
+        NO_DATA
+    } else {
+        x.clamp(-LIMIT, LIMIT)
+    }
+}
 
 /// The normal map of the lit pass: every height field's shading samples and every structured
 /// grid mesh's fine normals, as long as they fit one storage binding (later height fields fall
@@ -204,7 +217,7 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
                 return None;
             }
             let first = words.len() as u32;
-            words.extend(v.into_iter().map(|x| if x.is_nan() { NO_DATA } else { x }));
+            words.extend(v.into_iter().map(scalar_word));
             Some(first)
         })
         .collect();
@@ -235,7 +248,7 @@ fn tile_sub_boxes(t: &crate::lod::TileMesh) -> Vec<(DVec3, DVec3)> {
 fn vertex_words(n: usize, vals: &[f32], normals: &[u32], out: &mut Vec<[u32; 2]>) {
     out.clear();
     out.extend((0..n).map(|k| {
-        let x = vals.get(k).map_or(0.0, |&x| if x.is_nan() { NO_DATA } else { x });
+        let x = vals.get(k).map_or(0.0, |&x| scalar_word(x));
         [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE)]
     }));
 }

@@ -131,16 +131,28 @@ pub fn resolve_cmap(cmap: Option<&CmapArg>) -> Result<(String, Vec<[f32; 3]>)> {
     }
 }
 
-/// The colour range: `clim` checked, or the finite range of `data` (see the module's contract).
+/// The largest scalar magnitude drawn as itself: the lit pass receives scalars clamped to
+/// ±`SCALAR_LIMIT` so that no data (`gpu::geometry::NO_DATA`, -3.4e38) interpolated with them
+/// stays below -1e31 wherever its weight is above 3e-8 (a triangle touching no data is no data to
+/// its corners); colour ranges lie within it.
+pub const SCALAR_LIMIT: f64 = 1e30;
+
+/// The colour range: `clim` checked, or the finite range of `data` (see the module's contract),
+/// within ±[`SCALAR_LIMIT`].
 pub fn resolve_clim(clim: Option<[f64; 2]>, data: impl Iterator<Item = f64>) -> Result<[f64; 2]> {
     if let Some([lo, hi]) = clim {
         ensure(lo.is_finite() && hi.is_finite() && lo < hi, "clim", || {
             format!("clim is ({lo}, {hi}); expected two finite numbers lo < hi")
         })?;
+        ensure(lo.abs().max(hi.abs()) <= SCALAR_LIMIT, "clim", || {
+            format!("clim is ({lo}, {hi}); colour ranges lie within ±1e30")
+        })?;
         return Ok([lo, hi]);
     }
-    let (lo, hi) =
-        data.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = data
+        .filter(|v| v.is_finite())
+        .map(|v| v.clamp(-SCALAR_LIMIT, SCALAR_LIMIT))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
     Ok(if lo > hi {
         [0.0, 1.0]
     } else if lo == hi {

@@ -154,13 +154,14 @@ fn grid_coords(p: u32) -> vec2<f32> {
 
 // The object's colour at scalar s: flat, or matplotlib's mapping of a 256-row colour map
 // (row floor(256 t), t = (s - lo) / (hi - lo) clamped to [0, 1], the last row at t = 1); scalars
-// below -1e37 are no data (geometry.rs NO_DATA) and get the NaN colour.
+// below -1e31 are no data (geometry.rs NO_DATA, -3.4e38, or an interpolation with it: the other
+// scalars come clamped to ±1e30) and get the NaN colour.
 fn base_color(o: Object, s: f32) -> vec3<f32> {
     if (o.cmap.z < 0.5) {
         return o.color.rgb;
     }
     let base = u32(o.cmap.w);
-    if (s < -1e37) {
+    if (s < -1e31) {
         return lut[base + 256u].rgb;
     }
     let t = clamp((s - o.cmap.x) * o.cmap.y, 0.0, 1.0);
