@@ -101,6 +101,19 @@ def test_mesh_vertex_values_and_set_color_by(renderer_small):
     assert img[H // 2, W // 2, 1] > 0 and img[H // 2, W // 2, 0] == img[H // 2, W // 2, 2] == 0
 
 
+def test_a_triangle_touching_no_data_is_no_data_to_its_valid_corners(renderer_small):
+    # Values 1, 1 and NaN, the NaN corner 1 km off: in view, no data's weight is under 1.2 %, where
+    # the map's low end (red) once showed (only a weight above 3 % was no data). Every pixel of the
+    # triangle is the NaN colour.
+    s = gc.Scene()
+    s.add_mesh([[0, 0, 0], [10, 0, 0], [5, 1000, 0]], [[0, 1, 2]], values=[1.0, 1.0, np.nan],
+               cmap=[[1, 0, 0], [0, 0, 1]], clim=(0, 1), nan_color=(0, 1, 0))
+    img = renderer_small(W, H).render(s, top_view()).image[..., :3].astype(int)
+    lit = img.sum(axis=-1) > 0
+    assert lit.sum() > 500
+    assert (img[lit][:, 0] == 0).all() and (img[lit][:, 2] == 0).all() and (img[lit][:, 1] > 0).all()
+
+
 def test_colouring_survives_pickling(renderer_small):
     v = np.random.default_rng(1).random((11, 11))
     s = flat_square(values=v, cmap="seismic")
@@ -118,6 +131,7 @@ def test_colouring_survives_pickling(renderer_small):
         (dict(cmap="no-such-map"), "cmap"),
         (dict(cmap=[[0, 0, 2], [1, 1, 1]]), "cmap"),
         (dict(clim=(1, 1)), "clim"),
+        (dict(clim=(0, 1e31)), "clim"),
         (dict(color_by="values"), "values"),
         (dict(color_by="depth"), "color_by"),
         (dict(values=np.full((11, 11), np.inf)), "values"),
@@ -162,3 +176,65 @@ def test_a_well_log_colours_the_tube(renderer_small):
         s.add_well([[0, 0, 0], [0, 0, -100]], values=[1.0, 2.0, 3.0])
     with pytest.raises(gc.InputError, match="^path"):
         s.add_well([[0, 0, 0]])
+
+
+def salt_ball() -> tuple[gc.Volume, np.ndarray]:
+    # A ball of radius 30 m (distance field) about (50, 50, -60), sampled every 5 m, at UTM-sized
+    # coordinates; and the sample positions' x, y, z.
+    o = np.array([456000.0, 6780000.0, -120.0])
+    x, y, z = np.meshgrid(*(o[a] + 5.0 * np.arange(n) for a, n in enumerate((21, 21, 25))), indexing="ij")
+    d = np.sqrt((x - o[0] - 50) ** 2 + (y - o[1] - 50) ** 2 + (z + 60) ** 2).astype(np.float32)
+    return gc.Volume(d, origin=o, spacing=(5, 5, 5), order="xyz"), np.stack([x, y, z])
+
+
+def test_an_isosurface_shows_a_second_volume_through_the_colour_map(renderer_small):
+    # (The values at the vertices, interpolated along their edges, are checked exactly in
+    # iso::mesh's tests; here what the surface shows.) Amplitude 1, no data east of x0 + 62 m.
+    vol, (x, y, z) = salt_ball()
+    amp = np.where(x > x.min() + 62, np.nan, 1.0)
+    avol = gc.Volume(amp, origin=vol.origin, spacing=vol.spacing, order="xyz")
+    s = gc.Scene()
+    s.add_isosurface(vol, 30.0, tiles=4, values=avol, cmap=[[1, 0, 0], [0, 0, 1]], clim=(0, 1), nan_color=(0, 1, 0))
+    white = gc.Scene()
+    white.add_isosurface(vol, 30.0, tiles=4, color=(1, 1, 1))
+    r = renderer_small(64, 48)
+    c = np.array(vol.origin) + [50, 50, 60]
+    for cam in (gc.Camera.look_at(c + [0, -100, 0], c), gc.Camera.look_at(c + [70, 50, 40], c)):
+        img = r.render(s, cam).image[..., :3] / 255.0
+        ref = r.render(white, cam).image[..., :3] / 255.0
+        lit = ref.sum(axis=-1) > 0.1
+        # Each lit pixel is the map's blue (amplitude 1) or the no-data green, times the shading.
+        blue = np.abs(img - np.array([0, 0, 1]) * ref).max(axis=-1) <= 2 / 255
+        green = np.abs(img - np.array([0, 1, 0]) * ref).max(axis=-1) <= 2 / 255
+        assert (blue | green)[lit].all()
+        assert blue[lit].sum() > 100 and green[lit].sum() > 100, (blue[lit].sum(), green[lit].sum())
+    # Coloured by them, clim defaults to the second volume's finite range, as its slices' would.
+    lin = gc.Volume(0.1 * (x - x.min()) - 0.05 * z, origin=vol.origin, spacing=vol.spacing, order="xyz")
+    t = s.add_isosurface(vol, 30.0, values=lin)
+    info = s.object_info(t)
+    assert info["color_by"] == "values"
+    assert info["clim"] == pytest.approx((-0.05 * z.max(), 0.1 * 100 - 0.05 * z.min()), rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("kw", "arg"),
+    [
+        (dict(values=np.zeros((21, 21, 25))), "values"),
+        (dict(values="shape"), "values"),
+        (dict(values="spacing"), "values"),
+        (dict(color_by="values"), "values"),
+        (dict(values="same", color=(1, 0, 0)), "color"),
+        (dict(values="same", color_by="z"), "values"),
+    ],
+)
+def test_isosurface_values_errors_name_the_argument(kw, arg):
+    vol, _ = salt_ball()
+    other = {
+        "same": gc.Volume(np.zeros((21, 21, 25), np.float32), origin=vol.origin, spacing=vol.spacing, order="xyz"),
+        "shape": gc.Volume(np.zeros((21, 21, 24), np.float32), origin=vol.origin, spacing=vol.spacing, order="xyz"),
+        "spacing": gc.Volume(np.zeros((21, 21, 25), np.float32), origin=vol.origin, spacing=(5, 5, 4), order="xyz"),
+    }
+    if isinstance(kw.get("values"), str):
+        kw = {**kw, "values": other[kw["values"]]}
+    with pytest.raises(gc.InputError, match=rf"^{arg}"):
+        gc.Scene().add_isosurface(vol, 30.0, **kw)

@@ -182,6 +182,7 @@ class Scene:
         name: str | None,
         color: tuple[float, float, float] | None,
         coloring: _Coloring | None = None,
+        values: Volume | None = None,
     ) -> int: ...
     def add_lens(
         self,

@@ -283,8 +283,11 @@ class Scene:
         coarse_factor: float = 25.0,
         name: str | None = None,
         color: ArrayLike | None = None,
+        values: Volume | None = None,
+        color_by: ColorBy | None = None,
         cmap: Any = None,
         clim: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
     ) -> int:
         """Add the isosurface ``volume == isovalue`` (a salt body, in the volume's units) as an
@@ -292,19 +295,32 @@ class Scene:
         :func:`geocull.iso.extract_isosurface` (NaN samples are outside the domain), cut into
         ``tiles`` spatially coherent tiles (default one per ~4096 triangles) with coarse proxies, drawn
         with the other objects and culled by them like any mesh (three_pass hides a salt body under a
-        horizon). ``color`` a flat colour, or ``cmap`` / ``clim`` to colour it by z (default: the
-        palette colour). :meth:`Renderer.render_isosurface` stays the single-object path with the
-        volume's own implicit occluders. ``progress`` as for :meth:`add_heightfield` (the fraction
-        of tiles built, once the surface is extracted). Returns the object id."""
+        horizon). :meth:`Renderer.render_isosurface` stays the single-object path with the volume's
+        own implicit occluders.
+
+        values: a second :class:`Volume` on the same grid (the same samples per axis, origin,
+        spacing and rotation: built as ``volume`` was, e.g. the amplitude cube of a salt-probability
+        cube), shown on the surface: each vertex takes the value interpolated between the two
+        samples of its cell edge, with the weights that placed it (NaN where either is NaN, drawn in
+        ``nan_color``); ``clim`` defaults to that volume's finite range, as for its slices.
+        Without ``values`` or ``color``, ``cmap`` / ``clim`` colour the surface by z; with neither,
+        it takes the palette colour.
+        {color}
+        progress: as for :meth:`add_heightfield` (the fraction of tiles built, once the surface is
+            extracted).
+        Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
-        c = None if cmap is None and clim is None else cv.coloring("z", None, cmap, clim, None, 1)
+        if values is not None:
+            cv.expect_instance(values, Volume, "values")
+        by = "values" if color_by is None and values is not None else color_by
+        c = cv.coloring(by, None, cmap, clim, nan_color, 1)
         k = None if tiles is None else cv.integer(tiles, "tiles")
         with _progress.task(progress, k or 1, "add_isosurface: tiles"):  # total set by the core
             return self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
                                           cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
-                                          c)
+                                          c, None if values is None else values._v)
 
     def add_lens(
         self,
@@ -525,3 +541,5 @@ class Scene:
 Scene.add_heightfield.__doc__ = (Scene.add_heightfield.__doc__ or "").replace(
     "{color}", _doc("(ny, nx) like z: one scalar per sample (masked samples are NaN)"))
 Scene.add_mesh.__doc__ = (Scene.add_mesh.__doc__ or "").replace("{color}", _doc("(n,): one scalar per vertex"))
+Scene.add_isosurface.__doc__ = (Scene.add_isosurface.__doc__ or "").replace(
+    "{color}", _doc("a Volume on the isosurface's grid (above)"))

@@ -237,7 +237,10 @@ impl PyScene {
     /// The isosurface `volume == isovalue` as a scene mesh (kind "isosurface") of about `tiles`
     /// spatially coherent tiles, culled like any object (three_pass: by the other objects).
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (volume, isovalue, tiles, coarse_factor, name, color, coloring=None))]
+    /// With `values` (a volume on `volume`'s grid) and `coloring`, its values at the vertices are
+    /// the surface's (`coloring`'s own values stay None; coloured by them, its clim defaults to
+    /// `values`' finite range, as a slice of that volume is).
+    #[pyo3(signature = (volume, isovalue, tiles, coarse_factor, name, color, coloring=None, values=None))]
     fn add_isosurface(
         &self,
         py: Python<'_>,
@@ -248,14 +251,27 @@ impl PyScene {
         name: Option<String>,
         color: Option<(f64, f64, f64)>,
         coloring: Option<ColoringArgs<'_>>,
+        values: Option<PyRef<'_, super::iso::PyVolume>>,
     ) -> PyResult<u32> {
-        let color_by = self::coloring(coloring, &[], "none (an isosurface is coloured by z)")?;
+        let what = "none (an isosurface's values come from a volume on its grid: `values`)";
+        let mut color_by = self::coloring(coloring, &[], what)?;
         let tree = volume.tree(py)?;
         let vol = &volume.inner;
+        let other = values.as_ref().map(|v| &v.inner);
         let color = color.map(|c| [c.0, c.1, c.2]);
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
-            let m = crate::iso::mesh::isosurface_mesh(vol, &tree, isovalue)?;
+            let m = match (other, color_by.as_mut()) {
+                (Some(other), Some(c)) => {
+                    let (m, sampled) = crate::iso::mesh::isosurface_mesh_sampled(vol, &tree, isovalue, other)?;
+                    c.values = Some(sampled);
+                    if c.source == ColorSource::Values {
+                        volume_clim(c, other)?;
+                    }
+                    m
+                }
+                _ => crate::iso::mesh::isosurface_mesh(vol, &tree, isovalue)?,
+            };
             let faces: Vec<[i64; 3]> = m.faces.iter().map(|f| f.map(|k| k as i64)).collect();
             let n = faces.len();
             let tiles = match tiles {
