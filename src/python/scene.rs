@@ -236,10 +236,10 @@ impl PyScene {
 
     /// The isosurface `volume == isovalue` as a scene mesh (kind "isosurface") of about `tiles`
     /// spatially coherent tiles, culled like any object (three_pass: by the other objects).
-    #[allow(clippy::too_many_arguments)]
     /// With `values` (a volume on `volume`'s grid) and `coloring`, its values at the vertices are
     /// the surface's (`coloring`'s own values stay None; coloured by them, its clim defaults to
     /// `values`' finite range, as a slice of that volume is).
+    #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (volume, isovalue, tiles, coarse_factor, name, color, coloring=None, values=None))]
     fn add_isosurface(
         &self,
