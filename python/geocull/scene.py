@@ -302,7 +302,8 @@ class Scene:
         spacing and rotation: built as ``volume`` was, e.g. the amplitude cube of a salt-probability
         cube), shown on the surface: each vertex takes the value interpolated between the two
         samples of its cell edge, with the weights that placed it (NaN where either is NaN, drawn in
-        ``nan_color``); ``clim`` defaults to that volume's finite range, as for its slices.
+        ``nan_color``; the rare vertex inside a cell, at the centre of a fanned loop, takes the
+        trilinear value there); ``clim`` defaults to that volume's finite range, as for its slices.
         Without ``values`` or ``color``, ``cmap`` / ``clim`` colour the surface by z; with neither,
         it takes the palette colour.
         {color}

@@ -31,10 +31,12 @@ pub fn isosurface_mesh(vol: &Volume, tree: &MinMaxOctree, isovalue: f64) -> Resu
 
 /// [`isosurface_mesh`] with a second volume's values at its vertices (one per vertex, in the
 /// values volume's units): `values` must lie on `vol`'s grid (the same samples per axis, origin,
-/// spacing and rotation; else an error naming `values`). A vertex lies on a cell edge, where the
-/// extraction placed it between the edge's two samples: its value is interpolated between the same
-/// two samples of `values` with the same weights (trilinear at the vertex, which on an edge is
-/// that), so it is NaN where either of them is NaN and exact for a field linear along the edge.
+/// spacing and rotation; else an error naming `values`). Each value is `values`' trilinear
+/// interpolant at the vertex. Almost every vertex lies on a cell edge, where the extraction placed
+/// it between the edge's two samples: there that is the interpolation between the same two samples
+/// of `values` with the same weights, NaN where either is NaN, exact for a field linear along the
+/// edge. The rare centre vertex of a loop fanned inside a cell (`march::centroid_vertex`, under
+/// 1 %) takes the interpolant at that point, over the cell's 8 samples.
 pub fn isosurface_mesh_sampled(
     vol: &Volume,
     tree: &MinMaxOctree,
@@ -184,13 +186,13 @@ mod tests {
             // Back to the grid frame: undo the rotation about the origin's vertical.
             let (u, t) = (w[0] - o[0], w[1] - o[1]);
             let q = [o[0] + c * u + sn * t, o[1] - sn * u + c * t, w[2]];
-            // The vertex's edge: the coordinate that is not on a sample plane.
-            let f = [0, 1, 2].map(|a| (q[a] - o[a]) / s[a]);
-            let along = (0..3).find(|&a| (f[a] - f[a].round()).abs() > 1e-6);
-            // The x of its two samples (of the one sample it sits on), NaN beyond 0.2.
-            let xs = match along {
-                Some(0) => vec![o[0] + f[0].floor() * s[0], o[0] + (f[0].floor() + 1.0) * s[0]],
-                _ => vec![o[0] + f[0].round() * s[0]],
+            // The x of the samples it is interpolated from: the two about it when its x is not on a
+            // sample plane (an edge along x, or a loop's centre inside a cell), else the one it is
+            // on; NaN beyond 0.2.
+            let f = (q[0] - o[0]) / s[0];
+            let xs = match (f - f.round()).abs() > 1e-6 {
+                true => vec![o[0] + f.floor() * s[0], o[0] + (f.floor() + 1.0) * s[0]],
+                false => vec![o[0] + f.round() * s[0]],
             };
             let ends_nan = xs.iter().any(|&x| x > 0.2);
             if ends_nan {
