@@ -78,7 +78,14 @@ def test_rotated_irap_surface_matches_pyvista_triangulation(renderer, tmp_path, 
     assert np.ma.getmaskarray(surf.values).sum() > 20, "the hole survives the IRAP round trip"
     kw = gc.io.from_xtgeo_surface(surf)
     assert kw["rotation"] == pytest.approx(30.0) and kw["yflip"] == (yflip == -1)
-    assert kw["name"] is None and gc.io.from_xtgeo_surface(make_surface())["name"] == "TopVolantis"  # IRAP: no name
+    # The dict holds geometry only (so that `**kw, name=...` works); the surface's own name comes
+    # with the object itself: "TopVolantis" is lost in the IRAP file.
+    assert "name" not in kw
+    named = gc.Scene()
+    assert named.object_info(named.add_heightfield(make_surface()))["name"] == "TopVolantis"
+    assert named.object_info(named.add_heightfield(surf))["name"] not in ("unknown", "TopVolantis")  # no placeholder
+    assert named.object_info(named.add_heightfield(make_surface(), name="Top"))["name"] == "Top"  # keywords win
+    assert named.object_info(named.add_heightfield(**kw, name="Top", tiles=(2, 2)))["name"] == "Top"
     assert kw["z"].shape == (surf.nrow, surf.ncol)
     s = gc.Scene()
     sid = s.add_heightfield(**kw, tiles=(6, 5))
@@ -168,7 +175,8 @@ def test_grid_corners_active_and_properties():
     grid.set_actnum(act)
     poro = xtgeo.GridProperty(grid, name="PORO", values=np.arange(12, dtype=np.float64).reshape(3, 2, 2) / 100)
     grid.append_prop(poro)
-    out = gc.io.from_xtgeo_grid(grid, properties=["PORO"])
+    out = gc.io.from_xtgeo_grid(grid, "PORO")
+    assert out.keys() == gc.grid.from_xtgeo(grid, "PORO").keys() == {"corners", "active", "values"}  # add_grid's
     corners, active = out["corners"], out["active"]
     assert corners.shape == (2, 2, 3, 8, 3) and active.shape == (2, 2, 3)
     assert not active[0, 1, 2] and active.sum() == 11
@@ -182,9 +190,11 @@ def test_grid_corners_active_and_properties():
     np.testing.assert_allclose(c[1] - c[0], (10 * np.cos(t), 10 * np.sin(t), 0), atol=1e-9)  # bit 0: i
     np.testing.assert_allclose(c[2] - c[0], (-20 * np.sin(t), 20 * np.cos(t), 0), atol=1e-9)  # bit 1: j
     np.testing.assert_allclose(c[4] - c[0], (0, 0, -5), atol=1e-9)  # bit 2: k, downwards from the top
-    p = out["properties"]["PORO"]
+    p = out["values"]
     assert p.shape == (2, 2, 3) and p[1, 0, 2] == pytest.approx(poro.values[2, 0, 1])
     assert np.isnan(p[0, 1, 2])  # inactive: masked in xtgeo -> NaN
-    assert gc.io.from_xtgeo_grid(grid, properties=[poro])["properties"].keys() == {"PORO"}
-    with pytest.raises(gc.InputError, match="properties"):
-        gc.io.from_xtgeo_grid(grid, properties=["NOPE"])
+    np.testing.assert_array_equal(gc.io.from_xtgeo_grid(grid, values=poro)["values"], p)
+    np.testing.assert_array_equal(gc.io.xtgeo_property("PORO", grid), p)
+    assert gc.io.from_xtgeo_grid(grid)["values"] is None
+    with pytest.raises(gc.InputError, match="^values: the grid has no property 'NOPE'"):
+        gc.io.from_xtgeo_grid(grid, "NOPE")

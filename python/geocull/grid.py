@@ -2,7 +2,8 @@
 xtgeo ``Grid`` objects, as the arrays geocull's reservoir grids take.
 
 ``from_grdecl``  COORD, ZCORN (, ACTNUM) -> ``dict(corners=..., active=...)``
-``from_xtgeo``   an xtgeo Grid (, a property) -> ``dict(corners=..., active=..., values=...)``
+``from_xtgeo``   an xtgeo Grid (, a property) -> ``dict(corners=..., active=..., values=...)``, the
+                 keyword arguments of ``Scene.add_grid`` (as :func:`geocull.io.from_xtgeo_grid`)
 
 Conventions (the same everywhere in geocull):
 
@@ -27,7 +28,7 @@ import numpy as np
 
 from ._convert import float_array, integer
 from ._errors import InputError
-from .io import from_xtgeo_grid
+from .io import GridKwargs, from_xtgeo_grid
 
 __all__ = ["from_grdecl", "from_xtgeo", "CornerArrays", "GridInput"]
 
@@ -39,12 +40,9 @@ class CornerArrays(TypedDict):
     active: np.ndarray
 
 
-class GridInput(TypedDict):
-    """What :func:`from_xtgeo` returns: corners, active and values (or None) of one grid."""
-
-    corners: np.ndarray
-    active: np.ndarray
-    values: np.ndarray | None
+#: What :func:`from_xtgeo` returns: corners, active and values (or None) of one grid, the same
+#: keys as :func:`geocull.io.from_xtgeo_grid` (keyword arguments of ``Scene.add_grid``).
+GridInput = GridKwargs
 
 
 def _zsign(z_positive: str) -> float:
@@ -120,13 +118,12 @@ def from_grdecl(
 
 
 def from_xtgeo(grid: Any, property: Any = None, z_positive: Literal["up", "down"] = "down") -> GridInput:
-    """An xtgeo ``Grid`` as ``dict(corners=..., active=..., values=...)``.
+    """An xtgeo ``Grid`` as ``dict(corners=..., active=..., values=...)``, keyword arguments of
+    ``Scene.add_grid``: ``scene.add_grid(**from_xtgeo(grid, "PORO"), name="Reek")``.
 
-    A thin wrapper of :func:`geocull.io.from_xtgeo_grid` (same corner order, z = -depth for
+    :func:`geocull.io.from_xtgeo_grid` itself (same keys, same corner order, z = -depth metres for
     ``z_positive="down"``): ``property`` is a property name of ``grid`` or an
-    ``xtgeo.GridProperty``, whose values (masked / inactive cells NaN) become ``values``; None gives
-    ``values=None``.
+    ``xtgeo.GridProperty``, whose values ((nk, nj, ni); masked / inactive / undefined cells NaN)
+    become ``values``; None gives ``values=None``.
     """
-    arrays = from_xtgeo_grid(grid, properties=None if property is None else [property], z_positive=z_positive)
-    values = next(iter(arrays["properties"].values())) if arrays["properties"] else None
-    return GridInput(corners=arrays["corners"], active=arrays["active"], values=values)
+    return from_xtgeo_grid(grid, values=property, z_positive=z_positive)

@@ -3,17 +3,28 @@ PyVista meshes, each with its conventions translated, so that a scene needs no g
 
 >>> import geocull as gc, xtgeo
 >>> scene = gc.Scene()
->>> scene.add_heightfield(**gc.io.from_xtgeo_surface(xtgeo.surface_from_file("top.gri")), tiles=(8, 8))
->>> vol = gc.Volume(**gc.io.from_xtgeo_cube(cube))          # or gc.Volume.from_segy("cube.sgy")
+>>> scene.add_heightfield(xtgeo.surface_from_file("top.gri"), tiles=(8, 8))   # xtgeo objects directly
+>>> scene.add_heightfield(**gc.io.from_xtgeo_surface(surf), name="Top", tiles=(8, 8))  # or through a dict
+>>> scene.add_well(xtgeo.well_from_file("OP_1.w"), log="Poro", radius=15.0)
+>>> vol = gc.Volume(cube)                                    # or gc.Volume.from_segy("cube.sgy")
 >>> scene.add_mesh(trimesh.load("fault.stl"), kind="fault")  # trimesh / PyVista meshes directly
 >>> gc.io.to_trimesh(scene, 0).export("top.ply")
 
 ``from_xtgeo_surface``  xtgeo RegularSurface -> ``Scene.add_heightfield`` keyword arguments
 ``from_xtgeo_cube``     xtgeo Cube -> ``Volume`` keyword arguments
-``from_xtgeo_grid``     xtgeo Grid -> corner-point arrays (corners, active, properties)
+``from_xtgeo_grid``     xtgeo Grid -> ``Scene.add_grid`` keyword arguments (corners, active, values)
+``from_xtgeo_well``     xtgeo Well -> ``Scene.add_well`` keyword arguments (path, values)
+``xtgeo_property``      an xtgeo GridProperty (or a grid's property by name) -> (nk, nj, ni) array
+``xtgeo_kind``          which xtgeo object something is, by its attributes (no import)
 ``from_segy``           a SEG-Y file -> ``Volume`` keyword arguments (``Volume.from_segy`` builds it)
 ``to_pyvista``          one scene object -> ``pyvista.PolyData``
 ``to_trimesh``          one scene object -> ``trimesh.Trimesh``
+
+The dictionaries hold geometry and data only, never a name or any presentation argument, so every
+keyword of the function they feed can be added to them: ``add_heightfield(**kw, name="Top",
+cmap="terrain")``. Passing the xtgeo object itself (``add_heightfield(surf)``, ``add_grid(grid,
+values="PORO")``, ``add_well(well, log="Poro")``, ``add_mesh(trisurf)``, ``Volume(cube)``) also takes
+its name; any keyword given there wins over what the object says.
 
 Conventions. geocull's world is x east, y north, **z up**, in metres. xtgeo and SEG-Y give depth (or
 time) positive *down*; with ``z_positive="down"`` (the default of every function here) a depth d
@@ -44,18 +55,25 @@ __all__ = [
     "from_xtgeo_surface",
     "from_xtgeo_cube",
     "from_xtgeo_grid",
+    "from_xtgeo_well",
+    "xtgeo_property",
+    "xtgeo_kind",
     "from_segy",
     "to_pyvista",
     "to_trimesh",
     "HeightfieldKwargs",
     "VolumeKwargs",
-    "GridArrays",
+    "GridKwargs",
+    "WellKwargs",
     "XTGEO_UNDEF_LIMIT",
 ]
 
-#: Values at or beyond this magnitude are xtgeo's undefined marker (UNDEF is 1e33; its
-#: UNDEF_LIMIT is 9.9e32) and become holes.
-XTGEO_UNDEF_LIMIT = 9.9e32
+#: Values at or beyond this magnitude are undefined and become holes / NaN (no data): xtgeo's
+#: UNDEF is 1e33 (its UNDEF_LIMIT 9.9e32), which it writes for undefined surface nodes, missing
+#: cube traces and log samples; no measured value comes near 1e30.
+XTGEO_UNDEF_LIMIT = 1e30
+#: xtgeo's undefined value of discrete (integer) logs and properties.
+XTGEO_UNDEF_INT = 2_000_000_000
 
 
 class HeightfieldKwargs(TypedDict):
@@ -66,11 +84,12 @@ class HeightfieldKwargs(TypedDict):
     spacing: tuple[float, float]
     rotation: float
     yflip: bool
-    name: str | None
 
 
 class VolumeKwargs(TypedDict):
-    """What :func:`from_xtgeo_cube` and :func:`from_segy` return: keyword arguments of ``Volume``."""
+    """What :func:`from_xtgeo_cube` and :func:`from_segy` return: keyword arguments of ``Volume``
+    (values, origin, spacing, order, z_positive, rotation, yflip, and the survey's inline,
+    crossline and sample numbers in the file's order)."""
 
     values: np.ndarray
     origin: tuple[float, float, float]
@@ -78,14 +97,26 @@ class VolumeKwargs(TypedDict):
     order: Literal["zyx", "xyz"]
     z_positive: Literal["up", "down"]
     rotation: float
+    yflip: bool
+    inlines: np.ndarray
+    crosslines: np.ndarray
+    samples: np.ndarray
 
 
-class GridArrays(TypedDict):
-    """What :func:`from_xtgeo_grid` returns (see there for the corner order)."""
+class GridKwargs(TypedDict):
+    """What :func:`from_xtgeo_grid` (and :func:`geocull.grid.from_xtgeo`) return: keyword arguments
+    of ``Scene.add_grid`` (see there for the corner order); ``values`` None without a property."""
 
     corners: np.ndarray
     active: np.ndarray
-    properties: dict[str, np.ndarray]
+    values: np.ndarray | None
+
+
+class WellKwargs(TypedDict):
+    """What :func:`from_xtgeo_well` returns: keyword arguments of ``Scene.add_well``."""
+
+    path: np.ndarray
+    values: np.ndarray | None
 
 
 def _import(name: str) -> Any:
@@ -104,11 +135,56 @@ def _zsign(z_positive: str) -> float:
 
 
 def _undefined_masked(values: Any) -> np.ma.MaskedArray:
-    """A float64 masked array with xtgeo's undefined values (and NaN) masked."""
+    """A float64 masked array with the undefined values (:data:`XTGEO_UNDEF_LIMIT`, NaN) masked."""
     v = np.ma.asarray(values)
     data = np.asarray(np.ma.getdata(v), dtype=np.float64)
     mask = np.ma.getmaskarray(v) | ~np.isfinite(data) | (np.abs(data) >= XTGEO_UNDEF_LIMIT)
     return np.ma.MaskedArray(data, mask=mask)
+
+
+def _undefined_nan(values: Any, discrete: bool = False) -> np.ndarray:
+    """float64 copy of ``values`` with masked, non-finite and undefined samples (magnitude >=
+    :data:`XTGEO_UNDEF_LIMIT`; :data:`XTGEO_UNDEF_INT` too for ``discrete`` data) set to NaN."""
+    v = np.ma.asarray(values)
+    data = np.array(np.ma.getdata(v), dtype=np.float64)
+    bad = np.ma.getmaskarray(v) | ~np.isfinite(data) | (np.abs(data) >= XTGEO_UNDEF_LIMIT)
+    if discrete:
+        bad |= data == XTGEO_UNDEF_INT
+    data[bad] = np.nan
+    return data
+
+
+# The attributes that identify each xtgeo class (duck typing: xtgeo is never imported to check).
+_XTGEO_ATTRS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("cube", ("ncol", "nrow", "nlay", "xinc", "yinc", "zinc", "xori", "yori", "zori", "ilines", "xlines", "values")),
+    ("surface", ("ncol", "nrow", "xinc", "yinc", "xori", "yori", "rotation", "yflip", "values")),
+    ("grid", ("dimensions", "get_xyz_corners", "get_actnum")),
+    ("gridproperty", ("dimensions", "values", "name", "isdiscrete")),
+    ("well", ("xname", "yname", "zname", "lognames", "get_dataframe")),
+    ("trisurface", ("vertices", "triangles")),
+)
+
+XtgeoKind = Literal["cube", "surface", "grid", "gridproperty", "well", "trisurface"]
+
+
+def xtgeo_kind(x: Any) -> XtgeoKind | None:
+    """Which xtgeo object ``x`` is, by its attributes (xtgeo is not imported): "cube" (``Cube``),
+    "surface" (``RegularSurface``), "grid" (``Grid``), "gridproperty" (``GridProperty``), "well"
+    (``Well``), "trisurface" (``TriangulatedSurface``), or None (arrays, lists, anything else)."""
+    if x is None or isinstance(x, np.ndarray | list | tuple | str | bytes | dict):
+        return None
+    for kind, attrs in _XTGEO_ATTRS:
+        if all(hasattr(x, a) for a in attrs):
+            return kind  # type: ignore[return-value]
+    return None
+
+
+def xtgeo_name(x: Any) -> str | None:
+    """The ``name`` of an xtgeo object, None for xtgeo's placeholders ("unknown", "noname", "")."""
+    name = getattr(x, "name", None)
+    if name is None or str(name).strip().lower() in ("", "unknown", "noname", "none"):
+        return None
+    return str(name)
 
 
 # --------------------------------------------------------------------------------------------- xtgeo
@@ -116,13 +192,15 @@ def _undefined_masked(values: Any) -> np.ma.MaskedArray:
 
 def from_xtgeo_surface(surf: Any, z_positive: Literal["up", "down"] = "down") -> HeightfieldKwargs:
     """An xtgeo ``RegularSurface`` as keyword arguments of :meth:`geocull.Scene.add_heightfield`:
-    ``scene.add_heightfield(**from_xtgeo_surface(surf), tiles=(8, 8))``.
+    ``scene.add_heightfield(**from_xtgeo_surface(surf), name="Top", tiles=(8, 8))`` (or
+    ``scene.add_heightfield(surf, ...)``, which calls this and takes the surface's name too).
 
     z: ``surf.values`` transposed to (nrow, ncol) (xtgeo stores (ncol, nrow)), a masked array whose
     mask (xtgeo's undefined nodes, values >= :data:`XTGEO_UNDEF_LIMIT`, NaN) becomes holes; negated
-    for z_positive="down" (xtgeo's depth / time positive down -> z up; "up" keeps the values).
-    origin (xori, yori), spacing (xinc, yinc), rotation (degrees counter-clockwise about the origin),
-    yflip (``surf.yflip == -1``), name (``surf.name``; None for xtgeo's default "unknown").
+    for z_positive="down" (xtgeo's depth / time positive down, metres or ms -> z up; "up" keeps the
+    values). origin (xori, yori) metres, spacing (xinc, yinc) metres, rotation (degrees
+    counter-clockwise about the origin), yflip (``surf.yflip == -1``). No ``name``: the dictionary
+    holds the geometry only, so ``name=`` and every other keyword can be added to it.
     Node (i, j) of the surface lies at ``(xori, yori) + R(rotation) @ (i*xinc, j*yinc*yflip)``, as in
     ``surf.get_xyz_values()``.
     """
@@ -131,76 +209,102 @@ def from_xtgeo_surface(surf: Any, z_positive: Literal["up", "down"] = "down") ->
     yflip = int(surf.yflip)
     if yflip not in (1, -1):
         raise InputError(f"surf: yflip is {surf.yflip!r}; xtgeo's yflip is 1 or -1")
-    name = getattr(surf, "name", None)
-    if name == "unknown":  # xtgeo's default: no name (IRAP files store none)
-        name = None
     return HeightfieldKwargs(
         z=z,
         origin=(float(surf.xori), float(surf.yori)),
         spacing=(float(surf.xinc), float(surf.yinc)),
         rotation=float(surf.rotation),
         yflip=yflip == -1,
-        name=None if name is None else str(name),
     )
 
 
-def _right_handed(
-    values: np.ndarray, x0: float, y0: float, ystep: float, rotation: float, flip: bool
-) -> tuple[np.ndarray, float, float]:
-    """(values, x0, y0) of a grid indexed [i, j, ...] whose rows run towards -y in its frame when
-    ``flip``: the j axis reversed (a view) and the origin moved to the last row, so that the grid is
-    right-handed (a Volume has a rotation, no mirror). ``ystep`` is the row spacing."""
-    if not flip:
-        return values, x0, y0
-    n = values.shape[1]
-    t = math.radians(rotation)
-    d = -(n - 1) * ystep  # the last row, at -(n-1)*ystep along the grid's y axis
-    return values[:, ::-1], x0 - math.sin(t) * d, y0 + math.cos(t) * d
-
-
 def from_xtgeo_cube(cube: Any, z_positive: Literal["up", "down"] | None = None) -> VolumeKwargs:
-    """An xtgeo ``Cube`` as keyword arguments of :class:`geocull.Volume`: ``gc.Volume(**from_xtgeo_cube(c))``.
+    """An xtgeo ``Cube`` as keyword arguments of :class:`geocull.Volume`: ``gc.Volume(**from_xtgeo_cube(c))``
+    (``gc.Volume(cube)`` does the same).
 
-    values: ``cube.values`` (ncol, nrow, nlay) as it is (order="xyz": column -> x, row -> y,
-    layer -> z; no copy); origin (xori, yori, zori), spacing (xinc, yinc, zinc), rotation.
+    values: ``cube.values`` (ncol, nrow, nlay) (order="xyz": column -> x, row -> y, layer -> z),
+    no copy unless it holds undefined samples: values of magnitude >= :data:`XTGEO_UNDEF_LIMIT`
+    (xtgeo's 1e33 for missing traces) and masked ones become NaN (no data) in a copy of the cube.
+    origin (xori, yori, zori), spacing (xinc, yinc, zinc) metres (zinc in the cube's units: ms for
+    time), rotation (degrees counter-clockwise), yflip (``cube.yflip == -1``: rows run towards -y
+    in the cube's frame; the Volume reverses them, a view, with its origin on the last row).
     z_positive: None follows ``cube.zflip`` (1: z positive down, the usual depth / time cube,
-    "down"; -1: "up"). xtgeo's yflip=-1 reverses the row axis (a view) with the origin on the last
-    row, the same samples in a right-handed grid.
+    "down"; -1: "up"). inlines, crosslines: ``cube.ilines`` (ncol,), ``cube.xlines`` (nrow,);
+    samples: (nlay,) ``zori + k*zinc``, the sample times / depths in the cube's order.
     """
     zflip = int(getattr(cube, "zflip", 1))
     zp: Literal["up", "down"] = z_positive if z_positive is not None else ("down" if zflip == 1 else "up")
     _zsign(zp)
-    values = np.ma.getdata(cube.values)
-    values, x0, y0 = _right_handed(
-        values, float(cube.xori), float(cube.yori), float(cube.yinc), float(cube.rotation), int(cube.yflip) == -1
-    )
+    raw = cube.values
+    values = np.ma.getdata(raw)
+    if not isinstance(values, np.ndarray) or values.dtype.kind != "f":
+        values = np.asarray(values, dtype=np.float32)
+    bad = (values >= XTGEO_UNDEF_LIMIT) | (values <= -XTGEO_UNDEF_LIMIT)
+    if isinstance(raw, np.ma.MaskedArray):
+        bad |= np.ma.getmaskarray(raw)
+    if bad.any():
+        values = np.where(bad, values.dtype.type(np.nan), values)
+    nlay = int(values.shape[2]) if values.ndim == 3 else int(cube.nlay)
+    zori, zinc = float(cube.zori), float(cube.zinc)
     return VolumeKwargs(
         values=values,
-        origin=(x0, y0, float(cube.zori)),
-        spacing=(float(cube.xinc), float(cube.yinc), float(cube.zinc)),
+        origin=(float(cube.xori), float(cube.yori), zori),
+        spacing=(float(cube.xinc), float(cube.yinc), zinc),
         order="xyz",
         z_positive=zp,
         rotation=float(cube.rotation),
+        yflip=int(cube.yflip) == -1,
+        inlines=np.asarray(cube.ilines).copy(),
+        crosslines=np.asarray(cube.xlines).copy(),
+        samples=zori + zinc * np.arange(nlay, dtype=np.float64),
     )
 
 
-def from_xtgeo_grid(
-    grid: Any, properties: Any = None, z_positive: Literal["up", "down"] = "down"
-) -> GridArrays:
-    """An xtgeo corner-point ``Grid`` as plain arrays (for geocull's future reservoir-grid object kind,
-    or any use):
+def _grid_dims(grid: Any) -> tuple[int, int, int]:
+    ni, nj, nk = (int(v) for v in grid.dimensions)
+    return ni, nj, nk
 
-    corners: (nk, nj, ni, 8, 3) float64 world (x, y, z) of each cell's 8 corners. **Corner order:**
-        corner c has i-bit ``c & 1``, j-bit ``(c >> 1) & 1`` and k-bit ``(c >> 2) & 1``, i.e.
+
+def xtgeo_property(prop: Any, grid: Any = None, arg: str = "values") -> np.ndarray:
+    """One cell property as a C-contiguous (nk, nj, ni) float64 array (k = 0 the top layer; masked,
+    inactive and undefined cells NaN, :data:`XTGEO_UNDEF_INT` too for discrete properties):
+    ``prop`` an ``xtgeo.GridProperty``, or a property name of ``grid`` (``grid.get_prop_by_name``).
+    ``arg`` names the argument in errors."""
+    if isinstance(prop, str):
+        if grid is None:
+            raise InputError(f"{arg}: a property name ({prop!r}) needs an xtgeo Grid")
+        found = grid.get_prop_by_name(prop)
+        if found is None:
+            names = [str(p.name) for p in (getattr(grid, "props", None) or [])]
+            raise InputError(f"{arg}: the grid has no property {prop!r} (it has {names})")
+        prop = found
+    if xtgeo_kind(prop) != "gridproperty":
+        raise InputError(f"{arg}: {type(prop).__name__} is neither an xtgeo GridProperty nor a property name")
+    discrete = bool(getattr(prop, "isdiscrete", False))
+    data = _undefined_nan(prop.values, discrete)
+    if grid is not None and data.shape != _grid_dims(grid):
+        raise InputError(f"{arg}: {prop.name!r} has shape {data.shape}, the grid {_grid_dims(grid)}")
+    if data.ndim != 3:
+        raise InputError(f"{arg}: {prop.name!r} has shape {data.shape}, not (ncol, nrow, nlay)")
+    return np.ascontiguousarray(data.transpose(2, 1, 0))
+
+
+def from_xtgeo_grid(grid: Any, values: Any = None, z_positive: Literal["up", "down"] = "down") -> GridKwargs:
+    """An xtgeo corner-point ``Grid`` as keyword arguments of :meth:`geocull.Scene.add_grid`:
+    ``scene.add_grid(**from_xtgeo_grid(grid, "PORO"), cmap="viridis")`` (or
+    ``scene.add_grid(grid, values="PORO")``); :func:`geocull.grid.from_xtgeo` returns the same.
+
+    corners: (nk, nj, ni, 8, 3) float64 world (x, y, z) metres of each cell's 8 corners. **Corner
+        order:** corner c has i-bit ``c & 1``, j-bit ``(c >> 1) & 1`` and k-bit ``(c >> 2) & 1``, i.e.
         c = 0..3 the cell's top face at (i, j), (i+1, j), (i, j+1), (i+1, j+1), c = 4..7 its base in
         the same order (xtgeo's corners 1..8); k = 0 is the top layer. z is -depth for
         z_positive="down" (xtgeo's Z_TVDSS is positive down), the stored value for "up".
     active: (nk, nj, ni) bool (xtgeo's ACTNUM != 0).
-    properties: name -> (nk, nj, ni) float64 (masked / inactive cells NaN), for every
-        ``xtgeo.GridProperty`` given (or property name of ``grid``) in ``properties``.
+    values: (nk, nj, ni) float64 of ``values`` (an ``xtgeo.GridProperty`` or a property name of the
+        grid; masked / inactive / undefined cells NaN, see :func:`xtgeo_property`), or None.
     """
     sign = _zsign(z_positive)
-    ni, nj, nk = (int(v) for v in grid.dimensions)
+    ni, nj, nk = _grid_dims(grid)
     parts = grid.get_xyz_corners()  # 24 GridProperty: x, y, z of corner 1, then corner 2, ...
     if len(parts) != 24:
         raise InputError(f"grid: get_xyz_corners() gave {len(parts)} arrays, expected 24")
@@ -208,21 +312,71 @@ def from_xtgeo_grid(
     corners = c.reshape(8, 3, ni, nj, nk).transpose(4, 3, 2, 0, 1).copy()  # (nk, nj, ni, 8, 3)
     corners[..., 2] *= sign
     active = np.asarray(np.ma.getdata(grid.get_actnum().values)).transpose(2, 1, 0) != 0
-    props: dict[str, np.ndarray] = {}
-    for p in [] if properties is None else ([properties] if isinstance(properties, str) else list(properties)):
-        prop = grid.get_prop_by_name(p) if isinstance(p, str) else p
-        if prop is None:
-            raise InputError(f"properties: the grid has no property {p!r}")
-        v = np.ma.asarray(prop.values)
-        data = np.asarray(np.ma.getdata(v), dtype=np.float64).copy()
-        data[np.ma.getmaskarray(v)] = np.nan
-        if data.shape != (ni, nj, nk):
-            raise InputError(f"properties: {prop.name!r} has shape {data.shape}, the grid ({ni}, {nj}, {nk})")
-        props[str(prop.name)] = np.ascontiguousarray(data.transpose(2, 1, 0))
-    return GridArrays(corners=corners, active=np.ascontiguousarray(active), properties=props)
+    vals = None if values is None else xtgeo_property(values, grid, "values")
+    return GridKwargs(corners=corners, active=np.ascontiguousarray(active), values=vals)
+
+
+def from_xtgeo_well(
+    well: Any,
+    log: str | None = None,
+    max_stations: int | None = None,
+    z_positive: Literal["up", "down"] = "down",
+) -> WellKwargs:
+    """An xtgeo ``Well`` as keyword arguments of :meth:`geocull.Scene.add_well`:
+    ``scene.add_well(**from_xtgeo_well(well, log="Poro"), radius=15.0, name=well.name)`` (or
+    ``scene.add_well(well, log="Poro")``, which takes the well's name too).
+
+    path: (n, 3) float64 stations (x, y, z) metres from the well's dataframe columns
+        ``well.xname``, ``well.yname``, ``well.zname`` (X_UTME, Y_UTMN, Z_TVDSS), z = -depth for
+        z_positive="down" (xtgeo's TVDSS is positive down; "up" keeps it); stations with an
+        undefined or NaN coordinate are dropped.
+    values: (n,) float64 of the log ``log`` (one of ``well.lognames``) at the same stations, its
+        undefined values (NaN, magnitude >= :data:`XTGEO_UNDEF_LIMIT`, :data:`XTGEO_UNDEF_INT` for
+        discrete logs) NaN; None without ``log``.
+    max_stations: at most this many stations (>= 2), evenly spaced in station order, first and
+        last kept (RMS well files hold a station every ~0.15 m: thousands per well); None keeps all.
+    """
+    sign = _zsign(z_positive)
+    df = well.get_dataframe()
+    cols = [str(well.xname), str(well.yname), str(well.zname)]
+    for c in cols:
+        if c not in df.columns:
+            raise InputError(f"well: its dataframe has no column {c!r}")
+    xyz = _undefined_nan(np.column_stack([np.asarray(df[c], dtype=np.float64) for c in cols]))
+    vals = None
+    if log is not None:
+        if not isinstance(log, str):
+            raise InputError(f"log: {log!r} is not a string (a log name)")
+        names = list(well.lognames)
+        if log not in names or log not in df.columns:
+            raise InputError(f"log: the well {xtgeo_name(well)!r} has no log {log!r} (it has {names})")
+        discrete = bool(well.isdiscrete(log)) if hasattr(well, "isdiscrete") else False
+        vals = _undefined_nan(np.asarray(df[log], dtype=np.float64), discrete)
+    keep = np.isfinite(xyz).all(axis=1)
+    if not keep.all():
+        xyz = xyz[keep]
+        vals = None if vals is None else vals[keep]
+    if max_stations is not None:
+        if isinstance(max_stations, bool) or not isinstance(max_stations, int | np.integer) or max_stations < 2:
+            raise InputError(f"max_stations: {max_stations!r} is not an integer >= 2")
+        if len(xyz) > max_stations:
+            idx = np.unique(np.round(np.linspace(0, len(xyz) - 1, int(max_stations))).astype(np.int64))
+            xyz = xyz[idx]
+            vals = None if vals is None else vals[idx]
+    if len(xyz) < 2:
+        raise InputError(f"well: {len(xyz)} station(s) with defined coordinates; a well needs 2")
+    xyz[:, 2] *= sign
+    return WellKwargs(path=np.ascontiguousarray(xyz), values=vals)
 
 
 # --------------------------------------------------------------------------------------------- SEG-Y
+
+#: The reader failures of segyio (and of a truncated or lying file) that become InputErrors.
+_SEGY_ERRORS = (ValueError, OSError, RuntimeError, IndexError, KeyError, EOFError, MemoryError)
+#: The sample format codes of the SEG-Y standard (rev. 2) that segyio reads; others it would read
+#: as IBM floats after a warning, i.e. as wrong numbers.
+_SEGY_FORMATS = {1: "IBM float", 2: "int32", 3: "int16", 5: "IEEE float32", 6: "IEEE float64", 8: "int8",
+                 9: "int64", 10: "uint32", 11: "uint16", 12: "uint64", 16: "uint8"}
 
 
 def from_segy(
@@ -230,92 +384,200 @@ def from_segy(
     iline: int = 189,
     xline: int = 193,
     z_positive: Literal["up", "down"] = "down",
+    tolerance: float | None = None,
 ) -> VolumeKwargs:
     """A post-stack 3-D SEG-Y cube as keyword arguments of :class:`geocull.Volume` (needs segyio);
     ``Volume.from_segy(source)`` builds the volume.
 
     source: a path or an open ``segyio.SegyFile`` (read as it is, e.g. after ``f.mmap()``).
     iline, xline: trace header bytes of the inline and crossline numbers (segyio's defaults).
+    tolerance: how far (in the CDP coordinates' units, metres) a trace may lie from the regular
+        grid fitted to all traces; None: 10 % of the smaller bin size, enough for coordinates
+        rounded to whole metres (off by up to 0.71 m on 12.5 m bins).
 
     Axes: inline -> x, crossline -> y, sample -> z (order="xyz"; crossline-sorted files are
     transposed as a view). z: ``f.samples`` (the delay and sample interval of the headers, in the
     file's units: ms for time, m or ft for depth) with z_positive="down", so the first sample is the
     shallowest and the cube renders the right way up. x, y: the CDP_X / CDP_Y trace headers scaled by
-    their SourceGroupScalar (negative = divide). The position of trace (inline index a, crossline
-    index b) must be ``P0 + a*u + b*v`` for two perpendicular steps u, v (checked on every trace, to
-    5 % of the smaller step): spacing (|u|, |v|), rotation = the direction of u (degrees
+    their SourceGroupScalar (negative = divide). The trace at (inline index a, crossline index b)
+    must lie at ``P0 + a*u + b*v`` for two perpendicular steps u, v fitted by least squares to every
+    trace present (within ``tolerance``): spacing (|u|, |v|), rotation = the direction of u (degrees
     counter-clockwise from +x), origin = P0. **Rotated surveys** are supported at any angle; a
-    survey whose crossline step points clockwise of the inline step (a left-handed grid) gets its
-    crossline axis reversed (a view) and its origin on the last crossline. Skewed (non-perpendicular)
-    or irregular geometries, pre-stack (several offsets) and unstructured files are InputErrors.
+    survey whose crossline step points clockwise of the inline step (a left-handed grid) gets
+    ``yflip=True`` (the Volume reverses its crossline axis, a view; crossline indices still count in
+    the file's order). Skewed (non-perpendicular) or irregular geometries, pre-stack (several
+    offsets) and unstructured files are InputErrors.
 
-    The samples are read once, by ``segyio.tools.cube`` (one array), which the Volume copies once
-    into its buffer: no further copy, whatever the axis order.
+    No-data: dead traces (trace identification code 2) and missing traces (a file whose traces do
+    not fill the inline x crossline rectangle) are NaN; the geometry comes from the traces present.
+    inlines, crosslines, samples: the survey's numbers (``f.ilines``, ``f.xlines``, ``f.samples``)
+    in the file's order, which :meth:`geocull.Scene.add_slice` takes as ``inline=``, ``crossline=``,
+    ``time=`` / ``depth=``.
+
+    Every reader failure (a missing, truncated or damaged file, headers that contradict the file
+    size, an unknown sample format code) is an :class:`geocull.InputError` naming ``source``, the
+    path and the cause. The samples are read once (``segyio.tools.cube`` for complete files), which
+    the Volume copies once into its buffer.
     """
     segyio = _import("segyio")
+    _zsign(z_positive)
+    tol = None
+    if tolerance is not None:
+        if isinstance(tolerance, bool) or not isinstance(tolerance, int | float | np.floating | np.integer):
+            raise InputError(f"tolerance: {tolerance!r} is not a number")
+        tol = float(tolerance)
+        if not (math.isfinite(tol) and tol > 0):
+            raise InputError(f"tolerance: {tol!r}; expected a positive distance (metres)")
     if isinstance(source, str | os.PathLike):
-        with segyio.open(os.fspath(source), iline=iline, xline=xline) as f:
-            return _segy_kwargs(segyio, f, z_positive)
+        where = os.fspath(source)
+        if not os.path.isfile(where):
+            raise InputError(f"source: no such file {where!r}")
+        try:
+            try:
+                with segyio.open(where, iline=iline, xline=xline) as f:
+                    return _segy_kwargs(segyio, f, z_positive, tol, iline, xline)
+            except ValueError as e:
+                if isinstance(e, InputError) or "should match the number of traces" not in str(e):
+                    raise
+            # Missing traces: segyio cannot infer the geometry; read the traces as they come.
+            with segyio.open(where, iline=iline, xline=xline, ignore_geometry=True) as f:
+                return _segy_kwargs(segyio, f, z_positive, tol, iline, xline, sparse=True)
+        except InputError as e:
+            msg = str(e).removeprefix("source: ")
+            raise InputError(f"source: {where!r}: {msg}") from None
+        except _SEGY_ERRORS as e:
+            cause = str(e).strip() or type(e).__name__
+            raise InputError(f"source: cannot read the SEG-Y file {where!r}: {cause} ({type(e).__name__})") from e
     if not hasattr(source, "trace") or not hasattr(source, "header"):
         raise InputError(f"source: {type(source).__name__} is neither a path nor an open segyio.SegyFile")
-    return _segy_kwargs(segyio, source, z_positive)
+    try:
+        return _segy_kwargs(segyio, source, z_positive, tol, iline, xline, sparse=bool(source.unstructured))
+    except InputError:
+        raise
+    except _SEGY_ERRORS as e:
+        cause = str(e).strip() or type(e).__name__
+        raise InputError(f"source: cannot read the open SEG-Y file: {cause} ({type(e).__name__})") from e
 
 
-def _segy_kwargs(segyio: Any, f: Any, z_positive: Literal["up", "down"]) -> VolumeKwargs:
-    _zsign(z_positive)
-    if f.unstructured:
-        raise InputError("source: the SEG-Y file has no inline/crossline geometry (unstructured); check iline=/xline=")
-    if len(f.offsets) != 1:
-        raise InputError(f"source: a pre-stack file ({len(f.offsets)} offsets); geocull reads post-stack cubes")
-    il, xl = np.asarray(f.ilines), np.asarray(f.xlines)
+def _segy_kwargs(
+    segyio: Any, f: Any, z_positive: Literal["up", "down"], tol: float | None, iline: int, xline: int,
+    sparse: bool = False,
+) -> VolumeKwargs:
+    fmt = int(f.bin[segyio.BinField.Format])
+    if fmt not in _SEGY_FORMATS:
+        raise InputError(f"source: the binary header's sample format code is {fmt}, not one of the SEG-Y "
+                         f"formats {sorted(_SEGY_FORMATS)} (a damaged header?)")
+    tf = segyio.TraceField
     samples = np.asarray(f.samples, dtype=np.float64)
-    na, nb, ns = len(il), len(xl), len(samples)
+    ns = len(samples)
+    if sparse:
+        # Traces as they come: each placed by its own inline / crossline numbers.
+        til = np.asarray(f.attributes(iline)[:])
+        txl = np.asarray(f.attributes(xline)[:])
+        il, ta = np.unique(til, return_inverse=True)
+        xl, tb = np.unique(txl, return_inverse=True)
+        if len(il) * len(xl) > 4 * max(f.tracecount, 1) + 16:
+            raise InputError(f"source: {f.tracecount} traces spread over {len(il)} inlines x {len(xl)} crosslines "
+                             "(unstructured, or the wrong iline=/xline= header bytes)")
+        pos = ta * len(xl) + tb
+        if len(np.unique(pos)) != len(pos):
+            raise InputError("source: several traces share an inline / crossline pair (pre-stack, or the wrong "
+                             "iline=/xline= header bytes)")
+        raw = np.asarray(f.trace.raw[:])
+        if raw.shape != (f.tracecount, ns):
+            raise InputError(f"source: read {raw.shape} samples, expected {f.tracecount} traces x {ns}")
+        cube = np.full((len(il), len(xl), ns), np.nan, dtype=raw.dtype if raw.dtype.kind == "f" else np.float64)
+        cube[ta, tb] = raw
+        ta_all, tb_all = ta, tb
+    else:
+        if f.unstructured:
+            raise InputError("source: the SEG-Y file has no inline/crossline geometry (unstructured); "
+                             "check iline=/xline=")
+        if len(f.offsets) != 1:
+            raise InputError(f"source: a pre-stack file ({len(f.offsets)} offsets); geocull reads post-stack cubes")
+        il, xl = np.asarray(f.ilines), np.asarray(f.xlines)
+        inline_sorted = f.sorting == segyio.TraceSortingFormat.INLINE_SORTING
+        cube = segyio.tools.cube(f)  # (inlines, crosslines, samples) or (crosslines, inlines, samples)
+        if not inline_sorted:
+            cube = cube.transpose(1, 0, 2)
+        na_, nb_ = len(il), len(xl)
+        a, b = np.meshgrid(np.arange(na_), np.arange(nb_), indexing="ij")  # (na, nb)
+        if inline_sorted:
+            ta_all, tb_all = a.ravel(), b.ravel()  # trace t in file order -> (a, b)
+        else:
+            ta_all, tb_all = a.T.ravel(), b.T.ravel()
+    na, nb = len(il), len(xl)
     if min(na, nb, ns) < 2:
         raise InputError(f"source: {na} inlines x {nb} crosslines x {ns} samples; a volume needs 2 of each")
     dz = np.diff(samples)
-    if not np.allclose(dz, dz[0], rtol=1e-6):
+    if not np.allclose(dz, dz[0], rtol=1e-6) or dz[0] <= 0:
         raise InputError("source: the samples are not regularly spaced")
-    inline_sorted = f.sorting == segyio.TraceSortingFormat.INLINE_SORTING
-    cube = segyio.tools.cube(f)  # (inlines, crosslines, samples) or (crosslines, inlines, samples)
-    if not inline_sorted:
-        cube = cube.transpose(1, 0, 2)
-    tf = segyio.TraceField
     x = np.asarray(f.attributes(tf.CDP_X)[:], dtype=np.float64)
     y = np.asarray(f.attributes(tf.CDP_Y)[:], dtype=np.float64)
     sc = np.asarray(f.attributes(tf.SourceGroupScalar)[:], dtype=np.float64)
     scale = np.where(sc < 0, 1.0 / np.abs(np.where(sc == 0, 1, sc)), np.where(sc == 0, 1.0, sc))
     x, y = x * scale, y * scale
-    # Trace t in file order -> (inline index a, crossline index b).
-    shape = (na, nb) if inline_sorted else (nb, na)
-    xs, ys = x.reshape(shape), y.reshape(shape)
-    if not inline_sorted:
-        xs, ys = xs.T, ys.T
-    p0 = np.array([xs[0, 0], ys[0, 0]])
-    u = (np.array([xs[-1, 0], ys[-1, 0]]) - p0) / (na - 1)
-    v = (np.array([xs[0, -1], ys[0, -1]]) - p0) / (nb - 1)
+    dead = np.asarray(f.attributes(tf.TraceIdentificationCode)[:]) == 2
+    if dead.any():
+        if cube.dtype.kind != "f":
+            cube = cube.astype(np.float64)
+        cube[ta_all[dead], tb_all[dead]] = np.nan
+    live = ~dead if (~dead).sum() >= 3 else np.ones_like(dead)  # dead traces often carry no coordinates
+    p0, u, v, rotation, left_handed = _fit_survey(ta_all[live], tb_all[live], x[live], y[live], na, nb, tol)
     lu, lv = float(np.hypot(*u)), float(np.hypot(*v))
-    if lu == 0 or lv == 0:
-        raise InputError("source: CDP_X / CDP_Y do not change along the inlines or crosslines (no coordinates?)")
-    if abs(float(u @ v)) > 1e-3 * lu * lv:
-        raise InputError(
-            f"source: the inline step {u.tolist()} and the crossline step {v.tolist()} are not perpendicular "
-            "(a skewed survey); a Volume is a rectangular grid, possibly rotated"
-        )
-    a, b = np.meshgrid(np.arange(na), np.arange(nb), indexing="ij")
-    err = np.hypot(p0[0] + a * u[0] + b * v[0] - xs, p0[1] + a * u[1] + b * v[1] - ys).max()
-    if err > 0.05 * min(lu, lv):
-        raise InputError(f"source: the trace coordinates are not a regular grid (off by up to {err:g})")
-    rotation = math.degrees(math.atan2(u[1], u[0]))
-    left_handed = u[0] * v[1] - u[1] * v[0] < 0
-    values, x0, y0 = _right_handed(cube, float(p0[0]), float(p0[1]), lv, rotation, left_handed)
     return VolumeKwargs(
-        values=values,
-        origin=(x0, y0, float(samples[0])),
+        values=cube,
+        origin=(float(p0[0]), float(p0[1]), float(samples[0])),
         spacing=(lu, lv, float(dz[0])),
         order="xyz",
         z_positive=z_positive,
         rotation=rotation,
+        yflip=left_handed,
+        inlines=il.copy(),
+        crosslines=xl.copy(),
+        samples=samples,
     )
+
+
+def _fit_survey(
+    a: np.ndarray, b: np.ndarray, x: np.ndarray, y: np.ndarray, na: int, nb: int, tol: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool]:
+    """(P0, u, v, rotation in degrees, left-handed) of the perpendicular grid ``P0 + a*u + b*v``
+    nearest the traces at indices (a, b) and positions (x, y); InputError where a trace lies
+    farther than ``tol`` (default 10 % of the smaller step) from it."""
+    if len(np.unique(a)) < 2 or len(np.unique(b)) < 2:
+        raise InputError("source: the live traces span fewer than 2 inlines or crosslines")
+    m = np.column_stack([np.ones_like(a, dtype=np.float64), a, b]).astype(np.float64)
+    coef, *_ = np.linalg.lstsq(m, np.column_stack([x, y]), rcond=None)
+    u, v = coef[1], coef[2]
+    lu, lv = float(np.hypot(*u)), float(np.hypot(*v))
+    if lu < 1e-9 or lv < 1e-9:
+        raise InputError("source: CDP_X / CDP_Y do not change along the inlines or crosslines (no coordinates?)")
+    t = 0.1 * min(lu, lv) if tol is None else tol
+    err = float(np.hypot(*(m @ coef - np.column_stack([x, y])).T).max())
+    if err > t:
+        raise InputError(f"source: the trace coordinates are not a regular grid (off by up to {err:g}; "
+                         f"tolerance {t:g}, pass tolerance= to accept more)")
+    cross = float(u[0] * v[1] - u[1] * v[0])
+    hand = 1.0 if cross >= 0 else -1.0
+    # The perpendicular grid nearest the affine one: one direction, the mean of u's and of v's turned
+    # back by 90°, weighted by the extents they span.
+    tu = math.atan2(u[1], u[0])
+    tv = math.atan2(v[1], v[0]) - hand * math.pi / 2
+    wu, wv = lu * (na - 1), lv * (nb - 1)
+    th = math.atan2(wu * math.sin(tu) + wv * math.sin(tv), wu * math.cos(tu) + wv * math.cos(tv))
+    up = lu * np.array([math.cos(th), math.sin(th)])
+    vp = lv * hand * np.array([-math.sin(th), math.cos(th)])
+    q = np.column_stack([x, y]) - np.outer(a, up) - np.outer(b, vp)
+    p0p = q.mean(axis=0)
+    perr = float(np.hypot(*(q - p0p).T).max())
+    if perr > t:
+        raise InputError(
+            f"source: the inline step {u.tolist()} and the crossline step {v.tolist()} are not perpendicular "
+            f"(a skewed survey: off a rectangular grid by up to {perr:g}, tolerance {t:g}); a Volume is a "
+            "rectangular grid, possibly rotated"
+        )
+    return p0p, up, vp, math.degrees(th), hand < 0
 
 
 # --------------------------------------------------------------------------------------------- meshes

@@ -6,6 +6,7 @@ values in Rust, and raises :class:`geocull.InputError` naming the argument on ba
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -15,7 +16,7 @@ from numpy.typing import ArrayLike
 from . import _convert as cv
 from . import _geocull, _progress
 from ._convert import MeshLike
-from ._errors import InputError
+from ._errors import GeocullWarning, InputError
 from ._progress import ProgressLike
 from .results import GridLevel
 
@@ -27,7 +28,11 @@ if TYPE_CHECKING:
 SliceAxis = Literal["inline", "crossline", "sample"]
 _AXES = {"inline": 0, "crossline": 1, "sample": 2, "x": 0, "y": 1, "z": 2}
 
-__all__ = ["Scene", "ColorBy", "SliceAxis"]
+__all__ = ["Scene", "ColorBy", "SliceAxis", "FAR_APART"]
+
+#: Objects farther apart than this (metres, the gap between their bounding boxes) get a
+#: :class:`geocull.GeocullWarning` when the second is added.
+FAR_APART = 1_000_000.0
 
 #: What an object can be coloured by: its own z (world units, before vertical exaggeration and
 #: without later translations) or the ``values`` it was added with.
@@ -52,6 +57,49 @@ _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fin
 
 def _doc(values: str) -> str:
     return _COLOR_DOC.format(values=values).strip("\n").lstrip()
+
+
+def _object_boxes(table: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Object id -> (lo (3,), hi (3,)) world box of its tiles (empty tiles, NaN boxes, skipped)."""
+    out: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    if len(table) == 0:
+        return out
+    ok = np.isfinite(table["bbox_min"]).all(axis=1) & np.isfinite(table["bbox_max"]).all(axis=1)
+    t = table[ok]
+    for obj in np.unique(t["object"]):
+        rows = t[t["object"] == obj]
+        out[int(obj)] = (rows["bbox_min"].min(axis=0), rows["bbox_max"].max(axis=0))
+    return out
+
+
+def _nearest(numbers: np.ndarray, value: float, arg: str) -> int:
+    """Index of the entry of ``numbers`` (survey numbers, either direction) nearest ``value``;
+    InputError naming ``arg`` and listing the range when ``value`` lies over half a step outside."""
+    nums = np.asarray(numbers, dtype=np.float64)
+    lo, hi = float(nums.min()), float(nums.max())
+    step = float(np.median(np.abs(np.diff(nums)))) if len(nums) > 1 else 0.0
+    if not (lo - step / 2 <= value <= hi + step / 2):
+        raise InputError(f"{arg}: {value:g} is outside the volume's {arg}s {lo:g}..{hi:g} (step {step:g}, "
+                         f"{len(nums)} values)")
+    return int(np.argmin(np.abs(nums - value)))
+
+
+def _stored_range(volume: Any, axis: int, i0: int, i1: int) -> tuple[int, int]:
+    """An inclusive index range along ``axis`` in the file's order as the stored grid's (sorted)."""
+    n = (volume.shape[2], volume.shape[1], volume.shape[0])[axis]
+    if not (0 <= i0 < n and 0 <= i1 < n):
+        raise InputError(f"box[{axis}]: ({i0}, {i1}) is outside 0..{n - 1}")
+    a, b = volume._stored_index(axis, i0), volume._stored_index(axis, i1)
+    return (min(a, b), max(a, b))
+
+
+def _down(z_positive: Any, default_down: bool) -> bool:
+    """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
+    if z_positive is None:
+        return default_down
+    if z_positive not in ("up", "down"):
+        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
+    return z_positive == "down"
 
 
 class Scene:
@@ -107,36 +155,41 @@ class Scene:
 
     def add_heightfield(
         self,
-        z: ArrayLike,
-        origin: ArrayLike = (0.0, 0.0),
-        spacing: ArrayLike = (1.0, 1.0),
+        z: ArrayLike | Any,
+        origin: ArrayLike | None = None,
+        spacing: ArrayLike | None = None,
         tiles: ArrayLike = (1, 1),
         coarse_factor: float = 1.0,
         name: str | None = None,
         color: ArrayLike | None = None,
         null_value: float | None = None,
-        rotation: float = 0.0,
-        yflip: bool = False,
+        rotation: float | None = None,
+        yflip: bool | None = None,
         values: ArrayLike | None = None,
         color_by: ColorBy | None = None,
         cmap: Any = None,
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
+        z_positive: Literal["up", "down"] | None = None,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
-        z: (ny, nx) array of heights (metres); x runs along columns, y along rows. NaN, masked samples
+        z: (ny, nx) array of heights (metres), or an ``xtgeo.RegularSurface`` (recognised by its
+            attributes; read by :func:`geocull.io.from_xtgeo_surface`: its origin, spacing,
+            rotation, yflip, undefined nodes as holes, its name; any of these given here wins).
+            x runs along columns, y along rows. NaN, masked samples
             of a ``numpy.ma.MaskedArray`` (e.g. xtgeo's ``surf.values``), and samples equal to
             ``null_value`` (e.g. -999.25, compared in z's own dtype, so float32 data matches
             ``float32(null_value)``) are holes: triangles touching them are dropped.
-        origin: (x0, y0) world position of ``z[0, 0]`` (metres).  spacing: (dx, dy) > 0 sample
-            spacing (metres), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy) when not rotated.
+        origin: (x0, y0) world position of ``z[0, 0]`` (metres, default (0, 0)).  spacing: (dx, dy) > 0
+            sample spacing (metres, default (1, 1)), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy) when
+            not rotated.
         tiles: (tx, ty) tiles along x and y (each at least one cell wide); tiles share border samples.
         coarse_factor: >= 1; the coarse proxy of each tile has about 1/coarse_factor of its triangles.
         name: an optional label.  color: (r, g, b) in [0, 1]; without it (and without a colouring)
             a height field is coloured by its z through viridis over its own z range.
-        rotation: degrees counter-clockwise (seen from above) about ``origin`` (xtgeo's convention):
+        rotation: degrees counter-clockwise (seen from above, default 0) about ``origin`` (xtgeo's convention):
             ``z[j, i]`` sits at ``origin + R(rotation) @ (i*dx, j*dy)``.  yflip: True for xtgeo's
             ``yflip=-1``: rows run towards -y in the grid's frame (``(i*dx, -j*dy)`` before the
             rotation); a bool, so xtgeo's 1 / -1 must be translated (``yflip=surf.yflip == -1``, or use
@@ -146,20 +199,44 @@ class Scene:
         progress: None (a bar in notebooks for builds over a second, silence in scripts), True (a
             bar), False, or ``f(fraction, message)`` called with the fraction of tiles built
             (see :mod:`geocull._progress`).
+        z_positive: "up" (z holds elevations, metres up) or "down" (z holds depths or times positive
+            down: drawn at -z); default "up" for arrays, "down" for xtgeo surfaces.
         Returns the object id.
         """
+        from . import io
+
+        surface = io.xtgeo_kind(z) == "surface"
+        down = _down(z_positive, surface)
+        if surface:
+            kw = io.from_xtgeo_surface(z, z_positive="down" if down else "up")
+            name = io.xtgeo_name(z) if name is None else name
+            z = kw["z"]
+            origin = kw["origin"] if origin is None else origin
+            spacing = kw["spacing"] if spacing is None else spacing
+            rotation = kw["rotation"] if rotation is None else rotation
+            yflip = kw["yflip"] if yflip is None else yflip
+        elif down:
+            data, mask = cv.unmasked(z, "z")
+            neg = -cv.checked_array(data, "z", 2)
+            z = neg if mask is None else np.ma.MaskedArray(neg, mask=mask)
         nv = None if null_value is None else cv.number(null_value, "null_value")
+        if nv is not None and down:
+            nv = -nv  # compared with the negated heights
+        origin = (0.0, 0.0) if origin is None else origin
+        spacing = (1.0, 1.0) if spacing is None else spacing
+        rotation = 0.0 if rotation is None else rotation
+        yflip = False if yflip is None else yflip
         za = cv.heights(z, nv)
         o = cv.vec2(origin, "origin")
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
         with _progress.task(progress, tt[0] * tt[1], "add_heightfield: tiles"):  # read by the core
-            return self._s.add_heightfield(
+            return self._added(self._s.add_heightfield(
                 za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
                 cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
                 cv.coloring(color_by, values, cmap, clim, nan_color, 2),
-            )
+            ))
 
     def add_mesh(
         self,
@@ -176,6 +253,7 @@ class Scene:
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
+        z_positive: Literal["up", "down"] | None = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -188,14 +266,28 @@ class Scene:
         ``trimesh.Trimesh`` (its vertices and faces), or a ``pyvista.PolyData`` (any PyVista dataset is
         reduced to its surface): polygons and triangle strips are triangulated, line and vertex cells
         are ignored with a :class:`geocull.GeocullWarning`; ``name`` and ``color`` default to the
-        ``field_data`` written by :func:`geocull.io.to_pyvista`. Recognised by their attributes, so
-        neither package is imported unless such an object is passed.
+        ``field_data`` written by :func:`geocull.io.to_pyvista`. An ``xtgeo.TriangulatedSurface`` (its
+        ``vertices`` and ``triangles``, its name) is taken too. Recognised by their attributes, so
+        none of these packages is imported unless such an object is passed.
+        z_positive: "up" (vertex z is elevation, metres up) or "down" (z is depth positive down, e.g.
+        a TSurf fault in TVDSS: drawn at -z, each face's vertex order reversed so that its normal
+        keeps its side of the surface); default "up", "down" for xtgeo objects (xtgeo's convention).
         {color}
         progress: as for :meth:`add_heightfield` (the fraction of clusters built).
         Returns the object id.
         """
-        mesh = cv.mesh_arrays(vertices)
-        if mesh is not None:
+        from . import io
+
+        trisurf = io.xtgeo_kind(vertices) == "trisurface"
+        down = _down(z_positive, trisurf)
+        mesh = cv.mesh_arrays(vertices) if not trisurf else None
+        if trisurf:
+            if faces is not None:
+                raise InputError("faces: must be omitted when vertices is an xtgeo TriangulatedSurface")
+            name = io.xtgeo_name(vertices) if name is None else name
+            ts: Any = vertices
+            vertices, faces = np.asarray(ts.vertices), np.asarray(ts.triangles)
+        elif mesh is not None:
             if faces is not None:
                 raise InputError(f"faces: must be omitted when vertices is a {type(vertices).__name__}")
             vertices, faces = mesh.vertices, mesh.faces
@@ -208,18 +300,21 @@ class Scene:
         if f.dtype.kind == "u" and f.size and f.max() > np.iinfo(np.int64).max:
             raise InputError("faces: index too large")
         f = np.ascontiguousarray(f, dtype=np.int64)
+        if down:  # z = -depth: a mirror, so each face's order is reversed to keep its normal's side
+            v = v * np.array([1.0, 1.0, -1.0])
+            f = np.ascontiguousarray(f[:, ::-1])
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
         with _progress.task(progress, k or 1, "add_mesh: tiles"):  # read by the core
-            return self._s.add_mesh(
+            return self._added(self._s.add_mesh(
                 v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
                 cv.coloring(color_by, values, cmap, clim, nan_color, 1),
-            )
+            ))
 
     def add_well(
         self,
-        path: ArrayLike,
+        path: ArrayLike | Any,
         radius: float = 10.0,
         sides: int = 8,
         name: str | None = None,
@@ -228,6 +323,9 @@ class Scene:
         cmap: Any = None,
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
+        log: str | None = None,
+        max_stations: int | None = None,
+        z_positive: Literal["up", "down"] | None = None,
     ) -> int:
         """Add a well: ``path`` (n, 3) world stations (x, y, z metres, z up: pass z = -depth for
         depths) along a deviated well, drawn as a closed tube of ``radius`` metres with ``sides``
@@ -236,44 +334,121 @@ class Scene:
         repeat the previous one are dropped. ``values`` (n,): a log, one value per station,
         interpolated along the tube and coloured through ``cmap`` / ``clim`` / ``nan_color`` (as for
         :meth:`add_heightfield`); without values and ``color`` the well gets the palette colour.
+
+        ``path`` may be an ``xtgeo.Well`` (recognised by its attributes): its stations and, with
+        ``log`` (a log name, e.g. "Poro"), that log as ``values`` (undefined samples NaN), its name;
+        ``max_stations`` keeps at most that many stations (RMS files hold one every ~0.15 m); see
+        :func:`geocull.io.from_xtgeo_well`. ``values`` and ``name`` given here win.
+        z_positive: "up" (path z is elevation, metres up) or "down" (z is depth positive down, e.g.
+        TVDSS: drawn at -z); default "up" for arrays, "down" for xtgeo wells.
         Returns the object id."""
-        p = cv.float_array(path, "path", 2, 3)
-        return self._s.add_well(
+        from . import io
+
+        well = io.xtgeo_kind(path) == "well"
+        down = _down(z_positive, well)
+        if well:
+            kw = io.from_xtgeo_well(path, log=log, max_stations=max_stations, z_positive="down" if down else "up")
+            name = io.xtgeo_name(path) if name is None else name
+            values = kw["values"] if values is None else values
+            p = cv.float_array(kw["path"], "path", 2, 3)
+        else:
+            for arg, x in (("log", log), ("max_stations", max_stations)):
+                if x is not None:
+                    raise InputError(f"{arg}: only with an xtgeo Well as path (got {type(path).__name__})")
+            p = cv.float_array(path, "path", 2, 3)
+            if down:
+                p = p * np.array([1.0, 1.0, -1.0])
+        return self._added(self._s.add_well(
             p, cv.number(radius, "radius"), cv.integer(sides, "sides"), cv.name(name), cv.color(color),
             cv.coloring(None, values, cmap, clim, nan_color, 1),
-        )
+        ))
 
     def add_slice(
         self,
         volume: Volume,
-        axis: SliceAxis | int,
-        index: int,
+        axis: SliceAxis | int | None = None,
+        index: int | None = None,
         cmap: Any = "seismic",
         clim: ArrayLike | None = None,
         opacity: float = 1.0,
         name: str | None = None,
         nan_color: ArrayLike | None = None,
+        *,
+        inline: float | None = None,
+        crossline: float | None = None,
+        time: float | None = None,
+        depth: float | None = None,
     ) -> int:
         """Add a seismic slice of ``volume``: ``axis`` "inline" (or 0: the plane of constant i, the
         volume's first axis), "crossline" (1: constant j) or "sample" (2: constant k, a time or depth
-        slice), at sample ``index`` along that axis. It is drawn as the lattice of the volume's
-        samples on the plane (world positions from the volume's origin, spacing and rotation), each
-        sample's value coloured through ``cmap`` (default "seismic") over ``clim`` (default the whole
-        volume's finite range, so every slice of a volume shares its colours) and interpolated
-        across each triangle; NaN samples get ``nan_color``. Slices are opaque occluders (object kind
-        "slice") culled like any object; :meth:`set_slice_index` moves one. ``opacity`` in (0, 1]:
-        below 1 the slice is translucent, drawn as volume lenses are (blended after the opaque
-        image, unlit, never occluding, skipped where hidden). Returns the object id."""
+        slice), at sample ``index`` along that axis, counted in the order of the volume's values as
+        given (the file's order): sample 0 is the first sample (the shallowest for
+        z_positive="down" volumes: SEG-Y, xtgeo), crossline 0 the first crossline (also on
+        left-handed surveys). Or, instead of ``axis`` and ``index``, one survey number (volumes with
+        :attr:`Volume.inlines` / :attr:`Volume.crosslines` / :attr:`Volume.samples`, from SEG-Y or
+        xtgeo): ``inline=10800``, ``crossline=2650``, ``time=1200.0`` (ms) or ``depth=1650.0`` (m; both
+        read the sample numbers, in the file's units): the nearest line or sample; a number outside
+        the survey's range (beyond half a step) is an InputError naming the keyword and listing the
+        range.
+
+        It is drawn as the lattice of the volume's samples on the plane (world positions from the
+        volume's origin, spacing and rotation), each sample's value coloured through ``cmap``
+        (default "seismic") over ``clim`` (default the whole volume's finite range, so every slice of
+        a volume shares its colours) and interpolated across each triangle; NaN samples get
+        ``nan_color``. Slices are opaque occluders (object kind "slice") culled like any object;
+        :meth:`set_slice_index` moves one. ``opacity`` in (0, 1]: below 1 the slice is translucent,
+        drawn as volume lenses are (blended after the opaque image, unlit, never occluding, skipped
+        where hidden). Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
         op = cv.number(opacity, "opacity")
-        ax = self._axis(axis)
+        ax, idx = self._slice_position(volume, axis, index, inline, crossline, time, depth)
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
-        id = self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, op)
+        id = self._s.add_slice(volume._v, ax, idx, cv.name(name), c, op)
         self._slices[id] = (volume, ax, name, c, op)
-        return id
+        return self._added(id)
+
+    @staticmethod
+    def _slice_position(
+        volume: Volume, axis: Any, index: Any, inline: Any, crossline: Any, time: Any, depth: Any,
+        fixed_axis: int | None = None,
+    ) -> tuple[int, int]:
+        """(axis, stored index) of a slice given by (axis, index) in the file's order or by one survey
+        number; ``fixed_axis``: the axis of a slice being moved (``axis`` is then not given)."""
+        numbers = [(k, v) for k, v in (("inline", inline), ("crossline", crossline), ("time", time),
+                                       ("depth", depth)) if v is not None]
+        if len(numbers) > 1:
+            raise InputError(f"{numbers[1][0]}: give one of inline=, crossline=, time=, depth= (got "
+                             f"{', '.join(k for k, _ in numbers)})")
+        if numbers:
+            key, value = numbers[0]
+            if index is not None or (axis is not None and fixed_axis is None):
+                raise InputError(f"{key}: give either axis and index or {key}=, not both")
+            ax = {"inline": 0, "crossline": 1, "time": 2, "depth": 2}[key]
+            if fixed_axis is not None and ax != fixed_axis:
+                along = ("inline", "crossline", "sample")[fixed_axis]
+                raise InputError(f"{key}: this slice lies along axis {fixed_axis} ({along})")
+            nums = (volume.inlines, volume.crosslines, volume.samples)[ax]
+            if nums is None:
+                what = ("inline", "crossline", "sample")[ax]
+                raise InputError(f"{key}: the volume has no {what} numbers (volumes from SEG-Y or xtgeo carry them, "
+                                 f"or pass {what}s= to Volume); give axis and index")
+            file_index = _nearest(nums, cv.number(value, key), key)
+            return ax, volume._stored_index(ax, file_index)
+        if fixed_axis is None:
+            if axis is None or index is None:
+                raise InputError("axis: give axis and index, or one of inline=, crossline=, time=, depth=")
+            ax = Scene._axis(axis)
+        else:
+            ax = fixed_axis
+            if index is None:
+                raise InputError("index: give index, or one of inline=, crossline=, time=, depth=")
+        i = cv.integer(index, "index")
+        if not 0 <= ax <= 2:
+            raise InputError(f"axis: {ax}; expected 'inline', 'crossline', 'sample' or 0, 1, 2")
+        return ax, volume._stored_index(ax, i)
 
     def add_isosurface(
         self,
@@ -319,9 +494,9 @@ class Scene:
         c = cv.coloring(by, None, cmap, clim, nan_color, 1)
         k = None if tiles is None else cv.integer(tiles, "tiles")
         with _progress.task(progress, k or 1, "add_isosurface: tiles"):  # total set by the core
-            return self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
-                                          cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
-                                          c, None if values is None else values._v)
+            return self._added(self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
+                                                      cv.number(coarse_factor, "coarse_factor"), cv.name(name),
+                                                      cv.color(color), c, None if values is None else values._v))
 
     def add_lens(
         self,
@@ -335,30 +510,32 @@ class Scene:
     ) -> int:
         """Add a volume lens: the semi-transparent sub-volume of ``volume`` over ``box`` =
         ((i0, i1), (j0, j1), (k0, k1)), inclusive sample index ranges (at least 2 samples along each
-        axis), coloured by its samples through ``cmap`` over ``clim`` (default the whole volume's
-        range; NaN samples in ``nan_color``) with ``opacity`` in (0, 1) per slice. It is drawn as a
-        stack of slices through the box, one per sample along the axis closest to the view direction,
-        farthest first, alpha-blended over the opaque image, unlit and writing no depth (object kind
-        "lens"). It never occludes; each frame its slices' boxes are tested against the opaque depth
-        and hidden slices are not drawn (stats ``lens_slices_tested``, ``lens_slices_drawn``,
-        ``lenses_hidden``). Returns the object id."""
+        axis) counted in the order of the volume's values as given, as :meth:`add_slice`'s indices
+        (sample 0 the shallowest of a z_positive="down" volume), coloured by its samples through
+        ``cmap`` over ``clim`` (default the whole volume's range; NaN samples in ``nan_color``) with
+        ``opacity`` in (0, 1) per slice. It is drawn as a stack of slices through the box, one per
+        sample along the axis closest to the view direction, farthest first, alpha-blended over the
+        opaque image, unlit and writing no depth (object kind "lens"). It never occludes; each frame
+        its slices' boxes are tested against the opaque depth and hidden slices are not drawn (stats
+        ``lens_slices_tested``, ``lens_slices_drawn``, ``lenses_hidden``). Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
         b = cv.int_array(box, "box", 2, 2)
         if b.shape != (3, 2):
             raise InputError(f"box: shape {b.shape} is not (3, 2): ((i0, i1), (j0, j1), (k0, k1))")
-        bx = tuple((cv.integer(b[a, 0], f"box[{a}]"), cv.integer(b[a, 1], f"box[{a}]")) for a in range(3))
+        bx = tuple(_stored_range(volume, a, cv.integer(b[a, 0], f"box[{a}]"), cv.integer(b[a, 1], f"box[{a}]"))
+                   for a in range(3))
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
-        return self._s.add_lens(volume._v, bx, cv.number(opacity, "opacity"), cv.name(name), c)  # type: ignore[arg-type]
+        return self._added(self._s.add_lens(volume._v, bx, cv.number(opacity, "opacity"), cv.name(name), c))  # type: ignore[arg-type]
 
     def add_grid(
         self,
-        corners: ArrayLike,
+        corners: ArrayLike | Any,
         active: ArrayLike | None = None,
-        region: ArrayLike | None = None,
-        values: ArrayLike | None = None,
+        region: ArrayLike | Any | None = None,
+        values: ArrayLike | Any | None = None,
         cmap: Any = None,
         clim: ArrayLike | None = None,
         blocks: ArrayLike = (8, 8),
@@ -366,6 +543,7 @@ class Scene:
         color: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
+        z_positive: Literal["up", "down"] | None = None,
     ) -> int:
         """Add a reservoir grid (a truncated corner-point grid, Eclipse GRDECL / RESQML / xtgeo
         ``Grid``; :mod:`geocull.grid` converts those).
@@ -390,7 +568,36 @@ class Scene:
             faces on faults split where the neighbours' corners differ, so each region's surface is
             watertight at every level). Built block by block in parallel with the GIL released;
             ``progress`` as for :meth:`add_heightfield` (the fraction of blocks built).
+        xtgeo: ``corners`` may be an ``xtgeo.Grid`` (recognised by its attributes; read by
+            :func:`geocull.io.from_xtgeo_grid`: corners, ACTNUM as ``active`` unless given, its name),
+            and then ``values`` and ``region`` may be an ``xtgeo.GridProperty`` or the name of one of
+            the grid's properties (a GridProperty is taken with array corners too); ``region``'s
+            undefined / inactive cells become region -1.
+        z_positive: "up" (corner z is elevation, metres up) or "down" (z is depth positive down, e.g.
+            Eclipse / xtgeo TVDSS: drawn at -z); default "up" for arrays, "down" for xtgeo grids.
             Returns the object id."""
+        from . import io
+
+        grid = io.xtgeo_kind(corners) == "grid"
+        down = _down(z_positive, grid)
+        if grid:
+            kw = io.from_xtgeo_grid(corners, values=None, z_positive="down" if down else "up")
+            name = io.xtgeo_name(corners) if name is None else name
+            active = kw["active"] if active is None else active
+            xgrid: Any = corners
+            corners = kw["corners"]
+        else:
+            xgrid = None
+            if down:
+                data, mask = cv.unmasked(corners, "corners")
+                corners = cv.float_array(data, "corners", 5) * np.array([1.0, 1.0, -1.0])
+                if mask is not None:
+                    corners = np.ma.MaskedArray(corners, mask=mask)
+        if isinstance(values, str) or io.xtgeo_kind(values) == "gridproperty":
+            values = io.xtgeo_property(values, xgrid, "values")
+        if isinstance(region, str) or io.xtgeo_kind(region) == "gridproperty":
+            r = io.xtgeo_property(region, xgrid, "region")
+            region = np.where(np.isfinite(r), r, -1).astype(np.int64)
         data, mask = cv.unmasked(corners, "corners")
         if mask is not None:
             raise InputError("corners: masked corners are not supported; mark their cells inactive")
@@ -408,9 +615,43 @@ class Scene:
         bb = (cv.integer(b[0], "blocks[0]"), cv.integer(b[1], "blocks[1]"))
         n_blocks = -(-c.shape[2] // max(bb[0], 1)) * -(-c.shape[1] // max(bb[1], 1))
         with _progress.task(progress, n_blocks, "add_grid: blocks"):  # read by the core
-            return self._s.add_grid(
+            return self._added(self._s.add_grid(
                 c, act, reg, bb, cv.name(name), cv.color(color), cv.coloring(None, values, cmap, clim, nan_color, 3),
+            ))
+
+    def _added(self, id: int) -> int:
+        """``id``, after a :class:`geocull.GeocullWarning` if the new object lies over
+        :data:`FAR_APART` metres from another object of the scene (a grid in local coordinates beside
+        UTM horizons renders as an empty image), naming both."""
+        try:
+            boxes = _object_boxes(self.tile_table())
+        except Exception:  # never let the check fail an add
+            return id
+        new = boxes.get(id)
+        if new is None:
+            return id
+        lo, hi = new
+        worst: tuple[float, int] | None = None
+        for other, (olo, ohi) in boxes.items():
+            if other == id:
+                continue
+            gap = float(np.linalg.norm(np.maximum(0.0, np.maximum(olo - hi, lo - ohi))))
+            if gap > FAR_APART and (worst is None or gap > worst[0]):
+                worst = (gap, other)
+        if worst is not None:
+            gap, other = worst
+            warnings.warn(
+                f"{self._label(id)} lies {gap / 1000:,.0f} km from {self._label(other)}: over "
+                f"{FAR_APART / 1000:,.0f} km apart, one view cannot show both (local coordinates beside "
+                "UTM ones? depth given as elevation?)",
+                GeocullWarning,
+                stacklevel=3,
             )
+        return id
+
+    def _label(self, id: int) -> str:
+        info = self._s.object_info(id)
+        return f"object {id} ({info['kind']}{', ' + repr(info['name']) if info['name'] else ''})"
 
     def grid_levels(self, id: int) -> list[GridLevel]:
         """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):
@@ -423,17 +664,30 @@ class Scene:
         v0 = levels[0]["volume"] if levels else 0.0
         return [GridLevel(**lv, volume_change=(lv["volume"] - v0) / v0 if v0 else 0.0) for lv in levels]
 
-    def set_slice_index(self, id: int, index: int) -> None:
-        """Move slice ``id`` to sample ``index`` along its axis: its geometry is rebuilt from the
-        volume (the other objects are untouched) and a renderer's next frame rewrites only it on the
-        GPU (``stats["objects_patched"]``; the whole scene is uploaded again where objects were also
-        added or removed). The slice keeps its id, name, colouring, visibility and offset."""
+    def set_slice_index(
+        self,
+        id: int,
+        index: int | None = None,
+        *,
+        inline: float | None = None,
+        crossline: float | None = None,
+        time: float | None = None,
+        depth: float | None = None,
+    ) -> None:
+        """Move slice ``id`` to sample ``index`` along its axis (counted in the file's order, as
+        :meth:`add_slice`'s), or to the nearest survey number along its axis (``inline=`` for an
+        inline slice, ``crossline=``, ``time=`` / ``depth=`` for a sample slice): its geometry is
+        rebuilt from the volume (the other objects are untouched) and a renderer's next frame
+        rewrites only it on the GPU (``stats["objects_patched"]``; the whole scene is uploaded again
+        where objects were also added or removed). The slice keeps its id, name, colouring,
+        visibility and offset."""
         i = cv.integer(id, "id")
         if i not in self._slices:
             raise InputError(f"id: object {i} is not a slice added to this scene object (copies and "
                              "unpickled scenes do not keep the volumes of their slices)")
         volume, ax, name, c, op = self._slices[i]
-        self._s.add_slice(volume._v, ax, cv.integer(index, "index"), cv.name(name), c, op, i)
+        _, idx = self._slice_position(volume, None, index, inline, crossline, time, depth, fixed_axis=ax)
+        self._s.add_slice(volume._v, ax, idx, cv.name(name), c, op, i)
 
     @staticmethod
     def _axis(axis: Any) -> int:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -119,6 +120,40 @@ def _from_dataarray(
     )
 
 
+def _is_xtgeo_cube(x: Any) -> bool:
+    """An xtgeo ``Cube``, recognised by its attributes (xtgeo is not imported)."""
+    return not isinstance(x, np.ndarray) and all(
+        hasattr(x, k) for k in ("ncol", "nrow", "nlay", "xinc", "yinc", "zinc", "xori", "yori", "zori", "ilines",
+                                "xlines", "values")
+    )
+
+
+def _right_handed(
+    a: np.ndarray, origin: tuple[float, float, float], ystep: float, rotation: float
+) -> tuple[np.ndarray, tuple[float, float, float]]:
+    """``a`` (indexed [.., j, ..] on axis 1 in either order) with its j axis reversed (a view) and
+    the origin moved to the last row, for a grid whose rows run towards -y in its frame (xtgeo's
+    yflip=-1, a left-handed survey), so that the grid is right-handed (a Volume has a rotation, no
+    mirror)."""
+    n = a.shape[1]
+    t = math.radians(rotation)
+    d = -(n - 1) * ystep  # the last row, at -(n-1)*ystep along the grid's y axis
+    return a[:, ::-1], (origin[0] - math.sin(t) * d, origin[1] + math.cos(t) * d, origin[2])
+
+
+def _numbers(x: Any, arg: str, n: int) -> np.ndarray | None:
+    """A read-only 1-D copy of survey numbers (inline, crossline or sample numbers) of length ``n``."""
+    if x is None:
+        return None
+    a = np.array(cv.checked_array(x, arg, 1))
+    if a.shape != (n,):
+        raise InputError(f"{arg}: {a.shape[0]} numbers for an axis of {n} samples")
+    if a.dtype.kind == "f" and not np.isfinite(a).all():
+        raise InputError(f"{arg}: not all finite")
+    a.setflags(write=False)
+    return a
+
+
 class Volume:
     """A scalar field on a regular grid (a seismic cube, a property model), rendered as isosurfaces
     (:meth:`geocull.Renderer.render_isosurface`, :func:`geocull.extract_isosurface`). NaN samples, and
@@ -155,8 +190,22 @@ class Volume:
     line numbers, not metres, so such arrays need origin and spacing (or :meth:`from_segy`). With
     ``order=`` given, the DataArray is read as a plain array in that order.
 
+    yflip: True for a grid whose rows (its y / crossline axis) run towards -y in its own frame
+        (xtgeo's ``yflip=-1``, a left-handed survey): sample (i, j, k) lies at
+        ``(x0, y0) + R(rotation) @ (i*dx, -j*dy)``; the j axis is reversed as a view (no copy).
+    inlines, crosslines, samples: optional survey numbers of the x, y and z axes in the values' own
+        order ((nx,), (ny,), (nz,)): inline and crossline numbers, sample times (ms) or depths;
+        :meth:`Scene.add_slice` takes ``inline=``, ``crossline=``, ``time=`` / ``depth=`` in them.
+
+    xtgeo: an ``xtgeo.Cube`` passed as ``values`` is read by :func:`geocull.io.from_xtgeo_cube`
+    (undefined samples NaN, rotation, yflip, z positive down, its inline / crossline numbers and
+    sample depths), recognised by its attributes; any other argument given wins.
+
     The stored grid (:attr:`shape`, :attr:`origin`, :attr:`spacing`) is (nz, ny, nx) with z
-    upwards: for z_positive="down" its origin is the deepest sample.
+    upwards: for z_positive="down" its origin is the deepest sample. Slice and lens indices
+    (:meth:`Scene.add_slice`, :meth:`Scene.add_lens`) count in the values' own order instead: sample
+    0 is the first sample given (the shallowest for z_positive="down"), crossline 0 the first row
+    (also for ``yflip``).
     """
 
     def __init__(
@@ -166,8 +215,27 @@ class Volume:
         spacing: ArrayLike | None = None,
         order: VolumeOrder | None = None,
         z_positive: ZPositive | None = None,
-        rotation: float = 0.0,
+        rotation: float | None = None,
+        *,
+        yflip: bool | None = None,
+        inlines: ArrayLike | None = None,
+        crosslines: ArrayLike | None = None,
+        samples: ArrayLike | None = None,
     ) -> None:
+        if _is_xtgeo_cube(values):  # an xtgeo Cube: its geometry and survey numbers, keywords winning
+            from . import io
+
+            kw = io.from_xtgeo_cube(values, z_positive=z_positive)
+            values = kw["values"]
+            origin = kw["origin"] if origin is None else origin
+            spacing = kw["spacing"] if spacing is None else spacing
+            order = kw["order"] if order is None else order
+            z_positive = kw["z_positive"]
+            rotation = kw["rotation"] if rotation is None else rotation
+            yflip = kw["yflip"] if yflip is None else yflip
+            inlines = kw["inlines"] if inlines is None else inlines
+            crosslines = kw["crosslines"] if crosslines is None else crosslines
+            samples = kw["samples"] if samples is None else samples
         o3 = None if origin is None else cv.vec3(origin, "origin")
         s3 = None if spacing is None else cv.vec3(spacing, "spacing")
         zp: str | None = z_positive
@@ -178,11 +246,25 @@ class Volume:
         for arg, v in (("order", order), ("z_positive", zp)):
             if v is not None and not isinstance(v, str):
                 raise InputError(f"{arg}: {v!r} is not a string")
+        rot = 0.0 if rotation is None else cv.number(rotation, "rotation")
+        flip = False if yflip is None else cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True")
         a = _values(values)
-        self._v = _geocull.Volume(
-            a, o3 if o3 is not None else (0.0, 0.0, 0.0), s3 if s3 is not None else (1.0, 1.0, 1.0),
-            order or "zyx", zp or "up", cv.number(rotation, "rotation"),
+        o = o3 if o3 is not None else (0.0, 0.0, 0.0)
+        sp = s3 if s3 is not None else (1.0, 1.0, 1.0)
+        if flip:  # rows towards -y: reverse the j axis (a view), origin on the last row (right-handed)
+            a, o = _right_handed(a, o, sp[1], rot)
+        # Lengths of the x, y, z axes of the values as given.
+        if order in (None, "zyx"):
+            n = (a.shape[2], a.shape[1], a.shape[0])
+        else:
+            n = (a.shape[0], a.shape[1], a.shape[2])
+        survey = tuple(
+            _numbers(x, arg, k) for x, arg, k in ((inlines, "inlines", n[0]), (crosslines, "crosslines", n[1]),
+                                                   (samples, "samples", n[2]))
         )
+        self._v = _geocull.Volume(a, o, sp, order or "zyx", zp or "up", rot)
+        self._flip = (False, flip, (zp or "up") == "down")
+        self._survey: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = survey  # type: ignore[assignment]
 
     @classmethod
     def from_segy(
@@ -191,30 +273,45 @@ class Volume:
         iline: int = 189,
         xline: int = 193,
         z_positive: ZPositive = "down",
+        tolerance: float | None = None,
     ) -> Volume:
         """A post-stack 3-D SEG-Y cube (needs segyio): ``source`` is a path or an open
         ``segyio.SegyFile``; iline / xline: the trace header bytes of the inline and crossline numbers
         (segyio's defaults 189 / 193). See :func:`geocull.io.from_segy` for what is read: inline ->
         x, crossline -> y, sample -> z (``f.samples``, in the file's units: ms for time, m or ft for
         depth; z_positive="down"), origin and spacing from the CDP_X / CDP_Y headers (with their
-        scalar), rotation from the inline direction. Rotated surveys are supported when their inline
-        and crossline axes are perpendicular (either handedness); skewed, irregular, unstructured and
-        pre-stack files are InputErrors. The samples are read once (``segyio.tools.cube``) and copied
-        once into the volume."""
+        scalar), rotation from the inline direction; ``tolerance`` (metres, default 10 % of the
+        smaller bin) how far a trace may lie off the fitted grid (coordinates rounded to whole
+        metres load). Rotated surveys are supported when their inline and crossline axes are
+        perpendicular (either handedness); dead and missing traces are NaN; skewed, irregular,
+        unstructured and pre-stack files, and every reader failure (truncated file, headers that
+        contradict it), are InputErrors naming ``source`` and the path. The volume carries the
+        survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`)."""
         from . import io
 
-        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive)
-        return cls(kw["values"], kw["origin"], kw["spacing"], kw["order"], kw["z_positive"], kw["rotation"])
+        return cls(**io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance))
 
     @classmethod
     def _wrap(cls, inner: _geocull.Volume) -> Volume:
         v = cls.__new__(cls)
         v._v = inner
+        v._flip = (False, False, False)
+        v._survey = (None, None, None)
+        return v
+
+    @staticmethod
+    def _restore(data: bytes, flip: tuple[bool, bool, bool], survey: tuple[Any, Any, Any]) -> Volume:
+        """Unpickling: the core's bytes and the Python side's index order and survey numbers."""
+        v = Volume.from_bytes(data)
+        v._flip = (bool(flip[0]), bool(flip[1]), bool(flip[2]))
+        v._survey = (survey[0], survey[1], survey[2])
         return v
 
     def to_bytes(self) -> bytes:
         """The volume as bytes (shape, origin, spacing, :attr:`offset`, :attr:`rotation` and the float32
-        residuals, versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it."""
+        residuals, versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it and also
+        keeps the survey numbers and the index order of :meth:`Scene.add_slice` (``from_bytes``
+        alone gives a volume without them, indexed as its stored grid)."""
         return self._v.to_bytes()
 
     @staticmethod
@@ -224,8 +321,8 @@ class Volume:
             raise InputError(f"data: expected bytes, got {type(data).__name__}")
         return Volume._wrap(_geocull.Volume.from_bytes(bytes(data)))
 
-    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
-        return (Volume.from_bytes, (self.to_bytes(),))
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        return (Volume._restore, (self.to_bytes(), self._flip, self._survey))
 
     def __copy__(self) -> Volume:
         return self  # immutable: copies may share it
@@ -284,6 +381,36 @@ class Volume:
         an unrotated volume; before the rotation about the origin otherwise), min / max (n,) float64
         value range in the values' units (+inf / -inf for nodes whose samples are all NaN)."""
         return self._v.nodes(cv.integer(depth, "depth"))
+
+    @property
+    def inlines(self) -> np.ndarray | None:
+        """The survey's inline numbers along the volume's x axis (its first axis as given), in the
+        file's order: (nx,) for volumes from SEG-Y (``f.ilines``) or xtgeo cubes (``cube.ilines``) or
+        given as ``inlines=``; None otherwise. Read-only."""
+        return self._survey[0]
+
+    @property
+    def crosslines(self) -> np.ndarray | None:
+        """The survey's crossline numbers along the volume's y axis, in the file's order (also for
+        left-handed surveys, whose stored grid runs the other way): (ny,) or None. Read-only."""
+        return self._survey[1]
+
+    @property
+    def samples(self) -> np.ndarray | None:
+        """The sample times / depths along the z axis in the file's order (ms, m or ft as the file
+        has them: ``f.samples``, or xtgeo's ``zori + k*zinc``), first the shallowest for z_positive
+        "down": (nz,) float64 or None. Read-only."""
+        return self._survey[2]
+
+    def _stored_index(self, axis: int, index: int) -> int:
+        """The stored grid's index (of :attr:`shape`'s axis, counted along x, y, z = 0, 1, 2) of
+        sample ``index`` along ``axis`` counted in the order of the values as given (the file's
+        order): reversed along y for ``yflip`` volumes and along z for z_positive="down" ones, whose
+        stored grids run the other way. InputError naming ``index`` when out of range."""
+        n = (self.shape[2], self.shape[1], self.shape[0])[axis]
+        if not 0 <= index < n:
+            raise InputError(f"index: {index} is outside 0..{n - 1} along axis {axis}")
+        return n - 1 - index if self._flip[axis] else index
 
     def __repr__(self) -> str:
         rot = f" rotation={self.rotation:g}" if self.rotation else ""
