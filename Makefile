@@ -79,6 +79,7 @@ bench: setup
 
 bench-quick: setup
 	$(PY) -m geocull bench --quick --json out/bench_quick.json
+	$(PY) -m geocull bench --scene field --quick --json out/bench_field_quick.json
 
 # Frames/s of geocull.distributed.render_views on LocalClusters of 1 and 2 worker processes.
 bench-distributed: setup

@@ -28,6 +28,9 @@ warm, against PyVista flying edges + render, on the Pesco field and real volumes
 cell-merging levels, and each ``grid_lod`` mode against level 0 and PyVista. ``--scene seismic``: the
 scene with three slices and a lens (:mod:`geocull.bench_seismic`).
 
+``--scene field``: a real field from files (:mod:`geocull.bench_field`; ``--data DIR``, default
+``../shared/data/reek``): horizons, a grid and wells, every culling mode, LOD, the oracle and PyVista.
+
 ``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
 ``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
 """
@@ -88,10 +91,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
                    "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
                    "unbounded)")
-    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic"), default="gullfaks",
+    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field"), default="gullfaks",
                    help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso); grid: a "
                    "faulted reservoir grid (geocull.bench_grid); seismic: the gullfaks scene with slices and a lens "
-                   "(geocull.bench_seismic)")
+                   "(geocull.bench_seismic); field: a real field's horizons, grid and wells (geocull.bench_field)")
+    p.add_argument("--data", help="field: the field's directory (surfaces/*.gri, grid/*.EGRID or *.grdecl + porosity, "
+                   "wells/*.w; default ../shared/data/reek beside the checkout)")
     p.add_argument("--grid-n", type=int, help="grid: cells along i and j (default 100; quick 30)")
     p.add_argument("--grid-nk", type=int, help="grid: layers (default 100; quick 20)")
     p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
@@ -141,6 +146,10 @@ def _config(a: argparse.Namespace) -> dict[str, Any]:
         cfg.update(grid_n=a.grid_n or (12 if mode == "tiny" else 30 if small else 100),
                    grid_nk=a.grid_nk or (6 if mode == "tiny" else 20 if small else 100),
                    blocks=(8, 8) if small else (16, 16))
+    elif a.scene == "field":
+        from .bench_field import field_config
+
+        cfg.update(field_config(mode, a))
     elif a.scene == "seismic":
         small = mode != "full"
         cfg.update(cube=(24, 24, 16) if mode == "tiny" else (60, 60, 40) if small else (200, 200, 120),
@@ -617,7 +626,7 @@ def main(argv: list[str] | None = None) -> int:
 
         result = bench_iso.run(cfg)
         print(bench_iso.format_table(result), flush=True)
-    elif cfg["scene"] in ("grid", "seismic"):
+    elif cfg["scene"] in ("grid", "seismic", "field"):
         import importlib
 
         mod = importlib.import_module(f".bench_{cfg['scene']}", __package__)
