@@ -1,5 +1,7 @@
 """The notebook viewer, headless: its callbacks (drag, wheel, culling mode, pixel threshold, reset)
-change the camera and re-render, and the widget hands each frame to the browser as raw RGBA."""
+change the camera and re-render, the widget hands each frame to the browser as raw RGBA and answers
+every request (also when the frame is unchanged or a callback failed), and its JavaScript under node
+(a stand-in model and DOM) keeps one request in flight. tests/test_browser.py drives it in Chromium."""
 
 from __future__ import annotations
 
@@ -78,42 +80,179 @@ def test_widget_messages_drive_the_view(scene, renderer_small):
     assert st.frames == n
 
 
+def test_wheel_stops_at_the_minimum_distance(scene, renderer_small):
+    st = ViewerState(scene, renderer=renderer_small(32, 24), culling="none")
+    lo, hi = (np.asarray(b) for b in scene.bounds)
+    assert st.min_distance == pytest.approx(1e-3 * np.linalg.norm(hi - lo))
+    for _ in range(80):
+        st.wheel(-300)
+    assert st.distance == pytest.approx(st.min_distance)  # never through the target
+    st.wheel(100)
+    assert st.distance == pytest.approx(st.min_distance * 1.15)
+    st2 = ViewerState(scene, renderer=renderer_small(32, 24), culling="none", min_distance=500.0)
+    st2.wheel(-10000)
+    assert st2.distance == 500.0
+    cam = gc.Camera.fit(scene, projection="orthographic")
+    st3 = ViewerState(scene, renderer=renderer_small(32, 24), camera=cam, culling="none", min_distance=50.0)
+    st3.wheel(-10000)
+    assert st3.lens.ortho_height == pytest.approx(50.0)
+    with pytest.raises(gc.InputError, match="min_distance"):
+        ViewerState(scene, renderer=renderer_small(32, 24), min_distance=0.0)
+
+
+def _view(v, seq, epoch=0, **motion):
+    v.handle_message({"type": "view", "id": "v1", "seq": seq, "epoch": epoch, **motion})
+    return v.canvas.ack
+
+
+def test_every_request_is_answered_even_when_the_frame_is_the_same(scene, renderer_small):
+    pytest.importorskip("anywidget")
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
+    st, canvas = v.state, v.canvas
+    assert canvas.frames == st.frames == 1
+    ack = _view(v, 1, dy=1000)  # up to the elevation limit: a new image
+    assert st.elevation == MAX_ELEVATION and (ack["id"], ack["seq"]) == ("v1", 1) and ack["kernel_ms"] >= 0
+    frame = bytes(canvas.frame)
+    ack = _view(v, 2, dy=1000)  # past it: the same image, answered all the same
+    assert bytes(canvas.frame) == frame and ack["seq"] == 2 and canvas.frames == st.frames == 3
+    for i in range(60):  # down to the minimum distance: the last turns give the same view
+        ack = _view(v, 3 + i, wheel=-500)
+    assert ack["seq"] == 62 and st.distance == pytest.approx(st.min_distance) and canvas.frames == 63
+    _view(v, 63, wheel="junk")  # a request that fails is answered too, and the error shown
+    assert canvas.ack["seq"] == 63 and "drag/zoom" in canvas.error and isinstance(v.last_error, ValueError)
+    _view(v, 64, dx=10)  # the next good frame clears it
+    assert canvas.error == "" and canvas.ack["seq"] == 64
+
+
+def test_reset_drops_motion_from_before_it(scene, renderer_small):
+    pytest.importorskip("anywidget")
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
+    st, canvas = v.state, v.canvas
+    home = st.camera.orbit_angles()
+    _view(v, 1, dx=40, dy=75)
+    v.controls["reset"].click()
+    assert canvas.epoch == 1 and st.camera.orbit_angles() == pytest.approx(home)
+    n = st.frames
+    ack = _view(v, 2, epoch=0, dx=40, dy=75)  # sent before the browser heard of the reset: dropped
+    assert ack["seq"] == 2 and st.frames == n and st.camera.orbit_angles() == pytest.approx(home)
+    _view(v, 3, epoch=1, dx=10)  # made after it: applied
+    assert st.azimuth == pytest.approx((home[0] + 10 * DEGREES_PER_PIXEL) % 360)
+
+
+def test_callback_errors_are_shown_and_the_viewer_goes_on(scene, renderer_small):
+    pytest.importorskip("anywidget")
+    seen, boom = [], {"on": False}
+
+    def on_frame(res):
+        seen.append(res)
+        if boom["on"]:
+            raise RuntimeError("boom")
+
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none", on_frame=on_frame)
+    canvas = v.canvas
+    assert len(seen) == 1 and canvas.error == ""
+    boom["on"] = True
+    v.controls["culling"].value = "frustum"
+    assert canvas.error.startswith("Error in the viewer's culling menu: RuntimeError: boom")
+    assert "Traceback" in canvas.error and isinstance(v.last_error, RuntimeError)
+    v.controls["pixel_threshold"].value = 0.0  # the slider reaches 0
+    assert v.state.pixel_threshold == 0.0 and "pixel threshold slider" in canvas.error
+    boom["on"] = False
+    ack = _view(v, 1, dx=5)
+    assert canvas.error == "" and ack["seq"] == 1 and len(seen) == 4
+
+
+def test_browser_measures_in_the_stats_line_and_a_png_for_static_outputs(scene, renderer_small):
+    pytest.importorskip("anywidget")
+    import base64
+
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
+    assert "browser" not in v.stats.value and "render" in v.stats.value
+    v.handle_message({"type": "stats", "fps": 14.6, "latency_ms": 93.4})
+    assert "browser: 14.6 frames/s, 93 ms drag→frame" in v.stats.value
+    v.handle_message({"type": "stats", "fps": None, "latency_ms": "nan"})  # nothing measured: kept
+    assert "14.6 frames/s" in v.stats.value
+    bundle = v._repr_mimebundle_()
+    assert bundle["application/vnd.jupyter.widget-view+json"]["model_id"] == v.model_id
+    png = base64.b64decode(bundle["image/png"])
+    assert png == gc.results.encode_png(v.state.result.image)
+    assert bundle["text/plain"].startswith("geocull Viewer")
+
+
 HARNESS = r"""
-const handlers = {}, sent = [], drawn = [];
-const listeners = {};
-const canvas = {
-  style: {}, width: 0, height: 0,
-  addEventListener: (t, f) => { listeners[t] = f; },
-  setPointerCapture: () => {},
-  getContext: () => ({ putImageData: (img) => drawn.push([img.width, img.height, img.data.length]) }),
-};
-globalThis.document = { createElement: () => canvas };
+const sent = [], drawn = [], saved = [], handlers = {};
+function element(tag) {
+  const listeners = {};
+  return {
+    tag, style: {}, dataset: {}, children: [], listeners, width: 0, height: 0, textContent: "",
+    appendChild(c) { this.children.push(c); },
+    addEventListener(t, f) { listeners[t] = f; },
+    setPointerCapture() {},
+    getContext() { return { putImageData: (img) => drawn.push([img.width, img.height, img.data.length]) }; },
+    toDataURL() { return "data:image/png;base64,AAAA"; },
+  };
+}
+const made = [];
+globalThis.document = { createElement: (t) => { const e = element(t); made.push(e); return e; } };
 globalThis.ImageData = class { constructor(d, w, h) { this.data = d; this.width = w; this.height = h; } };
-const state = { width: 4, height: 2, frame: new DataView(new Uint8Array(32).buffer) };
+const buf = (v) => new DataView(new Uint8Array(32).fill(v).buffer);
+const state = { width: 4, height: 2, frame: buf(1), frames: 1, epoch: 0, ack: {}, error: "", png: "" };
 const model = {
-  get: (k) => state[k], on: (ev, f) => { handlers[ev] = f; }, send: (m) => sent.push(m),
+  get: (k) => state[k],
+  set: (k, v) => { state[k] = v; },
+  save_changes: () => saved.push(state.png),
+  send: (m) => sent.push(JSON.parse(JSON.stringify(m))),
+  on: (ev, f) => { (handlers[ev] = handlers[ev] || []).push(f); },
 };
+function update(changes) {  // a state update from the kernel: change:<name> for each key, then change
+  Object.assign(state, changes);
+  for (const k of Object.keys(changes)) (handlers["change:" + k] || []).forEach((f) => f());
+  (handlers["change"] || []).forEach((f) => f());
+}
 const el = { appendChild: () => {} };
 const mod = await import(process.argv[2]);
 mod.default.render({ model, el });
-const ev = (x, y) => ({ clientX: x, clientY: y, pointerId: 1 });
-listeners.pointerdown(ev(0, 0));
-listeners.pointermove(ev(5, 0));      // sent at once
-listeners.pointermove(ev(12, 3));     // the frame is not back yet: merged
-listeners.pointermove(ev(20, 3));
-let prevented = 0;
-listeners.wheel({ deltaY: 100, preventDefault: () => { prevented++; } });
-handlers["change:frame"]();           // the frame arrives: drawn, then the merged moves go out
-listeners.pointerup();
-listeners.pointermove(ev(30, 3));     // not dragging: nothing
-handlers["change:frame"]();
-console.log(JSON.stringify({ sent, drawn, prevented }));
+const canvas = made.find((e) => e.tag === "canvas"), error = made.find((e) => e.tag === "pre");
+const L = canvas.listeners, ev = (x, y) => ({ clientX: x, clientY: y, pointerId: 1 });
+const out = { steps: {} };
+L.pointerdown(ev(0, 0));
+L.pointermove(ev(5, 0));                       // sent at once
+L.pointermove(ev(12, 3));                      // a request is in flight: merged
+L.pointermove(ev(20, 3));
+L.wheel({ deltaY: 100, preventDefault: () => { out.prevented = true; } });
+const id = sent[0].id;
+update({ ack: { id: "another view", seq: 1 } }); // another view's answer: not ours
+out.steps.otherView = sent.length;
+update({ frame: buf(2), frames: 2, ack: { id, seq: 1, kernel_ms: 3 } });  // drawn, then the merged moves go out
+out.steps.afterFirst = sent.length;
+update({ frames: 3, ack: { id, seq: 2, kernel_ms: 2 } });  // the same image (no frame): still an answer
+L.pointermove(ev(30, 3));                      // so the next move goes out at once
+out.steps.afterSameImage = sent.length;
+L.pointerup();
+L.pointermove(ev(40, 3));                      // not dragging: nothing
+L.wheel({ deltaY: -50, preventDefault: () => {} });  // queued behind request 3 ...
+update({ epoch: 1 });                          // ... and dropped by "reset view"
+update({ frame: buf(3), frames: 4, ack: { id, seq: 3, kernel_ms: 2 } });
+out.steps.afterReset = sent.length;
+L.wheel({ deltaY: -50, preventDefault: () => {} });  // after the reset: sent, with the new epoch
+update({ frames: 5, ack: { id, seq: 4, kernel_ms: 2 } });
+update({ error: "Error in the viewer's drag/zoom: RuntimeError: boom" });
+out.error = [error.textContent, error.style.display];
+await new Promise((r) => setTimeout(r, 700));  // the view rests: measures reported, frame kept as PNG
+out.sent = sent; out.drawn = drawn; out.saved = saved;
+out.dataset = canvas.dataset;
+update({ error: "" });
+out.errorCleared = error.style.display;
+console.log(JSON.stringify(out));
 """
 
 
-def test_browser_code_merges_moves_while_a_frame_is_on_its_way(tmp_path):
-    """The widget's JavaScript under node with a stand-in model and canvas: one request at a time,
-    the moves made meanwhile merged into the next, frames drawn at the model's size."""
+def test_browser_code_answers_merging_and_reset(tmp_path):
+    """The widget's JavaScript under node with a stand-in model and DOM: one request at a time, the
+    moves made meanwhile merged into the next; an answer releases the next request whether or not
+    it brings a new image; answers for other views are ignored; "reset view" (a new epoch) drops
+    the queued motion; errors show under the image; at rest the browser reports its measures and
+    keeps the frame as PNG in the model."""
     import json
     import shutil
     import subprocess
@@ -129,7 +268,18 @@ def test_browser_code_merges_moves_while_a_frame_is_on_its_way(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert p.returncode == 0, p.stderr
     out = json.loads(p.stdout)
-    assert out["sent"] == [{"type": "view", "dx": 5, "dy": 0, "wheel": 0},
-                           {"type": "view", "dx": 15, "dy": 3, "wheel": 100}]
-    assert out["prevented"] == 1
-    assert out["drawn"][-1] == [4, 2, 32] and len(out["drawn"]) == 3  # at render, then on each frame
+    views = [m for m in out["sent"] if m["type"] == "view"]
+    motion = [(m["seq"], m["epoch"], m["dx"], m["dy"], m["wheel"]) for m in views]
+    assert motion == [(1, 0, 5, 0, 0), (2, 0, 15, 3, 100), (3, 0, 10, 0, 0), (4, 1, 0, 0, -50)]
+    assert len({m["id"] for m in views}) == 1
+    assert out["steps"] == {"otherView": 1, "afterFirst": 2, "afterSameImage": 3, "afterReset": 3}
+    assert out["prevented"] is True
+    assert len(out["drawn"]) == 3 and out["drawn"][-1] == [4, 2, 32]  # at render, then each new frame
+    assert out["dataset"]["frames"] == "5" and out["dataset"]["pending"] == "0"
+    assert float(out["dataset"]["latency"]) >= 0 and out["dataset"]["kernelMs"] == "2"
+    assert views[-1]["latency_ms"] is not None  # the measures ride on the requests ...
+    stats = [m for m in out["sent"] if m["type"] == "stats"]
+    assert len(stats) == 1 and stats[0]["latency_ms"] is not None  # ... and are reported at rest
+    assert out["saved"] == ["data:image/png;base64,AAAA"]
+    assert out["error"] == ["Error in the viewer's drag/zoom: RuntimeError: boom", "block"]
+    assert out["errorCleared"] == "none"

@@ -1,11 +1,24 @@
 """An interactive notebook viewer: ``gc.Viewer(scene, width, height, culling=...)``.
 
 Drag on the image to orbit about the target (right = azimuth up, i.e. the eye moves clockwise seen
-from above; down = the eye rises), turn the mouse wheel to zoom; the culling mode and the pixel
-threshold are controls under the image, followed by the frame's stats. Each frame is rendered
-by the scene's :class:`geocull.Renderer` and sent to the browser as raw RGBA (no image encoding).
-The browser asks for the next frame only when the last one has arrived, merging the mouse moves
-made meanwhile, so the view keeps the frame rate the renderer allows and never falls behind.
+from above; down = the eye rises), turn the mouse wheel to zoom (down to a minimum distance); the
+culling mode, the pixel threshold and a reset button are controls under the image, followed by the
+frame's stats. Each frame is rendered by the scene's :class:`geocull.Renderer` and sent to the
+browser as raw RGBA (no image encoding).
+
+The protocol never leaves the browser waiting. The browser sends one request at a time (the mouse
+moves made meanwhile merged into the next) and the kernel answers every request, with an
+acknowledgement (``ack``: the request's view id and number) that travels in the same state update as
+the frame, also when the frame is identical to the last one (a drag at the elevation limit, a wheel
+turn at the minimum distance) or when handling it failed; a browser that hears nothing for 15 s
+sends again anyway. "Reset view" bumps an epoch: motion queued or in flight from before is
+dropped, by the browser and by the kernel. An exception in a callback (the view's, the controls',
+or the ``on_frame`` given to :func:`Viewer`) is shown under the image and the viewer stays usable;
+the next good frame clears it. The canvas carries ``data-frames`` (frames rendered) for tests. The
+stats line reports what the browser measured: frames drawn per second and the time from the first
+mouse move of a request to its frame on screen (median of the last 20). When the view rests, the
+browser stores the frame as a PNG in the widget's state (``png``), which a saved notebook keeps,
+and the output's ``image/png`` shows the frame at display time where no widget can be drawn.
 
 The logic lives in :class:`ViewerState`, which has no widget dependency (tests drive it
 headlessly); :class:`Viewer` wraps it in an ``anywidget`` (with ipywidgets controls), imported
@@ -14,8 +27,13 @@ only when a Viewer is made: ``pip install anywidget``.
 
 from __future__ import annotations
 
+import base64
+import time
+import traceback
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from . import _convert as cv
 from ._errors import InputError
@@ -34,6 +52,11 @@ DEGREES_PER_PIXEL = 0.4
 ZOOM_PER_WHEEL = 1.15
 #: Elevation limit of the viewer (short of +-90, where the view's up would flip).
 MAX_ELEVATION = 89.5
+#: Default minimum distance of the eye from the target (and minimum orthographic view height), as
+#: a fraction of the scene's diagonal: the wheel stops there instead of passing through the target.
+MIN_DISTANCE_FRACTION = 1e-3
+#: The pixel-threshold slider's stops (pixels; 0 draws every tile with a visible pixel).
+THRESHOLD_STOPS = (0.0, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
 
 
 class ViewerState:
@@ -46,6 +69,9 @@ class ViewerState:
     :meth:`Camera.fit` of the scene from azimuth 210, elevation 30); culling, pixel_threshold and
     ``render_options`` go to :meth:`Renderer.render`. The default culling, "temporal", suits a view
     that moves a little from frame to frame: each frame starts from the tiles the last one showed.
+    min_distance: the closest the eye comes to the target with the wheel (render-space metres; for
+    orthographic views the smallest view height), default :data:`MIN_DISTANCE_FRACTION` of the
+    scene's diagonal (of the starting distance for a scene without bounds).
     """
 
     def __init__(
@@ -58,6 +84,7 @@ class ViewerState:
         camera: Camera | None = None,
         renderer: Renderer | None = None,
         on_frame: Callable[[RenderResult[RenderStats]], None] | None = None,
+        min_distance: float | None = None,
         **render_options: Any,
     ) -> None:
         self.scene = scene
@@ -72,7 +99,23 @@ class ViewerState:
         )
         self.result: RenderResult[RenderStats] | None = None
         self.frames = 0
+        #: What the browser measured (set by the widget): frames drawn per second while the view
+        #: moves, and the median time from a mouse move to its frame on screen (ms).
+        self.browser_fps: float | None = None
+        self.browser_latency_ms: float | None = None
         self._set_orbit(self.home)
+        if min_distance is None:
+            b = getattr(scene, "bounds", None)
+            if b is not None:
+                span = (np.asarray(b[1], float) - np.asarray(b[0], float)) * np.array([1.0, 1.0, self.home.z_scale])
+                diag = float(np.linalg.norm(span))
+            else:
+                diag = 0.0
+            self.min_distance = MIN_DISTANCE_FRACTION * (diag if diag > 0 else self.distance)
+        else:
+            self.min_distance = cv.number(min_distance, "min_distance")
+            if not self.min_distance > 0:
+                raise InputError(f"min_distance: expected a number > 0, got {min_distance!r}")
 
     @staticmethod
     def _mode(culling: str) -> CullingMode:
@@ -107,17 +150,21 @@ class ViewerState:
         browser's deltaY: > 0 scrolls down = zoom out), then render once. Drag: azimuth +=
         dx * DEGREES_PER_PIXEL, elevation += dy * DEGREES_PER_PIXEL (clamped to +-MAX_ELEVATION).
         Wheel: the distance (perspective) or the view height (orthographic) is multiplied by
-        ZOOM_PER_WHEEL ** (wheel / 100)."""
-        self.azimuth = (self.azimuth + cv.number(dx, "dx") * DEGREES_PER_PIXEL) % 360.0
-        el = self.elevation + cv.number(dy, "dy") * DEGREES_PER_PIXEL
+        ZOOM_PER_WHEEL ** (wheel / 100), and kept at or above :attr:`min_distance`."""
+        ddx, ddy, w = cv.number(dx, "dx"), cv.number(dy, "dy"), cv.number(wheel, "wheel")
+        self.azimuth = (self.azimuth + ddx * DEGREES_PER_PIXEL) % 360.0
+        el = self.elevation + ddy * DEGREES_PER_PIXEL
         self.elevation = max(-MAX_ELEVATION, min(MAX_ELEVATION, el))
-        w = cv.number(wheel, "wheel")
         if w:
             f = ZOOM_PER_WHEEL ** (-w / 100.0)
             if self.lens.projection == "orthographic":
-                self.lens = self.lens.zoomed(f)
+                h = self.lens.ortho_height
+                if h is not None and h / f < self.min_distance:
+                    f = h / self.min_distance
+                if h is None or abs(f - 1.0) > 1e-12:
+                    self.lens = self.lens.zoomed(f)
             else:
-                self.distance /= f
+                self.distance = max(self.min_distance, self.distance / f)
         return self.render()
 
     def drag(self, dx: float, dy: float) -> RenderResult[RenderStats]:
@@ -144,54 +191,161 @@ class ViewerState:
         return self.render()
 
     def stats_text(self) -> str:
-        """One line about the last frame: mode, triangles and tiles drawn, frame time."""
+        """One line about the last frame: mode, triangles and tiles drawn, the renderer's time, what
+        the browser measured (when it has reported), and the view."""
         if self.result is None:
             return ""
         s = self.result.stats
-        ms = float(s["total_ms"])
-        fps = f", {1000.0 / ms:.0f} frames/s possible" if ms > 0 else ""
+        ms, rb = float(s["total_ms"]), float(s.get("readback_ms", 0.0))
+        browser = ""
+        if self.browser_fps is not None or self.browser_latency_ms is not None:
+            parts = []
+            if self.browser_fps is not None:
+                parts.append(f"{self.browser_fps:.1f} frames/s")
+            if self.browser_latency_ms is not None:
+                parts.append(f"{self.browser_latency_ms:.0f} ms drag→frame")
+            browser = f" · browser: {', '.join(parts)}"
         return (f"{self.culling}: {int(s['triangles_drawn']):,} of {int(s['triangles_fine_total']):,} triangles, "
-                f"{int(s['tiles_drawn'])}/{int(s['tiles_total'])} tiles, {ms:.1f} ms{fps} · "
-                f"azimuth {self.azimuth:.0f}°, elevation {self.elevation:.0f}°, distance {self.distance:,.0f} m")
+                f"{int(s['tiles_drawn'])}/{int(s['tiles_total'])} tiles, render {ms:.1f} ms + {rb:.1f} ms read-back"
+                f"{browser} · azimuth {self.azimuth:.0f}°, elevation {self.elevation:.0f}°, "
+                f"distance {self.distance:,.0f} m")
 
 
 _ESM = """
+const ANSWER_TIMEOUT_MS = 15000;  // a request unanswered this long (kernel restarted?) is given up
+const IDLE_MS = 400;              // the view rests: report the measures, keep the frame as PNG
+
 function render({ model, el }) {
+  const root = document.createElement("div");
+  root.className = "geocull-viewer";
   const canvas = document.createElement("canvas");
-  canvas.style.cursor = "grab";
-  canvas.style.touchAction = "none";
-  el.appendChild(canvas);
+  canvas.style.cssText = "display:block;cursor:grab;touch-action:none";
+  const error = document.createElement("pre");
+  error.className = "geocull-error";
+  error.style.cssText = "display:none;margin:4px 0;padding:4px 6px;max-height:14em;overflow:auto;" +
+    "white-space:pre-wrap;font-size:12px;color:#a40000;background:#fff2f2;border-left:3px solid #a40000";
+  root.appendChild(canvas);
+  root.appendChild(error);
+  el.appendChild(root);
   const ctx = canvas.getContext("2d");
-  let busy = false, dx = 0, dy = 0, wheel = 0, last = null;
+  const id = Math.random().toString(36).slice(2) + Date.now().toString(36);
+  let seq = 0, inflight = null, timer = null, idle = null;
+  let dx = 0, dy = 0, wheel = 0, since = null, last = null;
+  let fps = null, latency = null;
+  const lats = [], shown = [];
+
+  function queued() { return dx !== 0 || dy !== 0 || wheel !== 0; }
+  function mark() { canvas.dataset.pending = inflight !== null || queued() ? "1" : "0"; }
   function flush() {
-    if (busy || (dx === 0 && dy === 0 && wheel === 0)) return;
-    busy = true;
-    model.send({ type: "view", dx: dx, dy: dy, wheel: wheel });
-    dx = 0; dy = 0; wheel = 0;
+    if (inflight === null && queued()) {
+      seq += 1;
+      inflight = { seq: seq, t0: since === null ? performance.now() : since, sent: performance.now() };
+      model.send({ type: "view", id: id, seq: seq, epoch: model.get("epoch"), dx: dx, dy: dy, wheel: wheel,
+                   fps: fps, latency_ms: latency });
+      dx = 0; dy = 0; wheel = 0; since = null;
+      clearTimeout(timer);
+      timer = setTimeout(() => { inflight = null; flush(); }, ANSWER_TIMEOUT_MS);
+    }
+    mark();
   }
+  function input() {
+    if (since === null) since = performance.now();
+    clearTimeout(idle);
+    flush();
+  }
+  function answered(ack) {
+    if (inflight === null || !ack || ack.id !== id || ack.seq !== inflight.seq) return;
+    clearTimeout(timer);
+    const now = performance.now();
+    lats.push(now - inflight.t0);
+    if (lats.length > 20) lats.shift();
+    const sorted = lats.slice().sort((a, b) => a - b);
+    latency = sorted[sorted.length >> 1];
+    shown.push(now);
+    while (shown.length > 1 && now - shown[0] > 2000) shown.shift();
+    if (shown.length >= 3) fps = (shown.length - 1) * 1000 / (now - shown[0]);
+    canvas.dataset.latency = String(latency);
+    canvas.dataset.roundtrip = String(now - inflight.sent);
+    canvas.dataset.kernelMs = String(ack.kernel_ms);
+    inflight = null;
+    flush();
+    if (inflight === null) {
+      clearTimeout(idle);
+      idle = setTimeout(rest, IDLE_MS);
+    }
+  }
+  function rest() {
+    if (inflight !== null || queued()) return;
+    model.send({ type: "stats", fps: fps, latency_ms: latency });
+    if (canvas.width > 0 && canvas.height > 0) {
+      const png = canvas.toDataURL("image/png");
+      if (png !== model.get("png")) { model.set("png", png); model.save_changes(); }
+    }
+  }
+  function size(w, h) { if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; } }
   function draw() {
     const w = model.get("width"), h = model.get("height"), buf = model.get("frame");
-    if (!buf || buf.byteLength !== w * h * 4) return;
-    canvas.width = w; canvas.height = h;
-    const px = new Uint8ClampedArray(buf.buffer, buf.byteOffset, buf.byteLength);
-    ctx.putImageData(new ImageData(px, w, h), 0, 0);
+    if (buf && buf.byteLength === w * h * 4) {
+      size(w, h);
+      const px = new Uint8ClampedArray(buf.buffer, buf.byteOffset, buf.byteLength);
+      ctx.putImageData(new ImageData(px, w, h), 0, 0);
+      return;
+    }
+    const png = model.get("png");  // a saved state without the raw frame: its PNG
+    if (png) {
+      const img = new Image();
+      img.onload = () => { size(img.width, img.height); ctx.drawImage(img, 0, 0); };
+      img.src = png;
+    }
   }
-  model.on("change:frame", () => { draw(); busy = false; flush(); });
+  function showError() {
+    const text = model.get("error") || "";
+    error.textContent = text;
+    error.style.display = text ? "block" : "none";
+  }
+  function count() { canvas.dataset.frames = String(model.get("frames")); }
+
+  model.on("change:frame", draw);
+  model.on("change:frames", count);
+  model.on("change:error", showError);
+  model.on("change:epoch", () => { dx = 0; dy = 0; wheel = 0; since = null; mark(); });
+  // "change" comes after every change:<name> of one update, so the frame is drawn before its answer
+  // is counted; answered() acts only on the answer to the request in flight.
+  model.on("change", () => answered(model.get("ack")));
+
   canvas.addEventListener("pointerdown", (e) => {
     last = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); canvas.style.cursor = "grabbing";
   });
   canvas.addEventListener("pointermove", (e) => {
     if (last === null) return;
-    dx += e.clientX - last[0]; dy += e.clientY - last[1]; last = [e.clientX, e.clientY]; flush();
+    dx += e.clientX - last[0]; dy += e.clientY - last[1]; last = [e.clientX, e.clientY]; input();
   });
   const up = () => { last = null; canvas.style.cursor = "grab"; };
   canvas.addEventListener("pointerup", up);
   canvas.addEventListener("pointercancel", up);
-  canvas.addEventListener("wheel", (e) => { e.preventDefault(); wheel += e.deltaY; flush(); }, { passive: false });
+  canvas.addEventListener("wheel", (e) => { e.preventDefault(); wheel += e.deltaY; input(); }, { passive: false });
   draw();
+  count();
+  showError();
+  mark();
+  return () => { clearTimeout(timer); clearTimeout(idle); };
 }
 export default { render };
 """
+
+
+def _describe(what: str, e: BaseException) -> str:
+    """The text shown under the image for an exception raised while handling ``what``."""
+    tb = "".join(traceback.format_exception(type(e), e, e.__traceback__))
+    return f"Error in the viewer's {what}: {type(e).__name__}: {e}\n\n{tb}"
+
+
+def _opt_float(v: Any) -> float | None:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return None
+    return f if np.isfinite(f) and f >= 0 else None
 
 
 def Viewer(  # noqa: N802 - a factory that reads as the class it returns
@@ -202,13 +356,17 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     pixel_threshold: float = 10,
     camera: Camera | None = None,
     renderer: Renderer | None = None,
+    on_frame: Callable[[RenderResult[RenderStats]], object] | None = None,
+    min_distance: float | None = None,
     **render_options: Any,
 ) -> Any:
     """A notebook widget showing ``scene`` (display it, or make it a cell's last expression): drag to
-    orbit, wheel to zoom, a culling-mode menu, a pixel-threshold slider, a reset button, and the
-    frame's stats under the image. Arguments as for :class:`ViewerState` (reachable as the widget's
-    ``.state``: ``viewer.state.camera`` is the current view). Needs ``anywidget`` (and with it
-    ipywidgets): ``pip install anywidget``."""
+    orbit, wheel to zoom, a culling-mode menu, a pixel-threshold slider (0 to 1000 pixels), a reset
+    button, and the frame's stats under the image. Arguments as for :class:`ViewerState`
+    (reachable as the widget's ``.state``: ``viewer.state.camera`` is the current view), plus
+    ``on_frame(result)``: called with every frame after it was sent to the browser (an exception
+    there is shown under the image, as any other in the viewer's callbacks, and kept as
+    ``viewer.last_error``). Needs ``anywidget`` (and with it ipywidgets): ``pip install anywidget``."""
     try:
         import anywidget
         import ipywidgets as widgets
@@ -216,41 +374,103 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("geocull.Viewer needs anywidget (and ipywidgets): pip install anywidget") from e
 
+    from .results import encode_png
+
     class _Canvas(anywidget.AnyWidget):
         _esm = _ESM
         frame = traitlets.Bytes(b"").tag(sync=True)
         width = traitlets.Int(0).tag(sync=True)
         height = traitlets.Int(0).tag(sync=True)
+        frames = traitlets.Int(0).tag(sync=True)  # frames rendered (data-frames on the canvas)
+        ack = traitlets.Dict().tag(sync=True)  # the last request answered: {"id", "seq", "kernel_ms"}
+        epoch = traitlets.Int(0).tag(sync=True)  # bumped by "reset view": older motion is dropped
+        error = traitlets.Unicode("").tag(sync=True)  # shown under the image; "" hides it
+        png = traitlets.Unicode("").tag(sync=True)  # data: URL of the last frame, set by the browser at rest
+
+    class _ViewerBox(widgets.VBox):
+        def _repr_mimebundle_(self, **kwargs: Any) -> Any:
+            data = super()._repr_mimebundle_(**kwargs)
+            if isinstance(data, dict) and state.result is not None:  # where no widget can be drawn
+                data["image/png"] = base64.b64encode(encode_png(state.result.image)).decode("ascii")
+                data["text/plain"] = f"geocull Viewer · {state.stats_text()}"
+            return data
 
     canvas = _Canvas()
     stats = widgets.HTML()
+    stats.add_class("geocull-stats")
+
+    def stats_html() -> str:
+        return f"<span style='font-family:monospace'>{state.stats_text()}</span>"
 
     def show(res: RenderResult[RenderStats]) -> None:
         h, w = res.image.shape[:2]
         with canvas.hold_sync():
             canvas.width, canvas.height = int(w), int(h)
             canvas.frame = res.image.tobytes()
-        stats.value = f"<span style='font-family:monospace'>{state.stats_text()}</span>"
+            canvas.frames = state.frames
+        stats.value = stats_html()
+        if on_frame is not None:
+            on_frame(res)
+        canvas.error = ""
 
-    state = ViewerState(scene, width, height, culling, pixel_threshold, camera, renderer, show, **render_options)
+    def guarded(what: str, fn: Callable[..., object], *args: Any) -> None:
+        try:
+            fn(*args)
+        except Exception as e:  # noqa: BLE001 - shown under the image: the viewer must go on
+            box.last_error = e
+            canvas.error = _describe(what, e)
 
-    def on_msg(_widget: Any, content: dict[str, Any], _buffers: Any) -> None:
-        if isinstance(content, dict) and content.get("type") == "view":
-            state.move(*(float(content.get(k, 0.0)) for k in ("dx", "dy", "wheel")))
+    state = ViewerState(scene, width, height, culling, pixel_threshold, camera, renderer, show, min_distance,
+                        **render_options)
+
+    def note_browser(content: dict[str, Any]) -> None:
+        fps, lat = _opt_float(content.get("fps")), _opt_float(content.get("latency_ms"))
+        if fps is not None:
+            state.browser_fps = fps
+        if lat is not None:
+            state.browser_latency_ms = lat
+
+    def view(content: dict[str, Any]) -> None:
+        note_browser(content)
+        if content.get("epoch", canvas.epoch) != canvas.epoch:
+            return  # motion made before "reset view": dropped
+        state.move(*(float(content.get(k) or 0.0) for k in ("dx", "dy", "wheel")))
+
+    def on_msg(_widget: Any, content: Any, _buffers: Any) -> None:
+        if not isinstance(content, dict):
+            return
+        if content.get("type") == "stats":
+            note_browser(content)
+            if state.result is not None:
+                stats.value = stats_html()
+        elif content.get("type") == "view":
+            t0 = time.perf_counter()
+            with canvas.hold_sync():  # the frame and its answer in one update
+                try:
+                    guarded("drag/zoom", view, content)
+                finally:
+                    canvas.ack = {"id": str(content.get("id")), "seq": content.get("seq"),
+                                  "kernel_ms": round((time.perf_counter() - t0) * 1000.0, 2)}
+
+    def reset() -> None:
+        canvas.epoch += 1  # first, so that the browser drops what it has queued
+        state.reset()
 
     canvas.on_msg(on_msg)
     mode = widgets.Dropdown(options=list(CULLING_MODES), value=state.culling, description="culling")
-    thr = widgets.FloatLogSlider(value=max(state.pixel_threshold, 0.1), base=10, min=-1, max=3, step=0.1,
-                                 description="pixels ≤", readout_format=".1f")
-    reset = widgets.Button(description="reset view")
-    mode.observe(lambda ch: state.set_culling(ch["new"]), names="value")
-    thr.observe(lambda ch: state.set_pixel_threshold(ch["new"]), names="value")
-    reset.on_click(lambda _b: state.reset())
-    box = widgets.VBox([canvas, widgets.HBox([mode, thr, reset]), stats])
+    stops = sorted({*THRESHOLD_STOPS, float(state.pixel_threshold)})
+    thr = widgets.SelectionSlider(options=[(f"{v:g}", v) for v in stops], value=float(state.pixel_threshold),
+                                  description="pixels ≤", continuous_update=False)
+    reset_button = widgets.Button(description="reset view")
+    mode.observe(lambda ch: guarded("culling menu", state.set_culling, ch["new"]), names="value")
+    thr.observe(lambda ch: guarded("pixel threshold slider", state.set_pixel_threshold, ch["new"]), names="value")
+    reset_button.on_click(lambda _b: guarded("reset button", reset))
+    box = _ViewerBox([canvas, widgets.HBox([mode, thr, reset_button]), stats])
     box.state = state
     box.canvas = canvas
     box.stats = stats
-    box.controls = dict(culling=mode, pixel_threshold=thr, reset=reset)
+    box.controls = dict(culling=mode, pixel_threshold=thr, reset=reset_button)
     box.handle_message = lambda content: on_msg(canvas, content, [])
-    state.render()
+    box.last_error = None
+    guarded("first frame", state.render)
     return box
