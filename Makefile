@@ -10,7 +10,7 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan gl build demo test test-rust test-python test-gl lint bench bench-quick bench-distributed examples-quick notebooks clean
+.PHONY: setup vulkan gl build demo test test-rust test-python test-gl browser test-browser lint bench bench-quick bench-distributed examples-quick notebooks clean
 
 setup: vulkan gl build
 
@@ -61,6 +61,23 @@ test-gl: setup
 	  tests/test_lod.py tests/test_cull_temporal.py tests/test_pass_triangles.py
 
 test: setup test-rust test-python test-gl
+
+# The notebook viewer in a real browser: JupyterLab on 127.0.0.1 (no token, a free port, its own
+# temporary folders) serves a notebook with a Viewer, which headless Chromium drives through selenium
+# (tests/test_browser.py: drags, wheel, every culling mode, the slider, an error in a callback).
+# Debian's chromium and chromium-driver are installed when missing, JupyterLab and selenium into the
+# venv (requirements-dev.txt) when missing. The run is bounded: jupyter and chromium are always ended.
+browser: $(VENV)/.deps
+	@if command -v chromium >/dev/null 2>&1 && command -v chromedriver >/dev/null 2>&1; then \
+	  echo "browser: chromium and chromedriver present"; \
+	else \
+	  echo "browser: installing chromium chromium-driver"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq chromium chromium-driver >/dev/null; \
+	fi
+	@$(PY) -c "import jupyterlab, selenium" 2>/dev/null || $(PY) -m pip install -q "jupyterlab>=4.0" "selenium>=4.10"
+
+test-browser: setup browser
+	GEOCULL_BROWSER_TEST=1 timeout -k 10 240 $(PY) -m pytest -q -p no:cacheprovider tests/test_browser.py
 
 # The gates (CI runs them after the tests): formatting, lints, the type stub against the built
 # extension, and the dependency rule of the code (docs/DESIGN.md).
