@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING as _TYPE_CHECKING
 from typing import Any as _Any
 
 from ._errors import DeviceError, GeocullError, GeocullWarning, InputError
+from ._runtime import private_runtime_dir as _private_runtime_dir
 from .camera import Camera, Projection
 from .iso import extract_isosurface
 from .renderer import (
@@ -35,6 +36,10 @@ from .renderer import (
 from .results import IsoResult, IsoStats, RenderResult, RenderStats
 from .scene import Scene
 from .volume import Volume, VolumeOrder, ZPositive
+
+# Before any device opens (none does on import): a private XDG_RUNTIME_DIR where none is set, so
+# that the drivers print no "XDG_RUNTIME_DIR is invalid or not set" lines.
+_private_runtime_dir()
 
 if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getattr__ imports them on first use
     from . import bench as bench
