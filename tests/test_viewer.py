@@ -124,6 +124,22 @@ def test_every_request_is_answered_even_when_the_frame_is_the_same(scene, render
     assert canvas.error == "" and canvas.ack["seq"] == 64
 
 
+def test_the_kernel_says_when_it_starts_on_a_request(scene, renderer_small, monkeypatch):
+    pytest.importorskip("anywidget")
+    import geocull.viewer as gv
+
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
+    said = []
+    monkeypatch.setattr(v.canvas, "send", lambda content, buffers=None: said.append((content, v.state.frames)))
+    n = v.state.frames
+    _view(v, 6, dx=3)
+    assert said == [] and v.canvas.ack["seq"] == 6  # off by default: one request at a time
+    monkeypatch.setattr(gv, "EARLY_NEXT", True)
+    _view(v, 7, dx=3)
+    assert said == [({"type": "started", "id": "v1", "seq": 7}, n + 1)]  # before the frame was rendered
+    assert v.canvas.ack["seq"] == 7 and v.state.frames == n + 2
+
+
 def test_reset_drops_motion_from_before_it(scene, renderer_small):
     pytest.importorskip("anywidget")
     v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
@@ -236,6 +252,22 @@ update({ frame: buf(3), frames: 4, ack: { id, seq: 3, kernel_ms: 2 } });
 out.steps.afterReset = sent.length;
 L.wheel({ deltaY: -50, preventDefault: () => {} });  // after the reset: sent, with the new epoch
 update({ frames: 5, ack: { id, seq: 4, kernel_ms: 2 } });
+const custom = (m) => (handlers["msg:custom"] || []).forEach((f) => f(m));
+L.pointerdown(ev(0, 0));
+L.pointermove(ev(1, 0));                       // request 5
+L.pointermove(ev(3, 0));                       // queued
+custom({ type: "started", id: "another view", seq: 5 });
+out.steps.otherStarted = sent.length;
+custom({ type: "started", id, seq: 5 });       // the kernel is on 5: the queued motion goes out as 6 ...
+out.steps.afterStarted = sent.length;
+L.pointermove(ev(6, 0));                       // ... but 7 waits: 6 has not started
+out.steps.secondWaits = sent.length;
+update({ frames: 6, ack: { id, seq: 5, kernel_ms: 2 } });  // 5 answered; 6 not started yet: 7 still waits
+out.steps.afterFifth = sent.length;
+update({ frames: 7, ack: { id, seq: 6, kernel_ms: 2 } });  // 6 answered: 7 goes out
+out.steps.afterSixth = sent.length;
+update({ frames: 8, ack: { id, seq: 7, kernel_ms: 2 } });
+L.pointerup();
 update({ error: "Error in the viewer's drag/zoom: RuntimeError: boom" });
 out.error = [error.textContent, error.style.display];
 await new Promise((r) => setTimeout(r, 700));  // the view rests: measures reported, frame kept as PNG
@@ -251,8 +283,9 @@ def test_browser_code_answers_merging_and_reset(tmp_path):
     """The widget's JavaScript under node with a stand-in model and DOM: one request at a time, the
     moves made meanwhile merged into the next; an answer releases the next request whether or not
     it brings a new image; answers for other views are ignored; "reset view" (a new epoch) drops
-    the queued motion; errors show under the image; at rest the browser reports its measures and
-    keeps the frame as PNG in the model."""
+    the queued motion; once the kernel says it started on a request, one more may wait behind it
+    (never two); errors show under the image; at rest the browser reports its measures and keeps
+    the frame as PNG in the model."""
     import json
     import shutil
     import subprocess
@@ -270,12 +303,15 @@ def test_browser_code_answers_merging_and_reset(tmp_path):
     out = json.loads(p.stdout)
     views = [m for m in out["sent"] if m["type"] == "view"]
     motion = [(m["seq"], m["epoch"], m["dx"], m["dy"], m["wheel"]) for m in views]
-    assert motion == [(1, 0, 5, 0, 0), (2, 0, 15, 3, 100), (3, 0, 10, 0, 0), (4, 1, 0, 0, -50)]
+    assert motion == [(1, 0, 5, 0, 0), (2, 0, 15, 3, 100), (3, 0, 10, 0, 0), (4, 1, 0, 0, -50),
+                      (5, 1, 1, 0, 0), (6, 1, 2, 0, 0), (7, 1, 3, 0, 0)]
     assert len({m["id"] for m in views}) == 1
-    assert out["steps"] == {"otherView": 1, "afterFirst": 2, "afterSameImage": 3, "afterReset": 3}
+    assert out["steps"] == {"otherView": 1, "afterFirst": 2, "afterSameImage": 3, "afterReset": 3,
+                            "otherStarted": 5, "afterStarted": 6, "secondWaits": 6, "afterFifth": 6,
+                            "afterSixth": 7}
     assert out["prevented"] is True
     assert len(out["drawn"]) == 3 and out["drawn"][-1] == [4, 2, 32]  # at render, then each new frame
-    assert out["dataset"]["frames"] == "5" and out["dataset"]["pending"] == "0"
+    assert out["dataset"]["frames"] == "8" and out["dataset"]["pending"] == "0"
     assert float(out["dataset"]["latency"]) >= 0 and out["dataset"]["kernelMs"] == "2"
     assert views[-1]["latency_ms"] is not None  # the measures ride on the requests ...
     stats = [m for m in out["sent"] if m["type"] == "stats"]

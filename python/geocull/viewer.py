@@ -11,12 +11,14 @@ moves made meanwhile merged into the next) and the kernel answers every request,
 acknowledgement (``ack``: the request's view id and number) that travels in the same state update as
 the frame, also when the frame is identical to the last one (a drag at the elevation limit, a wheel
 turn at the minimum distance) or when handling it failed; a browser that hears nothing for 15 s
-sends again anyway. "Reset view" bumps an epoch: motion queued or in flight from before is
+sends again anyway. (With :data:`EARLY_NEXT`, the kernel also says when it starts on a request and
+the browser may queue one more behind it.) "Reset view" bumps an epoch: motion queued or in flight from before is
 dropped, by the browser and by the kernel. An exception in a callback (the view's, the controls',
 or the ``on_frame`` given to :func:`Viewer`) is shown under the image and the viewer stays usable;
 the next good frame clears it. The canvas carries ``data-frames`` (frames rendered) for tests. The
 stats line reports what the browser measured: frames drawn per second and the time from the first
-mouse move of a request to its frame on screen (median of the last 20). When the view rests, the
+mouse move of a request to its frame on screen (median of the last 20); the canvas's
+``geocullLog`` holds each request's times (scripts/viewer_latency.py reads it). When the view rests, the
 browser stores the frame as a PNG in the widget's state (``png``), which a saved notebook keeps,
 and the output's ``image/png`` shows the frame at display time where no widget can be drawn.
 
@@ -55,6 +57,14 @@ MAX_ELEVATION = 89.5
 #: Default minimum distance of the eye from the target (and minimum orthographic view height), as
 #: a fraction of the scene's diagonal: the wheel stops there instead of passing through the target.
 MIN_DISTANCE_FRACTION = 1e-3
+#: Whether the kernel tells the browser when it starts on a request ("started"), so that the browser
+#: sends its next one (the motion made so far) to wait behind it and the kernel renders back to back
+#: while a frame travels. Off by default: measured in JupyterLab + Chromium on a 2-core CPU machine
+#: (lavapipe, 419 k triangles at 640 x 480, scripts/viewer_latency.py) it raised the median
+#: drag-to-frame latency by ~50 ms for ~10 % more frames/s, the renders competing with the browser
+#: and the server for the cores. Where the renderer does not share the browser's CPU (a GPU) and the
+#: transport costs more than the render, it should pay off. Off: one request at a time.
+EARLY_NEXT = False
 #: The pixel-threshold slider's stops (pixels; 0 draws every tile with a visible pixel).
 THRESHOLD_STOPS = (0.0, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
 
@@ -229,24 +239,32 @@ function render({ model, el }) {
   el.appendChild(root);
   const ctx = canvas.getContext("2d");
   const id = Math.random().toString(36).slice(2) + Date.now().toString(36);
-  let seq = 0, inflight = null, timer = null, idle = null;
+  let seq = 0, inflight = [], timer = null, idle = null;
   let dx = 0, dy = 0, wheel = 0, since = null, last = null;
   let fps = null, latency = null;
-  const lats = [], shown = [];
+  const lats = [], shown = [], log = [];
+  canvas.geocullLog = log;
 
   function queued() { return dx !== 0 || dy !== 0 || wheel !== 0; }
-  function mark() { canvas.dataset.pending = inflight !== null || queued() ? "1" : "0"; }
+  function mark() { canvas.dataset.pending = inflight.length > 0 || queued() ? "1" : "0"; }
+  // At most one request the kernel has not started on: the next waits behind the one rendering.
+  function free() { return inflight.length === 0 || (inflight.length === 1 && inflight[0].started); }
   function flush() {
-    if (inflight === null && queued()) {
+    if (free() && queued()) {
       seq += 1;
-      inflight = { seq: seq, t0: since === null ? performance.now() : since, sent: performance.now() };
+      inflight.push({ seq: seq, t0: since === null ? performance.now() : since, sent: performance.now(),
+                      started: false });
       model.send({ type: "view", id: id, seq: seq, epoch: model.get("epoch"), dx: dx, dy: dy, wheel: wheel,
                    fps: fps, latency_ms: latency });
       dx = 0; dy = 0; wheel = 0; since = null;
       clearTimeout(timer);
-      timer = setTimeout(() => { inflight = null; flush(); }, ANSWER_TIMEOUT_MS);
+      timer = setTimeout(() => { inflight = []; flush(); }, ANSWER_TIMEOUT_MS);
     }
     mark();
+  }
+  function started(msg) {
+    const r = inflight.find((q) => msg.id === id && q.seq === msg.seq);
+    if (r) { r.started = true; flush(); }
   }
   function input() {
     if (since === null) since = performance.now();
@@ -254,10 +272,14 @@ function render({ model, el }) {
     flush();
   }
   function answered(ack) {
-    if (inflight === null || !ack || ack.id !== id || ack.seq !== inflight.seq) return;
+    const i = ack && ack.id === id ? inflight.findIndex((q) => q.seq === ack.seq) : -1;
+    if (i < 0) return;
+    const r = inflight[i];
+    inflight.splice(0, i + 1);
     clearTimeout(timer);
+    if (inflight.length) timer = setTimeout(() => { inflight = []; flush(); }, ANSWER_TIMEOUT_MS);
     const now = performance.now();
-    lats.push(now - inflight.t0);
+    lats.push(now - r.t0);
     if (lats.length > 20) lats.shift();
     const sorted = lats.slice().sort((a, b) => a - b);
     latency = sorted[sorted.length >> 1];
@@ -265,17 +287,19 @@ function render({ model, el }) {
     while (shown.length > 1 && now - shown[0] > 2000) shown.shift();
     if (shown.length >= 3) fps = (shown.length - 1) * 1000 / (now - shown[0]);
     canvas.dataset.latency = String(latency);
-    canvas.dataset.roundtrip = String(now - inflight.sent);
+    canvas.dataset.roundtrip = String(now - r.sent);
     canvas.dataset.kernelMs = String(ack.kernel_ms);
-    inflight = null;
+    // Each answered request's times (ms, performance.now()) for scripts/viewer_latency.py.
+    log.push({ input: r.t0, sent: r.sent, answered: now, kernel_ms: ack.kernel_ms });
+    if (log.length > 5000) log.shift();
     flush();
-    if (inflight === null) {
+    if (inflight.length === 0 && !queued()) {
       clearTimeout(idle);
       idle = setTimeout(rest, IDLE_MS);
     }
   }
   function rest() {
-    if (inflight !== null || queued()) return;
+    if (inflight.length > 0 || queued()) return;
     model.send({ type: "stats", fps: fps, latency_ms: latency });
     if (canvas.width > 0 && canvas.height > 0) {
       const png = canvas.toDataURL("image/png");
@@ -305,6 +329,7 @@ function render({ model, el }) {
   }
   function count() { canvas.dataset.frames = String(model.get("frames")); }
 
+  model.on("msg:custom", (msg) => { if (msg && msg.type === "started") started(msg); });
   model.on("change:frame", draw);
   model.on("change:frames", count);
   model.on("change:error", showError);
@@ -445,6 +470,8 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
                 stats.value = stats_html()
         elif content.get("type") == "view":
             t0 = time.perf_counter()
+            if EARLY_NEXT:  # the browser may send its next request now: it waits behind this one
+                canvas.send({"type": "started", "id": str(content.get("id")), "seq": content.get("seq")})
             with canvas.hold_sync():  # the frame and its answer in one update
                 try:
                     guarded("drag/zoom", view, content)
