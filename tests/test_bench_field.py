@@ -60,6 +60,8 @@ def test_field_bench_json_structure(field_json: dict[str, Any]) -> None:
     assert all(r["x_none"] == 1 and r["same_image"] and r["triangles_drawn"] == s["n_triangles"] for r in none)
     for r in (r for r in rows if r["method"] == "oracle"):
         assert r["tiles_drawn"] == r["oracle_tiles"] and r["x_oracle"] == 1
+        assert r["tiles_by_kind"].keys() == s["kinds"].keys()
+        assert all(drawn == seen for drawn, seen in r["tiles_by_kind"].values())
     pm = s["per_method"]
     assert set(pm) == set(expected)
     assert all(pm[m]["x_none"] is not None and pm[m]["x_oracle"] is not None for m in expected)

@@ -204,7 +204,8 @@ def build_field(data: str | os.PathLike[str]) -> dict[str, Any]:
     """The field of ``data`` (:func:`find_files`) as a :class:`geocull.Scene` and what the benchmark
     needs of it: ``scene``, ``grid_scene`` (the grid alone), ``reservoir_bounds`` (horizons and grid),
     ``kinds`` (per object kind: objects, fine and coarse triangles, tiles), ``wells`` (name, stations,
-    triangles, log), ``files``, ``clim_z``, ``clim_poro``, ``read_s`` and ``build_s``."""
+    triangles, log), ``tile_kind`` (each tile's object kind, in tile order), ``files``, ``clim_z``,
+    ``clim_poro``, ``read_s`` and ``build_s``."""
     import warnings
 
     import xtgeo
@@ -258,15 +259,18 @@ def build_field(data: str | os.PathLike[str]) -> dict[str, Any]:
 
     table = scene.tile_table()
     kinds: dict[str, dict[str, int]] = {}
+    tile_kind = np.empty(len(table), dtype=object)
     for oid in scene.object_ids():
         info = scene.object_info(oid)
         k = kinds.setdefault(str(info["kind"]), dict(objects=0, triangles=0, coarse_triangles=0, tiles=0))
         rows = table[table["object"] == oid]
+        tile_kind[table["object"] == oid] = str(info["kind"])
         k["objects"] += 1
         k["triangles"] += int(info["n_triangles"])
         k["coarse_triangles"] += int(rows["tris_coarse"].sum())
         k["tiles"] += len(rows)
     return dict(scene=scene, grid_scene=grid_scene, grid_id=gid, reservoir_bounds=reservoir_bounds, kinds=kinds,
+                tile_kind=tile_kind,
                 wells=well_info, clim_z=clim_z, clim_poro=clim_poro, read_s=read_s, build_s=build_s,
                 files=dict(surfaces=[p.name for p in files["surfaces"]], grid=grid_file,
                            poro=files["poro"].name if files["poro"] is not None else "INIT:PORO",
@@ -385,6 +389,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
          f"{scene.n_triangles:,} triangles in {scene.n_tiles} tiles")
     vs = views(field["reservoir_bounds"], w, h, cfg.get("views"))
     renderer, r_grid = gc.Renderer(w, h), gc.Renderer(w, h)
+    kinds = field["tile_kind"]
     meths = methods()
     by_name = dict(meths)
 
@@ -423,7 +428,11 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
                 if rk["culling"] == "temporal" and not primed:
                     res, primed = renderer.render(scene, cam, **rk), True
             s: dict[str, Any] = dict(res.stats)
-            first[name] = dict(stats={k: s[k] for k in STAT_KEYS if k in s}, **_diff_summary(res, ref, visible))
+            # tiles drawn per object kind, against the oracle's (visible in the unculled image)
+            by_kind = {k: [int(np.count_nonzero(res.tile_drawn & (kinds == k))),
+                           int(np.count_nonzero((visible > 0) & (kinds == k)))] for k in field["kinds"]}
+            first[name] = dict(stats={k: s[k] for k in STAT_KEYS if k in s}, tiles_by_kind=by_kind,
+                               **_diff_summary(res, ref, visible))
             del res
         del oracle
         near, far = ref.near, ref.far
@@ -511,6 +520,8 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             views_same_image=sum(bool(r["same_image"]) for r in rs) if geo else None,
             tiles_proven_hidden=(sum(r["tiles_proven_hidden"] for r in rs)
                                  if geo and all("tiles_proven_hidden" in r for r in rs) else None),
+            mean_tiles_by_kind=({k: [sum(r["tiles_by_kind"][k][i] for r in rs) / len(rs) for i in (0, 1)]
+                                 for k in field["kinds"]} if geo else None),
         )
     grid_summary: dict[str, dict[str, Any]] = {}
     for gname in dict.fromkeys(r["mode"] for r in grid_rows):
@@ -605,6 +616,12 @@ def format_table(result: dict[str, Any]) -> str:
             f"{_f(m['mean_tiles_drawn'], '.1f'):>7} {same:>8} {_pct(m['max_differing_pixel_fraction']):>9} "
             f"{_pct(m['max_differing_pixel_fraction_tol4'], '.3f'):>8} {_f(m['max_abs_diff'], 'd'):>4} "
             f"{_f(m['missing_tiles'], 'd'):>4} {_f(m['tiles_proven_hidden'], 'd'):>6}")
+    lines += ["", "tiles drawn per object kind / visible in the oracle's image (mean over the views):"]
+    for name, m in s["per_method"].items():
+        if m.get("mean_tiles_by_kind"):
+            lines.append(f"  {name:<26} " + ", ".join(f"{k} {d:.1f}/{o:.1f}"
+                                                      for k, (d, o) in m["mean_tiles_by_kind"].items()))
+    lines.append("")
     for gname, m in s["grid_alone"].items():
         lines.append(f"grid alone {gname:<15} x full {_f(m['x_full'], '.3f')}, mean triangles "
                      f"{m['mean_triangles_drawn']:,.0f}, max diff px {_pct(m['max_differing_pixel_fraction'])} % "
