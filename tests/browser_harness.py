@@ -62,6 +62,10 @@ class StepTimeout(AssertionError):
     pass
 
 
+def _terminate(signum: int, _frame: object) -> None:
+    raise SystemExit(f"browser test ended by signal {signum}")
+
+
 class Lab:
     """One JupyterLab server and one headless Chromium showing a notebook made of ``cells`` (the
     pid cell is put first). ``step_timeout``: seconds a step may wait for the page."""
@@ -79,6 +83,9 @@ class Lab:
 
     # --- starting and stopping ---------------------------------------------------------------
     def __enter__(self) -> Lab:
+        # A SIGTERM (`timeout` in make test-browser) unwinds through close() instead of leaving the
+        # server and the browser running in their own sessions.
+        self._old_term = signal.signal(signal.SIGTERM, _terminate)
         try:
             self.start()
         except BaseException:
@@ -190,6 +197,9 @@ class Lab:
             self.server = None
         if getattr(self, "log", None) is not None:
             self.log.close()
+        if getattr(self, "_old_term", None) is not None:
+            signal.signal(signal.SIGTERM, self._old_term)
+            self._old_term = None
 
     def _kill_own_chromium(self) -> None:
         """Chromium processes still running on this Lab's profile folder (none after a clean quit)."""
