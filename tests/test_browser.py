@@ -111,6 +111,10 @@ def test_viewer_answers_every_step_in_jupyterlab(tmp_path):
         t = lab.wait_frame(t, "drag after the error", changed=True)
         assert lab.text(ERROR).strip() == ""
 
+        # At rest the browser keeps the frame as PNG in the widget's state (what a saved notebook keeps).
+        lab._wait(lambda: lab.run_in_kernel("assert v.canvas.png.startswith('data:image/png;base64,')") == "ok",
+                  lab.step_timeout, "the frame was not kept as PNG in the widget's state")
+
         errors = lab.console_errors()
         assert not errors, errors
     assert time.monotonic() - t0 < 180
