@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,8 +45,26 @@ _COLOR_DOC = """
         RdBu_r, sampled from matplotlib's tables), a matplotlib ``Colormap``, or an (n, 3) / (n, 4)
         array of RGB(A) rows in [0, 1]; default viridis. ``clim`` (lo, hi): the scalars mapped to the
         colour map's two ends (below and above clamp; matplotlib's mapping of a 256-entry map, as
-        PyVista draws it); default the drawn data's finite range. ``nan_color`` (r, g, b): the colour
-        of NaN values (default mid grey, 0.5). A flat ``color`` and a colouring cannot be combined."""
+        PyVista draws it); default for values the drawn data's finite range, for z the scene's depth
+        range: the lowest and highest z of every object coloured by z without a ``clim`` of its own
+        (hidden ones too), updated as such objects are added, removed or recoloured, so that equal
+        depths get equal colours across horizons. ``nan_color`` (r, g, b): the colour of NaN values
+        (default mid grey, 0.5). A flat ``color`` and a colouring cannot be combined. ``label``: the
+        name on the colour bar of :meth:`geocull.RenderResult.figure` (default the values' own name
+        where they carry one: an xarray / pandas ``name``, an xtgeo log or property; else "values";
+        colour by z is labelled "depth (m)")."""
+
+
+class _SharedZ(NamedTuple):
+    """An object coloured by z without a ``clim`` of its own, so over the scene's depth range: its
+    colour map (name, table), NaN colour, its own z range, and the range last given to the core."""
+
+    cmap: str | None
+    table: np.ndarray | None
+    nan: tuple[float, float, float] | None
+    own: tuple[float, float]
+    applied: tuple[float, float] | None
+
 
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
@@ -93,6 +111,17 @@ def _stored_range(volume: Any, axis: int, i0: int, i1: int) -> tuple[int, int]:
     return (min(a, b), max(a, b))
 
 
+def _label_arg(label: Any, values: Any = None) -> str | None:
+    """The colour bar label: ``label`` (None or a str, else InputError), else the ``name`` of
+    ``values`` where it has one (xarray DataArray, pandas Series, xtgeo GridProperty), else None."""
+    if label is not None:
+        if not isinstance(label, str):
+            raise InputError(f"label: {label!r} is not a string")
+        return label
+    n = getattr(values, "name", None)
+    return n if isinstance(n, str) and n else None
+
+
 def _down(z_positive: Any, default_down: bool) -> bool:
     """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
     if z_positive is None:
@@ -115,12 +144,20 @@ class Scene:
         self._s = _geocull.Scene()
         # Slices' sources, for set_slice_index: id -> (volume, axis, name, colouring).
         self._slices: dict[int, tuple[Any, int, str | None, cv.Coloring, float]] = {}
+        # Objects coloured by z over the scene's shared depth range (no clim of their own).
+        self._zshared: dict[int, _SharedZ] = {}
+        # Colour bar labels (RenderResult.figure) and colour tables of the objects coloured by data.
+        self._labels: dict[int, str] = {}
+        self._tables: dict[int, np.ndarray] = {}
 
     @classmethod
     def _wrap(cls, inner: _geocull.Scene) -> Scene:
         s = cls.__new__(cls)
         s._s = inner
         s._slices = {}
+        s._zshared = {}
+        s._labels = {}
+        s._tables = {}
         return s
 
     def copy(self) -> Scene:
@@ -129,6 +166,9 @@ class Scene:
         ``copy.deepcopy`` do the same."""
         s = Scene._wrap(self._s.copy())
         s._slices = dict(self._slices)
+        s._zshared = dict(self._zshared)
+        s._labels = dict(self._labels)
+        s._tables = dict(self._tables)
         return s
 
     def __copy__(self) -> Scene:
@@ -139,7 +179,11 @@ class Scene:
 
     def to_bytes(self) -> bytes:
         """The scene as bytes (a versioned little-endian layout of its objects and their tiles, as
-        stored), for files and other processes; :meth:`from_bytes` reads them. Pickling uses it."""
+        stored), for files and other processes; :meth:`from_bytes` reads them. Pickling uses it.
+        The bytes hold every object's colours as they are (the shared depth range included), but
+        not which objects follow the shared depth range nor the colour bar labels: a scene from
+        :meth:`from_bytes` renders the same, and objects added to it later share a depth range of
+        their own. Pickles (and :meth:`copy`) keep both."""
         return self._s.to_bytes()
 
     @staticmethod
@@ -150,8 +194,22 @@ class Scene:
             raise InputError(f"data: expected bytes, got {type(data).__name__}")
         return Scene._wrap(_geocull.Scene.from_bytes(bytes(data)))
 
-    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
-        return (Scene.from_bytes, (self.to_bytes(),))
+    def __reduce__(self) -> tuple[Any, tuple[bytes, dict[str, Any]]]:
+        return (Scene._unpickle, (self.to_bytes(), self._python_state()))
+
+    def _python_state(self) -> dict[str, Any]:
+        """What the Python wrapper keeps beside the core's bytes (pickles carry it)."""
+        return dict(zshared={k: tuple(v) for k, v in self._zshared.items()}, labels=dict(self._labels),
+                    tables=dict(self._tables))
+
+    @staticmethod
+    def _unpickle(data: bytes, state: dict[str, Any] | None = None) -> Scene:
+        s = Scene.from_bytes(data)
+        if state:
+            s._zshared = {int(k): _SharedZ(*v) for k, v in state.get("zshared", {}).items()}
+            s._labels = {int(k): str(v) for k, v in state.get("labels", {}).items()}
+            s._tables = {int(k): np.asarray(v, np.float64) for k, v in state.get("tables", {}).items()}
+        return s
 
     def add_heightfield(
         self,
@@ -172,6 +230,7 @@ class Scene:
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
         z_positive: Literal["up", "down"] | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a height field (a horizon or a terrain).
 
@@ -188,7 +247,7 @@ class Scene:
         tiles: (tx, ty) tiles along x and y (each at least one cell wide); tiles share border samples.
         coarse_factor: >= 1; the coarse proxy of each tile has about 1/coarse_factor of its triangles.
         name: an optional label.  color: (r, g, b) in [0, 1]; without it (and without a colouring)
-            a height field is coloured by its z through viridis over its own z range.
+            a height field is coloured by its z through viridis over the scene's depth range.
         rotation: degrees counter-clockwise (seen from above, default 0) about ``origin`` (xtgeo's convention):
             ``z[j, i]`` sits at ``origin + R(rotation) @ (i*dx, j*dy)``.  yflip: True for xtgeo's
             ``yflip=-1``: rows run towards -y in the grid's frame (``(i*dx, -j*dy)`` before the
@@ -231,12 +290,13 @@ class Scene:
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
+        lab = _label_arg(label, values)
+        c = cv.coloring(color_by, values, cmap, clim, nan_color, 2)
         with _progress.task(progress, tt[0] * tt[1], "add_heightfield: tiles"):  # read by the core
             return self._added(self._s.add_heightfield(
                 za, o, sp, tt, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), nv,
-                cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"),
-                cv.coloring(color_by, values, cmap, clim, nan_color, 2),
-            ))
+                cv.number(rotation, "rotation"), cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True"), c,
+            ), c, lab)
 
     def add_mesh(
         self,
@@ -254,6 +314,7 @@ class Scene:
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
         z_positive: Literal["up", "down"] | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a triangle mesh (a fault, an isosurface, any surface).
 
@@ -306,11 +367,12 @@ class Scene:
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
+        lab = _label_arg(label, values)
+        c = cv.coloring(color_by, values, cmap, clim, nan_color, 1)
         with _progress.task(progress, k or 1, "add_mesh: tiles"):  # read by the core
             return self._added(self._s.add_mesh(
-                v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color),
-                cv.coloring(color_by, values, cmap, clim, nan_color, 1),
-            ))
+                v, f, kind, k, cv.number(coarse_factor, "coarse_factor"), cv.name(name), cv.color(color), c,
+            ), c, lab)
 
     def add_well(
         self,
@@ -326,6 +388,7 @@ class Scene:
         log: str | None = None,
         max_stations: int | None = None,
         z_positive: Literal["up", "down"] | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a well: ``path`` (n, 3) world stations (x, y, z metres, z up: pass z = -depth for
         depths) along a deviated well, drawn as a closed tube of ``radius`` metres with ``sides``
@@ -341,14 +404,19 @@ class Scene:
         :func:`geocull.io.from_xtgeo_well`. ``values`` and ``name`` given here win.
         z_positive: "up" (path z is elevation, metres up) or "down" (z is depth positive down, e.g.
         TVDSS: drawn at -z); default "up" for arrays, "down" for xtgeo wells.
+        label: the log's name on colour bars (default ``log``, or the values' own name; see
+        :meth:`add_heightfield`).
         Returns the object id."""
         from . import io
 
         well = io.xtgeo_kind(path) == "well"
         down = _down(z_positive, well)
+        lab = _label_arg(label, values)
         if well:
             kw = io.from_xtgeo_well(path, log=log, max_stations=max_stations, z_positive="down" if down else "up")
             name = io.xtgeo_name(path) if name is None else name
+            if values is None and lab is None and isinstance(log, str):
+                lab = log
             values = kw["values"] if values is None else values
             p = cv.float_array(kw["path"], "path", 2, 3)
         else:
@@ -358,10 +426,10 @@ class Scene:
             p = cv.float_array(path, "path", 2, 3)
             if down:
                 p = p * np.array([1.0, 1.0, -1.0])
+        c = cv.coloring(None, values, cmap, clim, nan_color, 1)
         return self._added(self._s.add_well(
-            p, cv.number(radius, "radius"), cv.integer(sides, "sides"), cv.name(name), cv.color(color),
-            cv.coloring(None, values, cmap, clim, nan_color, 1),
-        ))
+            p, cv.number(radius, "radius"), cv.integer(sides, "sides"), cv.name(name), cv.color(color), c,
+        ), c, lab)
 
     def add_slice(
         self,
@@ -378,6 +446,7 @@ class Scene:
         crossline: float | None = None,
         time: float | None = None,
         depth: float | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a seismic slice of ``volume``: ``axis`` "inline" (or 0: the plane of constant i, the
         volume's first axis), "crossline" (1: constant j) or "sample" (2: constant k, a time or depth
@@ -398,17 +467,19 @@ class Scene:
         ``nan_color``. Slices are opaque occluders (object kind "slice") culled like any object;
         :meth:`set_slice_index` moves one. ``opacity`` in (0, 1]: below 1 the slice is translucent,
         drawn as volume lenses are (blended after the opaque image, unlit, never occluding, skipped
-        where hidden). Returns the object id."""
+        where hidden). ``label``: the colour bar's (as for :meth:`add_heightfield`). Returns the
+        object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
+        lab = _label_arg(label)
         op = cv.number(opacity, "opacity")
         ax, idx = self._slice_position(volume, axis, index, inline, crossline, time, depth)
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
         id = self._s.add_slice(volume._v, ax, idx, cv.name(name), c, op)
         self._slices[id] = (volume, ax, name, c, op)
-        return self._added(id)
+        return self._added(id, c, lab)
 
     @staticmethod
     def _slice_position(
@@ -464,6 +535,7 @@ class Scene:
         clim: ArrayLike | None = None,
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
+        label: str | None = None,
     ) -> int:
         """Add the isosurface ``volume == isovalue`` (a salt body, in the volume's units) as an
         object of the scene (kind "isosurface"): the welded, crack-free marching-cubes surface of
@@ -492,11 +564,13 @@ class Scene:
             cv.expect_instance(values, Volume, "values")
         by = "values" if color_by is None and values is not None else color_by
         c = cv.coloring(by, None, cmap, clim, nan_color, 1)
+        lab = _label_arg(label)
         k = None if tiles is None else cv.integer(tiles, "tiles")
         with _progress.task(progress, k or 1, "add_isosurface: tiles"):  # total set by the core
             return self._added(self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
                                                       cv.number(coarse_factor, "coarse_factor"), cv.name(name),
-                                                      cv.color(color), c, None if values is None else values._v))
+                                                      cv.color(color), c, None if values is None else values._v),
+                               c, lab)
 
     def add_lens(
         self,
@@ -507,6 +581,7 @@ class Scene:
         opacity: float = 0.3,
         name: str | None = None,
         nan_color: ArrayLike | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a volume lens: the semi-transparent sub-volume of ``volume`` over ``box`` =
         ((i0, i1), (j0, j1), (k0, k1)), inclusive sample index ranges (at least 2 samples along each
@@ -517,10 +592,12 @@ class Scene:
         sample along the axis closest to the view direction, farthest first, alpha-blended over the
         opaque image, unlit and writing no depth (object kind "lens"). It never occludes; each frame
         its slices' boxes are tested against the opaque depth and hidden slices are not drawn (stats
-        ``lens_slices_tested``, ``lens_slices_drawn``, ``lenses_hidden``). Returns the object id."""
+        ``lens_slices_tested``, ``lens_slices_drawn``, ``lenses_hidden``). ``label``: the colour
+        bar's (as for :meth:`add_heightfield`). Returns the object id."""
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
+        lab = _label_arg(label)
         b = cv.int_array(box, "box", 2, 2)
         if b.shape != (3, 2):
             raise InputError(f"box: shape {b.shape} is not (3, 2): ((i0, i1), (j0, j1), (k0, k1))")
@@ -528,7 +605,8 @@ class Scene:
                    for a in range(3))
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
-        return self._added(self._s.add_lens(volume._v, bx, cv.number(opacity, "opacity"), cv.name(name), c))  # type: ignore[arg-type]
+        id = self._s.add_lens(volume._v, bx, cv.number(opacity, "opacity"), cv.name(name), c)  # type: ignore[arg-type]
+        return self._added(id, c, lab)
 
     def add_grid(
         self,
@@ -544,6 +622,7 @@ class Scene:
         nan_color: ArrayLike | None = None,
         progress: ProgressLike = None,
         z_positive: Literal["up", "down"] | None = None,
+        label: str | None = None,
     ) -> int:
         """Add a reservoir grid (a truncated corner-point grid, Eclipse GRDECL / RESQML / xtgeo
         ``Grid``; :mod:`geocull.grid` converts those).
@@ -575,6 +654,8 @@ class Scene:
             undefined / inactive cells become region -1.
         z_positive: "up" (corner z is elevation, metres up) or "down" (z is depth positive down, e.g.
             Eclipse / xtgeo TVDSS: drawn at -z); default "up" for arrays, "down" for xtgeo grids.
+        label: the property's name on colour bars (default the property's name when ``values`` is
+            one, or a name; see :meth:`add_heightfield`).
             Returns the object id."""
         from . import io
 
@@ -593,7 +674,10 @@ class Scene:
                 corners = cv.float_array(data, "corners", 5) * np.array([1.0, 1.0, -1.0])
                 if mask is not None:
                     corners = np.ma.MaskedArray(corners, mask=mask)
+        lab = _label_arg(label, values)
         if isinstance(values, str) or io.xtgeo_kind(values) == "gridproperty":
+            if lab is None and isinstance(values, str):
+                lab = values
             values = io.xtgeo_property(values, xgrid, "values")
         if isinstance(region, str) or io.xtgeo_kind(region) == "gridproperty":
             r = io.xtgeo_property(region, xgrid, "region")
@@ -614,15 +698,17 @@ class Scene:
             raise InputError(f"blocks: shape {b.shape} is not (2,)")
         bb = (cv.integer(b[0], "blocks[0]"), cv.integer(b[1], "blocks[1]"))
         n_blocks = -(-c.shape[2] // max(bb[0], 1)) * -(-c.shape[1] // max(bb[1], 1))
+        col = cv.coloring(None, values, cmap, clim, nan_color, 3)
         with _progress.task(progress, n_blocks, "add_grid: blocks"):  # read by the core
-            return self._added(self._s.add_grid(
-                c, act, reg, bb, cv.name(name), cv.color(color), cv.coloring(None, values, cmap, clim, nan_color, 3),
-            ))
+            return self._added(self._s.add_grid(c, act, reg, bb, cv.name(name), cv.color(color), col), col, lab)
 
-    def _added(self, id: int) -> int:
-        """``id``, after a :class:`geocull.GeocullWarning` if the new object lies over
-        :data:`FAR_APART` metres from another object of the scene (a grid in local coordinates beside
-        UTM horizons renders as an empty image), naming both."""
+    def _added(self, id: int, coloring: cv.Coloring | None = None, label: str | None = None) -> int:
+        """``id``, after noting its colouring (``coloring``: the tuple given to the core; the colour
+        bar ``label``) and sharing the scene's depth range, and after a
+        :class:`geocull.GeocullWarning` if the new object lies over :data:`FAR_APART` metres from
+        another object of the scene (a grid in local coordinates beside UTM horizons renders as an
+        empty image), naming both."""
+        self._note_coloring(id, coloring, label)
         try:
             boxes = _object_boxes(self.tile_table())
         except Exception:  # never let the check fail an add
@@ -648,6 +734,50 @@ class Scene:
                 stacklevel=3,
             )
         return id
+
+    def _note_coloring(self, id: int, coloring: cv.Coloring | None, label: str | None) -> None:
+        """Keep what the core does not of object ``id``'s colouring (its table, its colour bar label;
+        whether it follows the shared depth range), then give the depth range to the objects that
+        follow it."""
+        info = self._s.object_info(id)
+        self._labels.pop(id, None)
+        self._tables.pop(id, None)
+        self._zshared.pop(id, None)
+        if info["color_by"] is not None:
+            if label is not None:
+                self._labels[id] = label
+            if coloring is not None and coloring[3] is not None:
+                self._tables[id] = coloring[3]
+        own = info["clim"]
+        if info["color_by"] == "z" and (coloring is None or coloring[4] is None) and own is not None:
+            self._zshared[id] = _SharedZ(
+                coloring[2] if coloring is not None else info["cmap"], coloring[3] if coloring is not None else None,
+                coloring[5] if coloring is not None else None, (float(own[0]), float(own[1])), None)
+        self._share_depth_range()
+
+    def _share_depth_range(self) -> None:
+        """Give every object coloured by z without a clim of its own the lowest and highest z over
+        them all (each one's own range was read when its colouring was set). Objects already given
+        this range are left alone."""
+        if not self._zshared:
+            return
+        lo = min(v.own[0] for v in self._zshared.values())
+        hi = max(v.own[1] for v in self._zshared.values())
+        rng = (lo, hi) if lo < hi else None  # all flat at one z: the core's own range (a core rule: lo < hi)
+        for id, v in list(self._zshared.items()):
+            if v.applied == rng and rng is not None:
+                continue
+            self._s.set_color_by(id, ("z", None, v.cmap, v.table, rng, v.nan))
+            self._zshared[id] = v._replace(applied=rng)
+
+    def depth_range(self) -> tuple[float, float] | None:
+        """``(zmin, zmax)`` metres: the scene's shared depth range, over which every object coloured
+        by z without a ``clim`` of its own is coloured (the lowest and highest z of those objects,
+        hidden ones included, offsets from :meth:`translate` not applied); None when there is no
+        such object. ``object_info(id)["clim"]`` is the range each object is drawn with."""
+        if not self._zshared:
+            return None
+        return (min(v.own[0] for v in self._zshared.values()), max(v.own[1] for v in self._zshared.values()))
 
     def _label(self, id: int) -> str:
         info = self._s.object_info(id)
@@ -698,9 +828,14 @@ class Scene:
         return cv.integer(axis, "axis")
 
     def remove(self, id: int) -> None:
-        """Remove object ``id``."""
-        self._slices.pop(id, None)
-        self._s.remove(cv.integer(id, "id"))
+        """Remove object ``id`` (the shared depth range is then that of the objects left)."""
+        i = cv.integer(id, "id")
+        self._s.remove(i)
+        self._slices.pop(i, None)
+        self._labels.pop(i, None)
+        self._tables.pop(i, None)
+        if self._zshared.pop(i, None) is not None:
+            self._share_depth_range()
 
     def set_visible(self, id: int, visible: bool) -> None:
         """Show or hide object ``id`` (no re-upload)."""
@@ -713,17 +848,24 @@ class Scene:
     def set_color(self, id: int, color: ArrayLike) -> None:
         """Draw object ``id`` in one flat colour (r, g, b) in [0, 1], ending any colour by data (no
         re-upload)."""
-        self._s.set_color(cv.integer(id, "id"), cv.vec3(color, "color"))
+        i = cv.integer(id, "id")
+        self._s.set_color(i, cv.vec3(color, "color"))
+        self._note_coloring(i, None, None)
 
     def set_color_by(
         self, id: int, color_by: ColorBy = "z", cmap: Any = None, clim: ArrayLike | None = None,
-        nan_color: ArrayLike | None = None,
+        nan_color: ArrayLike | None = None, label: str | None = None,
     ) -> None:
         """Colour object ``id`` through a colour map by its z or by the values it was added with
-        (``cmap``, ``clim``, ``nan_color`` as for :meth:`add_heightfield`; no re-upload)."""
+        (``cmap``, ``clim``, ``nan_color``, ``label`` as for :meth:`add_heightfield`: by z without
+        ``clim``, over the scene's shared depth range; no re-upload)."""
         c = cv.coloring(color_by, None, cmap, clim, nan_color, 1)
         assert c is not None
-        self._s.set_color_by(cv.integer(id, "id"), c)
+        i = cv.integer(id, "id")
+        if label is None and c[0] == "values":
+            label = self._labels.get(i)  # the values keep their name
+        self._s.set_color_by(i, c)
+        self._note_coloring(i, c, _label_arg(label))
 
     @property
     def n_tiles(self) -> int:
