@@ -17,6 +17,7 @@ pub mod levels;
 pub mod normals;
 pub mod shading;
 pub mod simplify;
+pub mod tube;
 
 use crate::error::Work;
 use glam::DVec3;

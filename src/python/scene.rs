@@ -180,7 +180,8 @@ impl PyScene {
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
             let sides = int_in(sides, "sides", 3, 64)?;
-            let opts = AddOptions { coarse_factor: 1.0, name, color, color_by, interrupt };
+            // The prepass proxy: a tube level with at most 1/25 of the fine triangles.
+            let opts = AddOptions { coarse_factor: 25.0, name, color, color_by, interrupt };
             lock(scene).add_well(p, radius, sides, opts)
         })
     }

@@ -389,11 +389,27 @@ impl Scene {
         kind: ObjectKind,
         color: [f32; 3],
         color_by: Option<ColorBy>,
+        tiles: Vec<TileMesh>,
+    ) -> u32 {
+        self.push_levels(origin, name, kind, color, color_by, tiles, false)
+    }
+
+    /// [`Self::push`], keeping the levels of an object coloured by data when `levels_keep_values`
+    /// (its levels bound the error of its values too, as a well's do: `crate::lod::tube`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn push_levels(
+        &mut self,
+        origin: DVec3,
+        name: Option<String>,
+        kind: ObjectKind,
+        color: [f32; 3],
+        color_by: Option<ColorBy>,
         mut tiles: Vec<TileMesh>,
+        levels_keep_values: bool,
     ) -> u32 {
         // Levels of detail bound the geometric error only: an object coloured by data keeps its
         // full resolution (coarser levels would blur its values), its coarse proxy still culls.
-        if color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
+        if !levels_keep_values && color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
             for t in &mut tiles {
                 t.levels.clear();
             }

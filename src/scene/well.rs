@@ -1,81 +1,12 @@
 //! Wells: a deviated well path drawn as a closed tube (an occluder like any mesh), optionally
-//! coloured by a log sampled along the path.
-//!
-//! The contract of [`tube`]: for a path of n >= 2 stations (consecutive duplicates dropped) and
-//! `sides` >= 3, the tube has one ring of `sides` vertices per station, each ring the regular
-//! polygon of circumradius `radius` centred on the station in the plane normal to the path's
-//! direction there (the mean of the two segments' directions at inner stations), turned from
-//! station to station by parallel transport (no twist), and a flat cap at each end, in all
-//! 2 (n - 1) sides plus 2 (sides - 2) triangles, wound outwards. The polygon's first vertex of the first ring lies
-//! along the horizontal normal of the first segment when it has one (+x for a vertical start).
+//! coloured by a log sampled along the path. The tube, its tiles along the path and their levels
+//! of detail are [`crate::lod::tube`]'s.
 
-use super::{AddOptions, Scene};
+use super::{check_coarse_factor, check_color, AddOptions, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
+use crate::lod::tube::{tube_tiles, TubeSpec};
 use glam::DVec3;
-
-/// Segments per tile: a long well is cut into tiles so that culling can drop the parts out of
-/// view or hidden.
-const SEGMENTS_PER_TILE: usize = 128;
-
-/// The tube around `path` (see the module's contract): (vertices, faces, the station of each
-/// vertex). `path` must be finite with at least two distinct consecutive stations.
-pub fn tube(path: &[DVec3], radius: f64, sides: usize) -> (Vec<[f64; 3]>, Vec<[i64; 3]>, Vec<usize>) {
-    let n = path.len();
-    let dir = |k: usize| -> DVec3 {
-        let a = if k > 0 { (path[k] - path[k - 1]).normalize() } else { DVec3::ZERO };
-        let b = if k + 1 < n { (path[k + 1] - path[k]).normalize() } else { DVec3::ZERO };
-        let d = a + b;
-        // A hairpin (a = -b) has no mean direction: take the incoming one.
-        if d.length_squared() > 1e-12 {
-            d.normalize()
-        } else if a != DVec3::ZERO {
-            a
-        } else {
-            b
-        }
-    };
-    let d0 = dir(0);
-    let mut u = DVec3::Z.cross(d0);
-    if u.length_squared() < 1e-12 {
-        u = DVec3::X; // vertical start
-    }
-    let mut u = u.normalize();
-    let (mut verts, mut station) = (Vec::with_capacity(n * sides + 2), Vec::with_capacity(n * sides + 2));
-    let mut prev = d0;
-    for (k, p) in path.iter().enumerate() {
-        let d = dir(k);
-        // Parallel transport: turn u by the rotation taking the previous direction onto this one.
-        let axis = prev.cross(d);
-        if axis.length_squared() > 1e-24 {
-            let q = glam::DQuat::from_rotation_arc(prev, d);
-            u = (q * u).normalize();
-        }
-        u = (u - d * u.dot(d)).normalize();
-        let v = d.cross(u);
-        prev = d;
-        for s in 0..sides {
-            let a = std::f64::consts::TAU * s as f64 / sides as f64;
-            verts.push((*p + radius * (a.cos() * u + a.sin() * v)).to_array());
-            station.push(k);
-        }
-    }
-    let ring = |k: usize, s: usize| (k * sides + s % sides) as i64;
-    let mut faces = Vec::with_capacity(2 * (n - 1) * sides + 2 * sides);
-    for k in 0..n - 1 {
-        for s in 0..sides {
-            // (u, v, d) is right-handed, so rings run counter-clockwise about d: this winding faces out.
-            faces.push([ring(k, s), ring(k, s + 1), ring(k + 1, s + 1)]);
-            faces.push([ring(k, s), ring(k + 1, s + 1), ring(k + 1, s)]);
-        }
-    }
-    // Caps: fans over each end ring, facing away from the path.
-    for s in 1..sides - 1 {
-        faces.push([ring(0, 0), ring(0, s + 1), ring(0, s)]);
-        faces.push([ring(n - 1, 0), ring(n - 1, s), ring(n - 1, s + 1)]);
-    }
-    (verts, faces, station)
-}
 
 impl Scene {
     /// Adds a well: `path` (n, 3) world stations along the well (any deviation), drawn as a tube
@@ -91,15 +22,13 @@ impl Scene {
         }
         ensure(radius.is_finite() && radius > 0.0, "radius", || format!("radius is {radius}; expected a number > 0"))?;
         ensure((3..=64).contains(&sides), "sides", || format!("sides is {sides}; expected 3..=64"))?;
-        let values = match opts.color_by.as_mut() {
-            Some(c) => c.values.take(),
-            None => None,
-        };
-        if let Some(v) = &values {
-            ensure(v.len() == path.len(), "values", || {
-                format!("values has {} entries; expected one per station of path, {}", v.len(), path.len())
-            })?;
+        let cf = check_coarse_factor(opts.coarse_factor)?;
+        let color = check_color(opts.color, self.next_id)?;
+        let color_by = super::color_by_arg(&opts.color, opts.color_by.take(), || None)?;
+        if let Some(c) = &color_by {
+            c.check(Some((path.len(), &format!("one per station of path, {}", path.len()))))?;
         }
+        let values = color_by.as_ref().and_then(|c| c.values.as_deref());
         // Distinct consecutive stations, keeping each one's log value.
         let mut stations: Vec<DVec3> = Vec::with_capacity(path.len());
         let mut logs: Vec<f64> = Vec::new();
@@ -107,7 +36,7 @@ impl Scene {
             let p = DVec3::from_array(*p);
             if stations.last() != Some(&p) {
                 stations.push(p);
-                if let Some(v) = &values {
+                if let Some(v) = values {
                     logs.push(v[i]);
                 }
             }
@@ -115,20 +44,33 @@ impl Scene {
         ensure(stations.len() >= 2, "path", || {
             format!("path has {} distinct station(s); a well needs at least 2", stations.len())
         })?;
-        let (verts, faces, station) = tube(&stations, radius, sides);
-        if let Some(c) = opts.color_by.as_mut() {
-            if values.is_some() {
-                c.values = Some(station.iter().map(|&k| logs[k]).collect());
+        // Levels keep a log's colours within half a row of a 256-row colour map over its range.
+        let value_tol = color_by.as_ref().map_or(0.0, |c| {
+            let [lo, hi] = c.clim.unwrap_or_else(|| {
+                let fin = logs.iter().copied().filter(|v| v.is_finite());
+                let (lo, hi) = fin.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+                [lo, hi]
+            });
+            if hi > lo {
+                (hi - lo) / (2.0 * crate::scene::color::LUT_SIZE as f64)
+            } else {
+                0.0
             }
-        }
-        let tiles = (stations.len() - 1).div_ceil(SEGMENTS_PER_TILE);
-        self.add_mesh(&verts, &faces, "well", Some(tiles), opts)
+        });
+        let (lo, hi) = stations.iter().fold((stations[0], stations[0]), |(a, b), p| (a.min(*p), b.max(*p)));
+        let o = self.origin_for(lo - radius, hi + radius);
+        let spec =
+            TubeSpec { path: &stations, values: values.is_some().then_some(&logs[..]), radius, sides, value_tol };
+        let tiles = opts.interrupt.run_parallel(|_stop| tube_tiles(&spec, o, cf as f32))?;
+        let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&tiles, o.z, &c.source))).transpose()?;
+        Ok(self.push_levels(o, opts.name, ObjectKind::Mesh { kind: "well".into() }, color, color_by, tiles, true))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::tube::tube;
 
     fn signed_volume(v: &[[f64; 3]], f: &[[i64; 3]]) -> f64 {
         f.iter()
