@@ -91,3 +91,123 @@ def test_a_clim_of_its_own_wins():
     assert s.object_info(values)["color_by"] == "values" and s.depth_range() is None
     with pytest.raises(gc.InputError, match="^label"):
         s.add_heightfield(ramp(-1000.0), values=np.ones((11, 51)), label=3)
+
+
+def colour_bars(fig) -> list:
+    """The colour bars of a figure from RenderResult.figure, left to right."""
+    return [ax._colorbar for ax in fig.axes if ax.get_label() == "colorbar"]
+
+
+def by_gid(fig, gid: str) -> list:
+    return [a for ax in fig.axes for a in ax.get_children() if a.get_gid() == gid]
+
+
+def picture_scene() -> gc.Scene:
+    """Two horizons by z (the shared range), one by its own clim, a porosity map, a flat fault and a
+    horizon far outside the view."""
+    s, a, b = two_horizons()
+    s.add_heightfield(ramp(-1000.0), origin=(0, 600), spacing=(20, 20), values=np.linspace(0.1, 0.3, 51)[None, :]
+                      * np.ones((11, 1)), cmap="seismic", label="porosity")
+    s.add_heightfield(ramp(-1000.0), origin=(0, 900), spacing=(20, 20), clim=(-1200.0, -900.0))
+    s.add_mesh([[0, 1200, -900], [1000, 1200, -900], [0, 1250, -1000]], [[0, 1, 2]], kind="fault", color=(1, 0, 1))
+    s.add_heightfield(ramp(-1000.0), origin=(50_000, 0), spacing=(20, 20), cmap="plasma")  # not in the view
+    return s
+
+
+def test_figure_has_one_colour_bar_per_colour_map_used_with_its_limits(renderer_small):
+    pytest.importorskip("matplotlib")
+    s = picture_scene()
+    cam = gc.Camera.look_at((500, 700, 3000), (500, 700, -1000), up=(0, 1, 0), projection="orthographic",
+                            ortho_height=1500.0)
+    res = renderer_small(W, H).render(s, cam, culling="none")
+    assert {c["object"] for c in res.colorings} == {0, 1, 2, 3}  # the fault is flat, the last one off-screen
+    fig = res.figure(title="Gullfaks")
+    bars = colour_bars(fig)
+    got = sorted((cb.ax.get_ylabel(), cb.cmap.name, tuple(round(x, 6) for x in cb.mappable.get_clim()))
+                 for cb in bars)
+    assert s.object_info(2)["clim"] == pytest.approx((0.1, 0.3))
+    assert got == sorted([("depth (m)", "viridis", (-1150.0, -1000.0)),  # the two horizons: one bar
+                          ("porosity", "seismic", (0.1, 0.3)),
+                          ("depth (m)", "viridis", (-1200.0, -900.0))])
+    # Each bar shows the colours the objects were drawn with: the core's 256 rows of the map.
+    import matplotlib
+
+    seismic = [cb for cb in bars if cb.ax.get_ylabel() == "porosity"][0]
+    np.testing.assert_allclose(seismic.cmap(np.linspace(0, 1, 256))[:, :3],
+                               matplotlib.colormaps["seismic"](np.linspace(0, 1, 256))[:, :3], atol=1e-6)
+    # Depth bars count depth = -z: the tick at z = -1100 reads 1100.
+    depth = [cb for cb in bars if cb.mappable.get_clim() == pytest.approx((-1150.0, -1000.0))][0]
+    assert depth.ax.yaxis.get_major_formatter()(-1100.0, 0) == "1100"
+    assert fig.axes[0].get_title() == "Gullfaks"
+    assert by_gid(fig, "image")[0].get_array().shape == (H, W, 3)
+    # Without colour bars, scale bar and arrow: the image alone.
+    bare = res.figure(colorbar=False, scale_bar=False, north_arrow=False)
+    assert colour_bars(bare) == [] and not by_gid(bare, "scale_bar") and not by_gid(bare, "north_arrow")
+
+
+def test_an_elevation_colour_bar_and_a_log_named_by_its_values(renderer_small):
+    pytest.importorskip("matplotlib")
+    s = gc.Scene()
+    s.add_heightfield(ramp(300.0), spacing=(20, 20))  # terrain: 300 .. 200 m above datum
+    path = np.array([[500, 250, 400], [500, 250, -500]], float)
+    s.add_well(path, radius=30, values=np.array([0.0, 1.0]), cmap="gray")  # no label: "values"
+    cam = gc.Camera.look_at((500, 250, 2000), (500, 250, 0), up=(0, 1, 0), projection="orthographic",
+                            ortho_height=1200.0)
+    res = renderer_small(W, H).render(s, cam, culling="none")
+    labels = sorted(cb.ax.get_ylabel() for cb in colour_bars(res.figure()))
+    assert labels == ["elevation (m)", "values"]
+
+
+def test_scale_bar_and_north_arrow_where_the_projection_allows(renderer_small):
+    pytest.importorskip("matplotlib")
+    s = picture_scene()
+    r = renderer_small(W, H)
+    top = gc.Camera.look_at((500, 700, 3000), (500, 700, -1000), up=(0, 1, 0), projection="orthographic",
+                            ortho_height=1500.0)
+    fig = r.render(s, top, culling="none").figure()
+    (bar,), (label,) = by_gid(fig, "scale_bar"), by_gid(fig, "scale_bar_label")
+    mpp = 1500.0 / H  # metres per pixel of the orthographic view
+    assert label.get_text() == "200 m"  # a fifth of the width is 0.2 * 96 * 23.4 m = 450 m: 200 m
+    assert bar.get_width() == pytest.approx(200.0 / mpp)
+    assert by_gid(fig, "north_arrow_label")[0].get_text() == "N"
+    assert north(fig) == pytest.approx((0.0, 1.0), abs=1e-9)  # north up
+
+    # Straight down with east up in the image (the map turned a quarter counter-clockwise): north
+    # points left, as the image shows: the northern objects (the fault at y = 1200) lie left of the
+    # southern ones (y = 0).
+    turned = gc.Camera.look_at((500, 700, 3000), (500, 700, -1000), up=(1, 0, 0), projection="orthographic",
+                               ortho_height=1500.0)
+    res = r.render(s, turned, culling="none")
+    assert north(res.figure()) == pytest.approx((-1.0, 0.0), abs=1e-9)
+    img = res.image.astype(int)
+    fault = (img[..., 0] > 100) & (img[..., 1] < 60) & (img[..., 2] > 100)  # the flat magenta fault
+    cols = np.nonzero(res.coverage)[1]
+    assert fault.any() and np.nonzero(fault)[1].max() < cols.max() - W // 4
+
+    # Perspective straight down on one flat level: the bar is true at that distance.
+    flat = gc.Scene()
+    flat.add_heightfield(np.full((11, 11), -1000.0), origin=(0, 0), spacing=(100, 100))
+    down = gc.Camera.look_at((500, 500, 0), (500, 500, -1000), up=(0, 1, 0), fov_y=40.0)
+    res = r.render(flat, down, culling="none")
+    (bar,) = by_gid(res.figure(), "scale_bar")
+    mpp = 2 * 1000.0 * np.tan(np.radians(20.0)) / H
+    length = float(by_gid(res.figure(), "scale_bar_label")[0].get_text().split()[0])
+    assert bar.get_width() == pytest.approx(length / mpp, rel=1e-3)
+    # An oblique perspective view has no one scale, nor one north direction.
+    oblique = gc.Camera.orbit((500, 700, -1000), azimuth=30, elevation=30, distance=3000)
+    fig = r.render(s, oblique, culling="none").figure()
+    assert not by_gid(fig, "scale_bar") and not by_gid(fig, "north_arrow")
+    assert len(colour_bars(fig)) >= 1
+    # An orthographic side view looking north: a scale bar (x is horizontal), north along the view axis.
+    side = gc.Camera.look_at((500, -3000, -1000), (500, 700, -1000), projection="orthographic", ortho_height=1500.0)
+    fig = r.render(s, side, culling="none").figure()
+    assert by_gid(fig, "scale_bar") and not by_gid(fig, "north_arrow")
+
+
+def north(fig) -> tuple[float, float]:
+    """The unit direction (x right, y up) of the figure's north arrow, tail to tip, in display space."""
+    (ann,) = by_gid(fig, "north_arrow")
+    tip = np.asarray(ann.xycoords.transform(ann.xy))
+    tail = np.asarray(ann.anncoords.transform(ann.xyann))
+    d = tip - tail
+    return tuple(d / np.linalg.norm(d))

@@ -257,7 +257,9 @@ class Renderer:
                            cv.number(max_pixel_error, "max_pixel_error"),
                            grid_lod if isinstance(grid_lod, str) else cv.fail_type(grid_lod, "grid_lod", "a string"),
                            cv.number(alpha, "alpha"), cv.number(lam, "lam"))
-        res: RenderResult[RenderStats] = RenderResult(d, culling)
+        res: RenderResult[RenderStats] = RenderResult(d, culling, camera)
+        # three_pass counts its prepass, an estimate: there the objects drawn are those in the frame.
+        res.colorings = scene.colorings(scene._frame_objects(res.tile_drawn, res.tile_pixels, culling != "three_pass"))
         if len(res.tile_pixels) and not res.tile_pixels.any():  # nothing drawn: say so if near clipped all
             t = scene.tile_table()
             shown = np.isin(t["object"], [i for i in scene.object_ids() if scene.object_info(i)["visible"]])
@@ -326,7 +328,7 @@ class Renderer:
             raise InputError(f"walk: {walk!r} is not a string")
         d = _geocull.render_isosurface(self._r, volume._v, w, camera._c, culling, od, cd, c,
                                        bool(cache), bool(return_map), walk)
-        res = IsoResult(d, culling)
+        res = IsoResult(d, culling, camera)
         lo, hi = volume.bounds  # one box: cheap enough to test every frame
         _warn_if_nearer_than_near(np.array([lo]), np.array([hi]), camera, res.near)
         return res

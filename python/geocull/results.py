@@ -6,17 +6,21 @@ and column 0 at its left; depths are distances along the camera's view axis in w
 (metres, exaggerated by the camera's ``z_scale``), +inf where nothing was drawn.
 """
 
+import math
 import struct
 import zlib
-from typing import TYPE_CHECKING, Generic, Literal, NotRequired, TypedDict, TypeVar, cast
+from typing import TYPE_CHECKING, Any, Generic, Literal, NotRequired, TypedDict, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
 
 if TYPE_CHECKING:
-    from ._geocull import IsoOutput, RenderOutput
+    from matplotlib.figure import Figure
 
-__all__ = ["RenderStats", "IsoStats", "GridLevel", "RenderResult", "IsoResult", "encode_png"]
+    from ._geocull import IsoOutput, RenderOutput
+    from .camera import Camera
+
+__all__ = ["RenderStats", "IsoStats", "GridLevel", "ObjectColoring", "RenderResult", "IsoResult", "encode_png"]
 
 
 class RenderStats(TypedDict):
@@ -93,6 +97,19 @@ class GridLevel(TypedDict):
     volume_change: float  # (volume - level 0's volume) / level 0's volume
 
 
+class ObjectColoring(TypedDict):
+    """One object's colouring by data (:meth:`geocull.Scene.colorings`, :attr:`RenderResult.colorings`)."""
+
+    object: int  # the object's id
+    name: str | None
+    kind: str  # "heightfield", "mesh", "well", "slice", ...
+    color_by: Literal["z", "values"]
+    cmap: str | None  # the colour map's name ("custom" for a table without one)
+    table: npt.NDArray[np.float64] | None  # (n, 3) RGB rows in [0, 1] as given (a table or a Colormap); else None
+    clim: tuple[float, float]  # the scalars at the colour map's ends (z in metres for "z")
+    label: str  # the colour bar's label: the attribute's name, "depth (m)" or "elevation (m)" for z
+
+
 class IsoStats(TypedDict):
     """``IsoResult.stats`` of an isosurface frame (:func:`geocull.iso.render_isosurface`). Every key is
     always present; depths count octree levels from the root (0); times are milliseconds."""
@@ -167,9 +184,19 @@ class RenderResult(Generic[StatsT]):
     exaggerated) projected to pixels at the tile's nearest point; else None.  tile_level,
     tile_error_px: for lod="screen_error", (n_tiles,) the level chosen for each tile (0 = fine;
     ``tile_table()["level_error"]``) and its error projected to pixels; else None.
+    camera: the :class:`geocull.Camera` rendered (None for results built by hand).  colorings: the
+    colourings by data of the objects in the frame (:class:`ObjectColoring`, as
+    :meth:`geocull.Scene.colorings` gave them when the frame was rendered: objects with pixels in
+    the image, or with a tile drawn where ``tile_pixels`` is an estimate (three_pass), and
+    translucent ones drawn); :meth:`figure` draws their colour bars.
     """
 
-    def __init__(self, d: "RenderOutput | IsoOutput", culling: str) -> None:
+    def __init__(
+        self, d: "RenderOutput | IsoOutput", culling: str, camera: "Camera | None" = None,
+        colorings: "list[ObjectColoring] | None" = None,
+    ) -> None:
+        self.camera = camera
+        self.colorings: list[ObjectColoring] = list(colorings or [])
         self.image: npt.NDArray[np.uint8] = d["image"]
         self.depth: npt.NDArray[np.float32] = d["depth"]
         self.tile_pixels: npt.NDArray[np.uint32] = d["tile_pixels"]
@@ -213,11 +240,169 @@ class RenderResult(Generic[StatsT]):
     def _repr_png_(self) -> bytes:
         return self.png()
 
+    def figure(
+        self, colorbar: bool = True, scale_bar: bool = True, north_arrow: bool = True, title: str | None = None,
+    ) -> "Figure":
+        """The image as a matplotlib ``Figure`` (matplotlib is imported here, not before; the figure
+        is made without pyplot, so it is not shown twice in a notebook: make it a cell's last
+        expression, or call ``fig.savefig(path)``).
+
+        colorbar: one colour bar per distinct (colour map, clim, label) among :attr:`colorings` (the
+        objects coloured by data in the frame), labelled with the attribute's name (``label=`` of
+        the ``add_*`` call, or the values' own name) or, for colour by z, "depth (m)" with ticks in
+        depth = -z (shallow at the top) where the range lies at or below z = 0, else "elevation
+        (m)". Objects in flat colours have none.
+        scale_bar: a bar of a round length (1, 2 or 5 x 10^k metres, about a fifth of the image's
+        width) along the image's x axis, where one length per pixel holds for horizontal distances
+        along it: an orthographic view whose image x axis is horizontal (any elevation; vertical
+        exaggeration does not touch horizontal lengths), or a perspective view looking straight
+        down (within 1 degree) at surfaces whose distances lie within 5 % of their median (the bar
+        is true at that distance). Left out for other views (an oblique perspective view has no one
+        scale), and for results without a :attr:`camera`.
+        north_arrow: an arrow towards +y of the world (grid north of a projected CRS) where the
+        projection draws north as one direction across the image: orthographic views, and
+        perspective views whose axis is perpendicular to north (straight down, or horizontal
+        towards east or west), unless north points nearly along the view axis (its image is then
+        shorter than a quarter of its length). Left out otherwise.
+        title: the axes' title (default none).
+
+        The artists are tagged for scripts and tests (``Artist.get_gid()``): "image", "scale_bar"
+        (its ``Rectangle``, in image pixels) and "scale_bar_label", "north_arrow" and
+        "north_arrow_label"; each colour bar's axes is labelled "colorbar" (``Axes.get_label()``).
+        """
+        from matplotlib import colormaps, patheffects
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.colors import ListedColormap, Normalize
+        from matplotlib.figure import Figure
+        from matplotlib.patches import Rectangle
+        from matplotlib.ticker import FuncFormatter
+        from matplotlib.transforms import offset_copy
+
+        h, w = self.image.shape[:2]
+        bars = _colour_bars(self.colorings) if colorbar else []
+        img_h = max(h / 100.0, 3.0)
+        img_w = img_h * w / h
+        fig = Figure(figsize=(img_w + 1.3 * len(bars) + 0.3, img_h + (0.5 if title else 0.2)), dpi=100,
+                     layout="constrained")
+        ax = fig.add_subplot()
+        ax.imshow(self.image[..., :3], interpolation="nearest", gid="image")
+        ax.set_axis_off()
+        if title:
+            ax.set_title(title)
+        for bar in bars:
+            table = bar["table"]
+            if table is not None:
+                cmap: Any = ListedColormap(np.asarray(table, np.float64), name=bar["cmap"] or "custom")
+            elif bar["cmap"] is not None and bar["cmap"] in colormaps:
+                cmap = colormaps[bar["cmap"]]
+            else:  # a name only the core knows: no table to draw it with
+                continue
+            lo, hi = bar["clim"]
+            cb = fig.colorbar(ScalarMappable(Normalize(lo, hi), cmap), ax=ax, fraction=0.06, pad=0.02, aspect=25)
+            cb.ax.set_label("colorbar")
+            cb.set_label(bar["label"])
+            if bar["color_by"] == "z" and bar["label"] == "depth (m)":
+                cb.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{-v:g}"))
+        halo = [patheffects.withStroke(linewidth=3, foreground="white")]  # readable on any background
+        cam = self.camera
+        if cam is not None and scale_bar:
+            mpp = _metres_per_pixel(cam, self.depth)
+            if mpp is not None:
+                length = _round_length(0.2 * w * mpp)
+                px = length / mpp
+                x0, y0 = 0.05 * w, 0.93 * h
+                bar_h = max(2.0, 0.012 * h)
+                ax.add_patch(Rectangle((x0, y0 - bar_h), px, bar_h, facecolor="black", edgecolor="white",
+                                       linewidth=0.8, gid="scale_bar"))
+                text = f"{length:g} m" if length < 1000 else f"{length / 1000:g} km"
+                ax.annotate(text, (x0 + px / 2, y0 - bar_h), xytext=(0, 3), textcoords="offset points", ha="center",
+                            va="bottom", fontsize=9, gid="scale_bar_label", path_effects=halo)
+        if cam is not None and north_arrow:
+            d = _north_on_image(cam)
+            if d is not None:
+                dx, dy = d
+                base = (0.92, 0.84)
+                half = 16.0  # points
+                tip = offset_copy(ax.transAxes, fig=fig, x=dx * half, y=dy * half, units="points")
+                tail = offset_copy(ax.transAxes, fig=fig, x=-dx * half, y=-dy * half, units="points")
+                ax.annotate("", xy=base, xycoords=tip, xytext=base, textcoords=tail, gid="north_arrow",
+                            arrowprops=dict(arrowstyle="-|>", color="black", lw=1.8, mutation_scale=14,
+                                            shrinkA=0, shrinkB=0, path_effects=halo))
+                lab = offset_copy(ax.transAxes, fig=fig, x=dx * (half + 9), y=dy * (half + 9), units="points")
+                ax.text(*base, "N", transform=lab, ha="center", va="center", fontsize=10, fontweight="bold",
+                        gid="north_arrow_label", path_effects=halo)
+        return fig
+
     def __repr__(self) -> str:
         s = self.stats
         return (f"<geocull.RenderResult {self.image.shape[1]}x{self.image.shape[0]} culling={self.culling} "
                 f"triangles_drawn={s['triangles_drawn']} tiles_drawn={s['tiles_drawn']}/{s['tiles_total']} "
                 f"total_ms={s['total_ms']:.1f}>")
+
+
+def _colour_bars(colorings: "list[ObjectColoring]") -> list[ObjectColoring]:
+    """One entry per distinct (colour by, colour map, table, clim, label), in the order first seen."""
+    seen: dict[tuple[Any, ...], ObjectColoring] = {}
+    for c in colorings:
+        table = c["table"]
+        key = (c["color_by"], c["cmap"], None if table is None else np.asarray(table).tobytes(),
+               tuple(float(x) for x in c["clim"]), c["label"])
+        seen.setdefault(key, c)
+    return list(seen.values())
+
+
+def _round_length(target: float) -> float:
+    """The largest of 1, 2, 5 x 10^k not above ``target`` (> 0)."""
+    k = math.floor(math.log10(target))
+    for m in (5.0, 2.0, 1.0):
+        if m * 10.0**k <= target:
+            return m * 10.0**k
+    return 10.0**k
+
+
+def _view_axes(cam: "Camera") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(right, up, forward) unit vectors of the camera in render space (z exaggerated)."""
+    v = cam.view_matrix()
+    return v[0, :3], v[1, :3], -v[2, :3]
+
+
+def _metres_per_pixel(cam: "Camera", depth: np.ndarray) -> float | None:
+    """Metres of horizontal distance per pixel along the image's x axis where one such scale holds
+    (see :meth:`RenderResult.figure`), else None."""
+    h = depth.shape[0]
+    right, _up, fwd = _view_axes(cam)
+    zs = np.array([1.0, 1.0, cam.z_scale])
+    tan = math.tan(math.radians(cam.fov_y) / 2)
+    if cam.projection == "orthographic":
+        if abs(right[2]) > 1e-6:  # the image's x axis is not horizontal: no one horizontal scale
+            return None
+        height = cam.ortho_height
+        if height is None:  # what fov_y sees at the target
+            height = 2.0 * float(np.linalg.norm((np.asarray(cam.target) - np.asarray(cam.eye)) * zs)) * tan
+        return height / h
+    if fwd[2] > -math.cos(math.radians(1.0)):  # a perspective view that does not look straight down
+        return None
+    d = depth[np.isfinite(depth)]
+    if d.size == 0:
+        return None
+    med = float(np.median(d))
+    if not med > 0 or float(np.abs(d - med).max()) > 0.05 * med:
+        return None
+    return 2.0 * med * tan / h
+
+
+def _north_on_image(cam: "Camera") -> tuple[float, float] | None:
+    """The image direction (x right, y up; unit length) of world +y where the projection draws it
+    as one direction (see :meth:`RenderResult.figure`), else None."""
+    right, up, fwd = _view_axes(cam)
+    north = np.array([0.0, 1.0, 0.0])
+    if cam.projection != "orthographic" and abs(float(fwd @ north)) > 0.01:
+        return None
+    d = np.array([float(right @ north), float(up @ north)])
+    n = float(np.linalg.norm(d))
+    if n < 0.25:
+        return None
+    return (float(d[0] / n), float(d[1] / n))
 
 
 class IsoResult(RenderResult[IsoStats]):
@@ -232,7 +417,7 @@ class IsoResult(RenderResult[IsoStats]):
     units), +inf where nothing is proven, when ``return_map=True``; else None.  horizon: always None.
     """
 
-    def __init__(self, d: "IsoOutput", culling: str) -> None:
-        super().__init__(d, culling)
+    def __init__(self, d: "IsoOutput", culling: str, camera: "Camera | None" = None) -> None:
+        super().__init__(d, culling, camera)
         self.nodes: npt.NDArray[np.uint32] = d["nodes"]
         self.occlusion_map: npt.NDArray[np.float32] | None = d.get("occlusion_map")

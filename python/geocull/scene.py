@@ -18,7 +18,7 @@ from . import _geocull, _progress
 from ._convert import MeshLike
 from ._errors import GeocullWarning, InputError
 from ._progress import ProgressLike
-from .results import GridLevel
+from .results import GridLevel, ObjectColoring
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
@@ -778,6 +778,54 @@ class Scene:
         if not self._zshared:
             return None
         return (min(v.own[0] for v in self._zshared.values()), max(v.own[1] for v in self._zshared.values()))
+
+    def colorings(self, ids: list[int] | None = None) -> list[ObjectColoring]:
+        """The colourings by data of objects ``ids`` (default every object, in the order added;
+        objects in one flat colour are left out): :class:`geocull.results.ObjectColoring` dicts with
+        the object's id, name, kind, color_by, colour map (its name, and its table where it was given
+        as a table or a matplotlib ``Colormap``), the ``clim`` it is drawn with, and its colour bar
+        label: the ``label`` given (or the values' own name), else "values"; colour by z is labelled
+        "depth (m)" (its bar counts depth = -z) where the range lies at or below z = 0, else
+        "elevation (m)". :meth:`geocull.RenderResult.figure` draws one colour bar per distinct
+        (colour map, clim, label) of the objects in the frame."""
+        out: list[ObjectColoring] = []
+        for i in self.object_ids() if ids is None else ids:
+            info = self._s.object_info(cv.integer(i, "ids"))
+            if info["color_by"] is None or info["clim"] is None:
+                continue
+            lo, hi = (float(x) for x in info["clim"])
+            if info["color_by"] == "z":
+                label = self._labels.get(info["id"]) or ("depth (m)" if hi <= 0 else "elevation (m)")
+            else:
+                label = self._labels.get(info["id"]) or "values"
+            out.append(ObjectColoring(object=info["id"], name=info["name"], kind=info["kind"],
+                                      color_by=info["color_by"], cmap=info["cmap"], table=self._tables.get(info["id"]),
+                                      clim=(lo, hi), label=label))
+        return out
+
+    def _frame_objects(self, tile_drawn: np.ndarray, tile_pixels: np.ndarray, exact_counts: bool) -> list[int]:
+        """Ids of the objects a frame shows: those with a tile holding pixels of the image (where
+        ``tile_pixels`` counts the final image, ``exact_counts``; else those with a tile drawn), and
+        translucent ones (lenses, slices with opacity < 1, which leave no pixel count) with a tile
+        drawn."""
+        key = (self._s.n_tiles, tuple(self._s.object_ids()))
+        cached = getattr(self, "_tile_objects", None)  # each tile's object, kept while the tiles are the same
+        if cached is None or cached[0] != key:
+            cached = (key, np.asarray(self._s.tile_table()["object"]))
+            self._tile_objects = cached
+        t = cached[1]
+        if len(t) != len(tile_drawn):  # the scene changed since the frame
+            return []
+        shown = (tile_pixels > 0) if exact_counts else tile_drawn
+        ids = set(np.unique(t[shown]).tolist())
+        for i in np.unique(t[tile_drawn]).tolist():
+            if i in ids:
+                continue
+            kind = self._s.object_info(i)["kind"]
+            sl = self._slices.get(i)
+            if kind == "lens" or (kind == "slice" and (sl is None or sl[4] < 1.0)):
+                ids.add(i)
+        return [i for i in self.object_ids() if i in ids]
 
     def _label(self, id: int) -> str:
         info = self._s.object_info(id)
