@@ -54,13 +54,15 @@ def _values(values: Any) -> np.ndarray:
     if mask is not None:  # masked samples are no data (NaN): a float copy with them set
         a = np.array(a, dtype=a.dtype if a.dtype.kind == "f" and a.dtype.itemsize >= 4 else np.float64)
         a[mask] = np.nan
-    if a.dtype == np.float32 or a.dtype == np.float64:
+    # By kind and size, not by dtype identity: a big-endian '>f8' is not `== np.float64` but must
+    # keep float64's precision (its residuals) as a native one does.
+    if a.dtype.kind == "f" and a.dtype.itemsize in (4, 8):
         if not a.dtype.isnative:
             a = a.astype(a.dtype.newbyteorder("="))
         return a
-    # float16 fits float32 exactly; integers go through float64, whose residuals keep them
-    # (int32 / int64 samples of 1e8 and 1e8 + 1 differ in float64 but not in float32).
-    return a.astype(np.float32 if a.dtype.kind == "f" else np.float64)
+    # float16 fits float32 exactly; long double and integers go through float64, whose residuals
+    # keep them (int32 / int64 samples of 1e8 and 1e8 + 1 differ in float64 but not in float32).
+    return a.astype(np.float32 if a.dtype.kind == "f" and a.dtype.itemsize < 4 else np.float64)
 
 
 def _is_dataarray(x: Any) -> bool:
@@ -159,7 +161,8 @@ class Volume:
     (:meth:`geocull.Renderer.render_isosurface`, :func:`geocull.extract_isosurface`). NaN samples, and
     the masked samples of a ``numpy.ma.MaskedArray``, are "no data" (no surface in cells touching them).
 
-    values: a 3-D array, float32 or float64 (other real dtypes are converted); numpy arrays, memory
+    values: a 3-D array, float32 or float64 in either byte order (other real dtypes are converted: float16
+        to float32, long double and integers to float64, by value); numpy arrays, memory
         maps and numpy-backed xarray DataArrays are read in place (transposes and flips too) and
         copied exactly once, into the core's float32 buffer. float64 (and integer) values are stored
         as float32 *residuals* about :attr:`offset`, the midrange of the finite samples, so values
