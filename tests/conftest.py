@@ -7,7 +7,14 @@ tests, which is safe: a renderer re-uploads whenever it is handed another scene)
 
 from __future__ import annotations
 
+import os
+
 import pytest
+
+# The tests check the core's own images, drawn over black: the renderers' default background (a
+# light grey gradient, put in by Python where nothing was drawn) is black for the whole run, also in
+# the processes tests start. tests/test_pictures.py tests the backgrounds themselves.
+os.environ.setdefault("GEOCULL_BACKGROUND", "black")
 
 
 @pytest.fixture(scope="session")

@@ -211,3 +211,71 @@ def north(fig) -> tuple[float, float]:
     tail = np.asarray(ann.anncoords.transform(ann.xyann))
     d = tip - tail
     return tuple(d / np.linalg.norm(d))
+
+
+def test_background_default_gradient_named_and_any_rgb(monkeypatch):
+    monkeypatch.delenv("GEOCULL_BACKGROUND", raising=False)  # conftest makes the suite's default black
+    s, _a, _b = two_horizons()
+    black = gc.Renderer(W, H, background="black").render(s, top_down(), culling="none")
+    cov = black.coverage
+    assert cov.any() and (~cov).any() and (black.image[~cov] == (0, 0, 0, 255)).all()  # the core's own image
+
+    def check(r, top, bottom):
+        res = r.render(s, top_down(), culling="none")
+        np.testing.assert_array_equal(res.depth, black.depth)
+        np.testing.assert_array_equal(res.image[cov], black.image[cov])  # surfaces untouched
+        assert (res.image[..., 3] == 255).all()
+        t = np.linspace(0, 1, H)[:, None]
+        want = np.round(255 * ((1 - t) * np.asarray(top) + t * np.asarray(bottom))).astype(np.uint8)
+        rows, cols = np.nonzero(~cov)
+        np.testing.assert_array_equal(res.image[rows, cols, :3], want[rows])
+        return res
+
+    default = gc.Renderer(W, H)
+    assert default.background == gc.renderer.BACKGROUNDS["gradient"]
+    res = check(default, *gc.renderer.BACKGROUNDS["gradient"])
+    top, bottom = res.image[0, 0, :3].astype(int), res.image[-1, 0, :3].astype(int)
+    assert (top > bottom).all() and top.min() >= 220 and bottom.min() >= 170  # light grey, lighter on top
+    assert np.ptp(top) <= 3 and np.ptp(bottom) <= 3  # neutral
+    check(gc.Renderer(W, H, background="white"), (1, 1, 1), (1, 1, 1))
+    r = gc.Renderer(W, H, background=(0.2, 0.4, 0.6))
+    check(r, (0.2, 0.4, 0.6), (0.2, 0.4, 0.6))
+    r.background = ((1, 0, 0), (0, 0, 1))  # settable, a (top, bottom) pair
+    check(r, (1, 0, 0), (0, 0, 1))
+    r.background = "black"
+    np.testing.assert_array_equal(r.render(s, top_down(), culling="none").image, black.image)
+    monkeypatch.setenv("GEOCULL_BACKGROUND", "0.5,0.5,0.5")  # for a whole program or test run
+    check(gc.Renderer(W, H), (0.5, 0.5, 0.5), (0.5, 0.5, 0.5))
+    check(gc.Renderer(W, H, background="white"), (1, 1, 1), (1, 1, 1))  # the argument wins
+
+
+def test_background_errors_name_the_argument(monkeypatch):
+    for bad, msg in (("pink", "^background: 'pink'"), ((1.5, 0, 0), "^background: colours must lie in"),
+                     ((0.1, 0.2), r"^background: shape \(2,\)"), (object(), "^background:")):
+        with pytest.raises(gc.InputError, match=msg):
+            gc.Renderer(8, 8, background=bad)
+    r = gc.Renderer(8, 8, background="white")
+    with pytest.raises(gc.InputError, match="^background"):
+        r.background = (0, 0, 2)
+    assert r.background == ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0))
+    monkeypatch.setenv("GEOCULL_BACKGROUND", "purple")
+    with pytest.raises(gc.InputError, match="^GEOCULL_BACKGROUND: 'purple'"):
+        gc.Renderer(8, 8)
+
+
+def test_background_under_isosurfaces_and_what_translucent_slices_keep(renderer_small):
+    x, y, z = np.meshgrid(np.arange(20.0), np.arange(20.0), np.arange(20.0), indexing="ij")
+    vol = gc.Volume(np.sqrt((x - 10) ** 2 + (y - 10) ** 2 + (z - 10) ** 2), order="xyz")
+    cam = gc.Camera.look_at((10, -40, 10), (10, 10, 10))
+    iso = gc.Renderer(W, H, background="white").render_isosurface(vol, 6.0, cam)
+    assert iso.coverage.any() and (iso.image[~iso.coverage] == 255).all()
+    # A translucent slice over nothing was blended with the core's black: it keeps that (documented).
+    s = gc.Scene()
+    s.add_slice(vol, "crossline", 10, cmap=[[0.2, 0.6, 1.0], [0.2, 0.6, 1.0]], opacity=0.5)
+    side = gc.Camera.look_at((10, -60, 10), (10, 10, 10), projection="orthographic", ortho_height=40)
+    white = gc.Renderer(W, H, background="white").render(s, side, culling="none")
+    black = gc.Renderer(W, H, background="black").render(s, side, culling="none")
+    lens = black.image[..., :3].any(axis=-1)
+    assert lens.any() and not white.coverage.any()
+    np.testing.assert_array_equal(white.image[lens], black.image[lens])
+    assert (white.image[~lens] == 255).all()

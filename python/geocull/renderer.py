@@ -3,8 +3,9 @@
 
 from __future__ import annotations
 
+import os
 import warnings
-from typing import Literal, get_args
+from typing import Literal, TypeAlias, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -18,7 +19,7 @@ from .scene import Scene
 from .volume import Volume
 
 __all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "IsoCullingMode", "IsoWalk", "LodMode",
-           "GridLodMode"]
+           "GridLodMode", "Background", "BACKGROUNDS"]
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
@@ -42,6 +43,66 @@ IsoWalk = Literal["auto", "gpu", "cpu"]
 LodMode = Literal["full", "screen_error"]
 #: Level choices of reservoir grids' blocks (:meth:`Renderer.render`'s ``grid_lod``).
 GridLodMode = Literal["full", "distance", "screen_error"]
+
+
+RGB: TypeAlias = tuple[float, float, float]
+
+#: The named backgrounds of :class:`Renderer` (``background=``): (top, bottom) RGB in [0, 1], blended
+#: row by row. "gradient" (the default) is a neutral light grey, lighter at the top.
+BACKGROUNDS: dict[str, tuple[RGB, RGB]] = {
+    "gradient": ((0.94, 0.94, 0.95), (0.72, 0.72, 0.73)),
+    "white": ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0)),
+    "black": ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+}
+
+#: What ``Renderer(background=...)`` takes: a name of :data:`BACKGROUNDS`, one (r, g, b) colour, or
+#: a (top, bottom) pair of them for a vertical gradient; RGB in [0, 1].
+Background: TypeAlias = Literal["gradient", "white", "black"] | RGB | tuple[RGB, RGB]
+
+
+def _background(value: object) -> tuple[RGB, RGB]:
+    """(top, bottom) RGB of a ``background`` argument; None: ``$GEOCULL_BACKGROUND`` (a name or
+    "r,g,b"), else "gradient". InputError naming the argument (or the variable)."""
+    arg = "background"
+    if value is None:
+        env = os.environ.get("GEOCULL_BACKGROUND", "").strip()
+        if not env:
+            return BACKGROUNDS["gradient"]
+        arg = "GEOCULL_BACKGROUND"
+        value = env if env in BACKGROUNDS or "," not in env else env.split(",")
+        if isinstance(value, list):
+            try:
+                value = [float(x) for x in value]
+            except ValueError:
+                raise InputError(f"{arg}: {env!r} is not a name ({', '.join(BACKGROUNDS)}) or r,g,b") from None
+    if isinstance(value, str):
+        if value not in BACKGROUNDS:
+            raise InputError(f"{arg}: {value!r} is not one of {', '.join(BACKGROUNDS)} or an (r, g, b) colour")
+        return BACKGROUNDS[value]
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"{arg}: {value!r} is not a name, an (r, g, b) colour or a (top, bottom) pair") from None
+    if a.shape == (3,):
+        a = np.stack([a, a])
+    if a.shape != (2, 3):
+        raise InputError(f"{arg}: shape {a.shape} is not (3,) (r, g, b) or (2, 3) (top, bottom)")
+    if not (np.isfinite(a).all() and (a >= 0).all() and (a <= 1).all()):
+        raise InputError(f"{arg}: colours must lie in [0, 1], got {a.tolist()}")
+    return ((float(a[0, 0]), float(a[0, 1]), float(a[0, 2])), (float(a[1, 0]), float(a[1, 1]), float(a[1, 2])))
+
+
+def _compose(image: np.ndarray, depth: np.ndarray, rows: np.ndarray | None) -> None:
+    """Put the background (``rows``: (H, 3) uint8, one colour per image row; None: black, as the
+    core clears) into ``image`` where nothing was drawn: depth +inf and the core's black clear
+    colour, which a translucent lens or slice over nothing has blended into (those keep it)."""
+    if rows is None:
+        return
+    empty = np.isposinf(depth)
+    empty &= ~image[..., :3].any(axis=-1)
+    if empty.any():
+        r, _ = np.nonzero(empty)
+        image[empty, :3] = rows[r]
 
 
 def _warn_if_nearer_than_near(lo: np.ndarray, hi: np.ndarray, camera: Camera, near: float) -> None:
@@ -92,16 +153,51 @@ class Renderer:
     "spawn" or "forkserver" method (scenes, cameras and volumes pickle); a process forked after
     its parent opened a renderer can build scenes but gets a DeviceError for a renderer (the
     driver's threads do not survive fork()). ``pass_triangles``: see :attr:`pass_triangles`
-    (driver memory against frame time on CPU drivers; default unbounded)."""
+    (driver memory against frame time on CPU drivers; default unbounded). ``background``: see
+    :attr:`background` (default a light grey gradient)."""
 
     def __init__(
-        self, width: int = 1280, height: int = 1024, backend: str = "auto", pass_triangles: int | None = None
+        self, width: int = 1280, height: int = 1024, backend: str = "auto", pass_triangles: int | None = None,
+        background: Background | None = None,
     ) -> None:
         if not isinstance(backend, str):
             raise InputError(f"backend: {backend!r} is not a string")
+        self._bg = _background(background)  # checked before a device opens
+        self._bg_rows: np.ndarray | None = None
         self._r = _geocull.Renderer(cv.integer(width, "width"), cv.integer(height, "height"), backend)
+        self._set_rows()
         if pass_triangles is not None:
             self.pass_triangles = pass_triangles
+
+    @property
+    def background(self) -> tuple[RGB, RGB]:
+        """The background of the images, (top, bottom) RGB in [0, 1], blended linearly from the
+        first image row to the last. Set it (also ``Renderer(background=...)``) to a name of
+        :data:`BACKGROUNDS` ("gradient": neutral light grey, lighter at the top, the default;
+        "white"; "black", the core's own), to one (r, g, b) colour, or to a (top, bottom) pair; None
+        is the default, which the environment variable ``GEOCULL_BACKGROUND`` (a name or "r,g,b")
+        can change for a whole program or test run. InputError naming ``background`` otherwise.
+
+        The core draws over black; the background is put into the image, in Python after the
+        frame (``stats["total_ms"]`` does not count it, a fraction of a millisecond at 640 x 480),
+        at the pixels where nothing was drawn: ``depth`` is +inf (:attr:`RenderResult.coverage` is
+        False) and the pixel is still black. Translucent lenses and slices drawn over nothing were
+        blended with that black, and keep it (an image-wide coverage alpha from the core would
+        let them blend with the background). Alpha stays 255 everywhere."""
+        return self._bg
+
+    @background.setter
+    def background(self, value: Background | None) -> None:
+        self._bg = _background(value)
+        self._set_rows()
+
+    def _set_rows(self) -> None:
+        top, bottom = (np.asarray(c) for c in self._bg)
+        if not (top.any() or bottom.any()):
+            self._bg_rows = None  # black: the core's clear colour already
+            return
+        t = np.linspace(0.0, 1.0, self.height)[:, None]
+        self._bg_rows = np.round(255.0 * ((1.0 - t) * top + t * bottom)).astype(np.uint8)
 
     @property
     def width(self) -> int:
@@ -258,6 +354,7 @@ class Renderer:
                            grid_lod if isinstance(grid_lod, str) else cv.fail_type(grid_lod, "grid_lod", "a string"),
                            cv.number(alpha, "alpha"), cv.number(lam, "lam"))
         res: RenderResult[RenderStats] = RenderResult(d, culling, camera)
+        _compose(res.image, res.depth, self._bg_rows)
         # three_pass counts its prepass, an estimate: there the objects drawn are those in the frame.
         res.colorings = scene.colorings(scene._frame_objects(res.tile_drawn, res.tile_pixels, culling != "three_pass"))
         if len(res.tile_pixels) and not res.tile_pixels.any():  # nothing drawn: say so if near clipped all
@@ -329,6 +426,7 @@ class Renderer:
         d = _geocull.render_isosurface(self._r, volume._v, w, camera._c, culling, od, cd, c,
                                        bool(cache), bool(return_map), walk)
         res = IsoResult(d, culling, camera)
+        _compose(res.image, res.depth, self._bg_rows)
         lo, hi = volume.bounds  # one box: cheap enough to test every frame
         _warn_if_nearer_than_near(np.array([lo]), np.array([hi]), camera, res.near)
         return res

@@ -3,7 +3,9 @@
 
 Image conventions shared by every frame: arrays are (H, W, ...) with row 0 at the top of the image
 and column 0 at its left; depths are distances along the camera's view axis in world units
-(metres, exaggerated by the camera's ``z_scale``), +inf where nothing was drawn.
+(metres, exaggerated by the camera's ``z_scale``), +inf where nothing was drawn; images are RGBA
+with alpha 255, the renderer's background (:attr:`geocull.Renderer.background`) where nothing was
+drawn.
 """
 
 import math
@@ -168,8 +170,10 @@ StatsT = TypeVar("StatsT", RenderStats, IsoStats)
 class RenderResult(Generic[StatsT]):
     """One rendered frame (:meth:`geocull.Renderer.render` returns ``RenderResult[RenderStats]``).
 
-    image: (H, W, 4) uint8 RGBA, row 0 at the top.  depth: (H, W) float32 distance along the view
-    axis in (exaggerated) world units, +inf where empty.  tile_pixels: (n_tiles,) uint32 visible
+    image: (H, W, 4) uint8 RGBA, row 0 at the top, alpha 255; where nothing was drawn (depth +inf)
+    the renderer's :attr:`~geocull.Renderer.background` (black with ``background="black"``, the
+    core's own image).  depth: (H, W) float32 distance along the view axis in (exaggerated) world
+    units, +inf where empty.  tile_pixels: (n_tiles,) uint32 visible
     pixels per tile, in :meth:`geocull.Scene.tile_table` order (three_pass: the pass-2 counts of
     its prepass, scaled to full-image pixels: of the built coarse proxies with conservative=False,
     of each tile's cheapest proxy with conservative=True, so an estimate there; none/oracle/temporal:
