@@ -84,3 +84,39 @@ def test_every_array_input_reads_non_native_byte_order_by_value():
     cams = [gc.Camera.look_at(conv([10, 10, 10], "f8"), conv([0, 0, 1e4], "f8")) for conv in
             (lambda a, dt: np.asarray(a).astype(dt), be)]
     assert cams[0].eye == cams[1].eye and cams[0].target == cams[1].target
+
+
+# ------------------------------------------------------------------ volume coordinates (item 5)
+
+
+@pytest.mark.parametrize(("kw", "arg", "words"), [
+    (dict(origin=(1e300, 0.0, 0.0)), "origin", "component 0 is 1e+300"),
+    (dict(origin=(0.0, -2e12, 0.0)), "origin", "component 1 is -2e+12"),
+    (dict(origin=(0.0, 0.0, 1e13), z_positive="down"), "origin", "component 2"),
+    (dict(spacing=(1e11, 1.0, 1.0)), "spacing", "component 0: the grid reaches 9e+11"),  # fits: no error
+    (dict(spacing=(2e11, 1.0, 1.0)), "spacing", "component 0: the grid reaches 1.8e+12"),
+    (dict(origin=(9e11, 0.0, 0.0), spacing=(1.0, 1e11, 1.0), rotation=-90.0), "spacing", "component 0"),
+    (dict(origin=(0.0, 0.0, 5e11), spacing=(1.0, 1.0, 1e11), z_positive="down"), "spacing", "component 2"),
+])
+def test_volume_coordinates_are_within_the_limit_of_every_object(kw, arg, words):
+    v = np.zeros((10, 10, 10))
+    if kw.get("spacing") == (1e11, 1.0, 1.0):
+        assert gc.Volume(v, **kw).bounds[1][0] == 9e11  # at the limit's side: accepted
+        return
+    with pytest.raises(gc.InputError, match=f"^{arg}: ") as e:
+        gc.Volume(v, **kw)
+    assert words in str(e.value) and "1e+12" in str(e.value)
+
+
+def test_volume_bytes_beyond_the_coordinate_limit_name_data():
+    b = bytearray(gc.Volume(np.zeros((3, 3, 3)), origin=(10.0, 0.0, 0.0)).to_bytes())
+    at = b.index(np.float64(10.0).tobytes())
+    b[at:at + 8] = np.float64(1e300).tobytes()
+    with pytest.raises(gc.InputError, match="^data: origin component 0 is 1e\\+300"):
+        gc.Volume.from_bytes(bytes(b))
+
+
+def test_a_volume_far_away_fails_at_once_not_in_later_calls():
+    # It used to be accepted, and a later slice or camera named `vertices` or `eye`.
+    with pytest.raises(gc.InputError, match="^origin: "):
+        gc.Volume(np.random.default_rng(0).random((4, 4, 4)), origin=(1e300, 0, 0))

@@ -18,6 +18,7 @@ import numpy as np
 from ._errors import GeocullWarning, InputError
 
 __all__ = [
+    "MAX_COORD",
     "FLOAT_KINDS",
     "INT_KINDS",
     "checked_array",
@@ -44,6 +45,10 @@ __all__ = [
     "MeshArrays",
     "mesh_arrays",
 ]
+
+#: Largest coordinate magnitude (metres) accepted anywhere: the core's ``camera::MAX_COORD``
+#: (src/camera.rs), which every object and the camera check in Rust; volumes are checked here.
+MAX_COORD = 1e12
 
 FLOAT_KINDS = "fiu"  # numpy dtype kinds accepted as real numbers: float, signed int, unsigned int
 INT_KINDS = "iu"  # numpy dtype kinds accepted as integers: signed int, unsigned int

@@ -156,6 +156,36 @@ def _numbers(x: Any, arg: str, n: int) -> np.ndarray | None:
     return a
 
 
+def _check_extent(
+    origin: tuple[float, float, float], spacing: tuple[float, float, float], n: tuple[int, int, int],
+    rotation: float, yflip: bool, down: bool, arg: str | None = None,
+) -> None:
+    """InputError when a volume's origin or its grid's far corners (``n`` samples along x, y, z, as
+    given) lie beyond :data:`geocull._convert.MAX_COORD`, the limit of every object's coordinates:
+    naming ``origin`` (a component) or ``spacing`` (the grid reaches beyond it), or ``arg``
+    (``data`` for bytes) with the same words. Non-finite values are left to the core's checks."""
+    lim = cv.MAX_COORD
+    for i, o in enumerate(origin):
+        if math.isfinite(o) and abs(o) > lim:
+            raise InputError(f"{arg or 'origin'}: {'origin ' if arg else ''}component {i} is {o:g}; "
+                             f"coordinates must be within +-{lim:g}")
+    if not all(math.isfinite(v) for v in (*origin, *spacing, rotation)):
+        return
+    t = math.radians(rotation)
+    c, s = math.cos(t), math.sin(t)
+    sy = -1.0 if yflip else 1.0
+    ex, ey, ez = ((k - 1) * d for k, d in zip(n, spacing, strict=True))
+    for corner, (u, v) in enumerate(((0.0, 0.0), (ex, 0.0), (0.0, sy * ey), (ex, sy * ey))):
+        for ax, w in ((0, origin[0] + c * u - s * v), (1, origin[1] + s * u + c * v)):
+            if abs(w) > lim:
+                raise InputError(f"{arg or 'spacing'}: {'spacing ' if arg else ''}component {ax}: the grid reaches "
+                                 f"{w:g} at corner {corner}; coordinates must be within +-{lim:g}")
+    z = origin[2] + ez
+    if abs(z) > lim:
+        raise InputError(f"{arg or 'spacing'}: {'spacing ' if arg else ''}component 2: the grid reaches "
+                         f"{-z if down else z:g} at its last sample; coordinates must be within +-{lim:g}")
+
+
 class Volume:
     """A scalar field on a regular grid (a seismic cube, a property model), rendered as isosurfaces
     (:meth:`geocull.Renderer.render_isosurface`, :func:`geocull.extract_isosurface`). NaN samples, and
@@ -173,7 +203,8 @@ class Volume:
         (inline, crossline, sample) cubes (``segyio.tools.cube``) and xtgeo's ``Cube.values``
         (ncol, nrow, nlay) go in as they are with order="xyz": inline -> x, crossline -> y,
         sample -> z (for a rotated survey, x and y are the grid's own axes; see ``rotation``).
-    origin: (x0, y0, z0) position of ``values``' first sample (index [0, 0, 0]), metres.
+    origin: (x0, y0, z0) position of ``values``' first sample (index [0, 0, 0]), metres; the origin
+        and the grid's far corners lie within +-1e12 (``MAX_COORD``), as every object's coordinates.
         spacing: (dx, dy, dz) > 0 sample spacing. Sample (i, j, k) lies at
         ``(x0, y0) + R(rotation) @ (i*dx, j*dy)`` horizontally and at z0 + k*dz
         (z_positive="up") or at **z = -(z0 + k*dz)** (z_positive="down") vertically.
@@ -261,6 +292,7 @@ class Volume:
             n = (a.shape[2], a.shape[1], a.shape[0])
         else:
             n = (a.shape[0], a.shape[1], a.shape[2])
+        _check_extent(o3 or (0.0, 0.0, 0.0), sp, n, rot, flip, (zp or "up") == "down")
         survey = tuple(
             _numbers(x, arg, k) for x, arg, k in ((inlines, "inlines", n[0]), (crosslines, "crosslines", n[1]),
                                                    (samples, "samples", n[2]))
@@ -322,7 +354,10 @@ class Volume:
         """A volume from :meth:`to_bytes`' bytes (InputError naming ``data`` if damaged)."""
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise InputError(f"data: expected bytes, got {type(data).__name__}")
-        return Volume._wrap(_geocull.Volume.from_bytes(bytes(data)))
+        v = Volume._wrap(_geocull.Volume.from_bytes(bytes(data)))
+        nz, ny, nx = v.shape
+        _check_extent(v.origin, v.spacing, (nx, ny, nz), v.rotation, False, False, arg="data")
+        return v
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         return (Volume._restore, (self.to_bytes(), self._flip, self._survey))
