@@ -4,6 +4,7 @@ Timings are never asserted, only their presence and sign."""
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -19,7 +20,7 @@ from geocull import report  # noqa: E402
 from geocull.data import stacked_test_scene, standard_views  # noqa: E402
 
 ROW_KEYS = {
-    "tiles", "coarse_factor", "view", "method", "pixel_threshold", "prepass_scale", "total_ms", "median_ms",
+    "tiles", "coarse_factor", "view", "method", "mode", "pixel_threshold", "prepass_scale", "total_ms", "median_ms",
     "ratio_to_none", "ratio_to_oracle", "differing_pixel_fraction", "psnr", "missing_tiles", "triangles_drawn",
     "triangles_fine_total", "tiles_drawn", "tiles_total", "triangle_diff_vs_oracle", "build_s", "times_ms",
 }
@@ -54,6 +55,9 @@ def test_sweep_rows_cover_the_grid(table):
     assert {r["coarse_factor"] for r in table} == {25, 100}
     tp = [r for r in table if r["method"] == "three_pass"]
     assert {(r["pixel_threshold"], r["prepass_scale"]) for r in tp} == {(0, 1), (0, 0.5), (10, 1), (10, 0.5)}
+    # "three_pass" here is the paper's approximate mode (Renderer's default is conservative): rows say so.
+    assert {r["mode"] for r in tp} == {"approximate (paper)"}
+    assert all(r["mode"] is None for r in table if r["method"] != "three_pass")
 
 
 def test_references_have_no_error(table):
@@ -100,6 +104,16 @@ def test_summarize_markdown_json_and_plot(table, tmp_path):
     assert all(math.isclose(s["ratio_to_none"], 1.0) for s in none)
     md = report.to_markdown(summ)
     assert md.startswith("| tiles |") and md.count("\n") == len(summ) + 2
+    # Counts print as whole numbers (summaries hold rounded means), parameters as given.
+    header, _, *lines = md.strip().split("\n")
+    cols = [c.strip() for c in header.strip("|").split("|")]
+    cells = [dict(zip(cols, (c.strip() for c in ln.strip("|").split("|")), strict=True)) for ln in lines]
+    for c in ("triangles_drawn", "triangles_prepass", "tiles_drawn", "missing_tiles", "views"):
+        assert c in cols and all(re.fullmatch(r"[\d,]+|–", row[c]) for row in cells), (c, [r[c] for r in cells])
+    assert {row["pixel_threshold"] for row in cells} == {"–", "0", "10"}
+    assert {row["prepass_scale"] for row in cells} == {"–", "1", "0.5"}
+    assert {row["mode"] for row in cells} == {"–", "approximate (paper)"}
+    assert all(isinstance(s["triangles_drawn"], int) and isinstance(s["tiles_drawn"], int) for s in summ)
     p = tmp_path / "t.json"
     report.write_json(dict(rows=table), str(p))  # psnr inf -> null, strict JSON
     back = json.loads(p.read_text())
@@ -211,3 +225,41 @@ def test_sweep_unknown_method_is_an_error_listing_the_valid_ones(spec):
     # frustum is a culling mode, so the sweep runs it like horizon
     rows = report.sweep(scene, [cam], methods=["frustum"], width=32, height=32, repeats=1)
     assert [r["method"] for r in rows] == ["none", "oracle", "frustum"]
+
+
+def test_plot_numbers_points_without_overlaps_and_names_both_three_pass_modes(spec):
+    pytest.importorskip("matplotlib")
+    scene = spec.build(tiles=(4, 4), coarse_factor=25)
+    cams = [gc.Camera.look_at(**v) for _, v in standard_views(spec)[:2]]
+    rows = report.sweep(scene, cams, thresholds=[0, 10, 50], prepass_scales=[1.0, 0.5], width=32, height=32,
+                        repeats=1, methods=("three_pass", "three_pass_cons", "horizon"))
+    assert {r["mode"] for r in rows} == {None, "approximate (paper)", "conservative"}
+    for aggregate, n in ((True, 3 + 2 * 6), (False, 2 * (3 + 2 * 6))):
+        fig = report.figure(rows, aggregate=aggregate)
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        ax = fig.axes[0]
+        numbers = [a for a in ax.get_children() if a.get_gid() == "point_label"]
+        assert sorted(int(a.get_text()) for a in numbers) == list(range(1, n + 1))
+        boxes = [a.get_window_extent(renderer) for a in numbers]
+        for i, b in enumerate(boxes):  # no number covers another
+            assert not any(b.overlaps(o) for o in boxes[i + 1:]), numbers[i].get_text()
+        ticks = [t.get_window_extent(renderer) for t in ax.get_xticklabels() if t.get_text()]
+        assert len(ticks) >= 2 and not any(a.overlaps(b) for i, a in enumerate(ticks) for b in ticks[i + 1:])
+        key = "\n".join(t.get_text() for t in fig.texts if t.get_gid() == "key")
+        assert "three_pass, approximate (paper) t10 s0.5" in key and "three_pass, conservative t0 s1" in key
+        assert len(re.findall(r"^ *\d+  ", key, flags=re.M)) == n
+        whole = fig.bbox
+        for t in fig.texts:  # the key is not cut off at the figure's edge
+            e = t.get_window_extent(renderer)
+            assert whole.x0 <= e.x0 and e.x1 <= whole.x1 and whole.y0 <= e.y0 and e.y1 <= whole.y1
+        legend = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "three_pass, approximate (paper)" in legend and "three_pass, conservative" in legend
+
+
+def test_to_frame_keeps_counts_integer(table):
+    pytest.importorskip("pandas")
+    df = report.to_frame(report.summarize(table))
+    for c in ("triangles_drawn", "tiles_drawn", "missing_tiles", "views"):
+        assert str(df[c].dtype) == "Int64", (c, df[c].dtype)
+    assert list(df["mode"].dropna().unique()) == ["approximate (paper)"]

@@ -4,8 +4,9 @@
                  prepass scales, and, from a :class:`~geocull.data.SceneSpec`, tile counts and coarse
                  factors) from a set of cameras, timed side by side; returns a table (list of dicts)
 ``summarize``    one row per configuration over all views (geometric-mean ratios, mean/max errors)
-``plot``         speed (ratio to none) against error (differing pixel fraction), one labelled marker
-                 per configuration (matplotlib, Agg backend)
+``plot``         speed (ratio to none) against error (differing pixel fraction), one numbered marker
+                 per configuration and a key of the numbers (matplotlib); ``figure`` the same as a
+                 matplotlib Figure
 ``to_markdown``  a table as GitHub markdown;  ``to_frame``  as a pandas DataFrame (if installed)
 ``timed_rounds`` the side-by-side timing loop (warm-up, then interleaved rounds in rotated order)
 
@@ -19,6 +20,11 @@ Ratios divide by ``none``'s (and ``oracle``'s) time of the same view, scene and 
 Errors are against the unculled (``none``) image of the same view: ``differing_pixel_fraction``
 (any channel differs), ``psnr``, and ``missing_tiles`` = tiles visible in the unculled image
 (``oracle``'s ``tile_pixels > 0``) that the method did not draw.
+
+Method names: ``"three_pass"`` here is the paper's *approximate* mode (``conservative=False``),
+while :meth:`geocull.Renderer.render`'s ``culling="three_pass"`` is conservative by default;
+``"three_pass_cons"`` is the conservative mode. Every row says which in its ``mode`` column
+(:data:`MODES`: "approximate (paper)", "conservative"), and tables and plots name them so.
 """
 
 from __future__ import annotations
@@ -50,22 +56,41 @@ if TYPE_CHECKING:
         | None
     )
 
-__all__ = ["sweep", "summarize", "plot", "to_markdown", "to_frame", "timed_rounds", "best_frame", "write_json",
-           "jsonable"]
+__all__ = ["sweep", "summarize", "plot", "figure", "to_markdown", "to_frame", "timed_rounds", "best_frame",
+           "write_json", "jsonable", "method_name", "MODES"]
 
 DEFAULT_THRESHOLDS = (0, 10, 50)
 DEFAULT_COARSE_FACTORS = (25, 100, 400)
 DEFAULT_TILES = ((10, 10),)
 DEFAULT_PREPASS_SCALES = (1.0, 0.5, 0.25)
 
+#: The ``mode`` of the sweep's three_pass methods: the paper's approximate culling and the conservative one.
+MODES = {"three_pass": "approximate (paper)", "three_pass_cons": "conservative"}
+
 # Columns of a sweep row, in display order.
 COLUMNS = (
-    "tiles", "coarse_factor", "view", "method", "pixel_threshold", "prepass_scale",
+    "tiles", "coarse_factor", "view", "method", "mode", "pixel_threshold", "prepass_scale",
     "total_ms", "median_ms", "ratio_to_none", "ratio_to_oracle",
     "differing_pixel_fraction", "psnr", "missing_tiles",
     "triangles_drawn", "triangles_prepass", "triangles_fine_total", "tiles_drawn", "tiles_total",
     "triangle_diff_vs_oracle", "prepass_ms", "count_ms", "draw_ms", "build_s",
 )
+
+#: Columns holding whole numbers (counts): printed as integers (summaries hold their rounded means).
+INT_COLUMNS = frozenset({
+    "triangles_drawn", "triangles_prepass", "triangles_fine_total", "tiles_drawn", "tiles_total", "missing_tiles",
+    "views", "tiles_at_risk", "predicted_max_missing_pixels", "missed_not_at_risk",
+})
+#: Parameter columns: printed as given (10, 0.5, 25), not as measured values.
+PARAM_COLUMNS = frozenset({"pixel_threshold", "prepass_scale", "coarse_factor"})
+
+
+def method_name(method: str) -> str:
+    """A method as tables and plots show it: ``"three_pass, approximate (paper)"``,
+    ``"three_pass, conservative"`` (:data:`MODES`), else the method itself."""
+    if method in MODES:
+        return f"three_pass, {MODES[method]}"
+    return method
 
 
 # --------------------------------------------------------------------------- helpers
@@ -217,6 +242,7 @@ def _sweep_scene(
                     base,
                     view=vname,
                     method=key[0],
+                    mode=MODES.get(key[0]),
                     pixel_threshold=key[1] if len(key) > 1 else None,
                     prepass_scale=key[2] if len(key) > 2 else None,
                     total_ms=t,
@@ -426,7 +452,8 @@ def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """One row per configuration (tiles, coarse factor, method, threshold, prepass scale) over all
     views: geometric means of ``ratio_to_none``/``ratio_to_oracle``, mean and max of
     ``differing_pixel_fraction``, total ``missing_tiles``, mean ``triangles_drawn``,
-    ``triangles_prepass`` and ``triangle_diff_vs_oracle``, mean ``total_ms``, and ``views`` (how many)."""
+    ``triangles_prepass``, ``tiles_drawn`` (rounded to whole numbers) and ``triangle_diff_vs_oracle``,
+    mean ``total_ms``, ``views`` (how many) and the ``mode`` of three_pass methods."""
     groups: dict[tuple, list[dict[str, Any]]] = {}
     for r in table:
         groups.setdefault(_config_key(r), []).append(r)
@@ -439,6 +466,7 @@ def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 tiles=key[0],
                 coarse_factor=key[1],
                 method=key[2],
+                mode=MODES.get(key[2]),
                 pixel_threshold=key[3],
                 prepass_scale=key[4],
                 views=len(rs),
@@ -450,14 +478,18 @@ def summarize(table: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 missing_tiles=sum(miss) if miss else None,
                 tiles_at_risk=_total(r.get("tiles_at_risk") for r in rs),
                 missed_not_at_risk=_total(r.get("missed_not_at_risk") for r in rs),
-                triangles_drawn=_mean(r["triangles_drawn"] for r in rs),
-                triangles_prepass=_mean(r.get("triangles_prepass") for r in rs),
+                triangles_drawn=_round(_mean(r["triangles_drawn"] for r in rs)),
+                triangles_prepass=_round(_mean(r.get("triangles_prepass") for r in rs)),
                 triangle_diff_vs_oracle=_mean(r.get("triangle_diff_vs_oracle") for r in rs),
-                tiles_drawn=_mean(r["tiles_drawn"] for r in rs),
+                tiles_drawn=_round(_mean(r["tiles_drawn"] for r in rs)),
                 build_s=rs[0].get("build_s"),
             )
         )
     return out
+
+
+def _round(x: float | None) -> int | None:
+    return None if x is None else int(round(x))
 
 
 def _total(values: Iterable[Any]) -> int | None:
@@ -467,8 +499,9 @@ def _total(values: Iterable[Any]) -> int | None:
 
 
 def point_label(r: dict[str, Any]) -> str:
-    """A short label of a row's configuration, e.g. ``three_pass t10 s0.5 c25 10x10``."""
-    parts = [str(r["method"])]
+    """A short label of a row's configuration, e.g. ``three_pass, approximate (paper) t10 s0.5 c25
+    10x10`` (:func:`method_name`)."""
+    parts = [method_name(str(r["method"]))]
     if r.get("pixel_threshold") is not None:
         parts.append(f"t{r['pixel_threshold']:g}")
     if r.get("prepass_scale") is not None:
@@ -480,13 +513,17 @@ def point_label(r: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-def _fmt(v: Any) -> str:
+def _fmt(v: Any, column: str | None = None) -> str:
     if v is None:
         return "–"
     if isinstance(v, bool):
         return str(v)
     if isinstance(v, (int, np.integer)):
         return f"{int(v):,}"
+    if column in INT_COLUMNS and isinstance(v, (float, np.floating)) and math.isfinite(v):
+        return f"{int(round(float(v))):,}"
+    if column in PARAM_COLUMNS and isinstance(v, (float, np.floating)):
+        return f"{float(v):g}"
     if isinstance(v, float):
         if math.isinf(v):
             return "inf"
@@ -499,7 +536,9 @@ def _fmt(v: Any) -> str:
 
 
 def to_markdown(table: Sequence[dict[str, Any]], columns: Sequence[str] | None = None) -> str:
-    """The table as GitHub markdown; ``columns`` default to those of :data:`COLUMNS` present."""
+    """The table as GitHub markdown; ``columns`` default to those of :data:`COLUMNS` present. Counts
+    (:data:`INT_COLUMNS`) print as whole numbers, parameters as given (``10``, ``0.5``), and the
+    ``mode`` column says which three_pass a row is."""
     if not table:
         return "(empty table)\n"
     if columns is None:
@@ -509,17 +548,22 @@ def to_markdown(table: Sequence[dict[str, Any]], columns: Sequence[str] | None =
         )
     lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
     for r in table:
-        lines.append("| " + " | ".join(_fmt(r.get(c)) for c in columns) + " |")
+        lines.append("| " + " | ".join(_fmt(r.get(c), c) for c in columns) + " |")
     return "\n".join(lines) + "\n"
 
 
 def to_frame(table: Sequence[dict[str, Any]]) -> Any:
-    """The table as a pandas DataFrame (ImportError with a hint if pandas is missing)."""
+    """The table as a pandas DataFrame (ImportError with a hint if pandas is missing); counts
+    (:data:`INT_COLUMNS`) as integer columns (pandas' ``Int64``, missing values ``<NA>``)."""
     try:
         import pandas as pd
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("to_frame/as_frame need pandas (pip install pandas); the list of dicts works without") from e
-    return pd.DataFrame(list(table))
+    df = pd.DataFrame(list(table))
+    for c in df.columns:
+        if c in INT_COLUMNS:
+            df[c] = df[c].round().astype("Int64")
+    return df
 
 
 def jsonable(x: Any) -> Any:
@@ -549,31 +593,69 @@ def write_json(obj: Any, path: str) -> None:
 
 def plot(table: Sequence[dict[str, Any]], path: str, title: str | None = None, aggregate: bool = True) -> str:
     """Plot speed (ratio of frame time to ``none``; lower is faster) against error (differing pixel
-    fraction vs the unculled image) to ``path`` (PNG, SVG, ... by extension), one labelled marker per
-    point. With ``aggregate`` (default) a point is a configuration over all views (see
-    :func:`summarize`), else every row is a point (labelled with its view). Returns ``path``."""
-    import matplotlib
+    fraction vs the unculled image) to ``path`` (PNG, SVG, ... by extension): :func:`figure`, saved.
+    Returns ``path``."""
+    figure(table, title=title, aggregate=aggregate).savefig(path)
+    return path
 
-    if matplotlib.get_backend().lower() != "agg":
-        matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+
+#: Offsets (points) tried for a point's number, nearest first: around the marker, then farther out.
+_LABEL_OFFSETS = [(dx * k, dy * k) for k in (1, 2, 3, 4, 6)
+                  for dx, dy in ((6, 4), (6, -12), (-14, 4), (-14, -12), (-4, 9), (-4, -17), (10, -4), (-20, -4))]
+_COLORS = {"none": "black", "oracle": "tab:green", "three_pass": "tab:blue", "three_pass_cons": "tab:purple",
+           "horizon": "tab:orange", "frustum": "tab:brown", "temporal": "tab:cyan"}
+_MARKERS = {"none": "s", "oracle": "*", "three_pass": "o", "three_pass_cons": "D", "horizon": "^", "frustum": "v",
+            "temporal": "P"}
+
+
+def figure(table: Sequence[dict[str, Any]], title: str | None = None, aggregate: bool = True) -> Any:
+    """The speed-against-error plot as a matplotlib ``Figure`` (made without pyplot; matplotlib is
+    imported here). One marker per point, coloured and shaped by method (the legend names the
+    three_pass modes: "approximate (paper)", "conservative"), numbered; each number sits at the
+    first place around its marker where it covers no other number and no marker, and a key
+    beside the plot (its width measured, so nothing is cut) gives each number's configuration
+    (:func:`point_label`; columns of at most 40 lines). With ``aggregate`` (default) a point is a
+    configuration over all views (see :func:`summarize`), else every row is a point (its key entry
+    names its view). The numbers carry the gid "point_label", the key's texts "key"."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+    from matplotlib.lines import Line2D
 
     rows = summarize(table) if aggregate else list(table)
     rows = [r for r in rows if r.get("ratio_to_none") is not None and r.get("differing_pixel_fraction") is not None]
-    colors = {"none": "black", "oracle": "tab:green", "three_pass": "tab:blue", "three_pass_cons": "tab:purple",
-              "horizon": "tab:orange"}
-    markers = {"none": "s", "oracle": "*", "three_pass": "o", "three_pass_cons": "D", "horizon": "^"}
-    fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
-    xs = [r["differing_pixel_fraction"] for r in rows]
+    keys = [point_label(r) if aggregate else f"{point_label(r)} [{r['view']}]" for r in rows]
+    per_col = 40
+    plot_w, height = 8.0, max(6.0, 0.9 + 0.16 * min(len(keys), per_col))
+    layout = ConstrainedLayoutEngine()
+    fig = Figure(figsize=(plot_w, height), dpi=110, layout=layout)
+    canvas = FigureCanvasAgg(fig)
+    # The key: columns of numbered configurations, measured to size the figure.
+    texts = []
+    for c in range(max(1, -(-len(keys) // per_col))):
+        chunk = keys[c * per_col:(c + 1) * per_col]
+        lines = [f"{c * per_col + i + 1:>3}  {k}" for i, k in enumerate(chunk)]
+        if c == 0:
+            lines = ["t: pixel threshold, s: prepass scale,", "c: coarse factor, then tiles", "", *lines]
+        texts.append(fig.text(0, 0.98, "\n".join(lines), va="top", ha="left", fontsize=7, family="monospace",
+                              gid="key", in_layout=False))
+    renderer = canvas.get_renderer()
+    widths = [t.get_window_extent(renderer).width / fig.dpi + 0.25 for t in texts]  # inches, with a gap
+    total = plot_w + sum(widths) + 0.1
+    fig.set_figwidth(total)
+    x = plot_w
+    for t, w in zip(texts, widths, strict=True):
+        t.set_x((x + 0.1) / total)
+        x += w
+    layout.set(rect=(0.0, 0.0, plot_w / total, 1.0))  # the plot on the left only
+
+    ax = fig.add_subplot()
     for r in rows:
         m = r["method"]
-        ax.scatter(r["differing_pixel_fraction"], r["ratio_to_none"], c=colors.get(m, "tab:gray"),
-                   marker=markers.get(m, "D"), s=60 if m != "oracle" else 140, zorder=3,
+        ax.scatter(r["differing_pixel_fraction"], r["ratio_to_none"], c=_COLORS.get(m, "tab:gray"),
+                   marker=_MARKERS.get(m, "X"), s=60 if m != "oracle" else 140, zorder=3,
                    edgecolors="white", linewidths=0.5)
-        label = point_label(r) if aggregate else f"{point_label(r)} [{r['view']}]"
-        ax.annotate(label, (r["differing_pixel_fraction"], r["ratio_to_none"]), textcoords="offset points",
-                    xytext=(5, 4), fontsize=7, zorder=4)
-    pos = [x for x in xs if x > 0]
+    pos = [r["differing_pixel_fraction"] for r in rows if r["differing_pixel_fraction"] > 0]
     ax.set_xscale("symlog", linthresh=max(min(pos) / 2, 1e-6) if pos else 1e-5)
     ax.set_xlim(left=0)
     ax.axhline(1.0, color="gray", lw=0.8, ls="--")
@@ -581,11 +663,33 @@ def plot(table: Sequence[dict[str, Any]], path: str, title: str | None = None, a
     ax.set_ylabel("frame time / unculled frame time (lower = faster)")
     ax.set_title(title or "geocull: speed against error")
     ax.grid(True, alpha=0.3)
-    handles = [plt.Line2D([], [], ls="", marker=markers[m], color=colors[m], label=m)
-               for m in colors if any(r["method"] == m for r in rows)]
+    ax.tick_params(axis="x", labelrotation=30)  # symlog ticks crowd near the linear threshold
+    for lab in ax.get_xticklabels():
+        lab.set_horizontalalignment("right")
+    handles = [Line2D([], [], ls="", marker=_MARKERS[m], color=_COLORS[m], label=method_name(m))
+               for m in _COLORS if any(r["method"] == m for r in rows)]
     if handles:
         ax.legend(handles=handles, loc="best", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    _number_points(fig, ax, [(r["differing_pixel_fraction"], r["ratio_to_none"]) for r in rows])
+    return fig
+
+
+def _number_points(fig: Any, ax: Any, points: list[tuple[float, float]]) -> None:
+    """Number each point (1, 2, ...) at the first offset of :data:`_LABEL_OFFSETS` where its number
+    covers no number placed before and no marker (the last offset tried when none is free)."""
+    from matplotlib.transforms import Bbox
+
+    fig.draw_without_rendering()  # the layout, then the data transform, are final from here
+    renderer = fig.canvas.get_renderer()
+    r = 5.0 * fig.dpi / 72.0  # a marker's half size, pixels
+    markers = [Bbox.from_extents(px - r, py - r, px + r, py + r) for px, py in ax.transData.transform(points)]
+    placed: list[Any] = []
+    for i, (x, y) in enumerate(points):
+        ann = ax.annotate(str(i + 1), (x, y), textcoords="offset points", xytext=_LABEL_OFFSETS[0], fontsize=7,
+                          zorder=4, gid="point_label", annotation_clip=False, in_layout=False)
+        for off in _LABEL_OFFSETS:
+            ann.set_position(off)
+            box = ann.get_window_extent(renderer)
+            if not any(box.overlaps(b) for b in placed) and not any(box.overlaps(m) for m in markers):
+                break
+        placed.append(ann.get_window_extent(renderer))
