@@ -120,3 +120,100 @@ def test_a_volume_far_away_fails_at_once_not_in_later_calls():
     # It used to be accepted, and a later slice or camera named `vertices` or `eye`.
     with pytest.raises(gc.InputError, match="^origin: "):
         gc.Volume(np.random.default_rng(0).random((4, 4, 4)), origin=(1e300, 0, 0))
+
+
+# ------------------------------------------------------------------------ infinities (item 4)
+# One rule: +-inf in sampled data (volume samples of every dtype and reader, height-field z,
+# colouring values) is refused, naming the user's argument and the first infinite element in the
+# user's own index order; NaN (or a masked element) is no data.
+
+
+def _with_inf(dtype, at=(2, 1, 4), value=-np.inf):
+    v = np.random.default_rng(1).random((6, 7, 8)).astype(dtype)
+    v[at] = value
+    return v
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float16", ">f4", "float64"])
+@pytest.mark.parametrize("kw", [{}, dict(order="xyz"), dict(z_positive="down"), dict(yflip=True)])
+def test_infinite_volume_samples_are_refused_naming_the_users_index(dtype, kw):
+    with pytest.raises(gc.InputError, match=r"^values\[2, 1, 4\] is -inf; use NaN for no data"):
+        gc.Volume(_with_inf(dtype), **kw)
+
+
+def test_masked_infinite_samples_are_no_data():
+    v = np.ma.masked_invalid(_with_inf("float32"))
+    vol = gc.Volume(v)
+    verts, _ = gc.extract_isosurface(vol, 0.5)
+    assert np.isfinite(verts).all()
+
+
+def test_infinite_residuals_in_volume_bytes_are_damage():
+    b = bytearray(gc.Volume(np.random.default_rng(2).random((4, 4, 4)).astype(np.float32)).to_bytes())
+    b[-4:] = np.float32(np.inf).tobytes()  # the last sample's residual
+    with pytest.raises(gc.InputError, match=r"^data: the residual of stored sample \[3, 3, 3\] is inf"):
+        gc.Volume.from_bytes(bytes(b))
+
+
+def test_damaged_volume_bytes_name_data_not_origin_or_spacing():
+    b = bytearray(gc.Volume(np.zeros((3, 3, 3)), spacing=(1.0, 2.5, 1.0)).to_bytes())
+    at = b.index(np.float64(2.5).tobytes())
+    b[at:at + 8] = np.float64(-1.0).tobytes()
+    with pytest.raises(gc.InputError, match="^data: damaged volume bytes: spacing: component 1 is -1"):
+        gc.Volume.from_bytes(bytes(b))
+    b[at:at + 8] = np.float64(np.nan).tobytes()
+    with pytest.raises(gc.InputError, match="^data: "):
+        gc.Volume.from_bytes(bytes(b))
+
+
+def test_no_later_call_names_an_argument_the_user_did_not_pass():
+    # A float32 volume with an inf sample used to load, then extract_isosurface returned NaN
+    # vertices and add_isosurface / add_slice failed naming `vertices` / `values[30] (flat index)`.
+    v = _with_inf("float32", at=(1, 1, 1), value=np.inf)
+    with pytest.raises(gc.InputError) as e:
+        s = gc.Scene()
+        vol = gc.Volume(v)
+        s.add_isosurface(vol, 0.5)
+        s.add_slice(vol, "inline", 1)
+    assert str(e.value).startswith("values[1, 1, 1] is inf")
+
+
+def test_infinite_colouring_values_name_their_element():
+    s = gc.Scene()
+    z = np.random.default_rng(4).random((5, 6))
+    vals = z.copy()
+    vals[1, 2] = np.inf
+    with pytest.raises(gc.InputError, match=r"^values\[1, 2\] is inf"):
+        s.add_heightfield(z, values=vals)
+    z[3, 4] = -np.inf
+    with pytest.raises(gc.InputError, match=r"^z\[3, 4\] is -inf"):
+        s.add_heightfield(z)
+    with pytest.raises(gc.InputError, match=r"^values\[1\] is inf"):
+        s.add_mesh(np.eye(3), [[0, 1, 2]], values=[0.0, np.inf, 1.0])
+
+
+def test_infinite_segy_samples_are_refused_naming_the_file_and_trace(tmp_path):
+    segyio = pytest.importorskip("segyio")
+    from test_io_segy import write_cube
+
+    path = str(write_cube(tmp_path / "cube.sgy"))
+    with segyio.open(path, "r+", ignore_geometry=True) as f:
+        tr = f.trace[40].copy()
+        tr[7] = np.inf
+        f.trace[40] = tr
+        il, xl = f.header[40][segyio.TraceField.INLINE_3D], f.header[40][segyio.TraceField.CROSSLINE_3D]
+    with pytest.raises(gc.InputError) as e:
+        gc.Volume.from_segy(path)
+    assert str(e.value).startswith(f"source: {path!r}: inline {il}, crossline {xl}, sample 7 (at 1028 in the "
+                                   "file's units) is inf; infinite samples are refused")
+
+
+# ----------------------------------------------------------- messages naming the right thing (item 6)
+
+
+@pytest.mark.parametrize("kw", [{}, dict(order="xyz", z_positive="down")])
+def test_a_sample_out_of_float32_range_is_named_not_a_valid_one(kw):
+    v = np.random.default_rng(5).random((6, 6, 6))
+    v[3, 1, 2] = 1e300  # values[0, 0, 0] is a valid ~0.5: the core named it (its residual overflowed)
+    with pytest.raises(gc.InputError, match=r"^values\[3, 1, 2\] is 1e\+300, over 3.4e\+38 from the median"):
+        gc.Volume(v, **kw)

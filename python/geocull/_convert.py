@@ -22,6 +22,8 @@ __all__ = [
     "FLOAT_KINDS",
     "INT_KINDS",
     "checked_array",
+    "first_infinite",
+    "refuse_infinite",
     "float_array",
     "unmasked",
     "heights",
@@ -67,6 +69,32 @@ def checked_array(x: Any, arg: str, ndim: int, last: int | None = None, kinds: s
         want = f"({', '.join(['n'] * (ndim - 1) + [str(last)])})" if last is not None else f"{ndim}-D"
         raise InputError(f"{arg}: shape {a.shape} is not {want}")
     return a
+
+
+def first_infinite(a: np.ndarray) -> tuple[int, ...] | None:
+    """Index of the first +-inf element of a float array in its own C order, or None (volumes: a
+    slice of the first axis at a time, no full-size temporary)."""
+    if a.dtype.kind != "f" or a.size == 0:
+        return None
+    if a.ndim < 3:
+        bad = np.isinf(a)
+        return tuple(int(i) for i in np.argwhere(bad)[0]) if bad.any() else None
+    for k in range(a.shape[0]):
+        bad = np.isinf(a[k])
+        if bad.any():
+            return (k, *(int(i) for i in np.argwhere(bad)[0]))
+    return None
+
+
+def refuse_infinite(a: np.ndarray, arg: str) -> None:
+    """InputError naming ``arg[index]``, the first +-inf element of ``a`` in the array's own index
+    order. geocull's one rule for infinities in sampled data (volume samples, height-field z,
+    colouring values): refused, with NaN (or a masked element) as no data. The core refuses them
+    too, but names some by their stored or flat index; this names the caller's."""
+    idx = first_infinite(a)
+    if idx is not None:
+        raise InputError(f"{arg}[{', '.join(map(str, idx))}] is {a[idx]}; use NaN for no data (infinite values are "
+                         "refused)")
 
 
 def float_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:
@@ -234,6 +262,7 @@ def coloring(
         if mask is not None:
             vals = vals.copy() if np.shares_memory(vals, data) else vals
             vals[mask] = np.nan
+        refuse_infinite(vals, "values")
     name_, table = cmap_table(cmap)
     lim = None if clim is None else vec2(clim, "clim")
     nan = None if nan_color is None else vec3(nan_color, "nan_color")

@@ -49,7 +49,8 @@ _COLOR_DOC = """
         range: the lowest and highest z of every object coloured by z without a ``clim`` of its own
         (hidden ones too), updated as such objects are added, removed or recoloured, so that equal
         depths get equal colours across horizons. ``nan_color`` (r, g, b): the colour of NaN values
-        (default mid grey, 0.5). A flat ``color`` and a colouring cannot be combined. ``label``: the
+        (default mid grey, 0.5; +-inf values are refused, an InputError naming the first). A flat
+        ``color`` and a colouring cannot be combined. ``label``: the
         name on the colour bar of :meth:`geocull.RenderResult.figure` (default the values' own name
         where they carry one: an xarray / pandas ``name``, an xtgeo log or property; else "values";
         colour by z is labelled "depth (m)")."""
@@ -240,7 +241,8 @@ class Scene:
             x runs along columns, y along rows. NaN, masked samples
             of a ``numpy.ma.MaskedArray`` (e.g. xtgeo's ``surf.values``), and samples equal to
             ``null_value`` (e.g. -999.25, compared in z's own dtype, so float32 data matches
-            ``float32(null_value)``) are holes: triangles touching them are dropped.
+            ``float32(null_value)``) are holes: triangles touching them are dropped; +-inf is
+            refused (InputError naming ``z[j, i]``), as in volumes and colouring values.
         origin: (x0, y0) world position of ``z[0, 0]`` (metres, default (0, 0)).  spacing: (dx, dy) > 0
             sample spacing (metres, default (1, 1)), so ``z[j, i]`` sits at (x0 + i*dx, y0 + j*dy) when
             not rotated.

@@ -54,6 +54,8 @@ def _values(values: Any) -> np.ndarray:
     if mask is not None:  # masked samples are no data (NaN): a float copy with them set
         a = np.array(a, dtype=a.dtype if a.dtype.kind == "f" and a.dtype.itemsize >= 4 else np.float64)
         a[mask] = np.nan
+    if a.dtype.kind == "f" and a.dtype.itemsize != 8:  # float64: the core checks while it reads them
+        cv.refuse_infinite(a, "values")
     # By kind and size, not by dtype identity: a big-endian '>f8' is not `== np.float64` but must
     # keep float64's precision (its residuals) as a native one does.
     if a.dtype.kind == "f" and a.dtype.itemsize in (4, 8):
@@ -63,6 +65,34 @@ def _values(values: Any) -> np.ndarray:
     # float16 fits float32 exactly; long double and integers go through float64, whose residuals
     # keep them (int32 / int64 samples of 1e8 and 1e8 + 1 differ in float64 but not in float32).
     return a.astype(np.float32 if a.dtype.kind == "f" and a.dtype.itemsize < 4 else np.float64)
+
+
+#: The largest float32: float64 samples farther than this from the volume's midrange cannot be
+#: stored as float32 residuals.
+_F32_MAX = float(np.finfo(np.float32).max)
+
+
+def _where(idx: Any) -> str:
+    return ", ".join(str(int(i)) for i in idx)
+
+
+def _range_error(a: np.ndarray) -> InputError:
+    """The InputError of float64 values whose range does not fit float32 residuals about their
+    midrange, naming the first sample truly out of range: the first one farther than float32's
+    range from the finite samples' median (one always is: a range over twice float32's has an end
+    beyond it on one side of the median), in the values' own index order."""
+    fin = a[np.isfinite(a)]
+    med = float(np.median(fin)) if fin.size else 0.0
+    for k in range(a.shape[0]):
+        with np.errstate(over="ignore", invalid="ignore"):
+            far = np.abs(a[k].astype(np.float64) - med) > _F32_MAX
+        if far.any():
+            idx = (k, *(int(i) for i in np.argwhere(far)[0]))
+            return InputError(
+                f"values[{_where(idx)}] is {a[idx]:g}, over {_F32_MAX:.3g} from the median of the values "
+                f"({med:g}): the volume's value range does not fit float32 even about its midrange (float64 "
+                "values are stored as float32 residuals)")
+    return InputError("values: the volume's value range does not fit float32 even about its midrange")
 
 
 def _is_dataarray(x: Any) -> bool:
@@ -190,6 +220,9 @@ class Volume:
     """A scalar field on a regular grid (a seismic cube, a property model), rendered as isosurfaces
     (:meth:`geocull.Renderer.render_isosurface`, :func:`geocull.extract_isosurface`). NaN samples, and
     the masked samples of a ``numpy.ma.MaskedArray``, are "no data" (no surface in cells touching them).
+    +-inf samples are refused in every dtype and reader (InputError naming ``values[...]``, the first
+    one in the values' own index order; ``source`` and the trace for SEG-Y), as in height fields
+    and colouring values: use NaN for no data (xtgeo cubes' undefined values, >= 1e33, are NaN).
 
     values: a 3-D array, float32 or float64 in either byte order (other real dtypes are converted: float16
         to float32, long double and integers to float64, by value); numpy arrays, memory
@@ -282,7 +315,7 @@ class Volume:
                 raise InputError(f"{arg}: {v!r} is not a string")
         rot = 0.0 if rotation is None else cv.number(rotation, "rotation")
         flip = False if yflip is None else cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True")
-        a = _values(values)
+        a = given = _values(values)
         o = o3 if o3 is not None else (0.0, 0.0, 0.0)
         sp = s3 if s3 is not None else (1.0, 1.0, 1.0)
         if flip:  # rows towards -y: reverse the j axis (a view), origin on the last row (right-handed)
@@ -297,7 +330,15 @@ class Volume:
             _numbers(x, arg, k) for x, arg, k in ((inlines, "inlines", n[0]), (crosslines, "crosslines", n[1]),
                                                    (samples, "samples", n[2]))
         )
-        self._v = _geocull.Volume(a, o, sp, order or "zyx", zp or "up", rot)
+        try:
+            self._v = _geocull.Volume(a, o, sp, order or "zyx", zp or "up", rot)
+        except InputError as e:
+            # The core names a float64 sample in its stored grid's order (z up, zyx): name the
+            # values' own index, and for a range too wide the sample truly out of it.
+            if not str(e).startswith("values["):
+                raise
+            cv.refuse_infinite(given, "values")
+            raise _range_error(given) from None
         self._flip = (False, flip, (zp or "up") == "down")
         self._survey: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = survey  # type: ignore[assignment]
 
@@ -324,7 +365,18 @@ class Volume:
         survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`)."""
         from . import io
 
-        return cls(**io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance))
+        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance)
+        idx = cv.first_infinite(kw["values"])
+        if idx is not None:  # the rule of every volume, named for the file (inline, crossline, sample)
+            k = idx[2]
+            where = repr(os.fspath(source)) if isinstance(source, str | os.PathLike) else "the open SEG-Y file"
+            il, xl, sm = (x[n] if x is not None else n for x, n in zip(
+                (kw["inlines"], kw["crosslines"], kw["samples"]), idx, strict=True))
+            raise InputError(
+                f"source: {where}: inline {il:g}, crossline {xl:g}, sample {k} (at {sm:g} in the file's units) is "
+                f"{kw['values'][idx]}; infinite samples are refused (NaN is no data; dead and missing traces are "
+                "read as NaN)")
+        return cls(**kw)
 
     @classmethod
     def _wrap(cls, inner: _geocull.Volume) -> Volume:
@@ -354,8 +406,18 @@ class Volume:
         """A volume from :meth:`to_bytes`' bytes (InputError naming ``data`` if damaged)."""
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise InputError(f"data: expected bytes, got {type(data).__name__}")
-        v = Volume._wrap(_geocull.Volume.from_bytes(bytes(data)))
+        data = bytes(data)
+        try:
+            v = Volume._wrap(_geocull.Volume.from_bytes(data))
+        except InputError as e:  # the core names some damaged fields (origin, spacing) as arguments
+            if str(e).startswith("data"):
+                raise
+            raise InputError(f"data: damaged volume bytes: {e}") from None
         nz, ny, nx = v.shape
+        n = nx * ny * nz  # the residuals: the bytes' last 4 n (the core refuses trailing bytes)
+        idx = cv.first_infinite(np.frombuffer(data, "<f4", count=n, offset=len(data) - 4 * n).reshape(nz, ny, nx))
+        if idx is not None:  # to_bytes never writes one (a volume holds no infinite sample)
+            raise InputError(f"data: the residual of stored sample [{_where(idx)}] is inf; damaged volume bytes")
         _check_extent(v.origin, v.spacing, (nx, ny, nz), v.rotation, False, False, arg="data")
         return v
 
