@@ -195,6 +195,92 @@ def test_browser_measures_in_the_stats_line_and_a_png_for_static_outputs(scene, 
     assert bundle["text/plain"].startswith("geocull Viewer")
 
 
+def test_z_scale_rerenders_with_that_vertical_exaggeration(scene, renderer_small):
+    r = renderer_small(48, 40)
+    frames = []
+    st = ViewerState(scene, renderer=r, culling="none", on_frame=frames.append)
+    first = st.render()
+    assert st.z_scale == 1.0 and st.camera.z_scale == 1.0
+    angles = (st.azimuth, st.elevation, st.distance)
+    res = st.set_z_scale(5.0)
+    assert len(frames) == 2 and st.camera.z_scale == 5.0
+    assert (st.azimuth, st.elevation, st.distance) == angles  # the view is kept
+    np.testing.assert_array_equal(res.image, r.render(scene, st.camera, culling="none").image)
+    assert not np.array_equal(res.image, first.image) and "z ×5" in st.stats_text()
+    st.reset()  # back to the default view, fitted at the exaggeration in use
+    assert st.z_scale == 5.0 and st.camera.z_scale == 5.0
+    assert st.camera.orbit_angles() == pytest.approx(gc.Camera.fit(scene, 210, 30, aspect=48 / 40,
+                                                                   z_scale=5.0).orbit_angles())
+    for bad in (0, -2, float("nan"), "x"):
+        with pytest.raises(gc.InputError, match="^z_scale"):
+            st.set_z_scale(bad)
+    assert st.z_scale == 5.0 and len(frames) == 3
+    cam = gc.Camera.fit(scene, z_scale=2.0)
+    assert ViewerState(scene, renderer=r, camera=cam).z_scale == 2.0  # the camera's by default ...
+    assert ViewerState(scene, renderer=r, camera=cam, z_scale=3.0).camera.z_scale == 3.0  # ... or given
+
+
+def test_widget_z_scale_trait_and_slider_rerender(scene, renderer_small):
+    pytest.importorskip("anywidget")
+    v = gc.Viewer(scene, renderer=renderer_small(40, 32), culling="none")
+    st, canvas, slider = v.state, v.canvas, v.controls["z_scale"]
+    assert canvas.z_scale == slider.value == 1.0 and st.frames == 1
+    canvas.z_scale = 4.0  # the trait (what the browser's keys set): a new frame at that exaggeration
+    assert st.z_scale == 4.0 and st.camera.z_scale == 4.0 and st.frames == 2
+    np.testing.assert_array_equal(np.frombuffer(canvas.frame, np.uint8).reshape(32, 40, 4), st.result.image)
+    np.testing.assert_array_equal(st.result.image, v.state.renderer.render(scene, st.camera, culling="none").image)
+    assert slider.value == 4.0  # a value between the stops becomes a stop of the slider
+    slider.value = 10.0
+    assert canvas.z_scale == 10.0 and st.camera.z_scale == 10.0 and st.frames == 3
+    assert "z ×10" in v.stats.value
+    canvas.z_scale = 0.0  # refused, shown under the image; the viewer goes on
+    assert "vertical exaggeration" in canvas.error and st.z_scale == 10.0
+    canvas.z_scale = 2.0
+    assert canvas.error == "" and st.camera.z_scale == 2.0
+    assert gc.Viewer(scene, renderer=renderer_small(40, 32), z_scale=3.0).canvas.z_scale == 3.0
+
+
+KEYS_HARNESS = r"""
+const state = { width: 1, height: 1, frame: null, frames: 0, epoch: 0, ack: {}, error: "", png: "", z_scale: 1 };
+const saved = [], made = [];
+globalThis.document = { createElement: (tag) => { const listeners = {}; const e = {
+  tag, style: {}, dataset: {}, listeners, appendChild() {}, addEventListener(t, f) { listeners[t] = f; },
+  getContext() { return {}; } }; made.push(e); return e; } };
+const model = { get: (k) => state[k], set: (k, v) => { state[k] = v; }, save_changes: () => saved.push(state.z_scale),
+                send() {}, on() {} };
+const mod = await import(process.argv[2]);
+mod.default.render({ model, el: { appendChild() {} } });
+const canvas = made.find((e) => e.tag === "canvas");
+const key = (k) => canvas.listeners.keydown({ key: k, preventDefault() {} });
+key("+"); key("="); key("-"); key("-"); key("-"); key("-"); key("a");
+state.z_scale = 7; key("+"); key("-");
+console.log(JSON.stringify({ saved, tabIndex: canvas.tabIndex }));
+"""
+
+
+def test_browser_keys_step_the_z_scale(tmp_path):
+    """"+" / "-" on the focused image step the synced z_scale through Z_SCALE_STOPS (under node)."""
+    import json
+    import shutil
+    import subprocess
+
+    from geocull.viewer import _ESM, Z_SCALE_STOPS
+
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not installed")
+    (tmp_path / "viewer.mjs").write_text(_ESM)
+    (tmp_path / "keys.mjs").write_text(KEYS_HARNESS)
+    p = subprocess.run([node, str(tmp_path / "keys.mjs"), str(tmp_path / "viewer.mjs")],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert Z_SCALE_STOPS[:3] == (0.5, 1.0, 2.0) and 10.0 in Z_SCALE_STOPS and 5.0 in Z_SCALE_STOPS
+    # 1 -> 2 -> 3, then down 2, 1, 0.5 and no lower; other keys nothing; from 7: up to 10, then down to 5.
+    assert out["saved"] == [2, 3, 2, 1, 0.5, 10, 5]
+    assert out["tabIndex"] == 0
+
+
 HARNESS = r"""
 const sent = [], drawn = [], saved = [], handlers = {};
 function element(tag) {

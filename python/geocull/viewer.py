@@ -2,9 +2,10 @@
 
 Drag on the image to orbit about the target (right = azimuth up, i.e. the eye moves clockwise seen
 from above; down = the eye rises), turn the mouse wheel to zoom (down to a minimum distance); the
-culling mode, the pixel threshold and a reset button are controls under the image, followed by the
-frame's stats. Each frame is rendered by the scene's :class:`geocull.Renderer` and sent to the
-browser as raw RGBA (no image encoding).
+culling mode, the pixel threshold, the vertical exaggeration (``z_scale``; also "+" / "-" on the
+focused image) and a reset button are controls under the image, followed by the frame's stats. Each
+frame is rendered by the scene's :class:`geocull.Renderer` and sent to the browser as raw RGBA (no
+image encoding).
 
 The protocol never leaves the browser waiting. The browser sends one request at a time (the mouse
 moves made meanwhile merged into the next) and the kernel answers every request, with an
@@ -30,6 +31,7 @@ only when a Viewer is made: ``pip install anywidget``.
 from __future__ import annotations
 
 import base64
+import json
 import time
 import traceback
 from collections.abc import Callable
@@ -67,6 +69,8 @@ MIN_DISTANCE_FRACTION = 1e-3
 EARLY_NEXT = False
 #: The pixel-threshold slider's stops (pixels; 0 draws every tile with a visible pixel).
 THRESHOLD_STOPS = (0.0, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)
+#: The vertical-exaggeration slider's stops (``z_scale``; the browser's "+" / "-" keys step through them).
+Z_SCALE_STOPS = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)
 
 
 class ViewerState:
@@ -81,7 +85,9 @@ class ViewerState:
     that moves a little from frame to frame: each frame starts from the tiles the last one showed.
     min_distance: the closest the eye comes to the target with the wheel (render-space metres; for
     orthographic views the smallest view height), default :data:`MIN_DISTANCE_FRACTION` of the
-    scene's diagonal (of the starting distance for a scene without bounds).
+    scene's diagonal (of the starting distance for a scene without bounds). z_scale: the vertical
+    exaggeration (> 0; default the camera's, 1 for the default camera); :meth:`set_z_scale`
+    changes it.
     """
 
     def __init__(
@@ -95,6 +101,7 @@ class ViewerState:
         renderer: Renderer | None = None,
         on_frame: Callable[[RenderResult[RenderStats]], None] | None = None,
         min_distance: float | None = None,
+        z_scale: float | None = None,
         **render_options: Any,
     ) -> None:
         self.scene = scene
@@ -104,9 +111,9 @@ class ViewerState:
         self.pixel_threshold = cv.number(pixel_threshold, "pixel_threshold")
         self.render_options = dict(render_options)
         self.on_frame = on_frame
-        self.home = camera if camera is not None else Camera.fit(
-            scene, azimuth=210.0, elevation=30.0, aspect=self.renderer.width / self.renderer.height
-        )
+        self.z_scale = self._z(z_scale if z_scale is not None else camera.z_scale if camera is not None else 1.0)
+        self._fit_home = camera is None  # the default view is fitted again at another z_scale
+        self.home = camera if camera is not None else self._fit()
         self.result: RenderResult[RenderStats] | None = None
         self.frames = 0
         #: What the browser measured (set by the widget): frames drawn per second while the view
@@ -127,6 +134,17 @@ class ViewerState:
             if not self.min_distance > 0:
                 raise InputError(f"min_distance: expected a number > 0, got {min_distance!r}")
 
+    def _fit(self) -> Camera:
+        return Camera.fit(self.scene, azimuth=210.0, elevation=30.0, aspect=self.renderer.width / self.renderer.height,
+                          z_scale=self.z_scale)
+
+    @staticmethod
+    def _z(z_scale: Any) -> float:
+        z = cv.number(z_scale, "z_scale")
+        if not (np.isfinite(z) and z > 0):
+            raise InputError(f"z_scale: expected a number > 0, got {z_scale!r}")
+        return z
+
     @staticmethod
     def _mode(culling: str) -> CullingMode:
         if culling not in CULLING_MODES:
@@ -141,10 +159,11 @@ class ViewerState:
 
     @property
     def camera(self) -> Camera:
-        """The current camera (the orbit with the starting camera's fov, projection, z_scale, ...)."""
+        """The current camera (the orbit with the starting camera's fov, projection, ...; the
+        viewer's :attr:`z_scale`)."""
         c = self.lens
         return Camera.orbit(self.target, self.azimuth, self.elevation, self.distance, c.up, c.fov_y, c.near,
-                            c.far, c.projection, c.ortho_height, c.z_scale)
+                            c.far, c.projection, c.ortho_height, self.z_scale)
 
     def render(self) -> RenderResult[RenderStats]:
         """Render the current view, keep it as :attr:`result` and hand it to ``on_frame``."""
@@ -195,8 +214,18 @@ class ViewerState:
         self.pixel_threshold = cv.number(pixel_threshold, "pixel_threshold")
         return self.render()
 
+    def set_z_scale(self, z_scale: float) -> RenderResult[RenderStats]:
+        """Set the vertical exaggeration (> 0: z drawn times ``z_scale``; InputError otherwise) and
+        re-render. The target (world coordinates), the angles and the distance are kept; the
+        default view (no ``camera`` given) is fitted again at the new exaggeration, for
+        :meth:`reset`."""
+        self.z_scale = self._z(z_scale)
+        if self._fit_home:
+            self.home = self._fit()
+        return self.render()
+
     def reset(self) -> RenderResult[RenderStats]:
-        """Back to the starting view; re-renders."""
+        """Back to the starting view (at the current :attr:`z_scale`); re-renders."""
         self._set_orbit(self.home)
         return self.render()
 
@@ -218,18 +247,20 @@ class ViewerState:
         return (f"{self.culling}: {int(s['triangles_drawn']):,} of {int(s['triangles_fine_total']):,} triangles, "
                 f"{int(s['tiles_drawn'])}/{int(s['tiles_total'])} tiles, render {ms:.1f} ms + {rb:.1f} ms read-back"
                 f"{browser} · azimuth {self.azimuth:.0f}°, elevation {self.elevation:.0f}°, "
-                f"distance {self.distance:,.0f} m")
+                f"distance {self.distance:,.0f} m, z ×{self.z_scale:g}")
 
 
 _ESM = """
 const ANSWER_TIMEOUT_MS = 15000;  // a request unanswered this long (kernel restarted?) is given up
 const IDLE_MS = 400;              // the view rests: report the measures, keep the frame as PNG
+const Z_STOPS = __Z_STOPS__;      // vertical exaggerations the "+" / "-" keys step through
 
 function render({ model, el }) {
   const root = document.createElement("div");
   root.className = "geocull-viewer";
   const canvas = document.createElement("canvas");
   canvas.style.cssText = "display:block;cursor:grab;touch-action:none";
+  canvas.tabIndex = 0;  // focusable, for the keys
   const error = document.createElement("pre");
   error.className = "geocull-error";
   error.style.cssText = "display:none;margin:4px 0;padding:4px 6px;max-height:14em;overflow:auto;" +
@@ -349,6 +380,16 @@ function render({ model, el }) {
   canvas.addEventListener("pointerup", up);
   canvas.addEventListener("pointercancel", up);
   canvas.addEventListener("wheel", (e) => { e.preventDefault(); wheel += e.deltaY; input(); }, { passive: false });
+  // "+" / "-": the next larger / smaller vertical exaggeration; the kernel renders when z_scale changes.
+  function zstep(up) {
+    const z = model.get("z_scale");
+    const next = up ? Z_STOPS.find((v) => v > z * 1.0001) : Z_STOPS.slice().reverse().find((v) => v < z / 1.0001);
+    if (next !== undefined) { model.set("z_scale", next); model.save_changes(); }
+  }
+  canvas.addEventListener("keydown", (e) => {
+    if (e.key === "+" || e.key === "=") { e.preventDefault(); zstep(true); }
+    else if (e.key === "-" || e.key === "_") { e.preventDefault(); zstep(false); }
+  });
   draw();
   count();
   showError();
@@ -356,13 +397,18 @@ function render({ model, el }) {
   return () => { clearTimeout(timer); clearTimeout(idle); };
 }
 export default { render };
-"""
+""".replace("__Z_STOPS__", json.dumps(list(Z_SCALE_STOPS)))
 
 
 def _describe(what: str, e: BaseException) -> str:
     """The text shown under the image for an exception raised while handling ``what``."""
     tb = "".join(traceback.format_exception(type(e), e, e.__traceback__))
     return f"Error in the viewer's {what}: {type(e).__name__}: {e}\n\n{tb}"
+
+
+def _stops(stops: Any, extra: float) -> list[tuple[str, float]]:
+    """A SelectionSlider's (label, value) options: ``stops`` and ``extra``, sorted."""
+    return [(f"{v:g}", float(v)) for v in sorted({*(float(x) for x in stops), float(extra)})]
 
 
 def _opt_float(v: Any) -> float | None:
@@ -383,15 +429,19 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     renderer: Renderer | None = None,
     on_frame: Callable[[RenderResult[RenderStats]], object] | None = None,
     min_distance: float | None = None,
+    z_scale: float | None = None,
     **render_options: Any,
 ) -> Any:
     """A notebook widget showing ``scene`` (display it, or make it a cell's last expression): drag to
-    orbit, wheel to zoom, a culling-mode menu, a pixel-threshold slider (0 to 1000 pixels), a reset
-    button, and the frame's stats under the image. Arguments as for :class:`ViewerState`
-    (reachable as the widget's ``.state``: ``viewer.state.camera`` is the current view), plus
-    ``on_frame(result)``: called with every frame after it was sent to the browser (an exception
-    there is shown under the image, as any other in the viewer's callbacks, and kept as
-    ``viewer.last_error``). Needs ``anywidget`` (and with it ipywidgets): ``pip install anywidget``."""
+    orbit, wheel to zoom, a culling-mode menu, a pixel-threshold slider (0 to 1000 pixels), a
+    vertical-exaggeration slider (:data:`Z_SCALE_STOPS`; "+" / "-" on the focused image step it; the
+    canvas's synced ``z_scale`` trait, ``viewer.canvas.z_scale``, set from Python or the browser,
+    re-renders at that exaggeration), a reset button, and the frame's stats under the image.
+    Arguments as for :class:`ViewerState` (reachable as the widget's ``.state``:
+    ``viewer.state.camera`` is the current view), plus ``on_frame(result)``: called with every
+    frame after it was sent to the browser (an exception there is shown under the image, as any
+    other in the viewer's callbacks, and kept as ``viewer.last_error``). Needs ``anywidget`` (and
+    with it ipywidgets): ``pip install anywidget``."""
     try:
         import anywidget
         import ipywidgets as widgets
@@ -411,6 +461,7 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
         epoch = traitlets.Int(0).tag(sync=True)  # bumped by "reset view": older motion is dropped
         error = traitlets.Unicode("").tag(sync=True)  # shown under the image; "" hides it
         png = traitlets.Unicode("").tag(sync=True)  # data: URL of the last frame, set by the browser at rest
+        z_scale = traitlets.Float(1.0).tag(sync=True)  # vertical exaggeration: the slider, the keys, Python
 
     class _ViewerBox(widgets.VBox):
         def _repr_mimebundle_(self, **kwargs: Any) -> Any:
@@ -446,7 +497,8 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
             canvas.error = _describe(what, e)
 
     state = ViewerState(scene, width, height, culling, pixel_threshold, camera, renderer, show, min_distance,
-                        **render_options)
+                        z_scale, **render_options)
+    canvas.z_scale = state.z_scale
 
     def note_browser(content: dict[str, Any]) -> None:
         fps, lat = _opt_float(content.get("fps")), _opt_float(content.get("latency_ms"))
@@ -488,15 +540,36 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     stops = sorted({*THRESHOLD_STOPS, float(state.pixel_threshold)})
     thr = widgets.SelectionSlider(options=[(f"{v:g}", v) for v in stops], value=float(state.pixel_threshold),
                                   description="pixels ≤", continuous_update=False)
+    zs = widgets.SelectionSlider(options=_stops(Z_SCALE_STOPS, state.z_scale), value=state.z_scale,
+                                 description="z ×", continuous_update=False)
+
+    syncing = [False]  # the slider follows the trait: its own events then are not the user's
+
+    def apply_z(z: float) -> None:
+        state.set_z_scale(z)
+        syncing[0] = True
+        try:
+            if state.z_scale not in [v for _, v in zs.options]:  # a value from Python or the keys: a stop of its own
+                zs.options = _stops([v for _, v in zs.options], state.z_scale)
+            zs.value = state.z_scale
+        finally:
+            syncing[0] = False
+
+    def slid(z: float) -> None:
+        if not syncing[0]:
+            canvas.z_scale = z
+
     reset_button = widgets.Button(description="reset view")
     mode.observe(lambda ch: guarded("culling menu", state.set_culling, ch["new"]), names="value")
     thr.observe(lambda ch: guarded("pixel threshold slider", state.set_pixel_threshold, ch["new"]), names="value")
     reset_button.on_click(lambda _b: guarded("reset button", reset))
-    box = _ViewerBox([canvas, widgets.HBox([mode, thr, reset_button]), stats])
+    zs.observe(lambda ch: slid(ch["new"]), names="value")
+    canvas.observe(lambda ch: guarded("vertical exaggeration", apply_z, ch["new"]), names="z_scale")
+    box = _ViewerBox([canvas, widgets.HBox([mode, thr, zs, reset_button]), stats])
     box.state = state
     box.canvas = canvas
     box.stats = stats
-    box.controls = dict(culling=mode, pixel_threshold=thr, reset=reset_button)
+    box.controls = dict(culling=mode, pixel_threshold=thr, z_scale=zs, reset=reset_button)
     box.handle_message = lambda content: on_msg(canvas, content, [])
     box.last_error = None
     guarded("first frame", state.render)
