@@ -217,3 +217,30 @@ def test_a_sample_out_of_float32_range_is_named_not_a_valid_one(kw):
     v[3, 1, 2] = 1e300  # values[0, 0, 0] is a valid ~0.5: the core named it (its residual overflowed)
     with pytest.raises(gc.InputError, match=r"^values\[3, 1, 2\] is 1e\+300, over 3.4e\+38 from the median"):
         gc.Volume(v, **kw)
+
+
+def _grid_corners(nk=2, nj=3, ni=4):
+    c = np.zeros((nk, nj, ni, 8, 3))
+    k, j, i = np.meshgrid(np.arange(nk), np.arange(nj), np.arange(ni), indexing="ij")
+    for n in range(8):
+        c[..., n, 0] = i + (n & 1)
+        c[..., n, 1] = j + ((n >> 1) & 1)
+        c[..., n, 2] = -(k + ((n >> 2) & 1))
+    return c
+
+
+@pytest.mark.parametrize("dtype", ["int32", "int64", "uint8", ">i4"])
+def test_an_integer_active_array_is_read_as_actnum(dtype):
+    # It was told "expected real numbers (float or int)" (it was an int array).
+    act = np.ones((2, 3, 4), dtype)
+    act[0, 1, 2] = 0
+    act[1, 2, 3] = 2  # ACTNUM 2 (dual porosity): active
+    s, t = gc.Scene(), gc.Scene()
+    s.add_grid(_grid_corners(), active=act)
+    t.add_grid(_grid_corners(), active=act.astype(np.int64) != 0)
+    assert s.to_bytes() == t.to_bytes()
+
+
+def test_a_float_active_array_is_told_what_is_expected():
+    with pytest.raises(gc.InputError, match=r"^active: dtype float64 is not supported; expected bools or integers$"):
+        gc.Scene().add_grid(_grid_corners(), active=np.ones((2, 3, 4)))

@@ -29,6 +29,7 @@ __all__ = [
     "heights",
     "vertices",
     "int_array",
+    "flags",
     "vec",
     "vec2",
     "vec3",
@@ -63,7 +64,8 @@ def checked_array(x: Any, arg: str, ndim: int, last: int | None = None, kinds: s
     except Exception as e:  # ragged lists, objects that refuse conversion
         raise InputError(f"{arg}: cannot be read as an array ({e})") from None
     if a.dtype.kind not in kinds:
-        want = "integers" if kinds == INT_KINDS else "real numbers (float or int)"
+        want = {INT_KINDS: "integers", FLOAT_KINDS: "real numbers (float or int)", "b": "bools",
+                "b" + INT_KINDS: "bools or integers"}.get(kinds, f"dtype kinds {kinds!r}")
         raise InputError(f"{arg}: dtype {a.dtype} is not supported; expected {want}")
     if a.ndim != ndim or (last is not None and a.shape[-1] != last):
         want = f"({', '.join(['n'] * (ndim - 1) + [str(last)])})" if last is not None else f"{ndim}-D"
@@ -155,6 +157,14 @@ def vertices(v: Any, arg: str = "vertices") -> np.ndarray:
 def int_array(x: Any, arg: str, ndim: int, last: int | None = None) -> np.ndarray:
     """numpy view of an integer-valued array (signed or unsigned, dtype kept) checked as by :func:`checked_array`."""
     return checked_array(x, arg, ndim, last, kinds=INT_KINDS)
+
+
+def flags(x: Any, arg: str, ndim: int) -> np.ndarray:
+    """C-contiguous bool array of rank ``ndim`` from bools or integers (integers as Eclipse's ACTNUM
+    and xtgeo's actnum: 0 = False, any other value = True); other dtypes are an InputError naming
+    ``arg`` that says so."""
+    a = checked_array(x, arg, ndim, kinds="b" + INT_KINDS)
+    return np.ascontiguousarray(a if a.dtype.kind == "b" else a != 0)
 
 
 def vec(x: Any, arg: str, n: int) -> tuple[float, ...]:

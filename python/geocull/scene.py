@@ -640,7 +640,8 @@ class Scene:
             j-bit ``(c >> 1) & 1``, k-bit ``(c >> 2) & 1`` (k-bit 0 = the cell's top), k = 0 the top
             layer. Collapsed corners (pinch-outs, zero-thickness cells) are legal; a non-finite corner
             of an active cell is an InputError naming it (inactive cells may hold anything).
-        active: (nk, nj, ni) bool (default all active): inactive cells are holes (one enclosed by
+        active: (nk, nj, ni) bool, or integers as Eclipse's ACTNUM (0 inactive, any other value
+            active; default all active): inactive cells are holes (one enclosed by
             active cells is a cavity, not drawn while the eye is outside the grid).
         region: (nk, nj, ni) int region ids (fault blocks, strata; default one region): cells never
             merge across regions; faces between regions are built for both (each region's surface
@@ -694,7 +695,7 @@ class Scene:
         if mask is not None:
             raise InputError("corners: masked corners are not supported; mark their cells inactive")
         c = cv.float_array(data, "corners", 5)
-        act = None if active is None else np.ascontiguousarray(cv.checked_array(active, "active", 3, kinds="b"))
+        act = None if active is None else cv.flags(active, "active", 3)
         reg = None
         if region is not None:
             r = cv.int_array(region, "region", 3)
