@@ -234,6 +234,12 @@ def test_plot_numbers_points_without_overlaps_and_names_both_three_pass_modes(sp
     rows = report.sweep(scene, cams, thresholds=[0, 10, 50], prepass_scales=[1.0, 0.5], width=32, height=32,
                         repeats=1, methods=("three_pass", "three_pass_cons", "horizon"))
     assert {r["mode"] for r in rows} == {None, "approximate (paper)", "conservative"}
+    assert report.method_name("three_pass") == "three_pass, approximate (paper)"
+    assert report.method_name("three_pass_cons") == "three_pass, conservative"
+    # the benchmark's names (python -m geocull bench --plot): "cons" marks its conservative runs
+    assert report.method_name("three_pass(s=0.5)") == "three_pass(s=0.5), approximate (paper)"
+    assert report.method_name("three_pass(cons,t=0)") == "three_pass(cons,t=0), conservative"
+    assert report.method_name("temporal(t=0)") == "temporal(t=0)" and report.method_name("none") == "none"
     for aggregate, n in ((True, 3 + 2 * 6), (False, 2 * (3 + 2 * 6))):
         fig = report.figure(rows, aggregate=aggregate)
         fig.canvas.draw()

@@ -85,12 +85,32 @@ INT_COLUMNS = frozenset({
 PARAM_COLUMNS = frozenset({"pixel_threshold", "prepass_scale", "coarse_factor"})
 
 
+def _mode(method: str) -> str | None:
+    """The three_pass mode of a method: the sweep's names (:data:`MODES`) and the benchmark's
+    ("three_pass(s=1)" approximate, "three_pass(cons,t=0)" conservative); None for other methods."""
+    if method in MODES:
+        return MODES[method]
+    if method.startswith("three_pass(") and method.endswith(")"):
+        return MODES["three_pass_cons" if "cons" in method[11:-1].split(",") else "three_pass"]
+    return None
+
+
+def _family(method: str) -> str:
+    """The method a plot colours a point by: "three_pass" (approximate), "three_pass_cons", or the
+    culling mode before any "(...)" of the benchmark's names."""
+    if _mode(method) == MODES["three_pass_cons"]:
+        return "three_pass_cons"
+    return method.split("(")[0]
+
+
 def method_name(method: str) -> str:
     """A method as tables and plots show it: ``"three_pass, approximate (paper)"``,
-    ``"three_pass, conservative"`` (:data:`MODES`), else the method itself."""
-    if method in MODES:
-        return f"three_pass, {MODES[method]}"
-    return method
+    ``"three_pass, conservative"`` (:data:`MODES`), the benchmark's three_pass names with their
+    mode (``"three_pass(s=1), approximate (paper)"``), else the method itself."""
+    mode = _mode(method)
+    if mode is None:
+        return method
+    return f"three_pass, {mode}" if method in MODES else f"{method}, {mode}"
 
 
 # --------------------------------------------------------------------------- helpers
@@ -651,7 +671,7 @@ def figure(table: Sequence[dict[str, Any]], title: str | None = None, aggregate:
 
     ax = fig.add_subplot()
     for r in rows:
-        m = r["method"]
+        m = _family(str(r["method"]))
         ax.scatter(r["differing_pixel_fraction"], r["ratio_to_none"], c=_COLORS.get(m, "tab:gray"),
                    marker=_MARKERS.get(m, "X"), s=60 if m != "oracle" else 140, zorder=3,
                    edgecolors="white", linewidths=0.5)
@@ -667,7 +687,7 @@ def figure(table: Sequence[dict[str, Any]], title: str | None = None, aggregate:
     for lab in ax.get_xticklabels():
         lab.set_horizontalalignment("right")
     handles = [Line2D([], [], ls="", marker=_MARKERS[m], color=_COLORS[m], label=method_name(m))
-               for m in _COLORS if any(r["method"] == m for r in rows)]
+               for m in _COLORS if any(_family(str(r["method"])) == m for r in rows)]
     if handles:
         ax.legend(handles=handles, loc="best", fontsize=8)
     _number_points(fig, ax, [(r["differing_pixel_fraction"], r["ratio_to_none"]) for r in rows])
