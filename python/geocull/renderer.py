@@ -3,8 +3,10 @@
 
 from __future__ import annotations
 
+import ctypes
 import os
 import warnings
+import weakref
 from typing import Literal, TypeAlias, get_args
 
 import numpy as np
@@ -12,7 +14,7 @@ from numpy.typing import ArrayLike
 
 from . import _convert as cv
 from . import _geocull
-from ._errors import GeocullWarning, InputError
+from ._errors import DeviceError, GeocullWarning, InputError
 from .camera import Camera
 from .results import IsoResult, RenderResult, RenderStats
 from .scene import Scene
@@ -137,6 +139,24 @@ def _warn_if_nearer_than_near(lo: np.ndarray, hi: np.ndarray, camera: Camera, ne
         )
 
 
+#: The renderers alive in this process (see :func:`_keep_in_forked_child`).
+_LIVE: weakref.WeakSet[Renderer] = weakref.WeakSet()
+
+
+def _keep_in_forked_child() -> None:
+    """``os.register_at_fork(after_in_child=...)``: in a child forked from this process the
+    renderers' core objects are kept forever (a reference no one releases). Their device's driver
+    threads did not survive the fork, and freeing a device waits for them: a child that merely
+    exited (its renderers freed with its globals) used to hang forever."""
+    for r in list(_LIVE):
+        dev = r.__dict__.get("_dev")
+        if dev is not None:
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(dev))
+
+
+os.register_at_fork(after_in_child=_keep_in_forked_child)
+
+
 class Renderer:
     """Off-screen wgpu renderer of width x height pixel images. backend: "auto" (a GPU if present,
     else Mesa's lavapipe on the CPU), "vulkan", "gl" (e.g. EGL + llvmpipe where there is no Vulkan),
@@ -152,7 +172,9 @@ class Renderer:
     render from different threads at once. Worker processes: start them with multiprocessing's
     "spawn" or "forkserver" method (scenes, cameras and volumes pickle); a process forked after
     its parent opened a renderer can build scenes but gets a DeviceError for a renderer (the
-    driver's threads do not survive fork()). ``pass_triangles``: see :attr:`pass_triangles`
+    driver's threads do not survive fork()); a renderer inherited by a forked process (e.g. a
+    module-level one and a ``multiprocessing.Pool`` with "fork", Linux's default) raises that
+    DeviceError on its first use there, instead of waiting forever. ``pass_triangles``: see :attr:`pass_triangles`
     (driver memory against frame time on CPU drivers; default unbounded). ``background``: see
     :attr:`background` (default a light grey gradient)."""
 
@@ -164,10 +186,25 @@ class Renderer:
             raise InputError(f"backend: {backend!r} is not a string")
         self._bg = _background(background)  # checked before a device opens
         self._bg_rows: np.ndarray | None = None
-        self._r = _geocull.Renderer(cv.integer(width, "width"), cv.integer(height, "height"), backend)
+        self._dev = _geocull.Renderer(cv.integer(width, "width"), cv.integer(height, "height"), backend)
+        self._pid = os.getpid()  # the process whose device it holds
+        _LIVE.add(self)
         self._set_rows()
         if pass_triangles is not None:
             self.pass_triangles = pass_triangles
+
+    @property
+    def _r(self) -> _geocull.Renderer:
+        """The core's renderer, in the process that opened it; DeviceError in a process forked from
+        it (its device's driver threads are not there: any call would wait forever)."""
+        if self._pid != os.getpid():
+            raise DeviceError(
+                f"this renderer was opened by process {self._pid}, and this process ({os.getpid()}) was forked from "
+                "it: the driver's threads do not survive fork(), so its device cannot be used here; create "
+                "renderers in worker processes started with multiprocessing's \"spawn\" or \"forkserver\" method "
+                "(scenes, cameras and volumes pickle)"
+            )
+        return self._dev
 
     @property
     def background(self) -> tuple[RGB, RGB]:
@@ -432,4 +469,6 @@ class Renderer:
         return res
 
     def __repr__(self) -> str:
+        if self._pid != os.getpid():
+            return f"<geocull.Renderer of process {self._pid}, unusable in this forked process>"
         return f"<geocull.Renderer {self.width}x{self.height} on {self.adapter_info}>"
