@@ -244,3 +244,47 @@ def test_an_integer_active_array_is_read_as_actnum(dtype):
 def test_a_float_active_array_is_told_what_is_expected():
     with pytest.raises(gc.InputError, match=r"^active: dtype float64 is not supported; expected bools or integers$"):
         gc.Scene().add_grid(_grid_corners(), active=np.ones((2, 3, 4)))
+
+
+# ------------------------------------------------------------------------ tiny scenes (item 7)
+
+
+def _tiny_scene(size):
+    s = gc.Scene()
+    x = np.arange(9)[None, :] * np.ones((9, 1))
+    s.add_heightfield(np.sin(x / 2.0) * size * 2, spacing=(size, size))
+    return s
+
+
+@pytest.mark.parametrize("size", [1e-8, 1e-10])
+def test_scenes_smaller_than_the_least_near_plane_warn(renderer_small, size):
+    # They rendered empty (or a few pixels: Camera.fit cannot bring the eye within the 1e-6 near
+    # plane) without a warning; the near-plane warning said "pass a smaller near", which is refused.
+    r = renderer_small(32, 32)
+    s = _tiny_scene(size)
+    for cam in (gc.Camera.fit(s), gc.Camera.look_at((14 * size, 14 * size, 10 * size), (4 * size, 4 * size, 0.0))):
+        with pytest.warns(gc.GeocullWarning, match=r"^the scene spans only [0-9.e-]+ \(its largest side") as w:
+            r.render(s, cam)
+        assert len([x for x in w if issubclass(x.category, gc.GeocullWarning)]) == 1
+
+
+def test_isosurfaces_of_tiny_volumes_warn(renderer_small):
+    c = np.linspace(-1, 1, 8)
+    v = gc.Volume(np.sqrt(c[:, None, None] ** 2 + c[None, :, None] ** 2 + c[None, None, :] ** 2), spacing=(1e-9,) * 3)
+    cam = gc.Camera.look_at((2e-8, 1e-8, 1e-8), (3.5e-9,) * 3)
+    with pytest.warns(gc.GeocullWarning, match="^the scene spans only 7e-09"):
+        renderer_small(32, 32).render_isosurface(v, 0.5, cam)
+
+
+def test_small_but_framable_scenes_do_not_warn(renderer_small):
+    import warnings
+
+    r = renderer_small(32, 32)
+    s = _tiny_scene(1e-6)  # 8e-6 wide: the eye can stand beyond the near plane and see it
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gc.GeocullWarning)
+        res = r.render(s, gc.Camera.fit(s))
+    big = _tiny_scene(1.0)
+    ref = r.render(big, gc.Camera.fit(big))  # the same view a million times larger
+    assert ref.coverage.mean() > 0.1
+    assert abs(res.coverage.mean() - ref.coverage.mean()) < 0.01
