@@ -123,6 +123,12 @@ def _label_arg(label: Any, values: Any = None) -> str | None:
     return n if isinstance(n, str) and n else None
 
 
+def _pair(v: Any) -> tuple[float, float]:
+    """(lo, hi) floats of a pair (TypeError / ValueError otherwise)."""
+    lo, hi = (float(x) for x in v)
+    return lo, hi
+
+
 def _down(z_positive: Any, default_down: bool) -> bool:
     """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
     if z_positive is None:
@@ -207,9 +213,19 @@ class Scene:
     def _unpickle(data: bytes, state: dict[str, Any] | None = None) -> Scene:
         s = Scene.from_bytes(data)
         if state:
-            s._zshared = {int(k): _SharedZ(*v) for k, v in state.get("zshared", {}).items()}
-            s._labels = {int(k): str(v) for k, v in state.get("labels", {}).items()}
-            s._tables = {int(k): np.asarray(v, np.float64) for k, v in state.get("tables", {}).items()}
+            ids = set(s.object_ids())
+            try:  # a damaged pickle's state is an InputError naming data, like its bytes
+                z = {int(k): _SharedZ(*v) for k, v in state.get("zshared", {}).items()}
+                z = {k: v._replace(own=_pair(v.own), applied=None if v.applied is None else _pair(v.applied))
+                     for k, v in z.items()}
+                labels = {int(k): str(v) for k, v in state.get("labels", {}).items()}
+                tables = {int(k): np.asarray(v, np.float64) for k, v in state.get("tables", {}).items()}
+                if not set(z) | set(labels) | set(tables) <= ids or any(t.ndim != 2 or t.shape[1:] != (3,)
+                                                                        for t in tables.values()):
+                    raise ValueError("entries of objects the scene does not have, or tables not (n, 3)")
+            except (TypeError, ValueError, AttributeError) as e:
+                raise InputError(f"data: the pickle's Python state is damaged ({e})") from None
+            s._zshared, s._labels, s._tables = z, labels, tables
         return s
 
     def add_heightfield(

@@ -390,8 +390,16 @@ class Volume:
     def _restore(data: bytes, flip: tuple[bool, bool, bool], survey: tuple[Any, Any, Any]) -> Volume:
         """Unpickling: the core's bytes and the Python side's index order and survey numbers."""
         v = Volume.from_bytes(data)
-        v._flip = (bool(flip[0]), bool(flip[1]), bool(flip[2]))
-        v._survey = (survey[0], survey[1], survey[2])
+        nz, ny, nx = v.shape
+        try:  # a damaged pickle's state is an InputError naming data, like its bytes
+            if len(flip) != 3 or len(survey) != 3:
+                raise ValueError("not three axes")
+            v._flip = (bool(flip[0]), bool(flip[1]), bool(flip[2]))
+            v._survey = tuple(  # type: ignore[assignment]
+                _numbers(x, f"data: {name}", n) for x, name, n in zip(
+                    survey, ("inlines", "crosslines", "samples"), (nx, ny, nz), strict=True))
+        except (TypeError, ValueError) as e:
+            raise InputError(f"data: the pickle's index order or survey numbers are damaged ({e})") from None
         return v
 
     def to_bytes(self) -> bytes:
