@@ -51,6 +51,8 @@ class RenderStats(TypedDict):
     cache_bytes: NotRequired[int]  # horizon: bytes of quadtrees cached after this frame (<= Renderer.cache_budget)
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view
     tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes tested
+    tiles_slab_tested: NotRequired[int]  # of those, height-field tiles tested with their slabs
+    triangles_slab_test: NotRequired[int]  # the slabs' triangles rasterised by the box test
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
     tiles_proven_hidden: NotRequired[int]  # three_pass conservative, temporal: hidden by a height field (CPU proof)
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose

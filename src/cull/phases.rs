@@ -33,8 +33,10 @@
 
 use super::{Draw, FrameInputs};
 use crate::gpu::layout::BoxInstance;
+use crate::gpu::slab_test::SlabDraws;
 use crate::gpu::DrawArgs;
 use crate::gpu::{passes, Targets};
+use wgpu::util::DeviceExt;
 
 /// What the prepass phase recorded.
 pub struct FirstSet {
@@ -154,9 +156,14 @@ pub struct TileBoxes {
     pub init: Vec<u32>,
     /// The whole box of each tile tested with sub-boxes: the gate of its sub-boxes.
     pub gates: Vec<BoxInstance>,
-    /// Per tile, the initial gate count: 0 for a tile whose sub-boxes wait for its whole box, 1
-    /// (open) for the others.
+    /// Per tile, the initial gate count: 0 for a tile whose sub-boxes (or slab) wait for its
+    /// whole box, 1 (open) for the others.
     pub gate_init: Vec<u32>,
+    /// The slab draws (`SceneGeometry::slab_draws`) of the tiles tested with their slabs.
+    pub slabs: Vec<DrawArgs>,
+    /// Per tile, for the slab test: its object's placement (render space, before exaggeration)
+    /// and how far its slab grows along z (the drawn level's error and a margin), world units.
+    pub place: Vec<[f32; 4]>,
 }
 
 /// The boxes of the visible, non-empty tiles. A tile drawn at level 0 is tested with its
@@ -165,10 +172,17 @@ pub struct TileBoxes {
 /// lies in the whole box (grown by no more), so where a sub-box's front face is at or in front of
 /// the image, the whole box's (the ray's entry into the larger convex box) is too. Most hidden
 /// tiles are then rasterised once, as one box, instead of as four.
-pub fn tile_boxes(f: &FrameInputs<'_>) -> TileBoxes {
+pub fn tile_boxes(f: &FrameInputs<'_>, drawn: Option<&[bool]>) -> TileBoxes {
     let g = f.geometry;
     let n = g.n_tiles();
-    let mut t = TileBoxes { boxes: Vec::new(), init: vec![0; n], gates: Vec::new(), gate_init: vec![1; n] };
+    let mut t = TileBoxes {
+        boxes: Vec::new(),
+        init: vec![0; n],
+        gates: Vec::new(),
+        gate_init: vec![1; n],
+        slabs: Vec::new(),
+        place: vec![[0.0; 4]; n],
+    };
     let instance = |i: usize, (lo, hi, _): (glam::DVec3, glam::DVec3, bool)| BoxInstance {
         lo: lo.as_vec3().to_array(),
         id: i as u32,
@@ -176,14 +190,21 @@ pub fn tile_boxes(f: &FrameInputs<'_>) -> TileBoxes {
         _pad: 0,
     };
     for i in 0..n {
-        if !f.object_visible[i] || g.fine[i].index_count == 0 {
+        // Tiles the first set is known (on the CPU) to draw need no test: their draw is on.
+        if !f.object_visible[i] || g.fine[i].index_count == 0 || drawn.is_some_and(|d| d[i]) {
             continue;
         }
         // A tile drawn at a coarser level is tested with its whole box, which holds every level
         // (levels use the tile's own vertices, and a box is convex).
         let subs = &g.sub_boxes[i];
         let whole = f.render_box(i, g.bbox[i].0, g.bbox[i].1);
-        if f.draw_args[i] == g.fine[i] && !subs.is_empty() {
+        if let Some((args, grow)) = slab_test(f, i, whole.2) {
+            t.gates.push(instance(i, whole));
+            t.gate_init[i] = 0;
+            let off = f.placement(g.tile_object_cpu[i] as usize);
+            t.place[i] = [off.x as f32, off.y as f32, off.z as f32, grow as f32];
+            t.slabs.push(args);
+        } else if f.draw_args[i] == g.fine[i] && !subs.is_empty() {
             // A whole box reaching the near plane is clipped, so it cannot gate: its sub-boxes
             // are then tested straight away.
             if !whole.2 {
@@ -207,19 +228,48 @@ pub fn tile_boxes(f: &FrameInputs<'_>) -> TileBoxes {
     t
 }
 
+/// Tile `i`'s slab draw and how far its slab grows along z when the box test uses its slab: a
+/// height-field tile with a slab, drawn at level 0 or at a lattice level (whose error bounds its
+/// vertical distance to the fine surface, so the slab grown by it holds the level), whose whole
+/// box (gate) does not reach the near plane (`near`). The growth adds a margin against f32
+/// round-off as `FrameInputs::render_box` grows boxes.
+fn slab_test(f: &FrameInputs<'_>, i: usize, near: bool) -> Option<(DrawArgs, f64)> {
+    let g = f.geometry;
+    let (args, exact) = g.slab_draws[i]?;
+    if near {
+        return None;
+    }
+    let error = if f.draw_args[i] == g.fine[i] {
+        0.0
+    } else if exact {
+        g.levels[i].iter().find(|l| l.args == f.draw_args[i])?.error as f64
+    } else {
+        return None;
+    };
+    let (lo, hi) = g.bbox[i];
+    let off = f.placement(g.tile_object_cpu[i] as usize);
+    let margin = 1e-6 * (lo + off).abs().max((hi + off).abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
+    Some((args, error + margin))
+}
+
 /// What the second phase recorded.
 pub struct Rest {
     /// The draws it adds (Gpu), or nothing (a Mask of false) when it only tests.
     pub draw: Draw,
     /// Per tile, the box pixels counted (FORCED + count for untested tiles).
     pub box_counts: wgpu::Buffer,
-    /// Tiles tested (each with one box or its sub-boxes).
+    /// Tiles tested (each with one box, its sub-boxes or its slab).
     pub tested: usize,
+    /// Tiles tested with their slabs, and the slabs' triangles.
+    pub slab_tiles: usize,
+    pub slab_triangles: u64,
 }
 
 /// Draws `first` (the set A, as indirect args, one per tile) into the final targets, tests every
 /// other visible tile's box against the result, and selects from `fine` (the frame's draws, one per
-/// tile) those whose count exceeds `threshold` (full-image pixels) when `add` is true.
+/// tile) those whose count exceeds `threshold` (full-image pixels) when `add` is true. `drawn`, when
+/// the caller knows the first set on the CPU, lists its tiles: they are not tested at all (on the
+/// GPU their boxes would collapse, but only after their vertex work).
 pub fn draw_and_test_the_rest(
     f: &FrameInputs<'_>,
     enc: &mut wgpu::CommandEncoder,
@@ -227,6 +277,7 @@ pub fn draw_and_test_the_rest(
     fine: &wgpu::Buffer,
     threshold: f32,
     add: bool,
+    drawn: Option<&[bool]>,
 ) -> Rest {
     let d = &f.ctx.device;
     let n = f.n_tiles();
@@ -241,7 +292,7 @@ pub fn draw_and_test_the_rest(
         f.pass_breaks,
         f.timestamps,
     );
-    let t = tile_boxes(f);
+    let t = tile_boxes(f, drawn);
     // The gates first (every gate open for them), then the boxes behind open gates.
     let gate = passes::counts_buffer_init(d, &t.gate_init);
     let open = passes::counts_buffer_init(d, &vec![1; n]);
@@ -252,6 +303,16 @@ pub fn draw_and_test_the_rest(
     let box_counts = passes::counts_buffer_init(d, &t.init);
     let boxes_buf = passes::boxes_buffer(d, &t.boxes);
     f.passes.record_box_test(d, enc, bg, main, &boxes_buf, t.boxes.len(), first, &gate, &box_counts, ts("test_ms"));
+    if let (Some((vertices, indices)), false) = (&f.geometry.slabs, t.slabs.is_empty()) {
+        let draws = passes::args_buffer(d, "slab_args", &t.slabs);
+        let place = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("slab_place"),
+            contents: bytemuck::cast_slice(&t.place),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let slabs = SlabDraws { vertices, indices, draws: &draws, n: t.slabs.len() as u32, place: &place };
+        f.passes.slab_test.record(d, enc, bg, main, &slabs, first, &gate, &box_counts, ts("test_ms"));
+    }
     let draw = if add {
         let rest = passes::empty_args_buffer(d, "rest_args", n);
         let ts = f.timestamps.and_then(|t| t.compute("count_ms"));
@@ -261,7 +322,8 @@ pub fn draw_and_test_the_rest(
         Draw::Mask(vec![false; n])
     };
     let tested = (0..n).filter(|&i| f.object_visible[i] && f.geometry.fine[i].index_count > 0).count();
-    Rest { draw, box_counts, tested }
+    let slab_triangles = t.slabs.iter().map(|a| a.triangles()).sum();
+    Rest { draw, box_counts, tested, slab_tiles: t.slabs.len(), slab_triangles }
 }
 
 #[cfg(test)]

@@ -72,13 +72,15 @@ impl CullStrategy for Temporal {
                 (set.first, set.fine)
             }
         };
-        let rest = draw_and_test_the_rest(f, enc, &first, &fine, threshold, true);
+        let rest = draw_and_test_the_rest(f, enc, &first, &fine, threshold, true, seen);
         self.current = Some(key);
         let mut v = Visible::new(rest.draw, Pixels::FinalImage);
         v.predrawn = Some(first);
         v.tile_counts.push(("box_pixels", rest.box_counts));
         v.stats.extend(stats);
         v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
+        v.stats.push(("tiles_slab_tested", Stat::Count(rest.slab_tiles as u64)));
+        v.stats.push(("triangles_slab_test", Stat::Count(rest.slab_triangles)));
         v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
         Ok(v)
     }

@@ -51,6 +51,13 @@ pub struct SceneGeometry {
     /// Per tile, boxes whose union holds its fine triangles (`TileMesh::sub_boxes`, [`SUB_BOXES`]²
     /// cells), origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
     pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
+    /// Every height-field tile's slab (`TileMesh::slab`, `lod::slab`), the box tests' occludee of
+    /// such tiles: its draw in `slabs` (one instance, first_instance = the tile) and whether its
+    /// levels of detail lie within their errors of the fine surface everywhere (lattice levels),
+    /// so that the slab grown by a level's error holds that level; None for other tiles.
+    pub slab_draws: Vec<Option<(DrawArgs, bool)>>,
+    /// The slabs' vertices (x, y, z, side) and u32 indices; None when no tile has one.
+    pub slabs: Option<(wgpu::Buffer, wgpu::Buffer)>,
     /// The fine surfaces of the height fields as the lit pass samples them
     /// (`Object::shading_samples`), object after object, two words per sample: the gradient as
     /// two f16 (x in the low half) and the object-relative height's f32 bits.
@@ -235,6 +242,43 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
 /// A tile's box as `SceneGeometry::bbox` keeps it (f64, origin-relative).
 fn tile_bbox(t: &crate::lod::TileMesh) -> (DVec3, DVec3) {
     (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
+}
+
+/// The slabs of `tiles` in one vertex and one index buffer, and per tile its slab's draw with
+/// whether its levels are lattice levels (`SceneGeometry::slab_draws`).
+#[allow(clippy::type_complexity)]
+fn upload_slabs(
+    d: &wgpu::Device,
+    tiles: &[&crate::lod::TileMesh],
+) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<(DrawArgs, bool)>>) {
+    let (mut verts, mut idx): (Vec<[f32; 4]>, Vec<u32>) = (Vec::new(), Vec::new());
+    let draws: Vec<Option<(DrawArgs, bool)>> = tiles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let s = t.slab.as_ref()?;
+            let (v, ix) = (&s.vertices, &s.indices);
+            let args = DrawArgs {
+                index_count: ix.len() as u32,
+                instance_count: 1,
+                first_index: idx.len() as u32,
+                base_vertex: verts.len() as i32,
+                first_instance: i as u32,
+            };
+            verts.extend_from_slice(v);
+            idx.extend_from_slice(ix);
+            Some((args, s.levels_exact))
+        })
+        .collect();
+    if idx.is_empty() {
+        return (None, draws);
+    }
+    let buf = |label, contents: &[u8], usage| {
+        d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+    };
+    let vb = buf("slab_vertices", bytemuck::cast_slice(&verts), wgpu::BufferUsages::VERTEX);
+    let ib = buf("slab_indices", bytemuck::cast_slice(&idx), wgpu::BufferUsages::INDEX);
+    (Some((vb, ib)), draws)
 }
 
 /// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them.
@@ -672,7 +716,10 @@ impl SceneGeometry {
         });
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
         let sub_boxes = tiles.par_iter().map(|t| tile_sub_boxes(t)).collect();
+        let (slabs, slab_draws) = upload_slabs(d, &tiles);
+        let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
+        let bytes = bytes + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims);
         ctx.take_error()?;
         Ok(Self {
@@ -690,6 +737,8 @@ impl SceneGeometry {
             levels,
             bbox,
             sub_boxes,
+            slab_draws,
+            slabs,
             shading,
             shading_base,
             grid_dims,

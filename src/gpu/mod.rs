@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod layout;
 pub mod passes;
 pub mod readback;
+pub mod slab_test;
 pub mod targets;
 pub mod timing;
 

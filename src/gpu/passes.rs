@@ -117,6 +117,8 @@ pub struct Passes {
     box_indices: wgpu::Buffer,
     /// The box test on the hardware's early depth test, where the device allows it exactly.
     box_early: Option<wgpu::RenderPipeline>,
+    /// The box test's count with height-field tiles' slabs as occludees.
+    pub slab_test: super::slab_test::SlabTest,
 }
 
 pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
@@ -431,6 +433,7 @@ impl Passes {
         let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(BOX_TEST_WGSL));
         let box_test = box_pipeline(d, &box_pl, &box_shader, if gl { "fs_box_gl" } else { "fs_box" }, None);
         let box_early = super::box_early::early_box_pipeline(d, &box_pl);
+        let slab_test = super::slab_test::SlabTest::new(d, &scene_layout, gl);
         let cube: [u32; 36] = [
             0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6,
         ];
@@ -457,6 +460,7 @@ impl Passes {
             box_early,
             box_layout,
             box_test,
+            slab_test,
         }
     }
 

@@ -17,6 +17,7 @@ pub mod levels;
 pub mod normals;
 pub mod shading;
 pub mod simplify;
+pub mod slab;
 pub mod tube;
 
 use crate::error::Work;
@@ -89,6 +90,9 @@ pub struct TileMesh {
     /// Levels 1.. for screen-space-error LOD ([`levels`]): each about a quarter of the triangles
     /// of the one before, the tile's border at full resolution; level 0 is `fine`.
     pub levels: Vec<levels::Level>,
+    /// A height-field tile's slab ([`slab`]): the shell the box test uses as its occludee; None
+    /// for other tiles (they are tested with their boxes).
+    pub slab: Option<slab::Slab>,
 }
 
 impl TileMesh {
@@ -343,6 +347,12 @@ pub fn tile_heightfield(
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
             }
+            let local_xy = |li: usize, lj: usize| {
+                let (x, y) = g.pos(i0 + li, j0 + lj);
+                (x - origin.x, y - origin.y)
+            };
+            tile.slab = slab::heightfield_slab(w, h, local_xy, |li, lj| at(i0 + li, j0 + lj) - origin.z)
+                .map(|s| slab::Slab { levels_exact: !holes, ..s });
             tile.finish(coarse_factor, lattice, true)
         })
         .inspect(|_| stop.item_done())

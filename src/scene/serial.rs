@@ -469,6 +469,8 @@ impl Scene {
                     bbox_max,
                     proxy_error,
                     levels,
+                    // Not stored: a loaded height field's tiles are box-tested with their boxes.
+                    slab: None,
                 });
             }
             if let ObjectKind::Grid(g) = &kind {

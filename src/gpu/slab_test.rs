@@ -1,0 +1,189 @@
+//! The slab test: [`Passes::record_box_test`](super::Passes::record_box_test)'s count with
+//! height-field tiles' slabs (`lod::slab`) as occludees (slab_test.wgsl). Mechanics only: it
+//! draws the slabs it is given, each as one instance of its tile, grown along z by the amount
+//! `place` holds for the tile, and counts per tile the fragments at or in front of the depth
+//! image; which tiles, and by how much, is the caller's (`cull::phases`).
+
+use super::passes::{shader, storage_entry};
+use super::targets::{Targets, DEPTH_FORMAT, ID_FORMAT};
+
+/// The slab-test pipeline and its bind-group layout.
+pub struct SlabTest {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+    /// Whether `pipeline` tests on the hardware's early depth test (the image's depth bound
+    /// read-only as the depth attachment, compared GreaterEqual before the fragment runs, as
+    /// `box_early.rs` does for boxes): where the device has SHADER_EARLY_DEPTH_TEST and is not GL.
+    /// Hidden slab fragments, most of them, then never reach the shader.
+    early: bool,
+}
+
+/// The early-depth fragment entry (appended to slab_test.wgsl where the device allows it).
+const EARLY_WGSL: &str = "
+@fragment
+@early_depth_test(force)
+fn fs_slab_early(v: SlabOut) -> @location(0) u32 {
+    atomicAdd(&counts[v.tile], 1u);
+    return 0u;
+}
+";
+
+/// One slab vertex: origin-relative (x, y, z) and its side (+1 top, -1 bottom).
+const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 16,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 }],
+};
+
+/// What a slab test draws and where it counts.
+pub struct SlabDraws<'a> {
+    /// All slabs' vertices ([`VERTEX`]) and indices (u32).
+    pub vertices: &'a wgpu::Buffer,
+    pub indices: &'a wgpu::Buffer,
+    /// `n` indexed indirect draws, one per slab, each one instance whose first_instance is its tile.
+    pub draws: &'a wgpu::Buffer,
+    pub n: u32,
+    /// Per tile (x, y, z, grow): its object's render-space placement and its slab's growth.
+    pub place: &'a wgpu::Buffer,
+}
+
+impl SlabTest {
+    /// The pipeline for `scene_layout` (group 0: the globals); `gl` compares z / w by hand.
+    pub fn new(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: bool) -> Self {
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let vs = wgpu::ShaderStages::VERTEX;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("slab_test"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                storage_entry(1, false, fs),
+                storage_entry(2, true, vs),
+                storage_entry(3, true, vs),
+                storage_entry(4, true, vs),
+            ],
+        });
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("slab_test"),
+            bind_group_layouts: &[Some(scene_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let early = !gl && d.features().contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
+        let mut source = include_str!("shaders/slab_test.wgsl").to_string();
+        if early {
+            source.push_str(EARLY_WGSL);
+        }
+        let module = shader(d, "slab_test.wgsl", source);
+        let fs_entry = if early {
+            "fs_slab_early"
+        } else if gl {
+            "fs_slab_gl"
+        } else {
+            "fs_slab"
+        };
+        let depth_stencil = early.then(|| wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        });
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("slab_test"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_slab"),
+                compilation_options: Default::default(),
+                buffers: &[Some(VERTEX)],
+            },
+            // Front faces only: a slab's prisms are wound outwards, so a ray enters each through
+            // one of them (counted as a box's front faces are).
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: Some(wgpu::Face::Back),
+                front_face: wgpu::FrontFace::Ccw,
+                ..Default::default()
+            },
+            depth_stencil,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(fs_entry),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: ID_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::empty(),
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { layout, pipeline, early }
+    }
+
+    /// Pass: for every slab of `slabs` whose tile's draw in `skip` is off and whose `gate` count is
+    /// above 0, adds to `counts[tile]` the fragments of the slab at or in front of the depth of
+    /// `targets` (drawn by an earlier pass, reverse-Z). Writes nothing to `targets`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        scene_bg: &wgpu::BindGroup,
+        targets: &Targets,
+        slabs: &SlabDraws<'_>,
+        skip: &wgpu::Buffer,
+        gate: &wgpu::Buffer,
+        counts: &wgpu::Buffer,
+        ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("slab_test"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
+                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: gate.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: slabs.place.as_entire_binding() },
+            ],
+        });
+        let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("slab_test"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.id,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep,
+            })],
+            // The early-depth pipeline tests against the image's depth, bound read-only.
+            depth_stencil_attachment: self.early.then_some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth,
+                depth_ops: None,
+                stencil_ops: None,
+            }),
+            timestamp_writes: ts,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if slabs.n > 0 {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, scene_bg, &[]);
+            pass.set_bind_group(1, &bg, &[]);
+            pass.set_vertex_buffer(0, slabs.vertices.slice(..));
+            pass.set_index_buffer(slabs.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.multi_draw_indexed_indirect(slabs.draws, 0, slabs.n);
+        }
+    }
+}

@@ -1,0 +1,436 @@
+//! Slabs: a closed shell that holds a height-field tile's surface and follows it, the occludee
+//! the conservative box test rasterises in place of the tile's boxes (`crate::cull::phases`).
+//!
+//! Contract of [`heightfield_slab`]: the tile is cut, by halving from the whole tile (whole fine
+//! cells each), into pieces, each closed by a prism of its own:
+//! * a piece whose samples are all finite and whose error is at most [`TOLERANCE`] sample
+//!   spacings (or that is one fine cell, whose error is 0) is bounded by its coarse surface (two
+//!   triangles over its corner samples, split as the fine cells are) moved up and down by its
+//!   error: the largest vertical distance between that surface and the fine triangles, found at
+//!   the fine samples and where the coarse diagonal crosses a fine edge (both surfaces are
+//!   piecewise linear, so the distance is largest at a vertex of their overlay). The prism's top
+//!   over the piece is then at or above, its bottom at or below, every fine point there;
+//! * a piece with no finite sample is left out;
+//! * any other piece is halved, down to one fine cell with a hole at a corner, which gets a
+//!   prism over each of its fine triangles whose corners are finite (the triangle, thickened).
+//!
+//! So a smooth tile is one prism (12 triangles), the slab follows a survey's ragged outline to
+//! the fine cell, nothing of it stands where the surface has no data, and it stays thin across
+//! faults and folds, where the pieces are small.
+//!
+//! Every fine triangle lies in the slab; a ray that meets the tile's surface therefore enters the
+//! slab at or in front of it, which is what the box test's argument needs of an occludee
+//! (`crate::cull::phases`). Unlike the tile's box (as tall as the tile's whole height range: 70 m
+//! and more on a dipping horizon, taller than the gap to the next horizon) the slab is as thick
+//! as the surface departs from its coarse lattice, a metre or two on a smooth horizon. Rotated
+//! grids need nothing more: positions come from the grid.
+//!
+//! Round-off: vertices on the tile's outline are pushed out across it (along the grid's axes) by
+//! `1e-4` of the tile's diagonal, a lone triangle's corners away from its centroid by as much,
+//! and every bound is thickened by three times the steepest slope between neighbouring samples
+//! times that push (what the push can tilt a surface by), so that no wall or face falls inside the
+//! surface it bounds; f32 heights are rounded outwards.
+
+use glam::DVec2;
+
+/// A piece whose coarse surface departs from the fine one by more than this many sample spacings
+/// is halved (down to single fine cells, which are exact).
+pub const TOLERANCE: f64 = 0.25;
+
+/// A tile's slab (see the module's contract) as the box test draws it: vertices (x, y, z, side),
+/// origin-relative, side +1 on top surfaces and -1 on bottom ones, and triangles over them, each
+/// prism's faces wound outwards (counter-clockwise seen from outside), so that the test counts
+/// front faces only: the ray's entry into the solid, one per pixel per prism, as a box's.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Slab {
+    pub vertices: Vec<[f32; 4]>,
+    pub indices: Vec<u32>,
+    /// Whether the tile's levels of detail are lattice levels, whose error bounds their vertical
+    /// distance to the fine surface everywhere (`super::levels::lattice_levels`): then the slab
+    /// grown by a level's error holds that level. Set by the tile's builder.
+    pub levels_exact: bool,
+}
+
+/// A cell's samples: all finite, none, or some.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Fill {
+    Full,
+    Empty,
+    Partial,
+}
+
+/// The slab of a height-field tile of `w` × `h` samples (see the module's contract): `pos(li, lj)`
+/// the origin-relative (x, y) of local sample (li, lj), `z(li, lj)` its origin-relative height
+/// (NaN: a hole). None when the tile has no finite sample or fewer than 2 samples a side.
+pub fn heightfield_slab(
+    w: usize,
+    h: usize,
+    pos: impl Fn(usize, usize) -> (f64, f64),
+    z: impl Fn(usize, usize) -> f64,
+) -> Option<Slab> {
+    if w < 2 || h < 2 {
+        return None;
+    }
+    let (p00, p11) = (pos(0, 0), pos(w - 1, h - 1));
+    let (pa, pb) = (pos(w - 1, 0), pos(0, h - 1));
+    let diag = (DVec2::new(p11.0 - p00.0, p11.1 - p00.1).length()).max(DVec2::new(pb.0 - pa.0, pb.1 - pa.1).length());
+    // The steepest slope between neighbouring samples: the surface rises by at most twice that
+    // per unit of horizontal distance in any direction, so pushing the outline out by `push`
+    // moves the top and bottom surfaces by at most `thick`, by which every vertex is thickened.
+    let push = 1e-4 * diag;
+    let mut slope = 0.0f64;
+    for lj in 0..h {
+        for li in 0..w {
+            for (di, dj) in [(1, 0), (0, 1)] {
+                let (i, j) = (li + di, lj + dj);
+                if i < w && j < h {
+                    let (a, b) = (z(li, lj), z(i, j));
+                    let (p, q) = (pos(li, lj), pos(i, j));
+                    let d = DVec2::new(q.0 - p.0, q.1 - p.1).length();
+                    if a.is_finite() && b.is_finite() && d > 0.0 {
+                        slope = slope.max((b - a).abs() / d);
+                    }
+                }
+            }
+        }
+    }
+    let thick = 3.0 * slope * push;
+    // Cells whose coarse surface departs from the fine one by more than this are refined (a
+    // twentieth of the mean sample spacing): a fault's step or a sharp fold gets small cells.
+    let spacing = (DVec2::from(pos(w - 1, 0)) - DVec2::from(p00)).length() / (w - 1) as f64;
+    let spacing = 0.5 * (spacing + (DVec2::from(pos(0, h - 1)) - DVec2::from(p00)).length() / (h - 1) as f64);
+    let tol = TOLERANCE * spacing;
+    // The grid's axes, and (x, y) of a sample pushed out across the tile's outline (along the
+    // axes, so that no sample leaves the cells about it).
+    let axis = |q: (f64, f64)| DVec2::new(q.0 - p00.0, q.1 - p00.1).normalize_or_zero();
+    let (ai, aj) = (axis(pos(1, 0)), axis(pos(0, 1)));
+    // A grid whose rows run clockwise from its columns (yflip) turns every winding over.
+    let flip = ai.perp_dot(aj) < 0.0;
+    let xy = |li: usize, lj: usize| -> [f32; 2] {
+        let (x, y) = pos(li, lj);
+        let mut p = DVec2::new(x, y);
+        let side = |at_lo: bool, at_hi: bool| {
+            if at_lo {
+                -1.0
+            } else if at_hi {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        p += (ai * side(li == 0, li == w - 1) + aj * side(lj == 0, lj == h - 1)) * push;
+        [p.x as f32, p.y as f32]
+    };
+    let fill = |a: (usize, usize), b: (usize, usize)| -> Fill {
+        let (mut some, mut all) = (false, true);
+        for lj in a.1..=b.1 {
+            for li in a.0..=b.0 {
+                if z(li, lj).is_finite() {
+                    some = true;
+                } else {
+                    all = false;
+                }
+            }
+        }
+        if all {
+            Fill::Full
+        } else if some {
+            Fill::Partial
+        } else {
+            Fill::Empty
+        }
+    };
+    // Pieces of the tile, halved until each is full and within the tolerance (bounded by its
+    // coarse surface and error), holds no finite sample (left out), or is one fine cell.
+    let mut slab = Slab::default();
+    let mut stack = vec![((0usize, 0usize), (w - 1, h - 1))];
+    while let Some((a, b)) = stack.pop() {
+        let f = fill(a, b);
+        let corners = [(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)];
+        let single = b.0 - a.0 <= 1 && b.1 - a.1 <= 1;
+        match f {
+            Fill::Empty => {}
+            Fill::Full if single || cell_error(a, b, &z) <= tol => {
+                prism(&mut slab, &corners.map(|(i, j)| xy(i, j)), &full_bounds(a, b, &z, thick), flip)
+            }
+            // One fine cell with a hole at a corner: a prism over each of its fine triangles
+            // whose corners are finite (the triangle itself, thickened), nothing elsewhere.
+            Fill::Partial if single => {
+                for tri in [[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]] {
+                    if tri.iter().all(|&(i, j)| z(i, j).is_finite()) {
+                        let bounds = tri.map(|(i, j)| (z(i, j) - thick, z(i, j) + thick));
+                        // Each corner pushed out from the triangle's centroid: every edge moves out.
+                        let p = tri.map(|(i, j)| DVec2::from(pos(i, j)));
+                        let c = (p[0] + p[1] + p[2]) / 3.0;
+                        let out = p.map(|q| q + (q - c).normalize_or_zero() * push).map(|q| [q.x as f32, q.y as f32]);
+                        prism(&mut slab, &out, &bounds, flip);
+                    }
+                }
+            }
+            Fill::Partial | Fill::Full => {
+                let (mi, mj) = ((a.0 + b.0) / 2, (a.1 + b.1) / 2);
+                let xs = if b.0 - a.0 > 1 { vec![a.0, mi, b.0] } else { vec![a.0, b.0] };
+                let ys = if b.1 - a.1 > 1 { vec![a.1, mj, b.1] } else { vec![a.1, b.1] };
+                for jj in ys.windows(2) {
+                    for ii in xs.windows(2) {
+                        stack.push(((ii[0], jj[0]), (ii[1], jj[1])));
+                    }
+                }
+            }
+        }
+    }
+    (!slab.indices.is_empty()).then_some(slab)
+}
+
+/// The bounds of a full cell's surface at its corners (counter-clockwise from `a`): each corner's
+/// height - and + the cell's [`cell_error`] and `thick`.
+fn full_bounds(a: (usize, usize), b: (usize, usize), z: &impl Fn(usize, usize) -> f64, thick: f64) -> [(f64, f64); 4] {
+    let e = cell_error(a, b, z) + thick;
+    [(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)].map(|(i, j)| (z(i, j) - e, z(i, j) + e))
+}
+
+/// Appends a closed prism over the convex polygon `corners` (a triangle or a quadrilateral,
+/// counter-clockwise in the grid's frame), its top at the corners' upper bounds and its bottom at
+/// their lower ones, every face wound outwards (counter-clockwise seen from outside) in world
+/// space: `flip` when the grid's frame is left-handed there (its rows run clockwise from its
+/// columns), which turns its counter-clockwise into clockwise.
+fn prism(slab: &mut Slab, corners: &[[f32; 2]], bounds: &[(f64, f64)], flip: bool) {
+    let base = slab.vertices.len() as u32;
+    let m = corners.len() as u32;
+    for (c, b) in corners.iter().zip(bounds) {
+        slab.vertices.push([c[0], c[1], bound_f32(b.1, 1.0), 1.0]);
+    }
+    for (c, b) in corners.iter().zip(bounds) {
+        slab.vertices.push([c[0], c[1], bound_f32(b.0, -1.0), -1.0]);
+    }
+    let mut tri = |a: u32, b: u32, c: u32| slab.indices.extend_from_slice(&if flip { [a, c, b] } else { [a, b, c] });
+    let (t, u) = (base, base + m);
+    for k in 1..m - 1 {
+        tri(t, t + k, t + k + 1); // the top, facing up
+        tri(u, u + k + 1, u + k); // the bottom, facing down
+    }
+    for k in 0..m {
+        // A wall below the top's edge k, facing away from the polygon.
+        let (e0, e1) = (t + k, t + (k + 1) % m);
+        tri(e0, e1 + m, e1);
+        tri(e0, e0 + m, e1 + m);
+    }
+}
+
+/// `exact` as f32, rounded up for a top (`side` > 0) and down for a bottom, so that the f32 still
+/// bounds the f64.
+fn bound_f32(exact: f64, side: f32) -> f32 {
+    let v = exact as f32;
+    if side > 0.0 {
+        next_up(v, exact)
+    } else {
+        next_down(v, exact)
+    }
+}
+
+/// The largest vertical distance between the fine surface over the lattice cell `a..=b` (local
+/// sample indices; every sample finite) and the cell's coarse triangles (corners a, b, c and a, c,
+/// d counter-clockwise from `a`, split along a-c as the fine cells are). Both are piecewise linear,
+/// so the distance is largest at a vertex of their overlay: a fine sample, or where the coarse
+/// diagonal crosses a fine edge (a column line, a row line or a fine cell's diagonal).
+fn cell_error(a: (usize, usize), b: (usize, usize), z: &impl Fn(usize, usize) -> f64) -> f64 {
+    let (sx, sy) = ((b.0 - a.0) as f64, (b.1 - a.1) as f64);
+    let (za, zb, zc, zd) = (z(a.0, a.1), z(b.0, a.1), z(b.0, b.1), z(a.0, b.1));
+    let coarse =
+        |u: f64, v: f64| if u >= v { za + u * (zb - za) + v * (zc - zb) } else { za + u * (zc - zd) + v * (zd - za) };
+    // The fine surface at local grid coordinates (x, y) from `a`, on its triangles.
+    let fine = |x: f64, y: f64| {
+        let (i, j) = ((x.floor() as usize).min(b.0 - a.0 - 1), (y.floor() as usize).min(b.1 - a.1 - 1));
+        let (fx, fy) = (x - i as f64, y - j as f64);
+        let at = |di: usize, dj: usize| z(a.0 + i + di, a.1 + j + dj);
+        if fx >= fy {
+            at(0, 0) + fx * (at(1, 0) - at(0, 0)) + fy * (at(1, 1) - at(1, 0))
+        } else {
+            at(0, 0) + fx * (at(1, 1) - at(0, 1)) + fy * (at(0, 1) - at(0, 0))
+        }
+    };
+    let mut e = 0.0f64;
+    for lj in a.1..=b.1 {
+        for li in a.0..=b.0 {
+            let (u, v) = ((li - a.0) as f64 / sx, (lj - a.1) as f64 / sy);
+            e = e.max((z(li, lj) - coarse(u, v)).abs());
+        }
+    }
+    // The coarse diagonal (t sx, t sy), t in 0..1, crosses column lines at t = i / sx, row lines at
+    // t = j / sy and fine diagonals (y - x an integer) at t = k / (sy - sx).
+    let mut ts: Vec<f64> = (1..b.0 - a.0).map(|i| i as f64 / sx).chain((1..b.1 - a.1).map(|j| j as f64 / sy)).collect();
+    if sx != sy {
+        let span = (sy - sx).abs() as usize;
+        ts.extend((1..span).map(|k| k as f64 / (sy - sx).abs()));
+    }
+    for t in ts {
+        e = e.max((fine(t * sx, t * sy) - (za + t * (zc - za))).abs());
+    }
+    e
+}
+
+/// `v` (the f32 nearest `exact`), raised by one ulp where it fell below `exact`.
+fn next_up(v: f32, exact: f64) -> f32 {
+    if (v as f64) < exact {
+        f32::from_bits(if v >= 0.0 { v.to_bits() + 1 } else { v.to_bits() - 1 })
+    } else {
+        v
+    }
+}
+
+/// `v` (the f32 nearest `exact`), lowered by one ulp where it rose above `exact`.
+fn next_down(v: f32, exact: f64) -> f32 {
+    if (v as f64) > exact {
+        f32::from_bits(if v > 0.0 { v.to_bits() - 1 } else { v.to_bits() + 1 })
+    } else {
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dipping, wavy tile rotated 30 degrees, with scattered holes (and a hole-free variant).
+    #[allow(clippy::type_complexity)]
+    fn tile(holes: bool) -> (impl Fn(usize, usize) -> (f64, f64), impl Fn(usize, usize) -> f64) {
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let pos = move |i: usize, j: usize| {
+            let (u, v) = (i as f64 * 25.0, j as f64 * 25.0);
+            (c * u - s * v + 10.0, s * u + c * v - 20.0)
+        };
+        let z = move |i: usize, j: usize| {
+            if holes && ((i * 7 + j * 3).is_multiple_of(11) || i + j < 6) {
+                f64::NAN
+            } else {
+                -0.1 * i as f64 * 25.0 + 8.0 * (j as f64 * 0.7).sin() + 3.0 * (i as f64 * 1.3).cos()
+            }
+        };
+        (pos, z)
+    }
+
+    /// Heights at (x, y) of the slab's top (side +1) and bottom (side -1) triangles covering it.
+    fn heights_at(s: &Slab, x: f64, y: f64) -> (Vec<f64>, Vec<f64>) {
+        let (mut tops, mut bottoms) = (Vec::new(), Vec::new());
+        for t in s.indices.chunks_exact(3) {
+            let v = [t[0], t[1], t[2]].map(|k| s.vertices[k as usize]);
+            if v[0][3] != v[1][3] || v[1][3] != v[2][3] {
+                continue; // a wall
+            }
+            let p = v.map(|q| DVec2::new(q[0] as f64, q[1] as f64));
+            let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+            if area.abs() < 1e-12 {
+                continue;
+            }
+            let q = DVec2::new(x, y);
+            let l1 = (p[2] - p[1]).perp_dot(q - p[1]) / area;
+            let l2 = (p[0] - p[2]).perp_dot(q - p[2]) / area;
+            let l3 = 1.0 - l1 - l2;
+            // f32 vertices: points on a shared edge may fall a few ulps outside both triangles.
+            if l1 < -1e-5 || l2 < -1e-5 || l3 < -1e-5 {
+                continue;
+            }
+            let zz = l1 * v[0][2] as f64 + l2 * v[1][2] as f64 + l3 * v[2][2] as f64;
+            if v[0][3] > 0.0 {
+                tops.push(zz)
+            } else {
+                bottoms.push(zz)
+            }
+        }
+        (tops, bottoms)
+    }
+
+    #[test]
+    fn every_point_of_the_fine_triangles_lies_between_a_top_and_a_bottom_over_it() {
+        for holes in [false, true] {
+            for (w, h) in [(2, 2), (3, 9), (17, 12), (40, 33)] {
+                let (pos, z) = tile(holes);
+                let Some(s) = heightfield_slab(w, h, &pos, &z) else {
+                    assert!(holes && w * h <= 4);
+                    continue;
+                };
+                for t in s.indices.chunks_exact(3) {
+                    assert!(t.iter().all(|&k| (k as usize) < s.vertices.len()));
+                }
+                let mut checked = 0;
+                for lj in 0..h - 1 {
+                    for li in 0..w - 1 {
+                        for tri in [[(0, 0), (1, 0), (1, 1)], [(0, 0), (1, 1), (0, 1)]] {
+                            let c = tri.map(|(di, dj)| (li + di, lj + dj));
+                            if c.iter().any(|&(i, j)| !z(i, j).is_finite()) {
+                                continue;
+                            }
+                            for bary in [[1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [1.0 / 3.0; 3]] {
+                                let mix = |f: &dyn Fn(usize, usize) -> f64| {
+                                    (0..3).map(|k| bary[k] * f(c[k].0, c[k].1)).sum::<f64>()
+                                };
+                                let (x, y) = (mix(&|i, j| pos(i, j).0), mix(&|i, j| pos(i, j).1));
+                                let zz = mix(&|i, j| z(i, j));
+                                let (tops, bottoms) = heights_at(&s, x, y);
+                                assert!(
+                                    tops.iter().any(|&t| t >= zz - 1e-4),
+                                    "no top over ({li}, {lj}) {zz}: {tops:?} {w} {h} {holes} {x} {y}"
+                                );
+                                assert!(bottoms.iter().any(|&b| b <= zz + 1e-4), "no bottom under ({li}, {lj})");
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+                assert!(checked > 0);
+            }
+        }
+    }
+
+    #[test]
+    fn a_smooth_tile_gets_a_thin_slab_and_holes_are_left_out() {
+        // A plane: every cell's coarse triangles are the surface, so the slab is the plane itself.
+        let plane = |i: usize, j: usize| 0.5 * i as f64 - 0.25 * j as f64;
+        let s = heightfield_slab(33, 33, |i, j| (i as f64 * 10.0, j as f64 * 10.0), plane).unwrap();
+        assert_eq!((s.vertices.len(), s.indices.len()), (8, 36), "one prism");
+        for v in &s.vertices {
+            let want = 0.05 * v[0] as f64 - 0.025 * v[1] as f64;
+            assert!((v[2] as f64 - want).abs() < 0.02, "{v:?}");
+        }
+        // A tile whose left half is a hole: no top reaches over the hole.
+        let half = |i: usize, j: usize| if i < 16 { f64::NAN } else { plane(i, j) };
+        let s = heightfield_slab(33, 33, |i, j| (i as f64 * 10.0, j as f64 * 10.0), half).unwrap();
+        let (tops, _) = heights_at(&s, 50.0, 160.0);
+        assert!(tops.is_empty());
+        let (tops, _) = heights_at(&s, 250.0, 160.0);
+        assert!(!tops.is_empty());
+        assert!(heightfield_slab(5, 5, |i, j| (i as f64, j as f64), |_, _| f64::NAN).is_none());
+    }
+
+    #[test]
+    fn every_prism_is_closed_and_wound_outwards() {
+        for (yflip, holes) in [(false, false), (false, true), (true, true)] {
+            let (pos, z) = tile(holes);
+            let pos = move |i: usize, j: usize| {
+                let (x, y) = pos(i, j);
+                if yflip {
+                    (x, -y)
+                } else {
+                    (x, y)
+                }
+            };
+            let s = heightfield_slab(17, 12, pos, &z).unwrap();
+            // Each prism's faces enclose a positive volume (outward winding) and every directed
+            // edge is matched by its reverse (closed), prism by prism (their vertices are their own).
+            let mut edges = std::collections::HashMap::new();
+            let mut volume = 0.0f64;
+            for t in s.indices.chunks_exact(3) {
+                let p = [t[0], t[1], t[2]].map(|k| {
+                    let v = s.vertices[k as usize];
+                    glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                });
+                volume += p[0].dot(p[1].cross(p[2])) / 6.0;
+                for e in 0..3 {
+                    *edges.entry((t[e], t[(e + 1) % 3])).or_insert(0) += 1;
+                }
+            }
+            assert!(edges.iter().all(|(&(a, b), &c)| c == 1 && edges.get(&(b, a)) == Some(&1)));
+            assert!(volume > 0.0, "{yflip} {holes}: {volume}");
+        }
+    }
+}
