@@ -27,7 +27,12 @@
 //! at coarser levels, whose triangles may leave the sub-boxes but not the convex box of the
 //! vertices they share with level 0. A pixel counted in several overlapping sub-boxes only raises
 //! the count. Sub-boxes are rasterised only where the tile's whole box, tested first, counts a
-//! pixel ([`tile_boxes`]): that changes no count, only the work. Boxes reaching the near plane
+//! pixel ([`tile_boxes`]): that changes no count, only the work. A height-field tile with a slab
+//! (`lod::slab`: closed prisms, wound outwards, whose union holds its fine triangles and, grown by
+//! a lattice level's error, that level's) is tested with its slab behind the same gate instead:
+//! the ray's entry into the prisms is a front face at or in front of the fragment, the same
+//! argument, with an occludee as thin as the surface's departure from its coarse lattice rather
+//! than as tall as the tile's height range. Boxes reaching the near plane
 //! are drawn untested ([`FORCED`]); boxes are grown against f32 round-off and ties count as
 //! visible (`FrameInputs::tile_box`).
 

@@ -347,11 +347,11 @@ pub fn tile_heightfield(
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
             }
-            let local_xy = |li: usize, lj: usize| {
+            let grid_xy = |li: usize, lj: usize| {
                 let (x, y) = g.pos(i0 + li, j0 + lj);
                 (x - origin.x, y - origin.y)
             };
-            tile.slab = slab::heightfield_slab(w, h, local_xy, |li, lj| at(i0 + li, j0 + lj) - origin.z)
+            tile.slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
                 .map(|s| slab::Slab { levels_exact: !holes, ..s });
             tile.finish(coarse_factor, lattice, true)
         })

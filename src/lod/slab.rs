@@ -228,6 +228,24 @@ fn bound_f32(exact: f64, side: f32) -> f32 {
     }
 }
 
+/// The slab of a height-field tile of `w` × `h` samples from its own vertices, as drawn:
+/// `vertex(li, lj)` the tile's vertex at local sample (li, lj) (`u32::MAX` where none: a hole, or
+/// a sample no triangle uses), `grid_xy` the sample's origin-relative (x, y) from its grid, used
+/// where it has no vertex. The same slab whether the tile was just built or read back from bytes.
+pub fn tile_slab(
+    tile: &super::TileMesh,
+    (w, h): (usize, usize),
+    vertex: impl Fn(usize, usize) -> u32,
+    grid_xy: impl Fn(usize, usize) -> (f64, f64),
+) -> Option<Slab> {
+    let at = |li: usize, lj: usize| tile.positions.get(vertex(li, lj) as usize);
+    let pos = |li: usize, lj: usize| match at(li, lj) {
+        Some(p) => (p[0] as f64, p[1] as f64),
+        None => grid_xy(li, lj),
+    };
+    heightfield_slab(w, h, pos, |li, lj| at(li, lj).map_or(f64::NAN, |p| p[2] as f64))
+}
+
 /// The largest vertical distance between the fine surface over the lattice cell `a..=b` (local
 /// sample indices; every sample finite) and the cell's coarse triangles (corners a, b, c and a, c,
 /// d counter-clockwise from `a`, split along a-c as the fine cells are). Both are piecewise linear,

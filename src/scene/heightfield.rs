@@ -310,6 +310,64 @@ impl Object {
 }
 
 impl Object {
+    /// Rebuilds the slabs (`lod::slab`) of a height field's tiles from their vertices, as
+    /// `lod::tile_heightfield` builds them (scenes read from bytes do not store them). A tile gets
+    /// none (it is box-tested) unless its vertices are distinct samples of its grid within its
+    /// tile's range and its triangles are the lattice's (as every tile built by this crate), so a
+    /// damaged scene never gets a slab that does not hold what it draws. Nothing for other kinds.
+    pub(crate) fn rebuild_slabs(&mut self) {
+        let Some(g) = self.grid_axes() else { return };
+        let ObjectKind::Heightfield { tiles: (tx, ty), .. } = self.kind else { return };
+        let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;
+        if !fits(g.nx, tx) || !fits(g.ny, ty) || self.tiles.len() != tx * ty {
+            return;
+        }
+        let (bx, by) = (lod::tile_bounds(g.nx, tx), lod::tile_bounds(g.ny, ty));
+        let tol = 1e-3 * g.dx.abs().min(g.dy.abs());
+        for tile in &mut self.tiles {
+            tile.slab = None;
+            let (ix, iy) = (tile.ix as usize, tile.iy as usize);
+            if ix >= tx || iy >= ty {
+                continue;
+            }
+            let (i0, j0) = (bx[ix], by[iy]);
+            let (w, h) = (bx[ix + 1] - i0 + 1, by[iy + 1] - j0 + 1);
+            if w * h > 4 * tile.positions.len() + 64 {
+                continue;
+            }
+            // Each vertex's local sample, and each sample's vertex.
+            let mut map = vec![u32::MAX; w * h];
+            let mut local = Vec::with_capacity(tile.positions.len());
+            let on_grid = tile.positions.iter().enumerate().all(|(k, p)| {
+                let Some((i, j)) = g.sample_at(p[0] as f64, p[1] as f64) else { return false };
+                let q = g.pos(i, j);
+                let near = (q[0] - p[0] as f64).abs() <= tol && (q[1] - p[1] as f64).abs() <= tol;
+                if !near || !(i0..i0 + w).contains(&i) || !(j0..j0 + h).contains(&j) {
+                    return false;
+                }
+                let slot = &mut map[(j - j0) * w + i - i0];
+                local.push((i - i0, j - j0));
+                std::mem::replace(slot, k as u32) == u32::MAX
+            });
+            let lattice = on_grid
+                && tile.fine.chunks_exact(3).all(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|k| local.get(k as usize).copied());
+                    let (Some(a), Some(b), Some(c)) = (a, b, c) else { return false };
+                    (b == (a.0 + 1, a.1) && c == (a.0 + 1, a.1 + 1)) || (b == (a.0 + 1, a.1 + 1) && c == (a.0, a.1 + 1))
+                });
+            if !lattice {
+                continue;
+            }
+            let holes = tile.fine_triangles() != 2 * (w - 1) * (h - 1);
+            let grid_xy = |li: usize, lj: usize| {
+                let q = g.pos(i0 + li, j0 + lj);
+                (q[0], q[1])
+            };
+            let slab = lod::slab::tile_slab(tile, (w, h), |li, lj| map[lj * w + li], grid_xy);
+            tile.slab = slab.map(|s| lod::slab::Slab { levels_exact: !holes, ..s });
+        }
+    }
+
     /// The fine surface of a height field as the lit pass samples it: at every sample the
     /// gradient `(dz/dx, dz/dy)` in the world's (unexaggerated, unrotated) x and y, and the height
     /// relative to the object's origin; a row-major (ny, nx) grid, None for other kinds.

@@ -469,7 +469,7 @@ impl Scene {
                     bbox_max,
                     proxy_error,
                     levels,
-                    // Not stored: a loaded height field's tiles are box-tested with their boxes.
+                    // Not stored: rebuilt below (`Object::rebuild_slabs`).
                     slab: None,
                 });
             }
@@ -499,6 +499,10 @@ impl Scene {
                 tiles,
                 geometry_stamp: super::new_geometry_stamp(),
             });
+            // Slabs are not stored: rebuilt from the tiles' vertices, as they were built.
+            if let Some(o) = objects.last_mut() {
+                o.rebuild_slabs();
+            }
         }
         r.finish()?;
         Ok(Scene {
@@ -544,6 +548,27 @@ mod tests {
         let turned = GridFrame::new([451_000.0, 6_780_000.0], [25.0, 30.0]).rotated(33.0, true);
         s.add_heightfield(&z, 9, 9, turned, (2, 2), None, opts("turned")).unwrap();
         s
+    }
+
+    #[test]
+    fn slabs_are_rebuilt_as_they_were_built() {
+        // Holes, a rotated yflipped frame, tiles of one sample row: every slab comes back equal.
+        let s = scene();
+        let t = Scene::from_bytes(&s.to_bytes()).unwrap();
+        let mut n = 0;
+        for (a, b) in s.objects().iter().zip(t.objects()) {
+            for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
+                assert_eq!(ta.slab, tb.slab, "object {} tile {} {}", a.id, ta.ix, ta.iy);
+                n += ta.slab.is_some() as usize;
+            }
+        }
+        assert!(n >= 5, "{n}");
+        // A tile whose vertex left its grid sample gets no slab (it is box-tested).
+        let mut u = Scene::from_bytes(&s.to_bytes()).unwrap();
+        let o = u.objects.iter_mut().find(|o| o.name == "turned").unwrap();
+        o.tiles[0].positions[0][0] += 3.0;
+        o.rebuild_slabs();
+        assert!(o.tiles[0].slab.is_none() && o.tiles[1].slab.is_some());
     }
 
     #[test]
