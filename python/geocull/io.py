@@ -161,7 +161,7 @@ _XTGEO_ATTRS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("grid", ("dimensions", "get_xyz_corners", "get_actnum")),
     ("gridproperty", ("dimensions", "values", "name", "isdiscrete")),
     ("well", ("xname", "yname", "zname", "lognames", "get_dataframe")),
-    ("trisurface", ("vertices", "triangles")),
+    ("trisurface", ("vertices", "triangles", "num_triangles", "num_vertices", "to_rms")),
 )
 
 XtgeoKind = Literal["cube", "surface", "grid", "gridproperty", "well", "trisurface"]
