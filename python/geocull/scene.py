@@ -6,9 +6,8 @@ values in Rust, and raises :class:`geocull.InputError` naming the argument on ba
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, Literal, NamedTuple
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -16,23 +15,17 @@ from numpy.typing import ArrayLike
 from . import _convert as cv
 from . import _geocull, _progress
 from ._convert import MeshLike
-from ._errors import GeocullWarning, InputError
+from ._errors import InputError
 from ._progress import ProgressLike
-from .results import GridLevel, ObjectColoring
+from ._scene_colors import FAR_APART, SceneColorings, SharedZ, label_arg, pair
+from ._scene_slices import SliceAxis, slice_position, stored_range
+from .results import GridLevel
 
 if TYPE_CHECKING:
     from ._geocull import ObjectInfo
     from .volume import Volume
 
-#: The slice axes of :meth:`Scene.add_slice`: constant i, j or k of the volume.
-SliceAxis = Literal["inline", "crossline", "sample"]
-_AXES = {"inline": 0, "crossline": 1, "sample": 2, "x": 0, "y": 1, "z": 2}
-
 __all__ = ["Scene", "ColorBy", "SliceAxis", "FAR_APART"]
-
-#: Objects farther apart than this (metres, the gap between their bounding boxes) get a
-#: :class:`geocull.GeocullWarning` when the second is added.
-FAR_APART = 1_000_000.0
 
 #: What an object can be coloured by: its own z (world units, before vertical exaggeration and
 #: without later translations) or the ``values`` it was added with.
@@ -56,17 +49,6 @@ _COLOR_DOC = """
         colour by z is labelled "depth (m)")."""
 
 
-class _SharedZ(NamedTuple):
-    """An object coloured by z without a ``clim`` of its own, so over the scene's depth range: its
-    colour map (name, table), NaN colour, its own z range, and the range last given to the core."""
-
-    cmap: str | None
-    table: np.ndarray | None
-    nan: tuple[float, float, float] | None
-    own: tuple[float, float]
-    applied: tuple[float, float] | None
-
-
 # dtype of the rows of Scene.tile_table().
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
                         ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
@@ -78,57 +60,6 @@ def _doc(values: str) -> str:
     return _COLOR_DOC.format(values=values).strip("\n").lstrip()
 
 
-def _object_boxes(table: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Object id -> (lo (3,), hi (3,)) world box of its tiles (empty tiles, NaN boxes, skipped)."""
-    out: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    if len(table) == 0:
-        return out
-    ok = np.isfinite(table["bbox_min"]).all(axis=1) & np.isfinite(table["bbox_max"]).all(axis=1)
-    t = table[ok]
-    for obj in np.unique(t["object"]):
-        rows = t[t["object"] == obj]
-        out[int(obj)] = (rows["bbox_min"].min(axis=0), rows["bbox_max"].max(axis=0))
-    return out
-
-
-def _nearest(numbers: np.ndarray, value: float, arg: str) -> int:
-    """Index of the entry of ``numbers`` (survey numbers, either direction) nearest ``value``;
-    InputError naming ``arg`` and listing the range when ``value`` lies over half a step outside."""
-    nums = np.asarray(numbers, dtype=np.float64)
-    lo, hi = float(nums.min()), float(nums.max())
-    step = float(np.median(np.abs(np.diff(nums)))) if len(nums) > 1 else 0.0
-    if not (lo - step / 2 <= value <= hi + step / 2):
-        raise InputError(f"{arg}: {value:g} is outside the volume's {arg}s {lo:g}..{hi:g} (step {step:g}, "
-                         f"{len(nums)} values)")
-    return int(np.argmin(np.abs(nums - value)))
-
-
-def _stored_range(volume: Any, axis: int, i0: int, i1: int) -> tuple[int, int]:
-    """An inclusive index range along ``axis`` in the file's order as the stored grid's (sorted)."""
-    n = (volume.shape[2], volume.shape[1], volume.shape[0])[axis]
-    if not (0 <= i0 < n and 0 <= i1 < n):
-        raise InputError(f"box[{axis}]: ({i0}, {i1}) is outside 0..{n - 1}")
-    a, b = volume._stored_index(axis, i0), volume._stored_index(axis, i1)
-    return (min(a, b), max(a, b))
-
-
-def _label_arg(label: Any, values: Any = None) -> str | None:
-    """The colour bar label: ``label`` (None or a str, else InputError), else the ``name`` of
-    ``values`` where it has one (xarray DataArray, pandas Series, xtgeo GridProperty), else None."""
-    if label is not None:
-        if not isinstance(label, str):
-            raise InputError(f"label: {label!r} is not a string")
-        return label
-    n = getattr(values, "name", None)
-    return n if isinstance(n, str) and n else None
-
-
-def _pair(v: Any) -> tuple[float, float]:
-    """(lo, hi) floats of a pair (TypeError / ValueError otherwise)."""
-    lo, hi = (float(x) for x in v)
-    return lo, hi
-
-
 def _down(z_positive: Any, default_down: bool) -> bool:
     """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
     if z_positive is None:
@@ -138,7 +69,7 @@ def _down(z_positive: Any, default_down: bool) -> bool:
     return z_positive == "down"
 
 
-class Scene:
+class Scene(SceneColorings):
     """A sub-surface scene: height fields and triangle meshes, each cut into tiles with a fine and
     a coarse level of detail. Coordinates are world units (metres), x and y horizontal, z up; inputs
     are kept in f64 and each object is stored relative to its own f64 origin (frames render relative
@@ -152,7 +83,7 @@ class Scene:
         # Slices' sources, for set_slice_index: id -> (volume, axis, name, colouring).
         self._slices: dict[int, tuple[Any, int, str | None, cv.Coloring, float]] = {}
         # Objects coloured by z over the scene's shared depth range (no clim of their own).
-        self._zshared: dict[int, _SharedZ] = {}
+        self._zshared: dict[int, SharedZ] = {}
         # Colour bar labels (RenderResult.figure) and colour tables of the objects coloured by data.
         self._labels: dict[int, str] = {}
         self._tables: dict[int, np.ndarray] = {}
@@ -215,8 +146,8 @@ class Scene:
         if state:
             ids = set(s.object_ids())
             try:  # a damaged pickle's state is an InputError naming data, like its bytes
-                z = {int(k): _SharedZ(*v) for k, v in state.get("zshared", {}).items()}
-                z = {k: v._replace(own=_pair(v.own), applied=None if v.applied is None else _pair(v.applied))
+                z = {int(k): SharedZ(*v) for k, v in state.get("zshared", {}).items()}
+                z = {k: v._replace(own=pair(v.own), applied=None if v.applied is None else pair(v.applied))
                      for k, v in z.items()}
                 labels = {int(k): str(v) for k, v in state.get("labels", {}).items()}
                 tables = {int(k): np.asarray(v, np.float64) for k, v in state.get("tables", {}).items()}
@@ -308,7 +239,7 @@ class Scene:
         sp = cv.vec2(spacing, "spacing")
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
-        lab = _label_arg(label, values)
+        lab = label_arg(label, values)
         c = cv.coloring(color_by, values, cmap, clim, nan_color, 2)
         with _progress.task(progress, tt[0] * tt[1], "add_heightfield: tiles"):  # read by the core
             return self._added(self._s.add_heightfield(
@@ -385,7 +316,7 @@ class Scene:
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
-        lab = _label_arg(label, values)
+        lab = label_arg(label, values)
         c = cv.coloring(color_by, values, cmap, clim, nan_color, 1)
         with _progress.task(progress, k or 1, "add_mesh: tiles"):  # read by the core
             return self._added(self._s.add_mesh(
@@ -435,7 +366,7 @@ class Scene:
 
         well = io.xtgeo_kind(path) == "well"
         down = _down(z_positive, well)
-        lab = _label_arg(label, values)
+        lab = label_arg(label, values)
         if well:
             kw = io.from_xtgeo_well(path, log=log, max_stations=max_stations, z_positive="down" if down else "up")
             name = io.xtgeo_name(path) if name is None else name
@@ -496,54 +427,14 @@ class Scene:
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
-        lab = _label_arg(label)
+        lab = label_arg(label)
         op = cv.number(opacity, "opacity")
-        ax, idx = self._slice_position(volume, axis, index, inline, crossline, time, depth)
+        ax, idx = slice_position(volume, axis, index, inline, crossline, time, depth)
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
         id = self._s.add_slice(volume._v, ax, idx, cv.name(name), c, op)
         self._slices[id] = (volume, ax, name, c, op)
         return self._added(id, c, lab)
-
-    @staticmethod
-    def _slice_position(
-        volume: Volume, axis: Any, index: Any, inline: Any, crossline: Any, time: Any, depth: Any,
-        fixed_axis: int | None = None,
-    ) -> tuple[int, int]:
-        """(axis, stored index) of a slice given by (axis, index) in the file's order or by one survey
-        number; ``fixed_axis``: the axis of a slice being moved (``axis`` is then not given)."""
-        numbers = [(k, v) for k, v in (("inline", inline), ("crossline", crossline), ("time", time),
-                                       ("depth", depth)) if v is not None]
-        if len(numbers) > 1:
-            raise InputError(f"{numbers[1][0]}: give one of inline=, crossline=, time=, depth= (got "
-                             f"{', '.join(k for k, _ in numbers)})")
-        if numbers:
-            key, value = numbers[0]
-            if index is not None or (axis is not None and fixed_axis is None):
-                raise InputError(f"{key}: give either axis and index or {key}=, not both")
-            ax = {"inline": 0, "crossline": 1, "time": 2, "depth": 2}[key]
-            if fixed_axis is not None and ax != fixed_axis:
-                along = ("inline", "crossline", "sample")[fixed_axis]
-                raise InputError(f"{key}: this slice lies along axis {fixed_axis} ({along})")
-            nums = (volume.inlines, volume.crosslines, volume.samples)[ax]
-            if nums is None:
-                what = ("inline", "crossline", "sample")[ax]
-                raise InputError(f"{key}: the volume has no {what} numbers (volumes from SEG-Y or xtgeo carry them, "
-                                 f"or pass {what}s= to Volume); give axis and index")
-            file_index = _nearest(nums, cv.number(value, key), key)
-            return ax, volume._stored_index(ax, file_index)
-        if fixed_axis is None:
-            if axis is None or index is None:
-                raise InputError("axis: give axis and index, or one of inline=, crossline=, time=, depth=")
-            ax = Scene._axis(axis)
-        else:
-            ax = fixed_axis
-            if index is None:
-                raise InputError("index: give index, or one of inline=, crossline=, time=, depth=")
-        i = cv.integer(index, "index")
-        if not 0 <= ax <= 2:
-            raise InputError(f"axis: {ax}; expected 'inline', 'crossline', 'sample' or 0, 1, 2")
-        return ax, volume._stored_index(ax, i)
 
     def add_isosurface(
         self,
@@ -588,7 +479,7 @@ class Scene:
             cv.expect_instance(values, Volume, "values")
         by = "values" if color_by is None and values is not None else color_by
         c = cv.coloring(by, None, cmap, clim, nan_color, 1)
-        lab = _label_arg(label)
+        lab = label_arg(label)
         k = None if tiles is None else cv.integer(tiles, "tiles")
         with _progress.task(progress, k or 1, "add_isosurface: tiles"):  # total set by the core
             return self._added(self._s.add_isosurface(volume._v, cv.number(isovalue, "isovalue"), k,
@@ -621,11 +512,11 @@ class Scene:
         from .volume import Volume
 
         cv.expect_instance(volume, Volume, "volume")
-        lab = _label_arg(label)
+        lab = label_arg(label)
         b = cv.int_array(box, "box", 2, 2)
         if b.shape != (3, 2):
             raise InputError(f"box: shape {b.shape} is not (3, 2): ((i0, i1), (j0, j1), (k0, k1))")
-        bx = tuple(_stored_range(volume, a, cv.integer(b[a, 0], f"box[{a}]"), cv.integer(b[a, 1], f"box[{a}]"))
+        bx = tuple(stored_range(volume, a, cv.integer(b[a, 0], f"box[{a}]"), cv.integer(b[a, 1], f"box[{a}]"))
                    for a in range(3))
         c = cv.coloring("values", None, cmap, clim, nan_color, 1)
         assert c is not None
@@ -699,7 +590,7 @@ class Scene:
                 corners = cv.float_array(data, "corners", 5) * np.array([1.0, 1.0, -1.0])
                 if mask is not None:
                     corners = np.ma.MaskedArray(corners, mask=mask)
-        lab = _label_arg(label, values)
+        lab = label_arg(label, values)
         if isinstance(values, str) or io.xtgeo_kind(values) == "gridproperty":
             if lab is None and isinstance(values, str):
                 lab = values
@@ -726,135 +617,6 @@ class Scene:
         col = cv.coloring(None, values, cmap, clim, nan_color, 3)
         with _progress.task(progress, n_blocks, "add_grid: blocks"):  # read by the core
             return self._added(self._s.add_grid(c, act, reg, bb, cv.name(name), cv.color(color), col), col, lab)
-
-    def _added(self, id: int, coloring: cv.Coloring | None = None, label: str | None = None) -> int:
-        """``id``, after noting its colouring (``coloring``: the tuple given to the core; the colour
-        bar ``label``) and sharing the scene's depth range, and after a
-        :class:`geocull.GeocullWarning` if the new object lies over :data:`FAR_APART` metres from
-        another object of the scene (a grid in local coordinates beside UTM horizons renders as an
-        empty image), naming both."""
-        self._note_coloring(id, coloring, label)
-        try:
-            boxes = _object_boxes(self.tile_table())
-        except Exception:  # never let the check fail an add
-            return id
-        new = boxes.get(id)
-        if new is None:
-            return id
-        lo, hi = new
-        worst: tuple[float, int] | None = None
-        for other, (olo, ohi) in boxes.items():
-            if other == id:
-                continue
-            gap = float(np.linalg.norm(np.maximum(0.0, np.maximum(olo - hi, lo - ohi))))
-            if gap > FAR_APART and (worst is None or gap > worst[0]):
-                worst = (gap, other)
-        if worst is not None:
-            gap, other = worst
-            warnings.warn(
-                f"{self._label(id)} lies {gap / 1000:,.0f} km from {self._label(other)}: over "
-                f"{FAR_APART / 1000:,.0f} km apart, one view cannot show both (local coordinates beside "
-                "UTM ones? depth given as elevation?)",
-                GeocullWarning,
-                stacklevel=3,
-            )
-        return id
-
-    def _note_coloring(self, id: int, coloring: cv.Coloring | None, label: str | None) -> None:
-        """Keep what the core does not of object ``id``'s colouring (its table, its colour bar label;
-        whether it follows the shared depth range), then give the depth range to the objects that
-        follow it."""
-        info = self._s.object_info(id)
-        self._labels.pop(id, None)
-        self._tables.pop(id, None)
-        self._zshared.pop(id, None)
-        if info["color_by"] is not None:
-            if label is not None:
-                self._labels[id] = label
-            if coloring is not None and coloring[3] is not None:
-                self._tables[id] = coloring[3]
-        own = info["clim"]
-        if info["color_by"] == "z" and (coloring is None or coloring[4] is None) and own is not None:
-            self._zshared[id] = _SharedZ(
-                coloring[2] if coloring is not None else info["cmap"], coloring[3] if coloring is not None else None,
-                coloring[5] if coloring is not None else None, (float(own[0]), float(own[1])), None)
-        self._share_depth_range()
-
-    def _share_depth_range(self) -> None:
-        """Give every object coloured by z without a clim of its own the lowest and highest z over
-        them all (each one's own range was read when its colouring was set). Objects already given
-        this range are left alone."""
-        if not self._zshared:
-            return
-        lo = min(v.own[0] for v in self._zshared.values())
-        hi = max(v.own[1] for v in self._zshared.values())
-        rng = (lo, hi) if lo < hi else None  # all flat at one z: the core's own range (a core rule: lo < hi)
-        for id, v in list(self._zshared.items()):
-            if v.applied == rng and rng is not None:
-                continue
-            self._s.set_color_by(id, ("z", None, v.cmap, v.table, rng, v.nan))
-            self._zshared[id] = v._replace(applied=rng)
-
-    def depth_range(self) -> tuple[float, float] | None:
-        """``(zmin, zmax)`` metres: the scene's shared depth range, over which every object coloured
-        by z without a ``clim`` of its own is coloured (the lowest and highest z of those objects,
-        hidden ones included, offsets from :meth:`translate` not applied); None when there is no
-        such object. ``object_info(id)["clim"]`` is the range each object is drawn with."""
-        if not self._zshared:
-            return None
-        return (min(v.own[0] for v in self._zshared.values()), max(v.own[1] for v in self._zshared.values()))
-
-    def colorings(self, ids: list[int] | None = None) -> list[ObjectColoring]:
-        """The colourings by data of objects ``ids`` (default every object, in the order added;
-        objects in one flat colour are left out): :class:`geocull.results.ObjectColoring` dicts with
-        the object's id, name, kind, color_by, colour map (its name, and its table where it was given
-        as a table or a matplotlib ``Colormap``), the ``clim`` it is drawn with, and its colour bar
-        label: the ``label`` given (or the values' own name), else "values"; colour by z is labelled
-        "depth (m)" (its bar counts depth = -z) where the range lies at or below z = 0, else
-        "elevation (m)". :meth:`geocull.RenderResult.figure` draws one colour bar per distinct
-        (colour map, clim, label) of the objects in the frame."""
-        out: list[ObjectColoring] = []
-        for i in self.object_ids() if ids is None else ids:
-            info = self._s.object_info(cv.integer(i, "ids"))
-            if info["color_by"] is None or info["clim"] is None:
-                continue
-            lo, hi = (float(x) for x in info["clim"])
-            if info["color_by"] == "z":
-                label = self._labels.get(info["id"]) or ("depth (m)" if hi <= 0 else "elevation (m)")
-            else:
-                label = self._labels.get(info["id"]) or "values"
-            out.append(ObjectColoring(object=info["id"], name=info["name"], kind=info["kind"],
-                                      color_by=info["color_by"], cmap=info["cmap"], table=self._tables.get(info["id"]),
-                                      clim=(lo, hi), label=label))
-        return out
-
-    def _frame_objects(self, tile_drawn: np.ndarray, tile_pixels: np.ndarray, exact_counts: bool) -> list[int]:
-        """Ids of the objects a frame shows: those with a tile holding pixels of the image (where
-        ``tile_pixels`` counts the final image, ``exact_counts``; else those with a tile drawn), and
-        translucent ones (lenses, slices with opacity < 1, which leave no pixel count) with a tile
-        drawn."""
-        key = (self._s.n_tiles, tuple(self._s.object_ids()))
-        cached = getattr(self, "_tile_objects", None)  # each tile's object, kept while the tiles are the same
-        if cached is None or cached[0] != key:
-            cached = (key, np.asarray(self._s.tile_table()["object"]))
-            self._tile_objects = cached
-        t = cached[1]
-        if len(t) != len(tile_drawn):  # the scene changed since the frame
-            return []
-        shown = (tile_pixels > 0) if exact_counts else tile_drawn
-        ids = set(np.unique(t[shown]).tolist())
-        for i in np.unique(t[tile_drawn]).tolist():
-            if i in ids:
-                continue
-            kind = self._s.object_info(i)["kind"]
-            sl = self._slices.get(i)
-            if kind == "lens" or (kind == "slice" and (sl is None or sl[4] < 1.0)):
-                ids.add(i)
-        return [i for i in self.object_ids() if i in ids]
-
-    def _label(self, id: int) -> str:
-        info = self._s.object_info(id)
-        return f"object {id} ({info['kind']}{', ' + repr(info['name']) if info['name'] else ''})"
 
     def grid_levels(self, id: int) -> list[GridLevel]:
         """Per level of grid ``id`` (level 0 = every boundary face, then each cell-merging level):
@@ -889,16 +651,8 @@ class Scene:
             raise InputError(f"id: object {i} is not a slice added to this scene object (copies and "
                              "unpickled scenes do not keep the volumes of their slices)")
         volume, ax, name, c, op = self._slices[i]
-        _, idx = self._slice_position(volume, None, index, inline, crossline, time, depth, fixed_axis=ax)
+        _, idx = slice_position(volume, None, index, inline, crossline, time, depth, fixed_axis=ax)
         self._s.add_slice(volume._v, ax, idx, cv.name(name), c, op, i)
-
-    @staticmethod
-    def _axis(axis: Any) -> int:
-        if isinstance(axis, str):
-            if axis not in _AXES:
-                raise InputError(f"axis: {axis!r}; expected 'inline', 'crossline', 'sample' or 0, 1, 2")
-            return _AXES[axis]
-        return cv.integer(axis, "axis")
 
     def remove(self, id: int) -> None:
         """Remove object ``id`` (the shared depth range is then that of the objects left)."""
@@ -938,7 +692,7 @@ class Scene:
         if label is None and c[0] == "values":
             label = self._labels.get(i)  # the values keep their name
         self._s.set_color_by(i, c)
-        self._note_coloring(i, c, _label_arg(label))
+        self._note_coloring(i, c, label_arg(label))
 
     @property
     def n_tiles(self) -> int:
