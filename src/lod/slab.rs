@@ -148,14 +148,18 @@ pub fn heightfield_slab(
         let f = fill(a, b);
         let corners = [(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)];
         let single = b.0 - a.0 <= 1 && b.1 - a.1 <= 1;
-        match f {
-            Fill::Empty => {}
-            Fill::Full if single || cell_error(a, b, &z) <= tol => {
-                prism(&mut slab, &corners.map(|(i, j)| xy(i, j)), &full_bounds(a, b, &z, thick), flip)
+        // A full piece's error, computed once: it decides whether the piece stands, and bounds it.
+        let error = (f == Fill::Full).then(|| cell_error(a, b, &z));
+        match (f, error) {
+            (Fill::Empty, _) => {}
+            (Fill::Full, Some(e)) if single || e <= tol => {
+                let half = e + thick;
+                let bounds = corners.map(|(i, j)| (z(i, j) - half, z(i, j) + half));
+                prism(&mut slab, &corners.map(|(i, j)| xy(i, j)), &bounds, flip)
             }
             // One fine cell with a hole at a corner: a prism over each of its fine triangles
             // whose corners are finite (the triangle itself, thickened), nothing elsewhere.
-            Fill::Partial if single => {
+            (Fill::Partial, _) if single => {
                 for tri in [[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]] {
                     if tri.iter().all(|&(i, j)| z(i, j).is_finite()) {
                         let bounds = tri.map(|(i, j)| (z(i, j) - thick, z(i, j) + thick));
@@ -167,7 +171,7 @@ pub fn heightfield_slab(
                     }
                 }
             }
-            Fill::Partial | Fill::Full => {
+            _ => {
                 let (mi, mj) = ((a.0 + b.0) / 2, (a.1 + b.1) / 2);
                 let xs = if b.0 - a.0 > 1 { vec![a.0, mi, b.0] } else { vec![a.0, b.0] };
                 let ys = if b.1 - a.1 > 1 { vec![a.1, mj, b.1] } else { vec![a.1, b.1] };
@@ -180,13 +184,6 @@ pub fn heightfield_slab(
         }
     }
     (!slab.indices.is_empty()).then_some(slab)
-}
-
-/// The bounds of a full cell's surface at its corners (counter-clockwise from `a`): each corner's
-/// height - and + the cell's [`cell_error`] and `thick`.
-fn full_bounds(a: (usize, usize), b: (usize, usize), z: &impl Fn(usize, usize) -> f64, thick: f64) -> [(f64, f64); 4] {
-    let e = cell_error(a, b, z) + thick;
-    [(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)].map(|(i, j)| (z(i, j) - e, z(i, j) + e))
 }
 
 /// Appends a closed prism over the convex polygon `corners` (a triangle or a quadrilateral,
