@@ -17,7 +17,7 @@
 //! lavapipe: 8192 rows of 4096 texels) are copied in bands of rows, each bound at an offset that
 //! is a multiple of 256 bytes (bands are multiples of 64 rows).
 
-use super::passes::{storage_entry, uniform_entry};
+use super::passes::{depth_texture_entry, storage_entry, uniform_entry};
 use super::readback::ReadbackTexture;
 use crate::error::Result;
 use wgpu::util::DeviceExt;
@@ -45,20 +45,7 @@ impl DepthReader {
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("depth_copy"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: cs,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                storage_entry(1, false, cs),
-                uniform_entry(2, cs),
-            ],
+            entries: &[depth_texture_entry(0, cs), storage_entry(1, false, cs), uniform_entry(2, cs)],
         });
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("depth_copy.wgsl"),

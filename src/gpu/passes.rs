@@ -134,6 +134,22 @@ pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> 
     }
 }
 
+/// A depth image bound as an unfilterable float texture: shaders read it with `textureLoad`
+/// (naga's GLSL cannot load a `texture_depth_2d`), as the box and slab tests and the depth
+/// read-back do.
+pub fn depth_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: vis,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 pub fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -410,16 +426,7 @@ impl Passes {
         let box_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("box_test"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_texture_entry(0, fs),
                 storage_entry(1, false, fs),
                 storage_entry(2, true, wgpu::ShaderStages::VERTEX),
                 storage_entry(3, true, wgpu::ShaderStages::VERTEX),

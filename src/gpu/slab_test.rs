@@ -4,7 +4,7 @@
 //! `place` holds for the tile, and counts per tile the fragments at or in front of the depth
 //! image; which tiles, and by how much, is the caller's (`cull::phases`).
 
-use super::passes::{shader, storage_entry};
+use super::passes::{depth_texture_entry, shader, storage_entry, with_box_wgsl, BOX_TEST_WGSL};
 use super::targets::{Targets, DEPTH_FORMAT, ID_FORMAT};
 
 /// The slab-test pipeline and its bind-group layout.
@@ -17,16 +17,6 @@ pub struct SlabTest {
     /// Hidden slab fragments, most of them, then never reach the shader.
     early: bool,
 }
-
-/// The early-depth fragment entry (appended to slab_test.wgsl where the device allows it).
-const EARLY_WGSL: &str = "
-@fragment
-@early_depth_test(force)
-fn fs_slab_early(v: SlabOut) -> @location(0) u32 {
-    atomicAdd(&counts[v.tile], 1u);
-    return 0u;
-}
-";
 
 /// One slab vertex: origin-relative (x, y, z) and its side (+1 top, -1 bottom).
 const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
@@ -55,16 +45,7 @@ impl SlabTest {
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("slab_test"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: fs,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_texture_entry(0, fs),
                 storage_entry(1, false, fs),
                 storage_entry(2, true, vs),
                 storage_entry(3, true, vs),
@@ -77,17 +58,19 @@ impl SlabTest {
             immediate_size: 0,
         });
         let early = !gl && d.features().contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
-        let mut source = include_str!("shaders/slab_test.wgsl").to_string();
+        // box_test.wgsl (with box.wgsl) gives the bindings and the fragment entry points; the
+        // early-depth one (box_test_early.wgsl) where the device runs it exactly, as box_early.rs.
+        let mut source = format!("{}\n{}", with_box_wgsl(BOX_TEST_WGSL), include_str!("shaders/slab_test.wgsl"));
         if early {
-            source.push_str(EARLY_WGSL);
+            source.push_str(include_str!("shaders/box_test_early.wgsl"));
         }
         let module = shader(d, "slab_test.wgsl", source);
         let fs_entry = if early {
-            "fs_slab_early"
+            "fs_box_early"
         } else if gl {
-            "fs_slab_gl"
+            "fs_box_gl"
         } else {
-            "fs_slab"
+            "fs_box"
         };
         let depth_stencil = early.then(|| wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
