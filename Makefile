@@ -40,7 +40,10 @@ $(VENV)/.deps: requirements-dev.txt
 	@touch $@
 
 # Release build of the Rust extension, installed into the venv in editable mode.
+# The extension is an abi3 module (one build for CPython >= 3.11); a version-specific build left by an
+# older checkout would shadow it on import, so it is removed first.
 build: $(VENV)/.deps
+	rm -f python/geocull/_geocull.cpython-*.so
 	$(VENV)/bin/maturin develop --release -q 2>&1 | grep -v "^📦\|^🔗\|^🐍\|^✏️\|Installed\|Built wheel" || true
 	@$(PY) -c "import geocull._geocull" || (echo "build failed" && exit 1)
 
