@@ -4,7 +4,7 @@ pinch-out, an erosional truncation, inactive cells, four regions): per cell-merg
 faces and vertices drawn as a percentage of level 0 (Figure 6) and the change of the enclosed
 volume (Figure 9; the paper reports at most 3 % for up to 4 coarsenings), then the build time and
 the frame time of each ``grid_lod`` mode against level 0 and against PyVista on the same grid
-(``geocull.bench_grid``, one run, side by side).
+(``geocull.bench.grid``, one run, side by side).
 
 Usage: python examples/grid_levels.py [--n 100] [--nk 100] [--blocks 16] [--out out/examples/grid]
        python examples/grid_levels.py --quick     (small, for CI)
@@ -17,7 +17,7 @@ import json
 import os
 from typing import Any
 
-from geocull import bench_grid
+from geocull.bench import grid as bench_grid
 
 PAPER = "paper (Jia et al.): faces fall with each coarsening; volume change at most 3 % for up to 4 coarsenings"
 

@@ -1,4 +1,4 @@
-"""Reproduce the seeds' findings (Plate et al.) on a Gullfaks-like scene with geocull.report.sweep.
+"""Reproduce the seeds' findings (Plate et al.) on a Gullfaks-like scene with geocull.bench.report.sweep.
 
 Three one-factor sweeps around the seeds' recommended setting (10×10 tiles per horizon, pixel
 threshold 10, coarse factor 25, full-resolution prepass), each timed side by side against the
@@ -29,7 +29,7 @@ from typing import Any
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 import geocull as gc  # noqa: E402
-from geocull import report  # noqa: E402
+from geocull.bench import report  # noqa: E402
 from geocull.data import gullfaks_like, standard_views  # noqa: E402
 
 TILES = [5, 7, 10, 15, 20]

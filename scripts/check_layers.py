@@ -11,10 +11,11 @@ or to a lower layer:
 (`cull` and `iso` do not use each other; `crate::TestRng`, `crate::Result`, `crate::Error` are the
 crate root's re-exports and allowed everywhere.)
 
-Python (python/geocull/): no import cycle among the package's modules at import time (module-level
-imports), and no module imports another module's underscore-prefixed name (``from .x import _y``),
-anywhere in the file. Private *modules* with public names (``_convert``, ``_errors``, ``_geocull``)
-are the package's internal API and may be imported.
+Python (python/geocull/ and its subpackages, such as geocull.bench): no import cycle among the
+package's modules at import time (module-level imports), and no module imports another module's
+underscore-prefixed name (``from .x import _y``, ``from ..x import _y``), anywhere in the file.
+Private *modules* with public names (``_convert``, ``_errors``, ``_geocull``) are the package's
+internal API and may be imported.
 """
 
 from __future__ import annotations
@@ -73,36 +74,63 @@ def check_rust() -> list[str]:
     return errors
 
 
+def python_modules(pkg: Path) -> dict[str, Path]:
+    """The package's modules by dotted name below ``geocull``: ``scene``, ``bench`` (bench/__init__.py),
+    ``bench.report``; the package's own ``__init__.py`` is ``__init__``."""
+    modules = {}
+    for p in sorted(pkg.rglob("*.py")):
+        parts = list(p.relative_to(pkg).with_suffix("").parts)
+        if parts[-1] == "__init__" and len(parts) > 1:
+            parts.pop()
+        modules[".".join(parts)] = p
+    return modules
+
+
 def check_python() -> list[str]:
     pkg = ROOT / "python" / "geocull"
-    modules = {p.stem: p for p in pkg.glob("*.py")}
+    modules = python_modules(pkg)
     errors = []
     graph: dict[str, set[str]] = {m: set() for m in modules}
     for name, path in modules.items():
         tree = ast.parse(path.read_text(), filename=str(path))
         top_level = set(id(n) for n in tree.body)
+        # the package a relative import starts from: "" for geocull itself, "bench" for geocull.bench's modules
+        package = name if path.name == "__init__.py" and name != "__init__" else name.rpartition(".")[0]
         for node in ast.walk(tree):
             targets: list[tuple[str, list[str]]] = []
             if isinstance(node, ast.ImportFrom):
-                if node.level == 1:
-                    base = node.module or ""
+                if node.level >= 1:
+                    parts = package.split(".") if package else []
+                    if node.level - 1 > len(parts):
+                        continue  # above geocull: not the package's business
+                    base = ".".join(parts[: len(parts) - (node.level - 1)] + ([node.module] if node.module else []))
                     names = [a.name for a in node.names]
-                    if base:
-                        targets.append((base.split(".")[0], names))
-                    else:  # from . import x, y
-                        targets.extend((n, []) for n in names)
+                    if node.module:
+                        targets.append((base, names))
+                    else:  # from . import x, y: submodules, or names of the package's __init__
+                        where = pkg.joinpath(*base.split(".")) if base else pkg
+                        subs = [n for n in names if (where / n).is_dir() or any(where.glob(f"{n}.*"))]
+                        targets.extend((f"{base}.{n}".lstrip("."), []) for n in subs)
+                        if len(subs) < len(names):
+                            targets.append((base or "__init__", [n for n in names if n not in subs]))
                 elif node.level == 0 and (node.module or "").startswith("geocull."):
-                    targets.append((node.module.split(".")[1], [a.name for a in node.names]))
+                    targets.append((node.module.split(".", 1)[1], [a.name for a in node.names]))
             elif isinstance(node, ast.Import):
                 for a in node.names:
                     if a.name.startswith("geocull."):
-                        targets.append((a.name.split(".")[1], []))
+                        targets.append((a.name.split(".", 1)[1], []))
             for mod, names in targets:
                 for n in names:
-                    if n.startswith("_") and not n.startswith("__"):
+                    if n.startswith("_") and not n.startswith("__") and f"{mod}.{n}" not in modules:
                         errors.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports private name {mod}.{n}")
-                if id(node) in top_level and mod in modules and mod != name:
-                    graph[name].add(mod)
+                if id(node) not in top_level:
+                    continue
+                # importing a.b imports the package a first, unless this module is inside a already
+                chain = mod.split(".")
+                for i in range(1, len(chain) + 1):
+                    m = ".".join(chain[:i])
+                    if m in modules and m != name and not name.startswith(m + "."):
+                        graph[name].add(m)
     # cycles among module-level imports
     state: dict[str, int] = {}
     stack: list[str] = []

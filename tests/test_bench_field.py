@@ -12,7 +12,8 @@ from typing import Any
 
 import pytest
 
-from geocull import bench, bench_field
+from geocull import bench
+from geocull.bench import field as bench_field
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "reek"
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import geocull as gc
-from geocull import bench_grid, bench_seismic
+from geocull.bench import grid as bench_grid
+from geocull.bench import seismic as bench_seismic
 
 
 def test_bench_grid_tiny():

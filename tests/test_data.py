@@ -184,7 +184,8 @@ def test_build_needs_extension(small):
 
 def test_generator_and_sweep_arguments_raise_input_error():
     import geocull as gc
-    from geocull import data, report
+    from geocull import data
+    from geocull.bench import report
 
     with pytest.raises(gc.InputError, match="^nx, ny"):
         data.gullfaks_like(nx=1)

@@ -100,7 +100,8 @@ def test_task_clamps_and_is_monotone():
 
 
 def test_sweep_and_bench_progress():
-    from geocull import bench, report
+    from geocull import bench
+    from geocull.bench import cli, report
     from geocull.data import stacked_test_scene, standard_views
 
     spec = stacked_test_scene(n=16, n_horizons=1, with_faults=False)
@@ -111,9 +112,9 @@ def test_sweep_and_bench_progress():
     assert {0.25, 0.5, 0.75} <= set(fr)  # 2 builds x 2 views
     assert any("building scene" in m for _, m in seen)
 
-    a = bench._parser().parse_args(["--tiny", "--no-pyvista", "--no-horizon"])
+    a = cli.parser().parse_args(["--tiny", "--no-pyvista", "--no-horizon"])
     seen, cb = recorder()
-    bench.run(bench._config(a), progress=cb)
+    bench.run(cli.config(a), progress=cb)
     fr = check_fractions(seen)
     assert pytest.approx(1 / 3) in fr and pytest.approx(2 / 3) in fr  # two builds, one view
 

@@ -148,7 +148,7 @@ def test_submodules_are_reachable_as_attributes():
     import sys
 
     assert callable(gc.compare.image_error) and callable(gc.data.gullfaks_like)
-    assert callable(gc.report.sweep)
+    assert callable(gc.bench.report.sweep) and callable(gc.bench.main)
     with pytest.raises(AttributeError):
         _ = gc.no_such_thing
     # PyVista (VTK) is not imported until gc.pyvista is used.

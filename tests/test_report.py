@@ -1,4 +1,4 @@
-"""geocull.report (sweeps, tables, plots) and ``python -m geocull bench`` on tiny configurations.
+"""geocull.bench.report (sweeps, tables, plots) and ``python -m geocull bench`` on tiny configurations.
 Timings are never asserted, only their presence and sign."""
 
 import json
@@ -16,7 +16,7 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 gc = pytest.importorskip("geocull")
 pytest.importorskip("geocull._geocull")
 
-from geocull import report  # noqa: E402
+from geocull.bench import report  # noqa: E402
 from geocull.data import stacked_test_scene, standard_views  # noqa: E402
 
 ROW_KEYS = {

@@ -10,8 +10,9 @@
 Modules: :mod:`~geocull.scene`, :mod:`~geocull.camera`, :mod:`~geocull.renderer`,
 :mod:`~geocull.results`, :mod:`~geocull.volume`, :mod:`~geocull.iso` (re-exported here), and,
 imported on first use, :mod:`~geocull.io` (xtgeo, segyio, trimesh, PyVista in and out),
-:mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.report`,
-:mod:`~geocull.bench`, :mod:`~geocull.testing` (image comparison and the pytest plugin),
+:mod:`~geocull.compare`, :mod:`~geocull.data`, :mod:`~geocull.pyvista`, :mod:`~geocull.bench`
+(the benchmarks, and :mod:`~geocull.bench.report`: sweeps, tables, plots), :mod:`~geocull.testing`
+(image comparison and the pytest plugin),
 :mod:`~geocull.distributed` (many views on a Dask cluster), and the notebook viewer ``Viewer``.
 """
 
@@ -50,7 +51,6 @@ if _TYPE_CHECKING:  # type checkers see the lazy submodules; at runtime __getatt
     from . import io as io
     from . import iso as iso
     from . import pyvista as pyvista
-    from . import report as report
     from . import testing as testing
     from .viewer import Viewer as Viewer
 
@@ -82,11 +82,11 @@ __all__ = [
     "Viewer",
 ]
 
-_SUBMODULES = ("compare", "data", "pyvista", "report", "bench", "iso", "io", "testing", "distributed", "grid")
+_SUBMODULES = ("compare", "data", "pyvista", "bench", "iso", "io", "testing", "distributed", "grid")
 
 
 def __getattr__(name: str) -> _Any:
-    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.report``, ``gc.bench``, ``gc.io``: imported on
+    """``gc.compare``, ``gc.data``, ``gc.pyvista``, ``gc.bench``, ``gc.io``: imported on
     first use (PyVista and VTK are only loaded when ``gc.pyvista`` is touched; ``gc.io`` imports
     xtgeo, segyio, trimesh only inside the functions that need them)."""
     if name in _SUBMODULES:

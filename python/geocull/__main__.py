@@ -27,9 +27,9 @@ def demo(argv: list[str]) -> int:
     import os
 
     import geocull as gc
+    from geocull.bench.report import timed_rounds
     from geocull.compare import coverage_agreement, depth_error, image_error
     from geocull.data import gullfaks_like, standard_views
-    from geocull.report import timed_rounds
 
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     n = max(1, a.repeats)

@@ -28,7 +28,7 @@ too, and PyVista/VTK with MSAA off (:mod:`geocull.pyvista`, the same camera and 
 Timing as in :mod:`geocull.bench`: one warm-up frame per method (the first temporal one two, so
 that temporal's history is the view), whose image is compared with ``none``'s (differing pixels, beyond 4/255, largest
 difference, missed tiles: tiles visible in the oracle's image that the mode did not draw), then
-``repeats`` rounds calling every method once in rotated order (:func:`geocull.report.timed_rounds`:
+``repeats`` rounds calling every method once in rotated order (:func:`geocull.bench.report.timed_rounds`:
 a shared machine's load falls on all alike); a method's time is the median of its rounds of
 ``stats["total_ms"]`` (call -> GPU done; PyVista: ``Render`` + ``WaitForCompletion``), ratios are of
 medians of the same view, and the summary gives their geometric means over the views. The grid is
@@ -180,7 +180,7 @@ def _well_arrays(path: Path) -> tuple[np.ndarray, np.ndarray | None, str]:
 
     import xtgeo
 
-    from .io import XTGEO_UNDEF_LIMIT
+    from ..io import XTGEO_UNDEF_LIMIT
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # pandas' deprecation warnings inside xtgeo
@@ -329,7 +329,7 @@ class _Frozen:
 
 
 def field_config(mode: str, a: argparse.Namespace) -> dict[str, Any]:
-    """The field benchmark's part of :func:`geocull.bench._config`: image size, views, repeats and the
+    """The field benchmark's part of :func:`geocull.bench.cli.config`: image size, views, repeats and the
     data directory for ``mode`` (full, quick, tiny), overridden by the command line's options."""
     size = {"full": (1280, 1024), "quick": (320, 256), "tiny": (64, 48)}[mode]
     return dict(width=a.width or size[0], height=a.height or size[1],
@@ -340,7 +340,7 @@ def field_config(mode: str, a: argparse.Namespace) -> dict[str, Any]:
 
 def _diff_summary(res: Any, ref: Any, visible: np.ndarray) -> dict[str, Any]:
     """Image error of ``res`` against ``none``'s frame ``ref`` (and the oracle's visible tiles)."""
-    from .compare import image_error
+    from ..compare import image_error
 
     e0 = image_error(res.image, ref.image, tile_drawn=res.tile_drawn, reference_tile_pixels=visible)
     e4 = image_error(res.image, ref.image, threshold=4)
@@ -402,7 +402,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             import pyvista
             import vtk
 
-            from . import pyvista as gpv_mod
+            from .. import pyvista as gpv_mod
 
             gpv = gpv_mod
             frozen = _Frozen(scene)
@@ -454,7 +454,7 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             _say(f"bench: view {vname}: {rep} timed round(s) of {len(jobs)} methods")
             times = report.timed_rounds(jobs, rep)
             if setup is not None:
-                from .compare import coverage_agreement, depth_error
+                from ..compare import coverage_agreement, depth_error
 
                 pv_img, pv_depth = setup.read()
                 del pv_img

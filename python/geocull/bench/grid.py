@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ._convert import surface_of
+from .._convert import surface_of
 from .report import best_frame
 
 __all__ = ["run", "format_table", "level_table"]

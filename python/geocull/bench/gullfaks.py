@@ -1,43 +1,9 @@
-"""``python -m geocull bench``: geocull's culling methods against each other and against PyVista.
-
-For every view of a Gullfaks-like scene (default: 11 horizons of 418×418 samples + 16 faults,
-≈ 3.9 M triangles, 1280×1024, all :func:`geocull.data.standard_views`) it renders, side by side in
-one process and one run (a warm-up round, then ``--repeats`` rounds in rotated order):
-
-- geocull ``none`` (every fine tile: the reference image), ``three_pass`` in the paper's
-  approximate mode (``conservative=False``; pixel threshold 10, coarse factor 25, prepass scale 1.0
-  and 0.5; coarse factor 100 at 0.5) and in the conservative mode (``cons``: threshold 0, coarse
-  factor 25 at scale 1, coarse factor 100 at 0.5), ``oracle`` (exactly the tiles visible in the
-  unculled image: the lower bound), ``horizon`` (CPU horizon culling);
-- PyVista/VTK off-screen with MSAA off and with MSAA on (PyVista's default), same camera and clip
-  range.
-
-Frame time = minimum over the rounds of geocull's ``stats["total_ms"]`` (call → GPU done, no
-read-back) or VTK's ``Render()`` + ``WaitForCompletion()`` wall time. Errors against geocull
-``none``: differing pixel fraction and missing tiles (tiles visible in the unculled image but not
-drawn) for geocull methods; for PyVista (shading differs) coverage agreement and relative depth
-error. Also printed: scene build time, triangles, host + GPU bytes per fine triangle, peak RSS,
-adapter. ``--pass-triangles N`` bounds the triangles of each render pass of the scenes' renderers
-(:attr:`geocull.Renderer.pass_triangles`: driver memory against frame time on CPU drivers).
-``--json PATH`` writes ``{"summary": {...}, "rows": [...]}``.
-
-``--scene iso``: isosurfaces instead (:mod:`geocull.bench_iso`): geocull none / implicit, cold and
-warm, against PyVista flying edges + render, on the Pesco field and real volumes from PyVista's wheel.
-
-``--scene grid``: a faulted reservoir grid (:mod:`geocull.bench_grid`): build time and memory, the
-cell-merging levels, and each ``grid_lod`` mode against level 0 and PyVista. ``--scene seismic``: the
-scene with three slices and a lens (:mod:`geocull.bench_seismic`).
-
-``--scene field``: a real field from files (:mod:`geocull.bench_field`; ``--data DIR``, default
-``../shared/data/reek``): horizons, a grid and wells, every culling mode, LOD, the oracle and PyVista.
-
-``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
-``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
-"""
+"""``python -m geocull bench`` (``--scene gullfaks``, the default): geocull's culling methods against
+each other and against PyVista on a Gullfaks-like scene; the command line and what it measures are
+described in :mod:`geocull.bench`."""
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import platform
@@ -49,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from . import _progress
-from ._progress import ProgressLike
+from .. import _progress
+from .._progress import ProgressLike
 
-__all__ = ["main", "run", "format_table"]
+__all__ = ["run", "format_table"]
 
 THRESHOLD = 10
 COARSE_FACTOR = 25  # the seeds' setting
@@ -71,94 +37,8 @@ def _rss_mb() -> float:
     return r / 1024.0 if sys.platform != "darwin" else r / 2**20
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="python -m geocull bench",
-        description="Benchmark geocull's culling (none / three_pass / oracle / horizon) against PyVista, side by side.",
-    )
-    p.add_argument("--quick", action="store_true", help="small scene (120x120 samples, 6 faults), 320x256, 3 views")
-    p.add_argument("--tiny", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("--json", metavar="PATH", help="write rows and summary as JSON")
-    p.add_argument("--plot", metavar="PATH", help="gullfaks: write the speed-against-error plot (x none against "
-                   "differing pixels, one marker per method over the views; needs matplotlib)")
-    p.add_argument("--width", type=int, help="image width (default 1280; quick 320)")
-    p.add_argument("--height", type=int, help="image height (default 1024; quick 256)")
-    p.add_argument("--views", help="number of standard views to use (first N), or comma-separated view names")
-    p.add_argument("--repeats", type=int, help="timed rounds after the warm-up (default 3; quick 2)")
-    p.add_argument("--size", type=int, help="samples per horizon side (default 418; quick 120)")
-    p.add_argument("--no-pyvista", action="store_true", help="skip the PyVista rows")
-    p.add_argument("--no-horizon", action="store_true", help="skip CPU horizon culling")
-    p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
-                   "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
-                   "unbounded)")
-    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field"), default="gullfaks",
-                   help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench_iso); grid: a "
-                   "faulted reservoir grid (geocull.bench_grid); seismic: the gullfaks scene with slices and a lens "
-                   "(geocull.bench_seismic); field: a real field's horizons, grid and wells (geocull.bench_field)")
-    p.add_argument("--data", help="field: the field's directory (surfaces/*.gri, grid/*.EGRID or *.grdecl + porosity, "
-                   "wells/*.w; default ../shared/data/reek beside the checkout)")
-    p.add_argument("--grid-n", type=int, help="grid: cells along i and j (default 100; quick 30)")
-    p.add_argument("--grid-nk", type=int, help="grid: layers (default 100; quick 20)")
-    p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
-                   "(default all; quick: pesco)")
-    p.add_argument("--iso-n", type=int, help="iso: samples per axis of the Pesco field (default 128; quick 32)")
-    p.add_argument("--occluder-depth", type=int, help="iso: octree depth of the occluders (default: geocull's)")
-    p.add_argument("--cull-depth", type=int, help="iso: octree depth of the tested nodes (default: geocull's)")
-    return p
-
-
-def _config(a: argparse.Namespace) -> dict[str, Any]:
-    tiny = a.tiny or os.environ.get("GEOCULL_BENCH_TINY", "") not in ("", "0")
-    if tiny:
-        mode = "tiny"
-        cfg = dict(size=48, n_faults=2, fault_triangles=(50, 200), width=64, height=48, views="1", repeats=1)
-    elif a.quick:
-        mode = "quick"
-        cfg = dict(size=120, n_faults=6, fault_triangles=(2000, 20000), width=320, height=256,
-                   views=",".join(QUICK_VIEWS), repeats=2)
-    else:
-        mode = "full"
-        cfg = dict(size=418, n_faults=16, fault_triangles=(2000, 20000), width=1280, height=1024, views=None, repeats=3)
-    cfg["mode"] = mode
-    for k in ("size", "width", "height", "views", "repeats"):
-        v = getattr(a, k)
-        if v is not None:
-            cfg[k] = v
-    cfg["pyvista"] = not a.no_pyvista
-    cfg["horizon"] = not a.no_horizon
-    cfg["pass_triangles"] = a.pass_triangles
-    cfg["scene"] = a.scene
-    if a.scene == "iso":
-        from .bench_iso import VOLUMES
-
-        small = mode != "full"
-        cfg.update(width=a.width or (96 if mode == "tiny" else 128 if small else 512),
-                   height=a.height or (96 if mode == "tiny" else 128 if small else 512),
-                   iso_views=int(a.views) if a.views and str(a.views).isdigit()
-                   else (1 if mode == "tiny" else 2 if small else 8),
-                   repeats=a.repeats or (1 if small else 3),
-                   iso_n=a.iso_n or (24 if mode == "tiny" else 32 if small else 128),
-                   iso_volumes=[v.strip() for v in a.iso_volumes.split(",")] if a.iso_volumes else
-                   (["pesco"] if small else list(VOLUMES)),
-                   occluder_depth=a.occluder_depth, cull_depth=a.cull_depth)
-    elif a.scene == "grid":
-        small = mode != "full"
-        cfg.update(grid_n=a.grid_n or (12 if mode == "tiny" else 30 if small else 100),
-                   grid_nk=a.grid_nk or (6 if mode == "tiny" else 20 if small else 100),
-                   blocks=(8, 8) if small else (16, 16))
-    elif a.scene == "field":
-        from .bench_field import field_config
-
-        cfg.update(field_config(mode, a))
-    elif a.scene == "seismic":
-        small = mode != "full"
-        cfg.update(cube=(24, 24, 16) if mode == "tiny" else (60, 60, 40) if small else (200, 200, 120),
-                   views=1 if mode == "tiny" else 3 if small else 7)
-    return cfg
-
-
 def _select_views(views, spec_arg) -> list:
-    from .data import standard_views
+    from ..data import standard_views
 
     all_views = standard_views(*spec_arg)
     if views is None:
@@ -178,7 +58,7 @@ def _select_views(views, spec_arg) -> list:
 
 
 def run(cfg: dict[str, Any], progress: ProgressLike = None) -> dict[str, Any]:
-    """Run the benchmark described by ``cfg`` (see :func:`_config`); returns summary and rows.
+    """Run the benchmark described by ``cfg`` (see :func:`geocull.bench.cli.config`); returns summary and rows.
     progress: None (a bar in notebooks, silence in scripts: the command line prints its own
     messages), True, False or ``f(fraction, message)`` over the two scene builds and the views
     (:mod:`geocull._progress`)."""
@@ -189,9 +69,9 @@ def run(cfg: dict[str, Any], progress: ProgressLike = None) -> dict[str, Any]:
 def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
     import geocull as gc
 
+    from ..compare import coverage_agreement, depth_error
+    from ..data import gullfaks_like
     from . import report
-    from .compare import coverage_agreement, depth_error
-    from .data import gullfaks_like
 
     t_start = time.perf_counter()
     w, h = int(cfg["width"]), int(cfg["height"])
@@ -270,7 +150,7 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
             import pyvista
             import vtk
 
-            from . import pyvista as gpv_mod
+            from .. import pyvista as gpv_mod
 
             pv_versions.update(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
             gpv = gpv_mod
@@ -515,7 +395,7 @@ def _orbit(render, views, cfg: dict[str, Any]) -> dict[str, Any]:
 def _warm_summary(res: Any, ref: Any, visible: np.ndarray) -> dict[str, Any]:
     """What a benchmark row needs of a warm-up frame ``res``, against the unculled frame ``ref``
     and the oracle's visible pixels per tile: its stats and image errors (the frame is not kept)."""
-    from .compare import coverage_agreement, image_error
+    from ..compare import coverage_agreement, image_error
 
     err = image_error(res.image, ref.image, tile_drawn=res.tile_drawn, reference_tile_pixels=visible)
     return dict(
@@ -615,37 +495,3 @@ def format_table(result: dict[str, Any]) -> str:
                  "cov agree = coverage agreement vs none; "
                  "depth err = median relative depth difference vs none (PyVista)")
     return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m geocull bench [options]``: run the benchmark and print its table; returns the exit status."""
-    a = _parser().parse_args(sys.argv[1:] if argv is None else argv)
-    cfg = _config(a)
-    if cfg["scene"] == "iso":
-        from . import bench_iso
-
-        result = bench_iso.run(cfg)
-        print(bench_iso.format_table(result), flush=True)
-    elif cfg["scene"] in ("grid", "seismic", "field"):
-        import importlib
-
-        mod = importlib.import_module(f".bench_{cfg['scene']}", __package__)
-        result = mod.run(cfg)
-        print(mod.format_table(result), flush=True)
-    else:
-        result = run(cfg)
-        print(format_table(result), flush=True)
-    if a.plot and cfg["scene"] == "gullfaks":
-        from .report import plot
-
-        rows = [r for r in result["rows"] if r.get("differing_pixel_fraction") is not None]
-        plot(rows, a.plot, title=f"geocull bench ({cfg['mode']}): speed against error, {cfg['width']}x{cfg['height']}")
-        _say(f"bench: wrote {a.plot}")
-    if a.json:
-        from .report import write_json
-
-        d = os.path.dirname(os.path.abspath(a.json))
-        os.makedirs(d, exist_ok=True)
-        write_json(result, a.json)
-        _say(f"bench: wrote {a.json}")
-    return 0

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .renderer import IsoCullingMode
+from ..renderer import IsoCullingMode
 
 VOLUMES = ("pesco", "channels", "frog")
 
@@ -45,7 +45,7 @@ def _say(msg: str) -> None:
 def load_volume(name: str, n: int) -> tuple[np.ndarray, tuple[float, float, float], tuple[float, float, float], float]:
     """``(values (nz, ny, nx), origin, spacing, isovalue)`` of a benchmark volume (no download)."""
     if name == "pesco":
-        from .data import pesco_synthetic
+        from ..data import pesco_synthetic
 
         vals, origin, spacing = pesco_synthetic(n)
         return vals, origin, spacing, 0.0
@@ -104,8 +104,8 @@ class _MeshScene:
 def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
     import geocull as gc
 
+    from ..compare import image_error
     from . import report
-    from .compare import image_error
 
     w, h = int(cfg["width"]), int(cfg["height"])
     vals, origin, spacing, iso = load_volume(name, int(cfg["iso_n"]))
@@ -123,7 +123,7 @@ def run_volume(name: str, cfg: dict[str, Any]) -> list[dict[str, Any]]:
         try:
             import pyvista as pv
 
-            from . import pyvista as gpv
+            from .. import pyvista as gpv
 
             g = pv.ImageData(dimensions=vals.shape[::-1], origin=origin, spacing=spacing)
             g.point_data["f"] = vals.ravel()

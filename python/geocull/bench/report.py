@@ -39,15 +39,15 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 
-from . import _progress
-from ._errors import InputError
-from ._progress import ProgressLike
+from .. import _progress
+from .._errors import InputError
+from .._progress import ProgressLike
 
 if TYPE_CHECKING:
-    from .camera import Camera
-    from .data import SceneSpec
-    from .renderer import CullingMode, Renderer
-    from .scene import Scene
+    from ..camera import Camera
+    from ..data import SceneSpec
+    from ..renderer import CullingMode, Renderer
+    from ..scene import Scene
 
     #: What ``sweep`` takes as cameras (see there).
     Cameras = (
@@ -131,7 +131,7 @@ def _cameras(cameras, spec, width: int, height: int) -> list[tuple[str, Any]]:
     if cameras is None:
         if spec is None:
             raise InputError("cameras: required when sweeping a Scene (no SceneSpec to frame views from)")
-        from .data import standard_views
+        from ..data import standard_views
 
         cameras = standard_views(spec, aspect=width / height)
     if isinstance(cameras, dict):
@@ -207,7 +207,7 @@ def _values(x, arg: str) -> list:
 def _sweep_scene(
     scene, cams, renderer, thresholds, prepass_scales, repeats, methods, base: dict[str, Any], say
 ) -> list[dict[str, Any]]:
-    from .compare import image_error
+    from ..compare import image_error
 
     # configurations: key -> render kwargs
     configs: list[tuple[tuple, dict[str, Any]]] = [(("none",), dict(culling="none"))]
@@ -376,7 +376,7 @@ def sweep(
     """
     import geocull as gc
 
-    from .data import SceneSpec
+    from ..data import SceneSpec
 
     repeats = max(1, int(repeats))
     # Every iterable argument is read once, here: a generator consumed by a check would otherwise

@@ -112,7 +112,7 @@ def pyvista_move(scene, vol, vals, origin, spacing, n, cam, w: int, h: int) -> f
     try:
         import pyvista as pv
 
-        from . import pyvista as gpv
+        from .. import pyvista as gpv
     except ImportError:
         return None
     st = gpv._Setup(scene, cam, w, h, False, True, None, None, (0.0, 0.0, 0.0), 1e-4)
