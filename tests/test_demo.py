@@ -25,4 +25,5 @@ def test_demo_prints_the_comparison(tmp_path, capsys, pyvista):
     assert lines["none"].split()[2] == "1.00"  # none against itself
     assert "0 (0.000 %)" in lines["none"]
     assert "three_pass" in lines and (("pyvista" in lines) == pyvista)
+    pytest.importorskip("PIL")  # read_png reads with Pillow (the test extra)
     assert read_png(out).shape == (48, 64, 4)

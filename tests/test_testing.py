@@ -1,6 +1,6 @@
 """geocull.testing: assert_images_close (fails with a diff file on a one-pixel change beyond the
-tolerance, passes within it), the PNG reader, and the pytest plugin's image_regression fixture
-driven through pytester."""
+tolerance, passes within it), the PNG reader (Pillow: the test extra; skipped without it), and the
+pytest plugin's image_regression fixture driven through pytester."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from geocull.testing import assert_images_close, image_difference, read_png, write_png
+
+pytest.importorskip("PIL", reason="geocull.testing reads PNG files with Pillow: pip install 'geocull[test]'")
 
 pytest_plugins = ["pytester"]
 
@@ -95,6 +97,47 @@ def test_read_png_every_filter(tmp_path):
     got = read_png(p)
     np.testing.assert_array_equal(got[..., :3], img)
     assert (got[..., 3] == 255).all()
+
+
+def test_png_round_trips_rgba_rgb_grey_and_16_bit(tmp_path):
+    from PIL import Image
+
+    rgba = image(11, 13, seed=3)
+    rgba[..., 3] = np.random.default_rng(4).integers(0, 256, size=rgba.shape[:2], dtype=np.uint8)
+    np.testing.assert_array_equal(read_png(write_png(tmp_path / "rgba.png", rgba)), rgba)  # geocull's writer
+    Image.fromarray(rgba, "RGBA").save(tmp_path / "rgba_pil.png")
+    np.testing.assert_array_equal(read_png(tmp_path / "rgba_pil.png"), rgba)  # Pillow's writer (its filters)
+
+    rgb = rgba[..., :3].copy()
+    Image.fromarray(rgb, "RGB").save(tmp_path / "rgb.png")
+    got = read_png(tmp_path / "rgb.png")
+    np.testing.assert_array_equal(got[..., :3], rgb)
+    assert (got[..., 3] == 255).all()
+    Image.fromarray(rgb, "RGB").save(tmp_path / "rgb_interlaced.png", interlace=1)  # Adam7: not read before
+    np.testing.assert_array_equal(read_png(tmp_path / "rgb_interlaced.png")[..., :3], rgb)
+
+    grey = rgba[..., 0].copy()
+    Image.fromarray(grey, "L").save(tmp_path / "grey.png")
+    np.testing.assert_array_equal(read_png(tmp_path / "grey.png")[..., :3], np.dstack([grey] * 3))
+
+    grey16 = grey.astype(np.uint16) * 256 + 7  # high byte == grey
+    Image.fromarray(grey16).save(tmp_path / "grey16.png")
+    assert Image.open(tmp_path / "grey16.png").mode.startswith("I")  # really 16 bits on file
+    np.testing.assert_array_equal(read_png(tmp_path / "grey16.png")[..., :3], np.dstack([grey] * 3))
+
+    (tmp_path / "no.png").write_bytes(b"GIF89a not a png")
+    with pytest.raises(ValueError, match="not a PNG file"):
+        read_png(tmp_path / "no.png")
+
+
+def test_read_png_without_pillow_says_which_extra(tmp_path, monkeypatch):
+    import sys
+
+    p = write_png(tmp_path / "a.png", image())  # writing needs no Pillow
+    monkeypatch.setitem(sys.modules, "PIL", None)  # import PIL fails
+    with pytest.raises(ImportError, match=r"Pillow.*geocull\[test\]"):
+        read_png(p)
+    assert_images_close(image(), image())  # arrays compare without Pillow
 
 
 def test_rendered_image_round_trips_through_png(tmp_path, renderer_small):

@@ -3,7 +3,9 @@
 ``assert_images_close(actual, expected, max_differing=0, tol=0)`` compares two images pixel by
 pixel and, on failure, writes ``<name>-actual.png``, ``<name>-expected.png`` and ``<name>-diff.png``
 (differing pixels in red over a dimmed grey copy of the expected image) and says where, how many
-pixels differ and by how much.
+pixels differ and by how much. PNG files are written without dependencies
+(:func:`geocull.results.encode_png`) and read with Pillow (:func:`read_png`; the ``test`` extra),
+imported only when a PNG file is read.
 
 The pytest plugin (registered through the ``pytest11`` entry point, so it is active wherever
 geocull is installed) adds the ``image_regression`` fixture::
@@ -22,9 +24,7 @@ from __future__ import annotations
 
 import os
 import re
-import struct
 import tempfile
-import zlib
 from pathlib import Path
 from typing import Any
 
@@ -73,62 +73,35 @@ def write_png(path: str | os.PathLike[str], image: Any) -> Path:
     return p
 
 
+def _pillow_image() -> Any:
+    """Pillow's ``PIL.Image``, imported on first use: reading PNG files needs it (writing does not)."""
+    try:
+        from PIL import Image
+    except ImportError as e:
+        raise ImportError(
+            "geocull.testing reads PNG files (baselines, read_png) with Pillow, which is not installed: "
+            "pip install 'geocull[test]' (the test extra) or pip install pillow"
+        ) from e
+    return Image
+
+
 def read_png(path: str | os.PathLike[str]) -> np.ndarray:
-    """(H, W, 4) uint8 RGBA of an 8-bit, non-interlaced PNG file (grey, grey + alpha, RGB or RGBA;
-    every filter type), such as the ones :func:`write_png` and ``RenderResult.save_png`` write."""
-    data = Path(path).read_bytes()
-    if data[:8] != b"\x89PNG\r\n\x1a\n":
-        raise ValueError(f"{path}: not a PNG file")
-    pos, idat, hdr = 8, [], None
-    while pos + 8 <= len(data):
-        (n,) = struct.unpack(">I", data[pos:pos + 4])
-        tag, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + n]
-        pos += 12 + n
-        if tag == b"IHDR":
-            hdr = struct.unpack(">IIBBBBB", body)
-        elif tag == b"IDAT":
-            idat.append(body)
-        elif tag == b"IEND":
-            break
-    if hdr is None:
-        raise ValueError(f"{path}: no IHDR chunk")
-    w, h, depth, ctype, _, _, interlace = hdr
-    channels = {0: 1, 2: 3, 4: 2, 6: 4}.get(ctype)
-    if depth != 8 or channels is None or interlace:
-        raise ValueError(f"{path}: only 8-bit, non-interlaced grey/RGB/RGBA PNGs are read (bit depth {depth}, "
-                         f"colour type {ctype}, interlace {interlace})")
-    raw = np.frombuffer(zlib.decompress(b"".join(idat)), np.uint8)
-    stride = w * channels
-    rows = raw.reshape(h, stride + 1)
-    out = np.zeros((h, stride), np.uint8)
-    prev = np.zeros(stride, np.uint8)
-    bpp = channels
-    for r in range(h):
-        f, line = rows[r, 0], rows[r, 1:].copy()
-        if f == 1:  # Sub: running sums per channel, modulo 256
-            line = np.cumsum(line.reshape(w, bpp), axis=0, dtype=np.uint8).reshape(stride)
-        elif f == 2:  # Up
-            line = line + prev
-        elif f in (3, 4):  # Average, Paeth: sequential along the row
-            cur = line.astype(np.int32)
-            up = prev.astype(np.int32)
-            for i in range(stride):
-                left = cur[i - bpp] if i >= bpp else 0
-                if f == 3:
-                    cur[i] = (cur[i] + (left + up[i]) // 2) & 255
-                else:
-                    ul = up[i - bpp] if i >= bpp else 0
-                    p = left + up[i] - ul
-                    pa, pb, pc = abs(p - left), abs(p - up[i]), abs(p - ul)
-                    pred = left if pa <= pb and pa <= pc else (up[i] if pb <= pc else ul)
-                    cur[i] = (cur[i] + pred) & 255
-            line = cur.astype(np.uint8)
-        elif f != 0:
-            raise ValueError(f"{path}: bad filter type {f} in row {r}")
-        out[r] = line
-        prev = line
-    img = out.reshape(h, w, channels)
-    return _rgba(img if channels != 2 else np.dstack([img[..., 0]] * 3 + [img[..., 1]]), "image")
+    """(H, W, 4) uint8 RGBA of a PNG file, such as the ones :func:`write_png` and
+    ``RenderResult.save_png`` write: grey, grey + alpha, RGB, RGBA or palette, 8 or 16 bits per
+    channel (16-bit grey keeps its high byte; Pillow reads 16-bit colour as 8-bit), interlaced or
+    not. Read with Pillow (the ``test`` extra), imported on first use: an ImportError that says so
+    where it is missing. A file that is not a PNG raises ValueError."""
+    Image = _pillow_image()
+    try:
+        img = Image.open(path, formats=["PNG"])
+    except Image.UnidentifiedImageError as e:
+        raise ValueError(f"{path}: not a PNG file") from e
+    with img:
+        img.load()
+        if img.mode in ("I;16", "I;16B", "I;16L", "I"):  # 16-bit grey: its high byte
+            a = np.asarray(img).astype(np.uint32) >> 8
+            return _rgba(np.clip(a, 0, 255).astype(np.uint8), "image")
+        return _rgba(np.asarray(img.convert("RGBA")), "image")
 
 
 def image_difference(actual: Any, expected: Any, tol: int = 0) -> dict[str, Any]:
