@@ -1,7 +1,8 @@
 """Reservoir corner-point grids in: the Eclipse pillar layout (GRDECL COORD / ZCORN / ACTNUM) and
 xtgeo ``Grid`` objects, as the arrays geocull's reservoir grids take.
 
-``from_grdecl``  COORD, ZCORN (, ACTNUM) -> ``dict(corners=..., active=...)``
+``from_grdecl``  COORD, ZCORN (, ACTNUM, MAPAXES) -> ``dict(corners=..., active=...)``
+``mapaxes_transform``  MAPAXES -> (origin, x axis, y axis) of the local -> world map
 ``from_xtgeo``   an xtgeo Grid (, a property) -> ``dict(corners=..., active=..., values=...)``, the
                  keyword arguments of ``Scene.add_grid`` (as :func:`geocull.io.from_xtgeo_grid`)
 
@@ -15,6 +16,12 @@ Conventions (the same everywhere in geocull):
   becomes z = -d; pass ``z_positive="up"`` for files that hold elevations.
 - ``active`` has shape (nk, nj, ni), bool (ACTNUM != 0); ``values`` (nk, nj, ni) float64 with
   inactive / masked cells NaN.
+- **MAPAXES** (Eclipse): 6 numbers X1 Y1 X2 Y2 X3 Y3, a point on the local y axis, the origin, a
+  point on the local x axis, in world (map) coordinates. A local (x, y) lies at
+  ``origin + x * ex + y * ey`` with ex, ey the *unit* vectors from the origin towards the two points
+  (no scaling: the points' distances from the origin do not matter; axes need not be perpendicular,
+  and a y axis clockwise of the x axis mirrors the grid), as Eclipse, resdata and xtgeo apply it.
+  Without MAPAXES the COORD values are world coordinates already.
 
 Only numpy is needed; xtgeo is imported by nothing here (``from_xtgeo`` reads the object it is
 given through :func:`geocull.io.from_xtgeo_grid`).
@@ -30,7 +37,7 @@ from ._convert import float_array, integer
 from ._errors import InputError
 from .io import GridKwargs, from_xtgeo_grid
 
-__all__ = ["from_grdecl", "from_xtgeo", "CornerArrays", "GridInput"]
+__all__ = ["from_grdecl", "from_xtgeo", "mapaxes_transform", "CornerArrays", "GridInput"]
 
 
 class CornerArrays(TypedDict):
@@ -59,6 +66,7 @@ def from_grdecl(
     nx: int,
     ny: int,
     nz: int | None = None,
+    mapaxes: Any = None,
     z_positive: Literal["up", "down"] = "down",
 ) -> CornerArrays:
     """Corner-point arrays from Eclipse's pillar layout (the GRDECL keywords, as numbers).
@@ -72,11 +80,19 @@ def from_grdecl(
         i-bit 0 then 1 (i fastest).
     actnum: ACTNUM, nx * ny * nz ints (i fastest) or None = all active.
     nx, ny: cells along i and j; nz: layers (default: from the length of ``zcorn``).
+    mapaxes: MAPAXES, 6 numbers ``(X1, Y1, X2, Y2, X3, Y3)`` (any shape of that size, e.g. (3, 2)):
+        a point on the local y axis, the origin, a point on the local x axis, world metres. COORD's
+        x, y are then local: each pillar point moves to ``origin + x * ex + y * ey``
+        (:func:`mapaxes_transform`; the module docstring has the convention). None: COORD is in
+        world coordinates already. An InputError naming ``mapaxes`` for another size, non-finite
+        numbers, an axis of zero length or two parallel axes.
+    z_positive: "down" (default: ZCORN and COORD z are depths, drawn at z = -depth) or "up".
 
     Returns ``dict(corners=(nz, ny, nx, 8, 3), active=(nz, ny, nx))`` in the corner order of the
-    module docstring, z = -depth for ``z_positive="down"``.
+    module docstring, world metres, z = -depth for ``z_positive="down"``.
     """
     sign = _zsign(z_positive)
+    axes = None if mapaxes is None else mapaxes_transform(mapaxes)
     nx = integer(nx, "nx")
     ny = integer(ny, "ny")
     if nx < 1 or ny < 1:
@@ -95,6 +111,13 @@ def from_grdecl(
     # (k, kbit, j, jbit, i, ibit) -> (k, j, i, kbit, jbit, ibit) -> corner c = 4 kbit + 2 jbit + ibit.
     depth = z.reshape(nz, 2, ny, 2, nx, 2).transpose(0, 2, 4, 1, 3, 5).reshape(nz, ny, nx, 8)
     pil = c.reshape(ny + 1, nx + 1, 6)
+    if axes is not None:
+        origin, ex, ey = axes
+        pil = pil.copy()
+        for col in (0, 3):  # the top and the bottom point of each pillar
+            x, y = pil[..., col].copy(), pil[..., col + 1].copy()
+            pil[..., col] = origin[0] + x * ex[0] + y * ey[0]
+            pil[..., col + 1] = origin[1] + x * ex[1] + y * ey[1]
     cbits = np.arange(8)
     pi = np.arange(nx)[None, :, None] + (cbits & 1)[None, None, :]  # (1, nx, 8)
     pj = np.arange(ny)[:, None, None] + ((cbits >> 1) & 1)[None, None, :]  # (ny, 1, 8)
@@ -115,6 +138,38 @@ def from_grdecl(
             raise InputError(f"actnum: {a.size} values, expected nx * ny * nz = {nx * ny * nz}")
         active = a.reshape(nz, ny, nx) != 0
     return CornerArrays(corners=corners, active=active)
+
+
+def mapaxes_transform(mapaxes: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(origin, ex, ey)`` of Eclipse's MAPAXES ``(X1, Y1, X2, Y2, X3, Y3)`` (6 numbers, any shape
+    of that size; world metres): the origin (X2, Y2) and the unit vectors ex towards (X3, Y3) and ey
+    towards (X1, Y1), each a (2,) float64. A local (x, y) lies at ``origin + x * ex + y * ey``.
+
+    InputError naming ``mapaxes``: not 6 finite numbers, a point on the origin (an axis of zero
+    length) or the two axes parallel (the map would squash the grid onto a line)."""
+    try:
+        m = np.asarray(mapaxes, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"mapaxes: {mapaxes!r} is not 6 numbers (X1 Y1 X2 Y2 X3 Y3)") from None
+    if m.size != 6:
+        raise InputError(f"mapaxes: {m.size} values (shape {m.shape}); MAPAXES is 6 numbers X1 Y1 X2 Y2 X3 Y3 "
+                         "(a point on the y axis, the origin, a point on the x axis)")
+    m = m.reshape(3, 2)
+    if not np.isfinite(m).all():
+        raise InputError(f"mapaxes: {m.ravel().tolist()} holds a non-finite number")
+    y_point, origin, x_point = m
+    scale = max(1.0, float(np.abs(m).max()))
+    ex, ey = x_point - origin, y_point - origin
+    lx, ly = float(np.hypot(*ex)), float(np.hypot(*ey))
+    for name, length in (("x", lx), ("y", ly)):
+        if length <= 1e-9 * scale:
+            raise InputError(f"mapaxes: the point on the {name} axis is the origin {origin.tolist()} "
+                             f"({m.ravel().tolist()}): the axis has no direction")
+    ex, ey = ex / lx, ey / ly
+    if abs(float(ex[0] * ey[1] - ex[1] * ey[0])) < 1e-6:
+        raise InputError(f"mapaxes: the x axis {ex.tolist()} and the y axis {ey.tolist()} are parallel "
+                         f"({m.ravel().tolist()}): they would map the grid onto a line")
+    return origin.copy(), ex, ey
 
 
 def from_xtgeo(grid: Any, property: Any = None, z_positive: Literal["up", "down"] = "down") -> GridInput:

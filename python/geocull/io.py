@@ -17,6 +17,7 @@ PyVista meshes, each with its conventions translated, so that a scene needs no g
 ``xtgeo_property``      an xtgeo GridProperty (or a grid's property by name) -> (nk, nj, ni) array
 ``xtgeo_kind``          which xtgeo object something is, by its attributes (no import)
 ``from_segy``           a SEG-Y file -> ``Volume`` keyword arguments (``Volume.from_segy`` builds it)
+``read_grdecl``         an Eclipse GRDECL file -> ``Scene.add_grid`` keyword arguments (MAPAXES applied)
 ``to_pyvista``          one scene object -> ``pyvista.PolyData``
 ``to_trimesh``          one scene object -> ``trimesh.Trimesh``
 
@@ -42,6 +43,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 import numpy as np
@@ -59,6 +61,7 @@ __all__ = [
     "xtgeo_property",
     "xtgeo_kind",
     "from_segy",
+    "read_grdecl",
     "to_pyvista",
     "to_trimesh",
     "HeightfieldKwargs",
@@ -367,6 +370,94 @@ def from_xtgeo_well(
         raise InputError(f"well: {len(xyz)} station(s) with defined coordinates; a well needs 2")
     xyz[:, 2] *= sign
     return WellKwargs(path=np.ascontiguousarray(xyz), values=vals)
+
+
+# -------------------------------------------------------------------------------------------- GRDECL
+
+#: Reader failures (of xtgeo's GRDECL reader, of a damaged or truncated file) that become InputErrors.
+_READ_ERRORS = (ValueError, OSError, RuntimeError, IndexError, KeyError, EOFError, MemoryError, TypeError,
+                AttributeError)
+
+
+def read_grdecl(
+    path: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
+    properties: str | None = None,
+    z_positive: Literal["up", "down"] = "down",
+    engine: Literal["auto", "xtgeo", "geocull"] = "auto",
+) -> GridKwargs:
+    """An Eclipse GRDECL corner-point grid as keyword arguments of :meth:`geocull.Scene.add_grid`:
+    ``scene.add_grid(**read_grdecl([grid_file, poro_file], properties="PORO"), name="Reek")``.
+
+    path: the GRDECL text file of the grid (SPECGRID, COORD, ZCORN, optional ACTNUM, MAPAXES,
+        GRIDUNIT / MAPUNITS), or a list of files read as one deck, the grid's first (property files
+        such as ``reek_sim_poro.grdecl`` after it).
+    properties: the name of one cell property keyword in those files (``"PORO"``) that becomes
+        ``values``, (nk, nj, ni) float64, NaN on inactive cells; None: ``values=None``. Several
+        properties: one call each, or recolour with ``Scene.set_color_by``.
+    z_positive: "down" (default: Eclipse depths, drawn at z = -depth metres) or "up".
+    engine: "xtgeo" reads through ``xtgeo.grid_from_file(..., fformat="grdecl")`` and
+        :func:`from_xtgeo_grid`; "geocull" through geocull's own keyword reader (numpy only:
+        ``n*value`` repeat counts, ``--`` comments, ``/`` terminators, ECHO / NOECHO and section
+        keywords skipped, ``INCLUDE`` followed, unknown keywords skipped, EQUALS / COPY / ADD /
+        MULTIPLY / BOX not applied but warned of) and :func:`geocull.grid.from_grdecl`; "auto"
+        (default) is xtgeo when it is installed. Both give the same corners on the same file
+        (xtgeo joins vertically split layers, with its own warning).
+
+    MAPAXES is applied (unless GRIDUNIT says the grid is relative to the map already): local
+    COORD (x, y) becomes ``origin + x * ex + y * ey`` (:func:`geocull.grid.mapaxes_transform`), so
+    the grid lands in the map (UTM) coordinates of horizons and wells; coordinates in GRIDUNIT
+    units other than MAPUNITS' are converted to MAPUNITS (METRES, FEET, CM), as xtgeo does.
+
+    Returns ``dict(corners=(nk, nj, ni, 8, 3), active=(nk, nj, ni), values=... or None)``, the
+    conventions of :mod:`geocull.grid`. A missing, unreadable, truncated (data without its ``/``)
+    or inconsistent file (a count other than SPECGRID's, a number that is none, a degenerate
+    MAPAXES) is an :class:`geocull.InputError` naming ``path``, the file and the cause; a property
+    not in the files one naming ``properties``.
+    """
+    from . import _grdecl
+
+    _zsign(z_positive)
+    if isinstance(path, str | os.PathLike):
+        paths = [os.fspath(path)]
+    elif isinstance(path, Sequence) and path and all(isinstance(p, str | os.PathLike) for p in path):
+        paths = [os.fspath(p) for p in path]
+    else:
+        raise InputError(f"path: {path!r} is neither a path nor a non-empty list of paths")
+    for p in paths:
+        if not os.path.isfile(p):
+            raise InputError(f"path: no such file {p!r}")
+    if properties is not None and not isinstance(properties, str):
+        raise InputError(f"properties: {properties!r} is not a property keyword name (a string such as 'PORO')")
+    if engine not in ("auto", "xtgeo", "geocull"):
+        raise InputError(f"engine: {engine!r}; expected 'auto', 'xtgeo' or 'geocull'")
+    if engine == "auto":
+        import importlib.util
+
+        engine = "xtgeo" if importlib.util.find_spec("xtgeo") is not None else "geocull"
+    if engine == "geocull":
+        keep = set(_grdecl.GRID_KEYWORDS) | ({properties.upper()} if properties else set())
+        deck = _grdecl.read_deck(paths, keep)
+        corners, active, values = _grdecl.deck_grid(deck, properties, z_positive)
+        return GridKwargs(corners=corners, active=active, values=values)
+    xtgeo = _import("xtgeo")
+    _grdecl.check_mapaxes(paths[0])  # xtgeo applies a degenerate one as NaN corners
+    try:
+        grid = xtgeo.grid_from_file(paths[0], fformat="grdecl")
+    except _READ_ERRORS as e:
+        cause = str(e).strip() or type(e).__name__
+        raise InputError(f"path: cannot read the GRDECL grid {paths[0]!r} (xtgeo): {cause} ({type(e).__name__})") from e
+    prop = None
+    if properties is not None:
+        causes = []
+        for p in paths:
+            try:
+                prop = xtgeo.gridproperty_from_file(p, fformat="grdecl", name=properties, grid=grid)
+                break
+            except _READ_ERRORS as e:
+                causes.append(f"{p!r}: {str(e).strip() or type(e).__name__}")
+        if prop is None:
+            raise InputError(f"properties: no property {properties!r} that xtgeo reads in {'; '.join(causes)}")
+    return from_xtgeo_grid(grid, values=prop, z_positive=z_positive)
 
 
 # --------------------------------------------------------------------------------------------- SEG-Y
