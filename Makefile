@@ -10,7 +10,7 @@ PY     := $(VENV)/bin/python
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
 
-.PHONY: setup vulkan gl build demo test test-rust test-python test-gl browser test-browser lint bench bench-quick bench-distributed wheel device-bundle examples-quick notebooks clean
+.PHONY: setup vulkan gl build demo test test-rust test-python test-gl browser test-browser lint bench bench-quick bench-scale bench-distributed wheel device-bundle examples-quick notebooks clean
 
 setup: vulkan gl build
 
@@ -100,6 +100,11 @@ bench: setup
 bench-quick: setup
 	$(PY) -m geocull bench --quick --json out/bench_quick.json
 	$(PY) -m geocull bench --scene field --quick --json out/bench_field_quick.json
+
+# Issue 41's scale benchmark: the Gullfaks-like scene at 3.9 M, 15 M and 61 M triangles, each size in its own
+# process (~15 min and ~3 GB on lavapipe); `python -m geocull bench --scene scale --quick` is the seconds-long variant.
+bench-scale: setup
+	$(PY) -m geocull bench --scene scale --json out/bench_scale.json
 
 # The abi3 wheel (one for every CPython >= 3.11) in dist/, and the bundle that scripts/device_bench.sh runs
 # from on a GPU machine without internet (docs/DESIGN.md, "Running on a GPU machine"): out/device_bundle.

@@ -21,7 +21,7 @@
 #        grid   python -m geocull bench --scene grid          (100x100x100 cells)
 #        iso    python -m geocull bench --scene iso --iso-volumes pesco --views 4   (512x512, 128^3)
 #        full   python -m geocull bench --views 3 --no-horizon (the Gullfaks-like scene, 3.9 M triangles, 1280x1024)
-#        scale  python -m geocull bench --scene scale --quick (not in the default steps)
+#        scale  python -m geocull bench --scene scale         (3.9 M, 15 M, 61 M triangles; not in the default steps)
 #      all with --no-pyvista unless --pyvista. --small: each in its smallest variant (to try the script on a
 #      CPU with --allow-cpu). A step gets at most its own limit and what is left of --budget (default 480 s,
 #      the whole run within ~8 min); a step with under 20 s left is skipped;
@@ -186,7 +186,7 @@ step_args() {  # the step's bench arguments and its own time limit (seconds), or
       grid)  echo "90|--scene grid --quick --repeats 1" ;;
       iso)   echo "90|--scene iso --quick --iso-volumes pesco --views 1" ;;
       full)  echo "120|--quick --views 1 --repeats 1 --no-horizon" ;;
-      scale) echo "120|--scene scale --quick" ;;
+      scale) echo "120|--scene scale --tiny" ;;
     esac
   else
     local iv="pesco"; [ "$with_pyvista" = 1 ] && iv="pesco,channels,frog"
@@ -196,7 +196,7 @@ step_args() {  # the step's bench arguments and its own time limit (seconds), or
       grid)  echo "90|--scene grid" ;;
       iso)   echo "90|--scene iso --iso-volumes $iv --views 4" ;;
       full)  echo "150|--views 3 --no-horizon" ;;
-      scale) echo "240|--scene scale --quick" ;;
+      scale) echo "300|--scene scale" ;;
     esac
   fi
 }

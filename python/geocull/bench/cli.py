@@ -38,12 +38,17 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
                    "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
                    "unbounded)")
-    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field"), default="gullfaks",
+    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field", "scale"),
+                   default="gullfaks",
                    help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench.iso); grid: a "
                    "faulted reservoir grid (geocull.bench.grid); seismic: the gullfaks scene with slices and a lens "
-                   "(geocull.bench.seismic); field: a real field's horizons, grid and wells (geocull.bench.field)")
+                   "(geocull.bench.seismic); field: a real field's horizons, grid and wells (geocull.bench.field); "
+                   "scale: the gullfaks scene ever finer, 3.9 M / 15 M / 61 M triangles, each in its own process "
+                   "(geocull.bench.scale; --scale-sizes)")
     p.add_argument("--data", help="field: the field's directory (surfaces/*.gri, grid/*.EGRID or *.grdecl + porosity, "
                    "wells/*.w; default ../shared/data/reek beside the checkout)")
+    p.add_argument("--scale-sizes", help="scale: comma-separated samples per horizon side (default 418,835,1669; "
+                   "quick 96,191)")
     p.add_argument("--grid-n", type=int, help="grid: cells along i and j (default 100; quick 30)")
     p.add_argument("--grid-nk", type=int, help="grid: layers (default 100; quick 20)")
     p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
@@ -97,6 +102,10 @@ def config(a: argparse.Namespace) -> dict[str, Any]:
         from .field import field_config
 
         cfg.update(field_config(mode, a))
+    elif a.scene == "scale":
+        from .scale import scale_config
+
+        cfg.update(scale_config(mode, a))
     elif a.scene == "seismic":
         small = mode != "full"
         cfg.update(cube=(24, 24, 16) if mode == "tiny" else (60, 60, 40) if small else (200, 200, 120),
@@ -113,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
 
         result = iso.run(cfg)
         print(iso.format_table(result), flush=True)
-    elif cfg["scene"] in ("grid", "seismic", "field"):
+    elif cfg["scene"] in ("grid", "seismic", "field", "scale"):
         import importlib
 
         mod = importlib.import_module(f".{cfg['scene']}", __package__)
