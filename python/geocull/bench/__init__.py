@@ -35,13 +35,17 @@ scene with three slices and a lens (:mod:`geocull.bench.seismic`).
 61 M triangles, each in its own process): build, first image, ``none`` / ``temporal`` / ``temporal`` + lod frame
 times, peak RSS and the lod frame's error, beside issue 41's targets.
 
+``--scene lod``: the LOD build of mesh tiles (:mod:`geocull.bench.lod`): geocull's meshoptimizer levels
+against fast-simplification (the ``bench`` extra) on the same tiles at the same triangle counts, build
+time and geometric error (symmetric Hausdorff estimate and mean distance to the fine surface).
+
 ``--quick``: a small scene (120×120 samples, 6 faults), 320×256, 3 views, 2 repeats (CI).
 ``--tiny`` (or env ``GEOCULL_BENCH_TINY=1``; for tests): 48×48 samples, 64×48, 1 view, 1 repeat.
 
 The package: :mod:`~geocull.bench.cli` (the command line: options and the dispatch to one module
 per ``--scene``), :mod:`~geocull.bench.gullfaks` (the default scene; :func:`run` and
 :func:`format_table` are re-exported here), :mod:`~geocull.bench.iso`, :mod:`~geocull.bench.grid`,
-:mod:`~geocull.bench.seismic`, :mod:`~geocull.bench.field`, :mod:`~geocull.bench.scale`, and
+:mod:`~geocull.bench.seismic`, :mod:`~geocull.bench.field`, :mod:`~geocull.bench.scale`, :mod:`~geocull.bench.lod`, and
 :mod:`~geocull.bench.report` (parameter sweeps, tables and plots of speed against error; the timing loop every
 benchmark uses). The submodules are imported on first use (``geocull.bench.report``) or by ``from geocull.bench
 import report``.

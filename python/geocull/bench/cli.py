@@ -38,13 +38,14 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
                    "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
                    "unbounded)")
-    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field", "scale"),
+    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field", "lod", "scale"),
                    default="gullfaks",
                    help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench.iso); grid: a "
                    "faulted reservoir grid (geocull.bench.grid); seismic: the gullfaks scene with slices and a lens "
                    "(geocull.bench.seismic); field: a real field's horizons, grid and wells (geocull.bench.field); "
-                   "scale: the gullfaks scene ever finer, 3.9 M / 15 M / 61 M triangles, each in its own process "
-                   "(geocull.bench.scale; --scale-sizes)")
+                   "lod: the LOD build of mesh tiles, meshoptimizer against fast-simplification (geocull.bench.lod; "
+                   "--size: samples per horizon side); scale: the gullfaks scene ever finer, 3.9 M / 15 M / 61 M "
+                   "triangles, each in its own process (geocull.bench.scale; --scale-sizes)")
     p.add_argument("--data", help="field: the field's directory (surfaces/*.gri, grid/*.EGRID or *.grdecl + porosity, "
                    "wells/*.w; default ../shared/data/reek beside the checkout)")
     p.add_argument("--scale-sizes", help="scale: comma-separated samples per horizon side (default 418,835,1669; "
@@ -102,6 +103,12 @@ def config(a: argparse.Namespace) -> dict[str, Any]:
         from .field import field_config
 
         cfg.update(field_config(mode, a))
+    elif a.scene == "lod":
+        from .lod import lod_config
+
+        cfg.update(lod_config(mode))
+        if a.size:
+            cfg["size"] = a.size
     elif a.scene == "scale":
         from .scale import scale_config
 
@@ -122,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
 
         result = iso.run(cfg)
         print(iso.format_table(result), flush=True)
-    elif cfg["scene"] in ("grid", "seismic", "field", "scale"):
+    elif cfg["scene"] in ("grid", "seismic", "field", "lod", "scale"):
         import importlib
 
         mod = importlib.import_module(f".{cfg['scene']}", __package__)
