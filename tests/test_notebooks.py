@@ -14,7 +14,8 @@ NOTEBOOKS = sorted(EXAMPLES.glob("*.ipynb"))
 
 def test_there_are_notebooks():
     names = {p.name for p in NOTEBOOKS}
-    assert {"xtgeo_three_pass_vs_pyvista.ipynb", "speed_vs_error_report.ipynb", "seismic_isosurface.ipynb"} <= names
+    assert {"xtgeo_three_pass_vs_pyvista.ipynb", "speed_vs_error_report.ipynb", "seismic_isosurface.ipynb",
+            "reek_field.ipynb"} <= names
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
