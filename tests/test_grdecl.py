@@ -13,7 +13,7 @@ What is checked:
   file; geocull's reader and xtgeo's give the same corners, active cells and property as
   ``from_grdecl`` of the arrays (and xtgeo's own transform); geocull's reader also takes data on
   the keyword's line, ``/`` glued to a number and Fortran exponents (1.0D+03), which xtgeo's does
-  not; GRIDUNIT 'MAP' means no transform; EQUALS is warned of;
+  not, and unquoted unit words and ``NOECHO /``; GRIDUNIT 'MAP' means no transform; EQUALS is warned of;
 - bad files are InputErrors naming ``path``, the file and the cause (truncated in ZCORN, a count
   other than SPECGRID's, a word for a number, defaulted ZCORN values, no COORD, a binary file, no
   such file, a degenerate MAPAXES), with either engine where xtgeo reads; an absent property names
@@ -198,11 +198,12 @@ def test_grdecl_reader_details(tmp_path: Path) -> None:
                                atol=1e-9)
     up = gc.io.read_grdecl(path, engine="geocull", z_positive="up")
     np.testing.assert_array_equal(up["corners"][..., 2], -kw["corners"][..., 2])
-    # geocull's reader only (xtgeo's refuses them): data on the keyword's line, "/" glued to the
-    # last value, Fortran exponents
+    # data on the keyword's line, "/" glued to the last value, Fortran exponents (xtgeo's reader
+    # refuses these three), unquoted words, a stray "/" after a keyword without data
     text = path.read_text().replace("SPECGRID\n 2 2 2 1 F /", "SPECGRID 2 2 2 1 F/")
-    text = text.replace("1000.000000", "1.000000D+03")
-    assert "D+03" in text
+    text = text.replace("1000.000000", "1.000000D+03").replace("MAPUNITS\n 'METRES  ' /", "MAPUNITS\n METRES /")
+    text = text.replace("NOECHO\n", "NOECHO /\n")
+    assert "D+03" in text and "METRES /" in text and "NOECHO /" in text
     (tmp_path / "glued.grdecl").write_text(text.replace("\n/\nACTNUM", "/\nACTNUM"))
     glued = gc.io.read_grdecl(tmp_path / "glued.grdecl", engine="geocull")
     np.testing.assert_array_equal(glued["corners"], kw["corners"])

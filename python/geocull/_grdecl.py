@@ -116,7 +116,7 @@ def _read_file(path: Path, keep: set[str], deck: GrdeclDeck, arg: str, depth: in
             if _is_keyword(first.split("/", 1)[0]) and first.upper() not in ("T", "F"):
                 if not tokens and kw not in keep and kw not in _KNOWN_DATA:
                     kw = None  # an unknown keyword followed by a keyword: it took no data
-                elif kw in keep or (kw in _KNOWN_DATA and kw not in _STRING_DATA):
+                elif kw not in _STRING_DATA and (kw in keep or kw in _KNOWN_DATA):
                     raise InputError(f"{arg}: {where!r}: keyword {kw} (line {kw_line}) has no '/' terminator "
                                      f"before {first!r} (line {n})")
             elif "/" not in line and "'" not in line and '"' not in line:
@@ -124,6 +124,8 @@ def _read_file(path: Path, keep: set[str], deck: GrdeclDeck, arg: str, depth: in
                 continue
         for t in _TOKEN.findall(line):
             if kw is None:
+                if t == "/":
+                    break  # a stray terminator (e.g. "ECHO /"): nothing to read
                 if not _is_keyword(t):
                     if after_unknown:
                         break  # the rest of an unknown keyword's records
@@ -233,8 +235,9 @@ def _word(deck: GrdeclDeck, kw: str, index: int) -> str:
 def deck_grid(
     deck: GrdeclDeck, properties: str | None, z_positive: str, arg: str = "path"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """``(corners, active, values or None)`` (:func:`geocull.grid.from_grdecl`'s arrays) of the grid in ``deck`` (SPECGRID or
-    DIMENS, COORD, ZCORN, ACTNUM, MAPAXES, GRIDUNIT, MAPUNITS) and its property ``properties``."""
+    """``(corners, active, values or None)`` (:func:`geocull.grid.from_grdecl`'s arrays) of the grid in
+    ``deck`` (SPECGRID or DIMENS, COORD, ZCORN, ACTNUM, MAPAXES, GRIDUNIT, MAPUNITS) and its property
+    ``properties`` ((nk, nj, ni), NaN on inactive cells)."""
     from .grid import from_grdecl
 
     def missing(kw: str) -> InputError:
