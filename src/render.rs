@@ -677,6 +677,10 @@ fn frame_state(
                 normal_map[0] = base + 1;
             }
             normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));
+            // A grid coloured per cell by its values (`grid::cells`); by z it takes its vertices'.
+            if geom.cell_colors[oi] && o.color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
+                normal_map[1] = 3;
+            }
             if let (Some((nu, nv)), Some(base)) = (geom.grid_dims[oi], geom.shading_base[oi]) {
                 grid_rows = [0.0, 0.0, nu as f32, nv as f32];
                 normal_map = [base + 1, 2, 0, 0];

@@ -70,6 +70,9 @@ pub struct SceneGeometry {
     /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
     /// vertices carry their grid coordinates in place of their normals; None for other objects.
     pub grid_dims: Vec<Option<(u32, u32)>>,
+    /// Per object, a reservoir grid whose tiles' cell values are in `sample_values`
+    /// (`grid::cells`): its fragments look their cell's value up (draw.wgsl `fs_cells`).
+    pub cell_colors: Vec<bool>,
     /// The tiles in runs, in order, covering every tile, each drawn by the lit pass with one
     /// pipeline.
     pub draw_runs: Vec<DrawRun>,
@@ -94,6 +97,8 @@ pub struct DrawRun {
     /// (`Scene::seen_from_outside`) its drawn faces bound its cells, wound outwards, and the lit
     /// pass culls their back faces.
     pub closed: Option<usize>,
+    /// Tiles of a grid coloured per cell (`SceneGeometry::cell_colors`): `fs_cells`.
+    pub cells: bool,
 }
 
 /// Cells per side of a tile's sub-boxes (`SceneGeometry::sub_boxes`).
@@ -210,7 +215,12 @@ fn upload_shading(
 /// and each object's first sample in them, for those whose heights are in the normal map
 /// (`shading_base`), as long as they fit one storage binding (later ones keep vertices of their
 /// own).
-fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) -> (wgpu::Buffer, Vec<Option<u32>>) {
+/// Then the cell values of grids coloured per fragment ([`super::cell_values`]).
+fn upload_values(
+    ctx: &GpuContext,
+    scene: &Scene,
+    shading_base: &[Option<u32>],
+) -> (wgpu::Buffer, Vec<Option<u32>>, super::cell_values::CellTables) {
     let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
     let mut words: Vec<f32> = Vec::new();
     let base = scene
@@ -228,6 +238,7 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
             Some(first)
         })
         .collect();
+    let cells = super::cell_values::append(scene, &mut words, max_words, scalar_word);
     if words.is_empty() {
         words.push(0.0);
     }
@@ -236,7 +247,18 @@ fn upload_values(ctx: &GpuContext, scene: &Scene, shading_base: &[Option<u32>]) 
         contents: bytemuck::cast_slice(&words),
         usage: wgpu::BufferUsages::STORAGE,
     });
-    (buf, base)
+    (buf, base, cells)
+}
+
+/// What a tile's vertices carry in the lit pass's normal slot: a grid-shaded mesh's grid
+/// coordinates, a reservoir grid's cell coordinates (`grid::cells`; it has no normals), else
+/// its normals.
+fn normal_slot(grid_mesh: bool, t: &crate::lod::TileMesh) -> &[u32] {
+    if grid_mesh || t.normals.is_empty() {
+        &t.grid_uv
+    } else {
+        &t.normals
+    }
 }
 
 /// A tile's box as `SceneGeometry::bbox` keeps it (f64, origin-relative).
@@ -554,8 +576,17 @@ impl SceneGeometry {
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
         let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
-        let (sample_values, values_base) = upload_values(ctx, scene, &shading_base);
-        let plan = Plan::new(scene, &shading_base, &values_base);
+        let (sample_values, values_base, cells) = upload_values(ctx, scene, &shading_base);
+        let mut plan = Plan::new(scene, &shading_base, &values_base);
+        // Grid tiles with cell tables (drawn from vertices of their own): the table's columns and
+        // first word where the vertex stage would look for a lattice (common.wgsl `tile_grid`).
+        let none = f32::from_bits(u32::MAX);
+        for (t, c) in cells.tiles.iter().enumerate() {
+            if let Some([first, bw, bh]) = *c {
+                plan.tile_grid[3 * t + 1] = [f32::from_bits(bw), f32::from_bits(bh), none, 0.0];
+                plan.tile_grid[3 * t + 2] = [none, f32::from_bits(first), 0.0, 0.0];
+            }
+        }
         let (nv, ni) = (plan.nv, plan.ni);
         check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
         let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -615,8 +646,7 @@ impl SceneGeometry {
             let mut runs = plan.runs.iter();
             for (oi, o) in scene.objects().iter().enumerate() {
                 for t in &o.tiles {
-                    // A grid-shaded mesh's vertices carry their grid coordinates for its normals.
-                    let nrm: &[u32] = if grid_dims[oi].is_some() { &t.grid_uv } else { &t.normals };
+                    let nrm = normal_slot(grid_dims[oi].is_some(), t);
                     let tile = fine.len() as u32;
                     tile_object.push(oi as u32);
                     bbox.push(tile_bbox(t));
@@ -720,7 +750,7 @@ impl SceneGeometry {
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
         let bytes = bytes + slab_bytes;
-        let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims);
+        let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
         Ok(Self {
             key: scene.geometry_key(),
@@ -742,6 +772,7 @@ impl SceneGeometry {
             shading,
             shading_base,
             grid_dims,
+            cell_colors: cells.objects,
             draw_runs,
             bytes,
             own_vertices,
@@ -773,7 +804,8 @@ impl SceneGeometry {
             let o = &scene.objects()[oi];
             let first = self.tile_object_cpu.iter().position(|&x| x as usize == oi).unwrap_or(0);
             let n = self.tile_object_cpu.iter().skip(first).take_while(|&&x| x as usize == oi).count();
-            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield { .. }) {
+            // (A grid coloured per cell has its tables in `sample_values`: uploaded afresh.)
+            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield { .. }) || self.cell_colors[oi] {
                 return Ok(false);
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
@@ -796,8 +828,7 @@ impl SceneGeometry {
                 {
                     return Ok(false);
                 }
-                // A grid-shaded mesh's vertices carry their grid coordinates, as in `upload`.
-                let nrm: &[u32] = if self.grid_dims[oi].is_some() { &t.grid_uv } else { &t.normals };
+                let nrm = normal_slot(self.grid_dims[oi].is_some(), t);
                 let mut put = |args: &DrawArgs, verts: &[[f32; 3]], vals: &[f32], normals: &[u32], idx: &[u32]| {
                     vertex_words(verts.len(), vals, normals, &mut words);
                     let v = args.base_vertex as u64;
@@ -857,6 +888,7 @@ fn draw_runs(
     tile_object: &[u32],
     shading_base: &[Option<u32>],
     grid_dims: &[Option<(u32, u32)>],
+    cell_colors: &[bool],
 ) -> Vec<DrawRun> {
     let mut runs: Vec<DrawRun> = Vec::new();
     for (k, &oi) in tile_object.iter().enumerate() {
@@ -866,9 +898,13 @@ fn draw_runs(
             && shading_base[o].is_some()
             && matches!(scene.objects()[o].kind, ObjectKind::Heightfield { .. });
         let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
+        let cells = cell_colors.get(o).copied().unwrap_or(false);
+        let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells };
         match runs.last_mut() {
-            Some(r) if r.grid_mesh == grid_mesh && r.field == field && r.closed == closed => r.tiles.end = k + 1,
-            _ => runs.push(DrawRun { tiles: k..k + 1, grid_mesh, field, closed }),
+            Some(r) if (r.grid_mesh, r.field, r.closed, r.cells) == (grid_mesh, field, closed, cells) => {
+                r.tiles.end = k + 1
+            }
+            _ => runs.push(run),
         }
     }
     runs
@@ -893,12 +929,12 @@ mod run_tests {
             s.objects().iter().enumerate().flat_map(|(o, ob)| std::iter::repeat_n(o as u32, ob.tiles.len())).collect();
         assert_eq!(tile_object, [0, 0, 1, 2, 3]);
         // The last height field's normal map did not fit: it draws as a mesh (fs_main).
-        let runs = draw_runs(&s, &tile_object, &[Some(0), None, Some(81), None], &[None; 4]);
+        let runs = draw_runs(&s, &tile_object, &[Some(0), None, Some(81), None], &[None; 4], &[false; 4]);
         let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
         assert_eq!(got, [(0..2, true, false), (2..3, false, false), (3..4, true, false), (4..5, false, false)]);
         // A grid mesh is never a field.
-        let runs =
-            draw_runs(&s, &tile_object, &[Some(0), Some(81), Some(90), Some(171)], &[None, Some((2, 2)), None, None]);
+        let (base, dims) = ([Some(0), Some(81), Some(90), Some(171)], [None, Some((2, 2)), None, None]);
+        let runs = draw_runs(&s, &tile_object, &base, &dims, &[false; 4]);
         let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
         assert_eq!(got, [(0..2, true, false), (2..3, false, true), (3..5, true, false)]);
     }

@@ -62,7 +62,8 @@ pub struct GpuObject {
     /// `x`: 1 + the first sample of the object's gradients (a structured grid mesh's: normals) in
     /// the normal map, 0 for none; `y`: 1 when the object's vertices carry smooth normals
     /// (`TileMesh::normals`), 2 when they carry grid coordinates (`TileMesh::grid_uv`) and its
-    /// normals are in the normal map; with neither, the lit pass shades by facets. `zw` unused.
+    /// normals are in the normal map, 3 for a reservoir grid coloured per cell (its vertices
+    /// carry cell coordinates, `grid::cells`); else the lit pass shades by facets. `zw` unused.
     pub normal_map: [u32; 4],
 }
 

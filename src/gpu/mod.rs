@@ -6,6 +6,7 @@
 //! the order of a frame lives in `crate::render`.
 
 mod box_early;
+mod cell_values;
 mod context;
 pub mod depth_read;
 pub mod geometry;

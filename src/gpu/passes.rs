@@ -104,6 +104,9 @@ pub struct Passes {
     /// The lit pass with back faces culled, for closed surfaces seen from outside
     /// (`geometry::DrawRun::closed`).
     draw_closed: wgpu::RenderPipeline,
+    /// `draw` and `draw_closed` for grids coloured per cell (`geometry::DrawRun::cells`).
+    draw_cells: wgpu::RenderPipeline,
+    draw_cells_closed: wgpu::RenderPipeline,
     draw_blend: wgpu::RenderPipeline,
     prepass: wgpu::RenderPipeline,
     histogram: wgpu::ComputePipeline,
@@ -250,8 +253,8 @@ impl Passes {
                 storage_entry(2, true, vf),
                 storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
                 storage_entry(4, true, vf),
-                storage_entry(5, true, wgpu::ShaderStages::VERTEX),
-                storage_entry(6, true, wgpu::ShaderStages::VERTEX),
+                storage_entry(5, true, vf),
+                storage_entry(6, true, vf),
             ],
         });
         let cs = wgpu::ShaderStages::COMPUTE;
@@ -376,6 +379,7 @@ impl Passes {
         let (draw, draw_grid) = (lit("fs_mesh", None), lit("fs_grid", None));
         let draw_field = lit_vs(("vs_field", "vs_field_gl"), "fs_field", None);
         let draw_closed = lit("fs_mesh", Some(wgpu::Face::Back));
+        let (draw_cells, draw_cells_closed) = (lit("fs_cells", None), lit("fs_cells", Some(wgpu::Face::Back)));
         // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
         // but not written, the tile ids left as the opaque pass wrote them.
         let draw_blend = scene_pipeline(
@@ -458,6 +462,8 @@ impl Passes {
             draw_grid,
             draw_field,
             draw_closed,
+            draw_cells,
+            draw_cells_closed,
             draw_blend,
             prepass,
             histogram,
@@ -532,6 +538,8 @@ impl Passes {
                 let pipeline = match run.closed {
                     _ if run.grid_mesh => &self.draw_grid,
                     _ if run.field => &self.draw_field,
+                    Some(o) if outside.get(o).copied().unwrap_or(false) && run.cells => &self.draw_cells_closed,
+                    _ if run.cells => &self.draw_cells,
                     Some(o) if outside.get(o).copied().unwrap_or(false) => &self.draw_closed,
                     _ => &self.draw,
                 };

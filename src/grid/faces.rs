@@ -62,6 +62,9 @@ pub(crate) struct Face {
     pub tol: f64,
     /// What lies across the face ([`kind`]); a merged face has its first member's.
     pub kind: u8,
+    /// Cell coordinates ([`super::cells`]) of `verts`, then of the triangles' other vertices;
+    /// empty unless the grid colours by cell values.
+    pub lat: Vec<u32>,
 }
 
 /// What lies across a face.
@@ -295,7 +298,12 @@ impl<'c, 'a> Level0<'c, 'a> {
             whole,
             tol,
             kind,
+            lat: Vec::new(),
         });
+        if self.ctx.cells {
+            let f = self.faces.last_mut().expect("pushed");
+            f.lat = super::cells::level0(f, &self.verts, (self.b.i0 as u32, self.b.j0 as u32), self.ctx.g.ni);
+        }
     }
 
     /// Builds every face of the block.

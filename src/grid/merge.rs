@@ -38,6 +38,10 @@ pub(crate) struct LevelFaces {
     pub faces: Vec<Face>,
     pub nodes: FastMap<Key, u32>,
     pub error: f64,
+    /// The largest chord between a face's unit normal and the normal of a level-0 triangle it
+    /// covers (bounded by summing each level's chord to its members' triangles): how far facet
+    /// shading may change (`lod::levels::Level::shading_error`).
+    pub shading: f64,
 }
 
 /// Level 0's node map: every whole face, keyed by its cell.
@@ -51,7 +55,7 @@ pub(crate) fn level0(faces: Vec<Face>, b: Block) -> LevelFaces {
             );
         }
     }
-    LevelFaces { faces, nodes, error: 0.0 }
+    LevelFaces { faces, nodes, error: 0.0, shading: 0.0 }
 }
 
 struct Group {
@@ -71,6 +75,7 @@ pub(crate) fn next_level(
     h: u32,
     b: Block,
     (ni, nj): (usize, usize),
+    cells: bool,
     verts: &mut Verts,
 ) -> LevelFaces {
     let (bw, bh) = ((b.i1 - b.i0) as u32, (b.j1 - b.j0) as u32);
@@ -147,6 +152,10 @@ pub(crate) fn next_level(
         }
     }
     fault_groups(prev, h, b, (ni, nj), &use_count, verts, &mut groups);
+    if cells {
+        // Strips are coloured flat (`cells::FLAT`): only pieces of one value merge.
+        groups.retain(|g| !g.fault || super::cells::strip_ok(&g.members, &prev.faces));
+    }
     // Accept groups until the vertex removals are consistent and every reduced face is convex
     // and within tolerance.
     let mut accepted = vec![true; groups.len()];
@@ -211,7 +220,8 @@ pub(crate) fn next_level(
                 Some((p, ok)) if p == print => ok,
                 _ => {
                     let ok = reduced.len() >= 3
-                        && (convex(&reduced, verts) || (grp.fault && ear_clip(&reduced, verts).is_some()));
+                        && (convex(&reduced, verts) || (grp.fault && ear_clip(&reduced, verts).is_some()))
+                        && (!cells || grp.fault || super::cells::exact_shape(&reduced, verts));
                     shape_seen[g] = Some((print, ok));
                     ok
                 }
@@ -228,7 +238,7 @@ pub(crate) fn next_level(
     }
     // The new level: untouched faces, then merged ones.
     let mut in_group = vec![false; prev.faces.len()];
-    let mut err = 0.0f64;
+    let (mut err, mut shade) = (0.0f64, 0.0f64);
     for (g, grp) in groups.iter().enumerate() {
         if accepted[g] {
             for &m in &grp.members {
@@ -253,6 +263,7 @@ pub(crate) fn next_level(
                 whole: face.whole,
                 tol: face.tol,
                 kind: face.kind,
+                lat: face.lat.clone(),
             });
         }
     }
@@ -268,7 +279,14 @@ pub(crate) fn next_level(
         }
         let reduced: Vec<u32> = grp.outline.iter().copied().filter(|&v| !drop[v as usize]).collect();
         err = err.max(removal_error(grp, &reduced, &drop, verts));
+        shade = shade.max(normal_chord(&reduced, &grp.members, &prev.faces, verts));
         let first = &prev.faces[grp.members[0] as usize];
+        // The members' cell coordinates of a vertex (they agree: see `cells`).
+        let lat_of = |v: u32| grp.members.iter().find_map(|&m| super::cells::of(&prev.faces[m as usize], v));
+        if cells && !grp.fault {
+            // Colours move with the lattice's map on the face: that is part of the error too.
+            err = err.max(super::cells::drift(first.dir, &grp.outline, &grp.inner, &reduced, &drop, verts, &lat_of));
+        }
         let vals: Vec<f64> =
             grp.members.iter().map(|&m| prev.faces[m as usize].value).filter(|v| !v.is_nan()).collect();
         let value = if vals.is_empty() { f64::NAN } else { vals.iter().sum::<f64>() / vals.len() as f64 };
@@ -284,6 +302,11 @@ pub(crate) fn next_level(
         } else {
             nodes.insert(grp.key, faces.len() as u32);
             (b.i0 as u32 + (grp.key.0 << h), b.j0 as u32 + (grp.key.1 << h), first.k)
+        };
+        let lat = match (cells, grp.fault) {
+            (false, _) => Vec::new(),
+            (true, true) => vec![super::cells::FLAT; reduced.len()],
+            (true, false) => reduced.iter().map(|&v| lat_of(v).unwrap_or(0)).collect(),
         };
         faces.push(Face {
             verts: reduced,
@@ -301,9 +324,27 @@ pub(crate) fn next_level(
             } else {
                 kind::MIXED
             },
+            lat,
         });
     }
-    LevelFaces { faces, nodes, error: prev.error + err }
+    LevelFaces { faces, nodes, error: prev.error + err, shading: prev.shading + shade }
+}
+
+/// The largest chord between the unit normal of the merged polygon `reduced` and those of its
+/// members' triangles.
+fn normal_chord(reduced: &[u32], members: &[u32], faces: &[Face], verts: &Verts) -> f64 {
+    let n = newell(reduced, verts).normalize_or_zero();
+    let mut chord = 0.0f64;
+    for &m in members {
+        for t in &faces[m as usize].tris {
+            let [a, b, c] = t.map(|v| verts.p(v));
+            let tn = (b - a).cross(c - a).normalize_or_zero();
+            if tn != glam::DVec3::ZERO {
+                chord = chord.max((tn - n).length());
+            }
+        }
+    }
+    chord
 }
 
 /// Inner vertices (of a group's faces, not on its outline) must be used by the group's faces

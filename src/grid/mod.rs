@@ -14,6 +14,7 @@
 //! right- or left-handed frame, is read off the corners (the sums over the active cells), so z up
 //! or z down and either handedness give outward normals.
 
+pub mod cells;
 pub(crate) mod faces;
 pub(crate) mod merge;
 pub(crate) mod poly;
@@ -99,6 +100,9 @@ pub(crate) struct Ctx<'g> {
     /// (i, j, up) is left-handed: every outline is reversed.
     pub flip: bool,
     pub origin: DVec3,
+    /// The grid is coloured by cell values: faces carry cell coordinates ([`cells`]) and merge
+    /// only where those stay exact.
+    pub cells: bool,
 }
 
 impl Ctx<'_> {
@@ -253,7 +257,7 @@ fn validate(g: &CornerGrid, origin: DVec3, blocks: (usize, usize)) -> Result<usi
 pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &impl Progress) -> Result<GridBuild> {
     let n = validate(g, origin, blocks)?;
     // Up and handedness from the active cells' mean axes.
-    let probe = Ctx { g, up: 1.0, flip: false, origin };
+    let probe = Ctx { g, up: 1.0, flip: false, origin, cells: false };
     let (sum_up, sum_hand) = (0..n)
         .into_par_iter()
         .filter(|&c| probe.active(c))
@@ -265,7 +269,8 @@ pub fn build_grid(g: &CornerGrid, origin: DVec3, blocks: (usize, usize), stop: &
             (ek.z, ei.cross(ej).dot(ek))
         })
         .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    let ctx = Ctx { g, up: if sum_up < 0.0 { -1.0 } else { 1.0 }, flip: sum_hand < 0.0, origin };
+    let cells = g.values.is_some() && g.nk <= cells::MAX_LAYERS && blocks.0.max(blocks.1) <= cells::MAX_BLOCK;
+    let ctx = Ctx { g, up: if sum_up < 0.0 { -1.0 } else { 1.0 }, flip: sum_hand < 0.0, origin, cells };
     let (bi, bj) = blocks;
     let (nbx, nby) = (g.ni.div_ceil(bi), g.nj.div_ceil(bj));
     let out: Vec<BlockOut> = (0..nbx * nby)
@@ -357,7 +362,8 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     let Level0 { mut verts, faces, .. } = l0;
     let mut tile = TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() };
     let has_values = g.values.is_some();
-    let mut out_map: poly::FastMap<(u32, u64), u32> = poly::FastMap::default();
+    // A vertex per position, value and cell coordinates.
+    let mut out_map: poly::FastMap<(u32, u64, u32), u32> = poly::FastMap::default();
     let mut stats = Vec::new();
     let mut kinds = Vec::new();
     let mut seen: Vec<u32> = Vec::new();
@@ -377,11 +383,15 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
                     st.volume += p[0].dot(p[1].cross(p[2])) / 6.0;
                     for &v in t {
                         let next = tile.positions.len() as u32;
-                        let e = *out_map.entry((v, vb)).or_insert(next);
+                        let lat = if ctx.cells { cells::of(f, v).unwrap_or(0) } else { 0 };
+                        let e = *out_map.entry((v, vb, lat)).or_insert(next);
                         if e == next {
                             tile.positions.push(verts.rel[v as usize]);
                             if has_values {
                                 tile.values.push(f.value as f32);
+                            }
+                            if ctx.cells {
+                                tile.grid_uv.push(lat);
                             }
                             seen.push(0);
                         }
@@ -406,7 +416,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     stats.push(st);
     kinds.push(kind_counts(&lev));
     for h in 1..=block_levels(bw, bh) {
-        lev = merge::next_level(&lev, h, b, (g.ni, g.nj), &mut verts);
+        lev = merge::next_level(&lev, h, b, (g.ni, g.nj), ctx.cells, &mut verts);
         let (idx, mut st) = emit(&lev, &verts, &mut tile, h + 1);
         let s = 1usize << h;
         let (nw, nh) = (bw.div_ceil(s), bh.div_ceil(s));
@@ -421,7 +431,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         }
         stats.push(st);
         kinds.push(kind_counts(&lev));
-        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32, shading_error: 0.0 });
+        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32, shading_error: lev.shading as f32 });
     }
     match tile.levels.last() {
         Some(l) => {

@@ -213,15 +213,22 @@ pub(crate) fn triangulate(poly: &[u32], verts: &mut Verts, region: i32, out: &mu
     out.truncate(w);
 }
 
+/// The corner a convex polygon of more than three vertices is fanned from by [`triangulate`]:
+/// one whose two neighbours are corners too; None when it needs a new centre vertex instead.
+pub(crate) fn fan_apex(poly: &[u32], verts: &Verts) -> Option<usize> {
+    let m = poly.len();
+    let n = newell(poly, verts).normalize_or_zero();
+    let c = corners(poly, verts, n);
+    (0..m).find(|&w| c[w] && c[(w + 1) % m] && c[(w + m - 1) % m])
+}
+
 fn fan(poly: &[u32], verts: &mut Verts, region: i32, out: &mut Vec<[u32; 3]>) {
     let m = poly.len();
     if m == 3 {
         out.push([poly[0], poly[1], poly[2]]);
         return;
     }
-    let n = newell(poly, verts).normalize_or_zero();
-    let c = corners(poly, verts, n);
-    if let Some(a) = (0..m).find(|&w| c[w] && c[(w + 1) % m] && c[(w + m - 1) % m]) {
+    if let Some(a) = fan_apex(poly, verts) {
         for s in 1..m - 1 {
             out.push([poly[a], poly[(a + s) % m], poly[(a + s + 1) % m]]);
         }

@@ -5,6 +5,8 @@
 use super::*;
 use std::collections::HashMap;
 
+#[path = "tests_cells.rs"]
+mod cells_tests;
 #[path = "tests_strips.rs"]
 mod strips;
 

@@ -40,7 +40,8 @@ pub struct Level {
     pub error: f32,
     /// Shading error: the largest chord between the lit pass's unit normals on this level and on
     /// level 0 ([`super::shading::shading_error`]; unitless, 0..=sqrt 2). 0 for height-field
-    /// levels (shaded from the fine surface) and reservoir-grid levels (not measured).
+    /// levels (shaded from the fine surface); reservoir-grid levels bound it by summing each
+    /// level's chord to the triangles of the faces it merges (`grid::merge`).
     pub shading_error: f32,
 }
 

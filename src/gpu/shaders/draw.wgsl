@@ -143,8 +143,38 @@ fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) 
     out.clip = g.view_proj * vec4<f32>(p, 1.0);
     out.world_s = vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5));
     out.tile = tile;
-    out.n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
+    out.n = normal_slot(o, nrm);
     return out;
+}
+
+// What a vertex's normal slot carries (`gpu::geometry::normal_slot`): a packed smooth normal, a
+// grid mesh's grid coordinates (normal_map.y = 2) or a reservoir grid's cell coordinates
+// (normal_map.y = 3, `grid::cells`: doubled, block-relative, i | j << 8 | k << 16).
+fn normal_slot(o: Object, nrm: u32) -> vec3<f32> {
+    if (o.normal_map.y == 3u) {
+        return vec3<f32>(f32(nrm & 0xffu), f32((nrm >> 8u) & 0xffu), f32(nrm >> 16u));
+    }
+    return select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
+}
+
+// The colouring scalar of a fragment of a reservoir grid coloured per cell: the value of the cell
+// its interpolated cell coordinates `c` fall in, from the tile's table in `sample_values`
+// (`gpu::cell_values`: columns bw, bh and first word in `tile_grid`); the vertex scalar `s` where
+// the grid is coloured otherwise, the face is flat or the table holds no value for that cell
+// (f32::MAX).
+fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
+    // (k = 0xffff: a face coloured flat, grid::cells::FLAT.)
+    if (o.normal_map.y != 3u || c.z > 65534.5) {
+        return s;
+    }
+    let b = tile_grid[3u * tile + 1u];
+    let dims = vec2<u32>(bitcast<u32>(b.x), bitcast<u32>(b.y));
+    let first = bitcast<u32>(tile_grid[3u * tile + 2u].y);
+    let q = max(floor(c * 0.5), vec3<f32>(0.0));
+    let i = min(u32(q.x), dims.x - 1u);
+    let j = min(u32(q.y), dims.y - 1u);
+    let w = sample_values[first + (u32(q.z) * dims.y + j) * dims.x + i];
+    return select(w, s, w > 3e38);
 }
 
 // A grid mesh's vertex's packed grid coordinates (lod::TileMesh::grid_uv: column | row << 16).
@@ -202,6 +232,14 @@ fn fs_mesh(v: VOutDraw) -> FOut {
     return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w)), v.tile + 1u);
 }
 
+// fs_mesh for the tiles of reservoir grids coloured per cell (gpu::geometry::DrawRun::cells).
+@fragment
+fn fs_cells(v: VOutDraw) -> FOut {
+    let o = objects[tile_object[v.tile]];
+    let s = cell_scalar(o, v.tile, v.n, v.world_s.w);
+    return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s)), v.tile + 1u);
+}
+
 // fs_main for the tiles of grid meshes (gpu::geometry::SceneGeometry::draw_runs).
 @fragment
 fn fs_grid(v: VOutDraw) -> FOut {
@@ -253,7 +291,7 @@ fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = g.view_proj * vec4<f32>(p, 1.0);
-    let n = select(vertex_normal(nrm), vec3<f32>(grid_coords(nrm), 0.0), o.normal_map.y == 2u);
+    let n = normal_slot(o, nrm);
     return VOutDrawGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw, n);
 }
 
@@ -277,6 +315,15 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
 fn fs_mesh_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
     let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
+    return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
+}
+
+// fs_cells with frag_depth written.
+@fragment
+fn fs_cells_gl(v: VOutDrawGl) -> FOutGl {
+    let o = objects[tile_object[v.tile]];
+    let s = cell_scalar(o, v.tile, v.n, v.world_s.w);
+    let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
