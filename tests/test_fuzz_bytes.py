@@ -2,7 +2,7 @@
 geocull.InputError or loads an object that renders consistently, and none crashes, hangs or
 allocates without bound.
 
-Cases (about 6,000, all deterministic): every scalar field of the scene bytes (a scene holding
+Cases (about 7,100, all deterministic): every scalar field of the scene bytes (a scene holding
 every object kind: height fields, one rotated and yflipped, a mesh, a well, a slice, an
 isosurface, a lens and a grid; the first tile of each object, and the first and last element
 of every array) and of the volume bytes set to boundary values of its type (0, 1,
@@ -22,7 +22,7 @@ The cases run in subprocesses (batches), each printing one line per case; a proc
 reported with the case it was running, and a new one carries on after it.
 
 Known failures that need the core (src/scene/serial.rs) are listed in KNOWN (a case-name
-pattern, the outcome it shows, what is wrong): the test fails if any other case fails, and also if
+pattern, the outcome it shows, what is wrong; empty now): the test fails if any other case fails, and also if
 a known entry no longer matches any failure, so that the list stays true (as xfail(strict=True)
 would).
 """
@@ -368,26 +368,12 @@ def run_batch(start: int, stop: int) -> None:
 
 # ------------------------------------------------------------------------ the test (parent)
 
-#: Failures that need the core: scene bytes are not validated completely on load
-#: (src/scene/serial.rs). (case-name pattern, outcome pattern, what is wrong). Every failure must
-#: match one, and every one must still match a failure (then it is fixed: remove it).
-KNOWN: list[tuple[str, str, str]] = [
-    (r"^scene:obj[01]\.hf\.(nx|ny|tx|ty)=", r"process died .*memory allocation of \d+ bytes failed|process died .*panic"
-     r"|GeocullError: internal error in geocull \(please report\): (capacity overflow|index out of bounds)",
-     "a height field's nx, ny, tx, ty are not checked against its tiles: horizon culling then allocates nx * ny "
-     "(Object::height_grid, HorizonTree::build: 'memory allocation of N bytes failed', SIGABRT at 2^31, 2^32, 2^40) "
-     "or panics (capacity overflow at 2^64 - 1; index out of bounds at tx or ty = 0, 1)"),
-    (r"^scene:obj[01]\.hf\.(dx|dy|x0|y0|rotation)=", r"^BAD: loaded, horizon differs from none",
-     "a height field's frame is not checked (dx, dy > 0 and consistent with its tiles' positions; x0, y0 within "
-     "+-1e12; rotation 1e13 accepted): it loads, and horizon culling, which rebuilds the grid from the frame, "
-     "culls visible tiles"),
-    (r"^scene:obj\d+\.tile\d+\.bbox_(min|max)\.[xyz]=", r"^BAD: loaded, three_pass differs from none",
-     "tile boxes are not checked against the tiles' positions (NaN, -0 or 1e-45 for a positive bound, a box that "
-     "does not hold the tile): conservative three_pass's box test then culls a visible tile"),
-    (r"^scene:obj\d+\.tile\d+\.grid_uv\[\d+\]=4294967295$", r"process died .*(memory allocation|panic)",
-     "packed grid coordinates are not bounded: Object::grid_normals (upload) sizes a buffer from the largest "
-     "(a 16 GiB allocation, SIGABRT)"),
-]
+#: Failures that need the core (src/scene/serial.rs, src/scene/serial_check.rs): (case-name
+#: pattern, outcome pattern, what is wrong). Every failure must match one, and every one must still
+#: match a failure (then it is fixed: remove it). Empty: the four kinds found first (a height
+#: field's nx, ny, tx, ty and frame not checked against its tiles, tile boxes not checked, packed
+#: grid coordinates not bounded) are refused on load since issue 39.
+KNOWN: list[tuple[str, str, str]] = []
 
 
 def _pump(stream, lines: queue.Queue) -> None:
@@ -469,6 +455,10 @@ def _known(name: str, outcome: str) -> int | None:
 
 
 def test_tampered_pickles_raise_input_error_or_load_and_render_alike():
+    # The untampered pickles load (else every case would pass as an InputError).
+    scene, vol = original_scene()
+    assert pickle.loads(pickle.dumps(scene)).to_bytes() == scene.to_bytes()
+    assert pickle.loads(pickle.dumps(vol)).to_bytes() == vol.to_bytes()
     n, failures, seconds = _run_all()
     assert n >= 5000
     matched = {k: _known(k, v) for k, v in failures.items()}

@@ -415,12 +415,7 @@ class Volume:
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise InputError(f"data: expected bytes, got {type(data).__name__}")
         data = bytes(data)
-        try:
-            v = Volume._wrap(_geocull.Volume.from_bytes(data))
-        except InputError as e:  # the core names some damaged fields (origin, spacing) as arguments
-            if str(e).startswith("data"):
-                raise
-            raise InputError(f"data: damaged volume bytes: {e}") from None
+        v = Volume._wrap(_geocull.Volume.from_bytes(data))  # damaged: an InputError naming data
         nz, ny, nx = v.shape
         n = nx * ny * nz  # the residuals: the bytes' last 4 n (the core refuses trailing bytes)
         idx = cv.first_infinite(np.frombuffer(data, "<f4", count=n, offset=len(data) - 4 * n).reshape(nz, ny, nx))

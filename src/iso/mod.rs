@@ -335,9 +335,10 @@ impl Volume {
         let rotation = if version >= 2 { r.f64()? } else { 0.0 };
         let values = r.f32s()?;
         r.finish()?;
-        Self::with_offset(values.into(), offset, dims, origin, spacing)?
-            .with_rotation(rotation)
-            .map_err(|e| input_err("data", format!("data: {e}")))
+        // Checked as the constructor checks its arguments, but the caller passed only `data`.
+        Self::with_offset(values.into(), offset, dims, origin, spacing)
+            .and_then(|v| v.with_rotation(rotation))
+            .map_err(|e| input_err("data", format!("data: damaged volume bytes: {e}")))
     }
 
     /// A residual (an octree min/max, a stored sample) in the volume's units.

@@ -106,8 +106,14 @@ impl TileMesh {
         self.coarse.len() / 3
     }
 
-    /// Sets `bbox_min` / `bbox_max` from the positions (zeros when there are none).
+    /// Sets `bbox_min` / `bbox_max` from the positions ([`Self::tight_bbox`]).
     pub fn compute_bbox(&mut self) {
+        (self.bbox_min, self.bbox_max) = self.tight_bbox();
+    }
+
+    /// The bounds of the positions (zeros when there are none): the box every builder gives a
+    /// tile, and the one `Scene::from_bytes` requires.
+    pub fn tight_bbox(&self) -> ([f32; 3], [f32; 3]) {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.positions {
@@ -120,8 +126,7 @@ impl TileMesh {
             lo = [0.0; 3];
             hi = [0.0; 3];
         }
-        self.bbox_min = lo;
-        self.bbox_max = hi;
+        (lo, hi)
     }
 
     /// Boxes whose union holds every fine triangle: the tile's (x, y) box cut into `s` × `s` cells,

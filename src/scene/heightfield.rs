@@ -38,53 +38,46 @@ impl GridFrame {
     pub fn rotated(self, rotation: f64, yflip: bool) -> Self {
         Self { rotation, yflip, ..self }
     }
-}
 
-impl Scene {
-    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows of the grid's
-    /// frame (`frame`). NaN samples (and samples equal to `null_value`) are holes; triangles touching
-    /// a hole are dropped.
-    #[allow(clippy::too_many_arguments)]
-    pub fn add_heightfield(
-        &mut self,
-        z: &[f64],
-        ny: usize,
-        nx: usize,
-        frame: GridFrame,
-        tiles: (usize, usize),
-        null_value: Option<f64>,
-        mut opts: AddOptions,
-    ) -> Result<u32> {
-        let GridFrame { origin, spacing, rotation, yflip } = frame;
+    /// Checks the frame of a grid of `nx` x `ny` samples cut into `tiles` (columns, rows), as
+    /// [`Scene::add_heightfield`] does and as `Scene::from_bytes` does on reading one: origin and
+    /// rotation finite, spacings finite, > 0 and normal (a denormal spacing puts every sample at
+    /// the origin), every corner within +-[`MAX_COORD`], each axis cut into 1..n - 1 tiles.
+    /// Errors name `origin`, `spacing`, `rotation` or `tiles`. Returns the grid's four corners
+    /// (x, y): the extremes of the rotated rectangle.
+    pub(crate) fn check(&self, nx: usize, ny: usize, tiles: (usize, usize)) -> Result<[(f64, f64); 4]> {
+        let GridFrame { origin, spacing, rotation, yflip } = *self;
         ensure(nx >= 2 && ny >= 2, "z", || {
             format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples")
         })?;
-        ensure(z.len() == nx * ny, "z", || format!("z has {} values, expected {ny} x {nx}", z.len()))?;
         for (i, v) in origin.iter().enumerate() {
             ensure(v.is_finite(), "origin", || format!("component {i} is {v}; expected a finite number"))?;
         }
         for (i, v) in spacing.iter().enumerate() {
-            ensure(v.is_finite() && *v > 0.0, "spacing", || {
-                format!("component {i} is {v}; expected a finite number > 0")
+            ensure(v.is_normal() && *v > 0.0, "spacing", || {
+                let tiny = if v.is_finite() && *v > 0.0 {
+                    format!(" (at least {:e})", f64::MIN_POSITIVE)
+                } else {
+                    String::new()
+                };
+                format!("component {i} is {}; expected a finite number > 0{tiny}", num(*v))
             })?;
         }
         ensure(rotation.is_finite(), "rotation", || {
             format!("rotation is {rotation}; expected a finite angle in degrees (counter-clockwise)")
         })?;
-        let rot = cos_sin_deg(rotation);
         let probe = GridSpec {
-            z,
+            z: &[],
             nx,
             ny,
             x0: origin[0],
             y0: origin[1],
             dx: spacing[0],
             dy: spacing[1],
-            rot,
+            rot: cos_sin_deg(rotation),
             yflip,
             values: None,
         };
-        // The grid's four corners (the extremes of a rotated rectangle), for the range check and bounds.
         let corners = [probe.pos(0, 0), probe.pos(nx - 1, 0), probe.pos(0, ny - 1), probe.pos(nx - 1, ny - 1)];
         for (i, o) in origin.iter().enumerate() {
             ensure(o.abs() <= MAX_COORD, "origin", || {
@@ -107,6 +100,33 @@ impl Scene {
         ensure(ty >= 1 && ty < ny, "tiles", || {
             format!("tiles[1] is {ty}; expected 1..={} for {ny} rows (each tile needs one cell)", ny - 1)
         })?;
+        Ok(corners)
+    }
+}
+
+impl Scene {
+    /// Adds a height field. `z` is row-major (ny, nx): x along columns, y along rows of the grid's
+    /// frame (`frame`). NaN samples (and samples equal to `null_value`) are holes; triangles touching
+    /// a hole are dropped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_heightfield(
+        &mut self,
+        z: &[f64],
+        ny: usize,
+        nx: usize,
+        frame: GridFrame,
+        tiles: (usize, usize),
+        null_value: Option<f64>,
+        mut opts: AddOptions,
+    ) -> Result<u32> {
+        let GridFrame { origin, spacing, rotation, yflip } = frame;
+        ensure(nx >= 2 && ny >= 2, "z", || {
+            format!("z has shape ({ny}, {nx}); a height field needs at least 2 x 2 samples")
+        })?;
+        ensure(z.len() == nx * ny, "z", || format!("z has {} values, expected {ny} x {nx}", z.len()))?;
+        let corners = frame.check(nx, ny, tiles)?;
+        let rot = cos_sin_deg(rotation);
+        let (tx, ty) = tiles;
         if let Some(nv) = null_value {
             ensure(!nv.is_infinite(), "null_value", || format!("null_value is {nv}; expected a finite number or NaN"))?;
         }
@@ -211,6 +231,13 @@ pub struct GridAxes {
 }
 
 impl GridAxes {
+    /// The grid of a height field's kind; None for other kinds.
+    pub(crate) fn of(kind: &ObjectKind) -> Option<Self> {
+        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = *kind else { return None };
+        let (c, s) = cos_sin_deg(rotation);
+        Some(GridAxes { o: [x0, y0], u: [c * dx, s * dx], v: [-s * dy, c * dy], nx, ny, rot: (c, s), dx, dy })
+    }
+
     /// Object-relative (x, y) of sample (i, j), rounded as `lod::GridSpec::pos` rounds it (so that
     /// it is the f64 value the tiles' f32 vertices were made from).
     pub fn pos(&self, i: usize, j: usize) -> [f64; 2] {
@@ -248,9 +275,7 @@ pub struct TileLattice {
 impl Object {
     /// The grid of a height field in its object's frame; None for other kinds.
     pub fn grid_axes(&self) -> Option<GridAxes> {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = self.kind else { return None };
-        let (c, s) = cos_sin_deg(rotation);
-        Some(GridAxes { o: [x0, y0], u: [c * dx, s * dx], v: [-s * dy, c * dy], nx, ny, rot: (c, s), dx, dy })
+        GridAxes::of(&self.kind)
     }
 
     /// The heights of a height field as a row-major (ny, nx) grid relative to the origin's z

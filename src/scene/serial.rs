@@ -38,6 +38,9 @@ use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::Ordering;
 
+#[path = "serial_check.rs"]
+mod check;
+
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
 const VERSION: u32 = 6;
 
@@ -280,211 +283,52 @@ impl Scene {
     }
 
     /// A scene read from [`Scene::to_bytes`]'s bytes: the same objects, ids and tiles (so it
-    /// renders the same image), under a new identity (renderers upload it afresh).
+    /// renders the same image), under a new identity (renderers upload it afresh). Each object is
+    /// checked once read (`check`): damaged or foreign bytes are an InputError naming `data`.
     pub fn from_bytes(data: &[u8]) -> Result<Scene> {
         let mut r = Reader::new(data, "data");
         let version = r.header(MAGIC, "scene", VERSION)?;
         let has_origin = r.u8()? != 0;
         let origin = DVec3::from_array(r.f64x3()?);
-        if !origin.is_finite() {
-            return Err(r.err("the origin is not finite"));
-        }
+        check::point(origin, "origin").map_err(|e| r.err(e))?;
         let next_id = r.u32()?;
         let n = r.u32()? as usize;
         let mut objects: Vec<Object> = Vec::with_capacity(n.min(1 << 16));
         for _ in 0..n {
+            let start = r.pos;
             let id = r.u32()?;
-            if id >= next_id || objects.iter().any(|o| o.id == id) {
-                return Err(r.err(format!("object id {id} is repeated or not below next id {next_id}")));
+            // Ids grow with every object added and removing one keeps the order: ascending.
+            if id >= next_id || objects.last().is_some_and(|o| o.id >= id) {
+                return Err(r.err(format!("object id {id} is repeated, out of order or not below next id {next_id}")));
             }
             let name = r.str()?;
-            let kind = match r.u8()? {
-                0 => {
-                    let (nx, ny) = (r.usize()?, r.usize()?);
-                    let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
-                    let rotation = if version >= 2 { r.f64()? } else { 0.0 };
-                    if !rotation.is_finite() {
-                        return Err(r.err(format!("object {id}: its rotation is not finite")));
-                    }
-                    let tiles = (r.usize()?, r.usize()?);
-                    ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
-                }
-                1 => ObjectKind::Mesh { kind: r.str()? },
-                2 if version >= 4 => {
-                    let d = [r.usize()?, r.usize()?, r.usize()?, r.usize()?, r.usize()?];
-                    let flat = r.f32s()?;
-                    if flat.len() % 2 != 0 {
-                        return Err(r.err(format!("object {id}: its block cell sizes are not pairs")));
-                    }
-                    let cell_size = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
-                    let get = |r: &mut Reader| -> Result<Vec<crate::grid::LevelStats>> {
-                        let n = r.u32()? as usize;
-                        let mut v = Vec::with_capacity(n.min(64));
-                        for _ in 0..n {
-                            let (cells, faces, triangles, vertices) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
-                            let volume = r.f64()?;
-                            // Version 4 did not order interior faces last: none is left out.
-                            let interior_triangles = if version >= 5 { r.u64()?.min(triangles) } else { 0 };
-                            v.push(crate::grid::LevelStats {
-                                cells,
-                                faces,
-                                triangles,
-                                vertices,
-                                volume,
-                                interior_triangles,
-                            });
-                        }
-                        Ok(v)
-                    };
-                    let levels = get(&mut r)?;
-                    let nb = r.u32()? as usize;
-                    let mut block_levels = Vec::with_capacity(nb.min(1 << 16));
-                    for _ in 0..nb {
-                        block_levels.push(get(&mut r)?);
-                    }
-                    ObjectKind::Grid(Box::new(crate::scene::grid::GridInfo {
-                        dims: (d[0], d[1], d[2]),
-                        blocks: (d[3], d[4]),
-                        cell_size,
-                        levels,
-                        block_levels,
-                    }))
-                }
-                k => return Err(r.err(format!("unknown object kind {k}"))),
-            };
+            let kind = read_kind(&mut r, version, id)?;
             let color = r.f32x3()?;
             let visible = r.u8()? != 0;
             let offset = DVec3::from_array(r.f64x3()?);
             // Version 3: each object's own origin; before, every object used the scene's.
             let object_origin = if version >= 3 { DVec3::from_array(r.f64x3()?) } else { origin };
-            if !object_origin.is_finite() {
-                return Err(r.err(format!("object {id}: its origin is not finite")));
-            }
-            if !offset.is_finite() {
-                return Err(r.err(format!("object {id}: its offset is not finite")));
-            }
-            let color_by = if version >= 4 {
-                let source = match r.u8()? {
-                    0 => None,
-                    1 => Some(ColorSource::Z),
-                    2 => Some(ColorSource::Values),
-                    k => return Err(r.err(format!("object {id}: unknown colouring {k}"))),
-                };
-                match source {
-                    None => None,
-                    Some(source) => {
-                        let cmap = r.str()?;
-                        let flat = r.f32s()?;
-                        if flat.len() != 3 * LUT_SIZE || flat.iter().any(|v| !(0.0..=1.0).contains(v)) {
-                            return Err(
-                                r.err(format!("object {id}: its colour map is not {LUT_SIZE} RGB rows in [0, 1]"))
-                            );
-                        }
-                        let lut = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                        let (lo, hi) = (r.f64()?, r.f64()?);
-                        let clim = resolve_clim(Some([lo, hi]), std::iter::empty())
-                            .map_err(|_| r.err(format!("object {id}: its colour range is not finite lo < hi")))?;
-                        let nan_color = r.f32x3()?;
-                        Some(ColorBy { source, cmap, lut, clim, nan_color })
-                    }
-                }
-            } else {
-                None
-            };
+            let placed = check::point(object_origin, "origin").and_then(|_| check::point(offset, "offset"));
+            placed.and_then(|_| check::rgb(color, "color")).map_err(|e| r.err(format!("object {id}: {e}")))?;
+            let color_by = read_color_by(&mut r, version, id)?;
             let opacity = if version >= 4 { r.f32()? } else { 1.0 };
             if !(opacity > 0.0 && opacity <= 1.0) {
                 return Err(r.err(format!("object {id}: its opacity is not in (0, 1]")));
             }
             let nt = r.u32()? as usize;
             let mut tiles = Vec::with_capacity(nt.min(1 << 16));
-            for _ in 0..nt {
-                let (ix, iy) = (r.u32()?, r.u32()?);
-                let (bbox_min, bbox_max) = (r.f32x3()?, r.f32x3()?);
-                let flat = r.f32s()?;
-                if flat.len() % 3 != 0 || flat.iter().any(|v| !v.is_finite()) {
-                    return Err(r.err(format!("object {id}: tile positions are not finite xyz triples")));
-                }
-                let positions: Vec<[f32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                // Per-vertex attributes: none, or one per position.
-                let per_vertex = |what: &str, len: usize| {
-                    (len != 0 && len != positions.len())
-                        .then(|| format!("object {id}: a tile has {len} {what} for {} vertices", positions.len()))
-                };
-                let values = if version >= 4 { r.f32s()? } else { Vec::new() };
-                if let Some(msg) = per_vertex("values", values.len()) {
-                    return Err(r.err(msg));
-                }
-                let normals = if version >= 5 { r.u32s()? } else { Vec::new() };
-                if let Some(msg) = per_vertex("normals", normals.len()) {
-                    return Err(r.err(msg));
-                }
-                let grid_uv = if version >= 6 { r.u32s()? } else { Vec::new() };
-                if let Some(msg) = per_vertex("grid coordinates", grid_uv.len()) {
-                    return Err(r.err(msg));
-                }
-                let (fine, coarse): (crate::lod::Indices, crate::lod::Indices) = (r.u32s()?.into(), r.u32s()?.into());
-                let proxy_error = r.f32()?;
-                let nl = r.u32()? as usize;
-                if nl > crate::lod::levels::MAX_LEVELS {
-                    return Err(r.err(format!(
-                        "object {id}: a tile has {nl} LOD levels; at most {}",
-                        crate::lod::levels::MAX_LEVELS
-                    )));
-                }
-                let mut levels = Vec::with_capacity(nl.min(64));
-                for _ in 0..nl {
-                    let error = r.f32()?;
-                    let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
-                    levels.push(crate::lod::levels::Level { error, shading_error, indices: r.u32s()?.into() });
-                }
-                for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
-                    if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
-                        return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
-                    }
-                }
-                // Before version 6 the shading error was not stored: measured again (meshes) or
-                // 0 (height fields, grids), as `lod` sets it when building.
-                for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
-                    l.shading_error = match kind {
-                        ObjectKind::Mesh { .. } => {
-                            let shading = crate::lod::shading::Shading { normals: &normals, grid_uv: &grid_uv };
-                            crate::lod::shading::shading_error(&positions, shading, &fine, &l.indices)
-                        }
-                        _ => 0.0,
-                    };
-                }
-                if levels.iter().any(|l| l.shading_error < 0.0) {
-                    return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
-                }
-                tiles.push(TileMesh {
-                    ix,
-                    iy,
-                    positions,
-                    values,
-                    normals,
-                    grid_uv,
-                    fine,
-                    coarse,
-                    bbox_min,
-                    bbox_max,
-                    proxy_error,
-                    levels,
-                    // Not stored: rebuilt below (`Object::rebuild_slabs`).
-                    slab: None,
-                });
-            }
-            if let ObjectKind::Grid(g) = &kind {
-                if g.cell_size.len() != tiles.len() || g.block_levels.len() != tiles.len() {
-                    return Err(
-                        r.err(format!("object {id}: a grid's block tables do not match its {} tiles", tiles.len()))
-                    );
-                }
+            for t in 0..nt {
+                let tile = read_tile(&mut r, version, id, &kind)?;
+                check::tile(&tile, object_origin).map_err(|e| r.err(format!("object {id}: tile {t}: {e}")))?;
+                tiles.push(tile);
             }
             if color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values)
                 && tiles.iter().all(|t: &TileMesh| t.values.is_empty())
             {
                 return Err(r.err(format!("object {id}: coloured by values but has none")));
             }
+            check::object(&kind, &tiles, object_origin, r.pos - start)
+                .map_err(|e| r.err(format!("object {id}: {e}")))?;
             crate::lod::share_indices(&mut tiles);
             objects.push(Object {
                 id,
@@ -517,173 +361,164 @@ impl Scene {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::{AddOptions, GridFrame};
-
-    fn scene() -> Scene {
-        let mut s = Scene::new();
-        let opts = |name: &str| AddOptions { name: Some(name.into()), ..AddOptions::new(4.0) };
-        let z: Vec<f64> =
-            (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
-        s.add_heightfield(&z, 9, 9, GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]), (3, 2), None, opts("top"))
-            .unwrap();
-        let v = [[451_000.0, 6_780_000.0, -5.0], [451_100.0, 6_780_000.0, -5.0], [451_000.0, 6_780_100.0, 5.0]];
-        s.add_mesh(&v, &[[0, 1, 2]], "fault", None, opts("f")).unwrap();
-        s.translate(1, [1.0, 2.0, 3.0]).unwrap();
-        s.set_visible(0, false).unwrap();
-        s.remove(0).unwrap();
-        s.add_heightfield(
-            &z,
-            9,
-            9,
-            GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]),
-            (1, 1),
-            Some(0.0),
-            opts("base"),
-        )
-        .unwrap();
-        // a rotated, yflipped grid keeps its frame (horizon culling rebuilds the grid from it)
-        let turned = GridFrame::new([451_000.0, 6_780_000.0], [25.0, 30.0]).rotated(33.0, true);
-        s.add_heightfield(&z, 9, 9, turned, (2, 2), None, opts("turned")).unwrap();
-        s
-    }
-
-    #[test]
-    fn slabs_are_rebuilt_as_they_were_built() {
-        // Holes, a rotated yflipped frame, tiles of one sample row: every slab comes back equal.
-        let s = scene();
-        let t = Scene::from_bytes(&s.to_bytes()).unwrap();
-        let mut n = 0;
-        for (a, b) in s.objects().iter().zip(t.objects()) {
-            for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
-                assert_eq!(ta.slab, tb.slab, "object {} tile {} {}", a.id, ta.ix, ta.iy);
-                n += ta.slab.is_some() as usize;
+/// An object's kind and what it keeps besides its tiles (height field frame, mesh label, grid
+/// tables), as read; checked against the tiles later (`check::object`).
+fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
+    Ok(match r.u8()? {
+        0 => {
+            let (nx, ny) = (r.usize()?, r.usize()?);
+            let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+            let rotation = if version >= 2 { r.f64()? } else { 0.0 };
+            let tiles = (r.usize()?, r.usize()?);
+            ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
+        }
+        1 => ObjectKind::Mesh { kind: r.str()? },
+        2 if version >= 4 => {
+            let d = [r.usize()?, r.usize()?, r.usize()?, r.usize()?, r.usize()?];
+            let flat = r.f32s()?;
+            if flat.len() % 2 != 0 {
+                return Err(r.err(format!("object {id}: its block cell sizes are not pairs")));
             }
-        }
-        assert!(n >= 5, "{n}");
-        // A tile whose vertex left its grid sample gets no slab (it is box-tested).
-        let mut u = Scene::from_bytes(&s.to_bytes()).unwrap();
-        let o = u.objects.iter_mut().find(|o| o.name == "turned").unwrap();
-        o.tiles[0].positions[0][0] += 3.0;
-        o.rebuild_slabs();
-        assert!(o.tiles[0].slab.is_none() && o.tiles[1].slab.is_some());
-    }
-
-    #[test]
-    fn round_trip_is_exact_under_a_new_identity() {
-        let s = scene();
-        let b = s.to_bytes();
-        let t = Scene::from_bytes(&b).unwrap();
-        assert_eq!(t.to_bytes(), b);
-        assert_ne!(t.geometry_key().0, s.geometry_key().0);
-        assert_eq!(t.origin(), s.origin());
-        for o in s.objects() {
-            assert_eq!(format!("{:?}", t.object(o.id).unwrap().kind), format!("{:?}", o.kind));
-            assert_eq!(t.geometry(o.id).unwrap(), s.geometry(o.id).unwrap());
-            let bits = |g: Option<Vec<f32>>| g.map(|g| g.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
-            assert_eq!(bits(t.object(o.id).unwrap().height_grid()), bits(o.height_grid()));
-        }
-        // ids continue where the original's would
-        let (mut s2, mut t2) = (s.clone(), t);
-        let z = vec![0.0; 4];
-        let o = AddOptions::new(1.0);
-        let a = s2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o.clone()).unwrap();
-        assert_eq!(t2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o).unwrap(), a);
-        assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
-        // the empty scene too
-        let e = Scene::from_bytes(&Scene::new().to_bytes()).unwrap();
-        assert!(e.objects().is_empty() && e.origin() == DVec3::ZERO);
-    }
-
-    #[test]
-    fn version_1_height_fields_read_as_unrotated() {
-        let mut s = Scene::new();
-        let o = AddOptions { name: Some("a".into()), color: Some([0.5; 3]), ..AddOptions::new(1.0) };
-        s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o)
-            .unwrap();
-        let v2 = s.to_bytes();
-        // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
-        // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
-        // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
-        // byte and opacity after it (flat, 1), and no tile values, normals nor grid coordinates
-        // (three empty arrays after the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
-        let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
-        let origin_at = at + 8 + 16 + 12 + 1 + 24;
-        let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
-        let mut v1 =
-            [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 24..]].concat();
-        v1[8..12].copy_from_slice(&1u32.to_le_bytes());
-        let t = Scene::from_bytes(&v1).unwrap();
-        assert_eq!(t.to_bytes(), v2);
-    }
-
-    #[test]
-    fn version_5_meshes_measure_their_shading_error_again() {
-        // A curved sheet, one tile: its levels have a shading error.
-        let n = 24;
-        let v: Vec<[f64; 3]> = (0..n * n)
-            .map(|k| {
-                let (x, y) = ((k % n) as f64 * 10.0, (k / n) as f64 * 10.0);
-                [x, y, 30.0 * (x / 60.0).sin()]
-            })
-            .collect();
-        let mut f = Vec::new();
-        for j in 0..n - 1 {
-            for i in 0..n - 1 {
-                // The other diagonal: not a structured grid (no grid coordinates to strip).
-                let k = (j * n + i) as i64;
-                f.push([k, k + 1, k + n as i64]);
-                f.push([k + 1, k + n as i64 + 1, k + n as i64]);
+            let cell_size = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
+            let get = |r: &mut Reader| -> Result<Vec<crate::grid::LevelStats>> {
+                let n = r.u32()? as usize;
+                let mut v = Vec::with_capacity(n.min(64));
+                for _ in 0..n {
+                    let (cells, faces, triangles, vertices) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
+                    let volume = r.f64()?;
+                    // Version 4 did not order interior faces last: none is left out.
+                    let interior_triangles = if version >= 5 { r.u64()?.min(triangles) } else { 0 };
+                    v.push(crate::grid::LevelStats { cells, faces, triangles, vertices, volume, interior_triangles });
+                }
+                Ok(v)
+            };
+            let levels = get(r)?;
+            let nb = r.u32()? as usize;
+            let mut block_levels = Vec::with_capacity(nb.min(1 << 16));
+            for _ in 0..nb {
+                block_levels.push(get(r)?);
             }
+            ObjectKind::Grid(Box::new(crate::scene::grid::GridInfo {
+                dims: (d[0], d[1], d[2]),
+                blocks: (d[3], d[4]),
+                cell_size,
+                levels,
+                block_levels,
+            }))
         }
-        let mut s = Scene::new();
-        s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
-        let t = &s.objects()[0].tiles[0];
-        assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
-        let v6 = s.to_bytes();
-        // Version 5: the same bytes without the tile's (empty) grid coordinates, after its
-        // normals, and without each level's shading error (the f32 after its error).
-        let mut normals_then = (t.normals.len() as u64).to_le_bytes().to_vec();
-        normals_then.extend(t.normals.iter().flat_map(|n| n.to_le_bytes()));
-        normals_then.extend(0u64.to_le_bytes());
-        normals_then.extend((t.fine.len() as u64).to_le_bytes());
-        let grid_at = v6.windows(normals_then.len()).position(|w| w == normals_then).unwrap() + normals_then.len() - 16;
-        let v6_no_grid = [&v6[..grid_at], &v6[grid_at + 8..]].concat();
-        let mut head = t.proxy_error.to_le_bytes().to_vec();
-        head.extend((t.levels.len() as u32).to_le_bytes());
-        head.extend(t.levels[0].error.to_le_bytes());
-        head.extend(t.levels[0].shading_error.to_le_bytes());
-        let w = &v6_no_grid;
-        let start = w.windows(head.len()).position(|x| x == head).unwrap() + 8;
-        let mut v5 = w[..start].to_vec();
-        let mut at = start;
-        for l in &t.levels {
-            v5.extend(&w[at..at + 4]); // error
-            at += 8; // and the shading error, dropped
-            let len = 8 + 4 * l.indices.len();
-            v5.extend(&w[at..at + len]);
-            at += len;
-        }
-        v5.extend(&w[at..]);
-        v5[8..12].copy_from_slice(&5u32.to_le_bytes());
-        let back = Scene::from_bytes(&v5).unwrap();
-        assert_eq!(back.to_bytes(), v6);
-    }
-
-    #[test]
-    fn damaged_bytes_are_input_errors() {
-        let b = scene().to_bytes();
-        for bad in [&b[..b.len() - 1], &b[..10], &b"not a scene"[..], &[]] {
-            let e = Scene::from_bytes(bad).unwrap_err().to_string();
-            assert!(e.starts_with("data"), "{e}");
-        }
-        let mut v = b.clone();
-        v[8] = 9; // version 9
-        assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 9"));
-        let mut extra = b.clone();
-        extra.push(0);
-        assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
-    }
+        k => return Err(r.err(format!("unknown object kind {k}"))),
+    })
 }
+
+/// An object's colouring by data (None: flat), its colour map and range checked as when set.
+fn read_color_by(r: &mut Reader, version: u32, id: u32) -> Result<Option<ColorBy>> {
+    Ok(if version >= 4 {
+        let source = match r.u8()? {
+            0 => None,
+            1 => Some(ColorSource::Z),
+            2 => Some(ColorSource::Values),
+            k => return Err(r.err(format!("object {id}: unknown colouring {k}"))),
+        };
+        match source {
+            None => None,
+            Some(source) => {
+                let cmap = r.str()?;
+                let flat = r.f32s()?;
+                if flat.len() != 3 * LUT_SIZE || flat.iter().any(|v| !(0.0..=1.0).contains(v)) {
+                    return Err(r.err(format!("object {id}: its colour map is not {LUT_SIZE} RGB rows in [0, 1]")));
+                }
+                let lut = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                let (lo, hi) = (r.f64()?, r.f64()?);
+                let clim = resolve_clim(Some([lo, hi]), std::iter::empty())
+                    .map_err(|_| r.err(format!("object {id}: its colour range is not finite lo < hi")))?;
+                let nan_color = r.f32x3()?;
+                check::rgb(nan_color, "nan_color").map_err(|e| r.err(format!("object {id}: {e}")))?;
+                Some(ColorBy { source, cmap, lut, clim, nan_color })
+            }
+        }
+    } else {
+        None
+    })
+}
+
+/// One tile of object `id` (of `kind`): per-vertex arrays one per position, indices within the
+/// positions, at most `MAX_LEVELS` levels.
+fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result<TileMesh> {
+    let (ix, iy) = (r.u32()?, r.u32()?);
+    let (bbox_min, bbox_max) = (r.f32x3()?, r.f32x3()?);
+    let flat = r.f32s()?;
+    if flat.len() % 3 != 0 || flat.iter().any(|v| !v.is_finite()) {
+        return Err(r.err(format!("object {id}: tile positions are not finite xyz triples")));
+    }
+    let positions: Vec<[f32; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    // Per-vertex attributes: none, or one per position.
+    let per_vertex = |what: &str, len: usize| {
+        (len != 0 && len != positions.len())
+            .then(|| format!("object {id}: a tile has {len} {what} for {} vertices", positions.len()))
+    };
+    let values = if version >= 4 { r.f32s()? } else { Vec::new() };
+    if let Some(msg) = per_vertex("values", values.len()) {
+        return Err(r.err(msg));
+    }
+    let normals = if version >= 5 { r.u32s()? } else { Vec::new() };
+    if let Some(msg) = per_vertex("normals", normals.len()) {
+        return Err(r.err(msg));
+    }
+    let grid_uv = if version >= 6 { r.u32s()? } else { Vec::new() };
+    if let Some(msg) = per_vertex("grid coordinates", grid_uv.len()) {
+        return Err(r.err(msg));
+    }
+    let (fine, coarse): (crate::lod::Indices, crate::lod::Indices) = (r.u32s()?.into(), r.u32s()?.into());
+    let proxy_error = r.f32()?;
+    let nl = r.u32()? as usize;
+    if nl > crate::lod::levels::MAX_LEVELS {
+        return Err(
+            r.err(format!("object {id}: a tile has {nl} LOD levels; at most {}", crate::lod::levels::MAX_LEVELS))
+        );
+    }
+    let mut levels = Vec::with_capacity(nl.min(64));
+    for _ in 0..nl {
+        let error = r.f32()?;
+        let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
+        levels.push(crate::lod::levels::Level { error, shading_error, indices: r.u32s()?.into() });
+    }
+    for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
+        if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
+            return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
+        }
+    }
+    // Before version 6 the shading error was not stored: measured again (meshes) or
+    // 0 (height fields, grids), as `lod` sets it when building.
+    for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
+        l.shading_error = match kind {
+            ObjectKind::Mesh { .. } => {
+                let shading = crate::lod::shading::Shading { normals: &normals, grid_uv: &grid_uv };
+                crate::lod::shading::shading_error(&positions, shading, &fine, &l.indices)
+            }
+            _ => 0.0,
+        };
+    }
+    if levels.iter().any(|l| l.shading_error < 0.0) {
+        return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
+    }
+    Ok(TileMesh {
+        ix,
+        iy,
+        positions,
+        values,
+        normals,
+        grid_uv,
+        fine,
+        coarse,
+        bbox_min,
+        bbox_max,
+        proxy_error,
+        levels,
+        // Not stored: rebuilt by `Object::rebuild_slabs`.
+        slab: None,
+    })
+}
+
+#[cfg(test)]
+#[path = "serial_tests.rs"]
+mod tests;

@@ -1,0 +1,166 @@
+//! `Scene::to_bytes` / `Scene::from_bytes`: round trips, older versions, damaged bytes.
+
+use super::*;
+use crate::scene::{AddOptions, GridFrame};
+
+pub(super) fn scene() -> Scene {
+    let mut s = Scene::new();
+    let opts = |name: &str| AddOptions { name: Some(name.into()), ..AddOptions::new(4.0) };
+    let z: Vec<f64> = (0..81).map(|k| ((k % 9) as f64 * 0.3).sin() + if k == 40 { f64::NAN } else { 0.0 }).collect();
+    s.add_heightfield(&z, 9, 9, GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]), (3, 2), None, opts("top"))
+        .unwrap();
+    let v = [[451_000.0, 6_780_000.0, -5.0], [451_100.0, 6_780_000.0, -5.0], [451_000.0, 6_780_100.0, 5.0]];
+    s.add_mesh(&v, &[[0, 1, 2]], "fault", None, opts("f")).unwrap();
+    s.translate(1, [1.0, 2.0, 3.0]).unwrap();
+    s.set_visible(0, false).unwrap();
+    s.remove(0).unwrap();
+    s.add_heightfield(
+        &z,
+        9,
+        9,
+        GridFrame::new([451_000.0, 6_780_000.0], [25.0, 25.0]),
+        (1, 1),
+        Some(0.0),
+        opts("base"),
+    )
+    .unwrap();
+    // a rotated, yflipped grid keeps its frame (horizon culling rebuilds the grid from it)
+    let turned = GridFrame::new([451_000.0, 6_780_000.0], [25.0, 30.0]).rotated(33.0, true);
+    s.add_heightfield(&z, 9, 9, turned, (2, 2), None, opts("turned")).unwrap();
+    s
+}
+
+#[test]
+fn slabs_are_rebuilt_as_they_were_built() {
+    // Holes, a rotated yflipped frame, tiles of one sample row: every slab comes back equal.
+    let s = scene();
+    let t = Scene::from_bytes(&s.to_bytes()).unwrap();
+    let mut n = 0;
+    for (a, b) in s.objects().iter().zip(t.objects()) {
+        for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
+            assert_eq!(ta.slab, tb.slab, "object {} tile {} {}", a.id, ta.ix, ta.iy);
+            n += ta.slab.is_some() as usize;
+        }
+    }
+    assert!(n >= 5, "{n}");
+    // A tile whose vertex left its grid sample gets no slab (it is box-tested).
+    let mut u = Scene::from_bytes(&s.to_bytes()).unwrap();
+    let o = u.objects.iter_mut().find(|o| o.name == "turned").unwrap();
+    o.tiles[0].positions[0][0] += 3.0;
+    o.rebuild_slabs();
+    assert!(o.tiles[0].slab.is_none() && o.tiles[1].slab.is_some());
+}
+
+#[test]
+fn round_trip_is_exact_under_a_new_identity() {
+    let s = scene();
+    let b = s.to_bytes();
+    let t = Scene::from_bytes(&b).unwrap();
+    assert_eq!(t.to_bytes(), b);
+    assert_ne!(t.geometry_key().0, s.geometry_key().0);
+    assert_eq!(t.origin(), s.origin());
+    for o in s.objects() {
+        assert_eq!(format!("{:?}", t.object(o.id).unwrap().kind), format!("{:?}", o.kind));
+        assert_eq!(t.geometry(o.id).unwrap(), s.geometry(o.id).unwrap());
+        let bits = |g: Option<Vec<f32>>| g.map(|g| g.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(bits(t.object(o.id).unwrap().height_grid()), bits(o.height_grid()));
+    }
+    // ids continue where the original's would
+    let (mut s2, mut t2) = (s.clone(), t);
+    let z = vec![0.0; 4];
+    let o = AddOptions::new(1.0);
+    let a = s2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o.clone()).unwrap();
+    assert_eq!(t2.add_heightfield(&z, 2, 2, GridFrame::new([0.0; 2], [1.0; 2]), (1, 1), None, o).unwrap(), a);
+    assert_ne!(s2.geometry_key().0, s.geometry_key().0, "a clone has its own identity");
+    // the empty scene too
+    let e = Scene::from_bytes(&Scene::new().to_bytes()).unwrap();
+    assert!(e.objects().is_empty() && e.origin() == DVec3::ZERO);
+}
+
+#[test]
+fn version_1_height_fields_read_as_unrotated() {
+    let mut s = Scene::new();
+    let o = AddOptions { name: Some("a".into()), color: Some([0.5; 3]), ..AddOptions::new(1.0) };
+    s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o).unwrap();
+    let v2 = s.to_bytes();
+    // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
+    // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
+    // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
+    // byte and opacity after it (flat, 1), and no tile values, normals nor grid coordinates
+    // (three empty arrays after the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
+    let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
+    let origin_at = at + 8 + 16 + 12 + 1 + 24;
+    let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
+    let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 24..]].concat();
+    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+    let t = Scene::from_bytes(&v1).unwrap();
+    assert_eq!(t.to_bytes(), v2);
+}
+
+#[test]
+fn version_5_meshes_measure_their_shading_error_again() {
+    // A curved sheet, one tile: its levels have a shading error.
+    let n = 24;
+    let v: Vec<[f64; 3]> = (0..n * n)
+        .map(|k| {
+            let (x, y) = ((k % n) as f64 * 10.0, (k / n) as f64 * 10.0);
+            [x, y, 30.0 * (x / 60.0).sin()]
+        })
+        .collect();
+    let mut f = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            // The other diagonal: not a structured grid (no grid coordinates to strip).
+            let k = (j * n + i) as i64;
+            f.push([k, k + 1, k + n as i64]);
+            f.push([k + 1, k + n as i64 + 1, k + n as i64]);
+        }
+    }
+    let mut s = Scene::new();
+    s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
+    let t = &s.objects()[0].tiles[0];
+    assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
+    let v6 = s.to_bytes();
+    // Version 5: the same bytes without the tile's (empty) grid coordinates, after its
+    // normals, and without each level's shading error (the f32 after its error).
+    let mut normals_then = (t.normals.len() as u64).to_le_bytes().to_vec();
+    normals_then.extend(t.normals.iter().flat_map(|n| n.to_le_bytes()));
+    normals_then.extend(0u64.to_le_bytes());
+    normals_then.extend((t.fine.len() as u64).to_le_bytes());
+    let grid_at = v6.windows(normals_then.len()).position(|w| w == normals_then).unwrap() + normals_then.len() - 16;
+    let v6_no_grid = [&v6[..grid_at], &v6[grid_at + 8..]].concat();
+    let mut head = t.proxy_error.to_le_bytes().to_vec();
+    head.extend((t.levels.len() as u32).to_le_bytes());
+    head.extend(t.levels[0].error.to_le_bytes());
+    head.extend(t.levels[0].shading_error.to_le_bytes());
+    let w = &v6_no_grid;
+    let start = w.windows(head.len()).position(|x| x == head).unwrap() + 8;
+    let mut v5 = w[..start].to_vec();
+    let mut at = start;
+    for l in &t.levels {
+        v5.extend(&w[at..at + 4]); // error
+        at += 8; // and the shading error, dropped
+        let len = 8 + 4 * l.indices.len();
+        v5.extend(&w[at..at + len]);
+        at += len;
+    }
+    v5.extend(&w[at..]);
+    v5[8..12].copy_from_slice(&5u32.to_le_bytes());
+    let back = Scene::from_bytes(&v5).unwrap();
+    assert_eq!(back.to_bytes(), v6);
+}
+
+#[test]
+fn damaged_bytes_are_input_errors() {
+    let b = scene().to_bytes();
+    for bad in [&b[..b.len() - 1], &b[..10], &b"not a scene"[..], &[]] {
+        let e = Scene::from_bytes(bad).unwrap_err().to_string();
+        assert!(e.starts_with("data"), "{e}");
+    }
+    let mut v = b.clone();
+    v[8] = 9; // version 9
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 9"));
+    let mut extra = b.clone();
+    extra.push(0);
+    assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
+}
