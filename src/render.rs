@@ -685,6 +685,7 @@ fn frame_state(
                 grid_rows = [0.0, 0.0, nu as f32, nv as f32];
                 normal_map = [base + 1, 2, 0, 0];
             }
+            normal_map[2] = o.priority() as u32;
             GpuObject {
                 offset: [p.x as f32, p.y as f32, p.z as f32, 0.0],
                 color: [o.color[0], o.color[1], o.color[2], o.opacity],
@@ -700,7 +701,11 @@ fn frame_state(
         view_proj: Mat4::from_cols_array(&fc.view_proj.to_cols_array().map(|v| v as f32)).to_cols_array_2d(),
         light_dir: [light.x as f32, light.y as f32, light.z as f32, 0.0],
         z_scale: camera.z_scale as f32,
-        _pad: [0.0; 3],
+        ortho_near: match fc.projection {
+            crate::camera::Projection::Orthographic => (fc.near / (fc.far - fc.near)) as f32,
+            crate::camera::Projection::Perspective => -1.0,
+        },
+        _pad: [0.0; 2],
     };
     // Translucent objects (lenses) are no occluders: strategies see them as hidden; draw_lenses
     // draws them after the opaque image.

@@ -89,11 +89,11 @@ class _Fields:
 
 
 def scene_fields(b: bytes) -> list[Field]:
-    """The fields of scene bytes, version 6 (layout: src/scene/serial.rs's module docs)."""
+    """The fields of scene bytes, version 7 (layout: src/scene/serial.rs's module docs)."""
     p = _Fields(b)
     assert b[:8] == b"GCSCENE\0"
     p.pos = 8
-    assert p.get("version", "<I") == 6, "the scene format changed: update scene_fields"
+    assert p.get("version", "<I") == 7, "the scene format changed: update scene_fields"
     p.get("has_origin", "<B")
     for a in "xyz":
         p.get(f"origin.{a}", "<d")
@@ -145,6 +145,7 @@ def scene_fields(b: bytes) -> list[Field]:
             for c in "rgb":
                 p.get(f"{pre}.nan_color.{c}", "<f")
         p.get(f"{pre}.opacity", "<f")
+        p.get(f"{pre}.priority", "<B")
         nt = p.get(f"{pre}.n_tiles", "<I")
         for t in range(nt):
             q = _Fields(b, p.pos, f"{pre}.tile{t}.")

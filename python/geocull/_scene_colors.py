@@ -77,12 +77,20 @@ class SceneColorings:
 
         def object_ids(self) -> list[int]: ...
 
-    def _added(self, id: int, coloring: cv.Coloring | None = None, label: str | None = None) -> int:
-        """``id``, after noting its colouring (``coloring``: the tuple given to the core; the colour
+    def _added(self, id: int, coloring: cv.Coloring | None = None, label: str | None = None,
+               priority: int | None = None) -> int:
+        """``id``, after setting its depth-tie ``priority`` (a bad one removes the object again and
+        raises), noting its colouring (``coloring``: the tuple given to the core; the colour
         bar ``label``) and sharing the scene's depth range, and after a
         :class:`geocull.GeocullWarning` if the new object lies over :data:`FAR_APART` metres from
         another object of the scene (a grid in local coordinates beside UTM horizons renders as an
         empty image), naming both."""
+        if priority is not None:
+            try:
+                self._s.set_priority(id, cv.integer(priority, "priority"))
+            except BaseException:
+                self._s.remove(id)
+                raise
         self._note_coloring(id, coloring, label)
         try:
             boxes = _object_boxes(self.tile_table())

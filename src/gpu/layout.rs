@@ -38,7 +38,10 @@ pub struct Globals {
     /// Towards the head light, render space; w unused.
     pub light_dir: [f32; 4],
     pub z_scale: f32,
-    pub _pad: [f32; 3],
+    /// Orthographic views: near / (far - near), what turns a depth into a distance for the
+    /// depth-tie priorities (common.wgsl `priority_clip`); -1 for perspective views.
+    pub ortho_near: f32,
+    pub _pad: [f32; 2],
 }
 
 /// Per-object state read every frame (`Object` in common.wgsl): translation (world units,
@@ -63,7 +66,9 @@ pub struct GpuObject {
     /// the normal map, 0 for none; `y`: 1 when the object's vertices carry smooth normals
     /// (`TileMesh::normals`), 2 when they carry grid coordinates (`TileMesh::grid_uv`) and its
     /// normals are in the normal map, 3 for a reservoir grid coloured per cell (its vertices
-    /// carry cell coordinates, `grid::cells`); else the lit pass shades by facets. `zw` unused.
+    /// carry cell coordinates, `grid::cells`); else the lit pass shades by facets. `z`: the
+    /// object's depth-tie priority (`scene::Object::priority`, common.wgsl `priority_clip`); `w`
+    /// unused.
     pub normal_map: [u32; 4],
 }
 

@@ -510,6 +510,16 @@ pub(crate) fn wavy_field() -> Volume {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn damaged_volume_bytes_name_data() {
+        // The volume's own checks named `spacing` (an argument the caller never passed).
+        let v = Volume::from_f64(&[0.0; 8], (2, 2, 2), [0.0; 3], [1.0; 3]).unwrap();
+        let mut b = v.to_bytes();
+        b[8 + 4 + 24 + 24..8 + 4 + 24 + 32].copy_from_slice(&0f64.to_le_bytes()); // spacing.x
+        let e = Volume::from_bytes(&b).unwrap_err().to_string();
+        assert!(e.starts_with("data: damaged volume bytes: spacing: component 0 is 0"), "{e}");
+    }
     use crate::scene::Scene;
 
     #[test]

@@ -393,6 +393,10 @@ impl PyScene {
     fn remove(&self, py: Python<'_>, id: i64) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.remove(object_id(id)?))
     }
+    #[pyo3(signature = (id, priority))]
+    fn set_priority(&self, py: Python<'_>, id: i64, priority: Option<i64>) -> PyResult<()> {
+        with_lock(py, &self.inner, move |s| s.set_priority(object_id(id)?, priority))
+    }
     fn set_visible(&self, py: Python<'_>, id: i64, visible: bool) -> PyResult<()> {
         with_lock(py, &self.inner, move |s| s.set_visible(object_id(id)?, visible))
     }
@@ -439,8 +443,8 @@ impl PyScene {
     }
 
     fn object_info<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Bound<'py, PyDict>> {
-        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize, Option<crate::scene::ColorBy>);
-        let (id, name, kind, color, visible, offset, n_tiles, n_tris, color_by): Info =
+        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize, Option<crate::scene::ColorBy>, u8);
+        let (id, name, kind, color, visible, offset, n_tiles, n_tris, color_by, priority): Info =
             with_lock(py, &self.inner, move |s| {
                 let o = s.object(object_id(id)?)?;
                 Ok((
@@ -453,6 +457,7 @@ impl PyScene {
                     o.tiles.len(),
                     o.fine_triangles(),
                     o.color_by.clone(),
+                    o.priority(),
                 ))
             })?;
         let d = PyDict::new(py);
@@ -461,6 +466,7 @@ impl PyScene {
         d.set_item("kind", kind)?;
         d.set_item("color", (color[0] as f64, color[1] as f64, color[2] as f64))?;
         d.set_item("visible", visible)?;
+        d.set_item("priority", priority)?;
         d.set_item("offset", (offset.x, offset.y, offset.z))?;
         d.set_item("n_tiles", n_tiles)?;
         d.set_item("n_triangles", n_tris)?;

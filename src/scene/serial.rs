@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 6 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 7 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -17,7 +17,8 @@
 //!   color f32 x 3, visible u8, offset f64 x 3, origin f64 x 3 (the object's own; absent before
 //!   version 3, read as the scene's),
 //!   color_by u8 (0 = flat, 1 = z, 2 = values; version 4), if not flat: cmap str, lut [f32 x 3]
-//!   (256 rows), clim f64 x 2, nan_color f32 x 3; opacity f32 (version 4); n_tiles u32
+//!   (256 rows), clim f64 x 2, nan_color f32 x 3; opacity f32 (version 4); priority u8 (version 7:
+//!   0..=15, 255 = by kind; absent before, by kind); n_tiles u32
 //!   per tile: ix u32, iy u32, bbox_min f32 x 3, bbox_max f32 x 3,
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
 //!             normals [u32] (version 5: packed smooth normals, empty or one per position),
@@ -42,7 +43,7 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -257,6 +258,7 @@ impl Scene {
                 }
             }
             w.f32(o.opacity);
+            w.u8(o.priority.unwrap_or(u8::MAX));
             w.u32(o.tiles.len() as u32);
             for t in &o.tiles {
                 w.u32(t.ix);
@@ -315,6 +317,10 @@ impl Scene {
             if !(opacity > 0.0 && opacity <= 1.0) {
                 return Err(r.err(format!("object {id}: its opacity is not in (0, 1]")));
             }
+            let priority = if version >= 7 { r.u8()? } else { u8::MAX };
+            if priority > super::MAX_PRIORITY && priority != u8::MAX {
+                return Err(r.err(format!("object {id}: its priority {priority} is not in 0..=15")));
+            }
             let nt = r.u32()? as usize;
             let mut tiles = Vec::with_capacity(nt.min(1 << 16));
             for t in 0..nt {
@@ -337,6 +343,7 @@ impl Scene {
                 color,
                 color_by,
                 opacity,
+                priority: (priority != u8::MAX).then_some(priority),
                 visible,
                 offset,
                 origin: object_origin,

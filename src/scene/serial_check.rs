@@ -79,10 +79,24 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
 pub(super) fn object(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usize) -> Check {
     match kind {
         ObjectKind::Heightfield { .. } => heightfield(kind, tiles, origin, bytes)?,
-        ObjectKind::Grid(g) => grid(g, tiles)?,
+        ObjectKind::Grid(g) => return grid(g, tiles).and_then(|_| cells(g, tiles)),
         ObjectKind::Mesh { .. } => {}
     }
     grid_uv(tiles)
+}
+
+/// A grid's cell coordinates (`grid::cells`, the lit pass sizes each tile's table of cell values
+/// by the largest): within its blocks and layers (or `cells::FLAT`).
+fn cells(g: &GridInfo, tiles: &[TileMesh]) -> Check {
+    let (nk, _, _) = g.dims;
+    let (bi, bj) = g.blocks;
+    for &c in tiles.iter().flat_map(|t| &t.grid_uv) {
+        let [i2, j2, k2] = crate::grid::cells::unpack(c);
+        if c != crate::grid::cells::FLAT && (i2 as usize > 2 * bi || j2 as usize > 2 * bj || k2 as usize >= 2 * nk) {
+            return Err(format!("a grid vertex's cell coordinates {:?} lie outside its block", [i2, j2, k2]));
+        }
+    }
+    Ok(())
 }
 
 /// A height field's grid against its tiles: its frame as `add_heightfield` checks it

@@ -2,7 +2,6 @@
 
 use super::super::tests::scene;
 use super::*;
-use crate::iso::Volume;
 use crate::scene::{AddOptions, Object, Scene};
 
 /// The error reading back `s` with object `name` changed by `f` (it must name `data`).
@@ -190,6 +189,15 @@ fn grid_block_tables_count_the_triangles_drawn() {
     assert!(e.contains("cell size"), "{e}");
     let e = refused(s, "g", |o| grid(o).block_levels.clear());
     assert!(e.contains("block tables do not match its 4 tiles"), "{e}");
+    // Coloured by values: cell coordinates within the blocks and layers (they size a table).
+    let mut s = Scene::new();
+    let values = crate::scene::ColorByArg::values((0..8).map(f64::from).collect());
+    let o = AddOptions { name: Some("v".into()), color_by: Some(values), ..AddOptions::new(1.0) };
+    s.add_grid((2, 2, 2), &corners, None, None, (1, 1), o).unwrap();
+    assert!(s.objects()[0].tiles.iter().all(|t| !t.grid_uv.is_empty()));
+    Scene::from_bytes(&s.to_bytes()).unwrap();
+    let e = refused(s, "v", |o| o.tiles[0].grid_uv[0] = crate::grid::cells::pack(1, 1, 0xfffe));
+    assert!(e.contains("cell coordinates [1, 1, 65534] lie outside its block"), "{e}");
 }
 
 #[test]
@@ -198,16 +206,6 @@ fn objects_come_in_the_order_of_their_ids() {
     s.objects.swap(0, 1);
     let e = Scene::from_bytes(&s.to_bytes()).unwrap_err().to_string();
     assert!(e.contains("out of order"), "{e}");
-}
-
-#[test]
-fn damaged_volume_bytes_name_data() {
-    // The volume's own checks named `spacing` (an argument the caller never passed).
-    let v = Volume::from_f64(&[0.0; 8], (2, 2, 2), [0.0; 3], [1.0; 3]).unwrap();
-    let mut b = v.to_bytes();
-    b[8 + 4 + 24 + 24..8 + 4 + 24 + 32].copy_from_slice(&0f64.to_le_bytes()); // spacing.x
-    let e = Volume::from_bytes(&b).unwrap_err().to_string();
-    assert!(e.starts_with("data: damaged volume bytes: spacing: component 0 is 0"), "{e}");
 }
 
 #[test]

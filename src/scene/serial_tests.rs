@@ -90,8 +90,9 @@ fn version_1_height_fields_read_as_unrotated() {
     // (three empty arrays after the tile's n_tiles 4, ix iy 8, bbox 24 and 4 positions 8 + 48)
     let at = 8 + 4 + 25 + 4 + 4 + 4 + 5 + 1 + 16 + 32;
     let origin_at = at + 8 + 16 + 12 + 1 + 24;
-    let values_at = origin_at + 24 + 1 + 4 + 4 + 8 + 24 + 56;
-    let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 29..values_at], &v2[values_at + 24..]].concat();
+    // (and no priority byte after the opacity: version 7)
+    let values_at = origin_at + 24 + 1 + 4 + 1 + 4 + 8 + 24 + 56;
+    let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 30..values_at], &v2[values_at + 24..]].concat();
     v1[8..12].copy_from_slice(&1u32.to_le_bytes());
     let t = Scene::from_bytes(&v1).unwrap();
     assert_eq!(t.to_bytes(), v2);
@@ -120,8 +121,14 @@ fn version_5_meshes_measure_their_shading_error_again() {
     s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
     let t = &s.objects()[0].tiles[0];
     assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
-    let v6 = s.to_bytes();
-    // Version 5: the same bytes without the tile's (empty) grid coordinates, after its
+    let v7 = s.to_bytes();
+    // Version 5: the same bytes without the object's priority byte (by kind, after its opacity),
+    let mut pri = 1.0f32.to_le_bytes().to_vec();
+    pri.extend([u8::MAX]);
+    pri.extend(1u32.to_le_bytes());
+    let pri_at = v7.windows(pri.len()).position(|w| w == pri).unwrap() + 4;
+    let v6 = [&v7[..pri_at], &v7[pri_at + 1..]].concat();
+    // without the tile's (empty) grid coordinates, after its
     // normals, and without each level's shading error (the f32 after its error).
     let mut normals_then = (t.normals.len() as u64).to_le_bytes().to_vec();
     normals_then.extend(t.normals.iter().flat_map(|n| n.to_le_bytes()));
@@ -147,7 +154,7 @@ fn version_5_meshes_measure_their_shading_error_again() {
     v5.extend(&w[at..]);
     v5[8..12].copy_from_slice(&5u32.to_le_bytes());
     let back = Scene::from_bytes(&v5).unwrap();
-    assert_eq!(back.to_bytes(), v6);
+    assert_eq!(back.to_bytes(), v7);
 }
 
 #[test]
@@ -163,4 +170,23 @@ fn damaged_bytes_are_input_errors() {
     let mut extra = b.clone();
     extra.push(0);
     assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
+}
+
+#[test]
+fn priorities_round_trip_and_a_bad_one_is_refused() {
+    let mut s = scene();
+    let id = s.objects()[0].id;
+    s.set_priority(id, Some(9)).unwrap();
+    assert!(s.set_priority(id, Some(16)).unwrap_err().to_string().starts_with("priority"));
+    let back = Scene::from_bytes(&s.to_bytes()).unwrap();
+    assert_eq!(back.objects()[0].priority, Some(9));
+    assert_eq!(back.objects()[1].priority, None);
+    // The byte after the first object's opacity: 9; 16 is no priority.
+    let b = s.to_bytes();
+    let mut bad = b.clone();
+    let mut pat = 1.0f32.to_le_bytes().to_vec();
+    pat.push(9);
+    let at = b.windows(5).position(|w| w == pat).unwrap() + 4;
+    bad[at] = 16;
+    assert!(Scene::from_bytes(&bad).unwrap_err().to_string().contains("priority 16"));
 }

@@ -8,7 +8,8 @@ struct Globals {
     view_proj: mat4x4<f32>,
     light_dir: vec4<f32>,
     z_scale: f32,
-    _pad0: f32,
+    // Orthographic: near / (far - near); perspective: -1 (priority_clip).
+    ortho_near: f32,
     _pad1: f32,
     _pad2: f32,
 }
@@ -29,6 +30,18 @@ struct DrawArgs {
 // Per tile: its boxes are tested only when this is above 0 (the count of an earlier box pass).
 @group(1) @binding(3) var<storage, read> gate: array<u32>;
 
+// Clip position `clip` at the largest depth-tie priority (common.wgsl `priority_clip`, 15: 11 steps): boxes
+// and slabs at least as near as anything drawn at their place, whatever its object's priority
+// (the same clamp at the near plane).
+fn nearest(clip: vec4<f32>) -> vec4<f32> {
+    let k = 11.0 * 4.76837158203125e-7;
+    var z = clip.z * (1.0 + k);
+    if (g.ortho_near >= 0.0) {
+        z = clip.z + k * (g.ortho_near * clip.w + clip.w - clip.z);
+    }
+    return vec4<f32>(clip.xy, select(min(z, clip.w), clip.z, clip.z > clip.w), clip.w);
+}
+
 struct BoxOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) tile: u32,
@@ -48,7 +61,7 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
         out.zw = vec2<f32>(0.0, 1.0);
         return out;
     }
-    out.clip = g.view_proj * vec4<f32>(corner(vi, lo.xyz, hi.xyz), 1.0);
+    out.clip = nearest(g.view_proj * vec4<f32>(corner(vi, lo.xyz, hi.xyz), 1.0));
     out.zw = out.clip.zw;
     return out;
 }

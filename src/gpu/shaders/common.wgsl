@@ -9,7 +9,8 @@ struct Globals {
     // Direction towards the head light (over the viewer's shoulder), render space, w unused.
     light_dir: vec4<f32>,
     z_scale: f32,
-    _pad0: f32,
+    // Orthographic: near / (far - near); perspective: -1 (priority_clip).
+    ortho_near: f32,
     _pad1: f32,
     _pad2: f32,
 }
@@ -27,7 +28,8 @@ struct Object {
     grid_rows: vec4<f32>,
     // x: 1 + the object's first sample in the normal map, 0: none; y: 1 when its vertices carry
     // smooth normals, 2 when they carry grid coordinates (normals in the normal map: a grid
-    // mesh); with neither, facet normals.
+    // mesh), 3 cell coordinates (a reservoir grid coloured per cell); with neither, facet
+    // normals; z: the depth-tie priority (priority_clip).
     normal_map: vec4<u32>,
 }
 
@@ -57,6 +59,29 @@ fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
     return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface[k].y));
 }
 
+// Clip position `clip` of a vertex of object `o` with its depth-tie priority applied
+// (scene::Object::priority, PRIORITY_DEPTH_STEP): reverse-Z depth scaled by 1 + (priority - 4) x
+// 2^-21, as if the object were that fraction nearer (horizons, 4, exactly where they are), so
+// that of two coincident surfaces the one of
+// higher priority is seen whatever the draw order. Every scene pass applies it (the same
+// expression everywhere: depths agree); the box tests take the largest priority (box_test.wgsl).
+// Never pushed past the near plane (depth 1): a surface on it (an automatic near plane fits the
+// scene) stays drawn, where priorities cannot order it; what lies before it is clipped as ever.
+fn priority_clip(clip: vec4<f32>, o: Object) -> vec4<f32> {
+    return nearer_by(clip, (f32(o.normal_map.z) - 4.0) * 4.76837158203125e-7);
+}
+
+// `clip` as if the fraction `k` of its distance nearer: perspective depth (near / distance) scaled
+// by 1 + k; orthographic depth (linear from the far plane, 0, to the near plane, 1) moved by k
+// times the distance in depth units (ortho_near + 1 - depth). Clamped at the near plane.
+fn nearer_by(clip: vec4<f32>, k: f32) -> vec4<f32> {
+    var z = clip.z * (1.0 + k);
+    if (g.ortho_near >= 0.0) {
+        z = clip.z + k * (g.ortho_near * clip.w + clip.w - clip.z);
+    }
+    return vec4<f32>(clip.xy, select(min(z, clip.w), clip.z, clip.z > clip.w), clip.w);
+}
+
 struct VOut {
     // Invariant so that the depth prepass and later passes rasterise identical depth.
     @builtin(position) @invariant clip: vec4<f32>,
@@ -69,7 +94,7 @@ fn vs_main(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> 
     let o = objects[tile_object[tile]];
     let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOut;
-    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     out.world = p;
     out.tile = tile;
     return out;
@@ -97,7 +122,7 @@ struct VOutGl {
 fn vs_gl(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOutGl {
     let o = objects[tile_object[tile]];
     let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
-    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     return VOutGl(clip, p, tile, clip.zw);
 }
 

@@ -140,7 +140,7 @@ fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) 
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
-    out.clip = g.view_proj * vec4<f32>(p, 1.0);
+    out.clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     out.world_s = vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5));
     out.tile = tile;
     out.n = normal_slot(o, nrm);
@@ -265,7 +265,7 @@ fn vs_field(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @builtin(ins
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
-    return VOutField(g.view_proj * vec4<f32>(p, 1.0), vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile);
+    return VOutField(priority_clip(g.view_proj * vec4<f32>(p, 1.0), o), vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile);
 }
 
 @fragment
@@ -290,7 +290,7 @@ fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
-    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     let n = normal_slot(o, nrm);
     return VOutDrawGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw, n);
 }
@@ -350,7 +350,7 @@ fn vs_field_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32,
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
-    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     return VOutFieldGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw);
 }
 

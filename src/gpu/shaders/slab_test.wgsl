@@ -23,7 +23,7 @@ fn vs_slab(@location(0) v: vec4<f32>, @builtin(instance_index) tile: u32) -> Box
     }
     let p = place[tile];
     let pos = vec3<f32>(v.xy, v.z + v.w * p.w);
-    out.clip = g.view_proj * vec4<f32>((pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale), 1.0);
+    out.clip = nearest(g.view_proj * vec4<f32>((pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale), 1.0));
     out.zw = out.clip.zw;
     return out;
 }
