@@ -132,14 +132,19 @@ def call(f, *a, **kw):
         return None
 
 
-def check_result(res, scene):
+def check_result(res, scene, cam=None):
     n = scene.n_tiles
     assert res.image.shape == (H, W, 4) and res.image.dtype == np.uint8
     assert res.depth.shape == (H, W) and res.depth.dtype == np.float32
     assert res.tile_pixels.shape == (n,) and res.tile_pixels.dtype == np.uint32
     assert res.tile_drawn.shape == (n,) and res.tile_drawn.dtype == bool
     assert not np.isnan(res.depth).any()
-    assert (res.depth > 0).all()
+    # Distances from the eye: positive in perspective (the near plane is never at 0); an
+    # orthographic view's eye may lie on a surface (its automatic near plane is then at 0).
+    if cam is not None and cam.projection == "orthographic":
+        assert (res.depth >= 0).all()
+    else:
+        assert (res.depth > 0).all()
     empty = np.isposinf(res.depth)
     assert (res.image[empty] == (0, 0, 0, 255)).all()
     assert (res.image[..., 3] == 255).all()
@@ -253,10 +258,10 @@ def test_fuzz_public_api(renderer, hf, meshes, cam_kw, render_kw, ops):
         cam = gc.Camera.look_at((3.0, -8.0, 12.0), (2.0, 2.0, 0.0))
     res = call(renderer.render, scene, cam, **render_kw)
     if res is not None:
-        check_result(res, scene)
+        check_result(res, scene, cam)
     # The same scene and camera always render in every mode with valid options.
     for m in gc.CULLING_MODES:
-        check_result(renderer.render(scene, cam, culling=m, pixel_threshold=0), scene)
+        check_result(renderer.render(scene, cam, culling=m, pixel_threshold=0), scene, cam)
 
 
 @FUZZ
@@ -286,3 +291,14 @@ def test_fuzz_valid_heightfields_render_the_same_in_every_mode(renderer, z, tile
         np.testing.assert_array_equal(res.depth, ref.depth, err_msg=m)
     res = renderer.render(scene, cam, culling="three_pass", pixel_threshold=0, prepass_scale=0.5)
     check_result(res, scene)
+
+
+def test_an_orthographic_eye_on_a_plane_sees_it_at_distance_zero(renderer_small):
+    # Found by test_fuzz_public_api: the automatic near plane of an orthographic view is at the
+    # eye (0), so a plane through the eye is drawn at distance 0 (never negative, never NaN).
+    s = gc.Scene()
+    s.add_heightfield(np.zeros((2, 2)))
+    cam = gc.Camera.look_at((0, 0, 0), (0, 0, 1), up=(0, 0, 1), fov_y=5, projection="orthographic")
+    res = renderer_small(16, 16).render(s, cam)
+    check_result(res, s, cam)
+    assert res.coverage.sum() > 0 and res.depth[res.coverage].max() == 0.0
