@@ -504,6 +504,27 @@ fn fault_groups(
     }
 }
 
+/// Each vertex of the ring `outline` that the merge removes (`drop`) with the kept vertices
+/// around it, before and after: (removed, before, after) as positions in `outline`.
+pub(super) fn removed_spans<'a>(
+    outline: &'a [u32],
+    drop: &'a [bool],
+) -> impl Iterator<Item = (usize, usize, usize)> + 'a {
+    let m = outline.len();
+    let dropped = move |k: usize| drop[outline[k] as usize];
+    (0..m).filter(move |&w| dropped(w)).map(move |w| {
+        let mut a = (w + m - 1) % m;
+        while dropped(a) && a != w {
+            a = (a + m - 1) % m;
+        }
+        let mut c = (w + 1) % m;
+        while dropped(c) && c != w {
+            c = (c + 1) % m;
+        }
+        (w, a, c)
+    })
+}
+
 /// The largest distance of a vertex the merge removes from the merged face: outline vertices
 /// from the segment between the kept vertices around them, inner vertices from the face's plane.
 fn removal_error(grp: &Group, reduced: &[u32], drop: &[bool], verts: &Verts) -> f64 {
@@ -520,19 +541,7 @@ fn removal_error(grp: &Group, reduced: &[u32], drop: &[bool], verts: &Verts) -> 
         }
     }
     let o = &grp.outline;
-    let m = o.len();
-    for w in 0..m {
-        if !drop[o[w] as usize] {
-            continue;
-        }
-        let mut a = (w + m - 1) % m;
-        while drop[o[a] as usize] && a != w {
-            a = (a + m - 1) % m;
-        }
-        let mut c = (w + 1) % m;
-        while drop[o[c] as usize] && c != w {
-            c = (c + 1) % m;
-        }
+    for (w, a, c) in removed_spans(o, drop) {
         let (pa, pc, pv) = (verts.p(o[a]), verts.p(o[c]), verts.p(o[w]));
         let ab = pc - pa;
         let t = if ab.length_squared() > 0.0 { ((pv - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
