@@ -24,10 +24,12 @@ use wgpu::util::DeviceExt;
 const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
 const BOX_WGSL: &str = include_str!("shaders/box.wgsl");
 const SELECT_WGSL: &str = include_str!("shaders/select_common.wgsl");
+/// Depth-tie priorities: appended to the scene passes' and the box tests' sources.
+const PRIORITY_WGSL: &str = include_str!("shaders/priority.wgsl");
 
 /// `source` with the shared box geometry (box.wgsl: `CUBE`, `box_corner`) prepended.
 pub fn with_box_wgsl(source: &str) -> String {
-    format!("{BOX_WGSL}\n{source}")
+    format!("{BOX_WGSL}\n{PRIORITY_WGSL}\n{source}")
 }
 
 /// The box test's shader (box.wgsl is prepended): vertex stage and the hand-compared fragment.
@@ -325,7 +327,7 @@ impl Passes {
                               targets: &[Option<wgpu::ColorTargetState>],
                               depth: &wgpu::DepthStencilState,
                               cull_mode: Option<wgpu::Face>| {
-            let module = shader(d, label, format!("{COMMON_WGSL}\n{file}"));
+            let module = shader(d, label, format!("{COMMON_WGSL}\n{PRIORITY_WGSL}\n{file}"));
             // (entry point, its GL variant)
             let (vs, fs) = if gl { (vs.1, format!("{fs}_gl")) } else { (vs.0, fs.to_string()) };
             d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

@@ -30,16 +30,11 @@ struct DrawArgs {
 // Per tile: its boxes are tested only when this is above 0 (the count of an earlier box pass).
 @group(1) @binding(3) var<storage, read> gate: array<u32>;
 
-// Clip position `clip` at the largest depth-tie priority (common.wgsl `priority_clip`, 15: 11 steps): boxes
-// and slabs at least as near as anything drawn at their place, whatever its object's priority
-// (the same clamp at the near plane).
+// Clip position `clip` at the largest depth-tie priority (15: 11 steps past a horizon's; common.wgsl
+// `priority_clip`): boxes and slabs at least as near as anything drawn at their place, whatever
+// its object's priority.
 fn nearest(clip: vec4<f32>) -> vec4<f32> {
-    let k = 11.0 * 4.76837158203125e-7;
-    var z = clip.z * (1.0 + k);
-    if (g.ortho_near >= 0.0) {
-        z = clip.z + k * (g.ortho_near * clip.w + clip.w - clip.z);
-    }
-    return vec4<f32>(clip.xy, select(min(z, clip.w), clip.z, clip.z > clip.w), clip.w);
+    return nearer_by(clip, 11.0 * PRIORITY_STEP);
 }
 
 struct BoxOut {

@@ -60,26 +60,13 @@ fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
 }
 
 // Clip position `clip` of a vertex of object `o` with its depth-tie priority applied
-// (scene::Object::priority, PRIORITY_DEPTH_STEP): reverse-Z depth scaled by 1 + (priority - 4) x
-// 2^-21, as if the object were that fraction nearer (horizons, 4, exactly where they are), so
-// that of two coincident surfaces the one of
-// higher priority is seen whatever the draw order. Every scene pass applies it (the same
-// expression everywhere: depths agree); the box tests take the largest priority (box_test.wgsl).
-// Never pushed past the near plane (depth 1): a surface on it (an automatic near plane fits the
-// scene) stays drawn, where priorities cannot order it; what lies before it is clipped as ever.
+// (scene::Object::priority, PRIORITY_DEPTH_STEP): as if the fraction (priority - 4) x 2^-21 of
+// its distance nearer (priority.wgsl `nearer_by`; horizons, 4, exactly where they are), so that
+// of two coincident surfaces the one of higher priority is seen whatever the draw order. Every
+// scene pass applies it (the same expression everywhere: depths agree); the box tests take the
+// largest priority (box_test.wgsl `nearest`).
 fn priority_clip(clip: vec4<f32>, o: Object) -> vec4<f32> {
-    return nearer_by(clip, (f32(o.normal_map.z) - 4.0) * 4.76837158203125e-7);
-}
-
-// `clip` as if the fraction `k` of its distance nearer: perspective depth (near / distance) scaled
-// by 1 + k; orthographic depth (linear from the far plane, 0, to the near plane, 1) moved by k
-// times the distance in depth units (ortho_near + 1 - depth). Clamped at the near plane.
-fn nearer_by(clip: vec4<f32>, k: f32) -> vec4<f32> {
-    var z = clip.z * (1.0 + k);
-    if (g.ortho_near >= 0.0) {
-        z = clip.z + k * (g.ortho_near * clip.w + clip.w - clip.z);
-    }
-    return vec4<f32>(clip.xy, select(min(z, clip.w), clip.z, clip.z > clip.w), clip.w);
+    return nearer_by(clip, (f32(o.normal_map.z) - 4.0) * PRIORITY_STEP);
 }
 
 struct VOut {
