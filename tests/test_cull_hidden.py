@@ -15,17 +15,17 @@ import geocull as gc
 N, TILES = 41, (4, 4)  # 16 tiles a plane
 
 
-def planes(top_z=0.0, low_z=-50.0, hole=False, rotation=0.0, extent=1.0, rim=False):
+def planes(top_z=0.0, low_z=-50.0, hole=False, rotation=0.0, extent=1.0, rim=0):
     """Two parallel planes of 41 x 41 samples (16 tiles each); the lower one's (x, y) extent can be
     smaller (``extent`` < 1: it sits under the middle of the top one). Rotated planes turn about
     their own middle, so that the lower one stays under the top's middle. ``rim``: the top's
-    outermost two rows and columns undefined, as real horizons' rims are (its border tiles hold
-    holes)."""
+    outermost ``rim`` rows and columns undefined, as real horizons' rims are (its border tiles
+    hold holes)."""
     top = np.full((N, N), top_z)
     if hole:
         top[20, 20] = np.nan
     if rim:
-        top[:2], top[-2:], top[:, :2], top[:, -2:] = np.nan, np.nan, np.nan, np.nan
+        top[:rim], top[-rim:], top[:, :rim], top[:, -rim:] = np.nan, np.nan, np.nan, np.nan
     s = gc.Scene()
     s.add_heightfield(top, origin=middle_at_20(20.0, rotation), tiles=TILES, rotation=rotation)
     s.add_heightfield(np.full((N, N), low_z), origin=middle_at_20(20.0 * extent, rotation), spacing=(extent, extent),
@@ -75,24 +75,46 @@ def test_rotated_planes_are_proven_in_their_own_frame(rotation):
 
 
 def test_a_rotated_top_with_an_undefined_rim_hides_what_lies_under_its_defined_middle():
-    # Real horizons: rotated survey, undefined nodes round the rim. The top's 12 border tiles hold
-    # holes and hide nothing; every ray to the lower plane crosses the top's 4 hole-free middle
-    # tiles (the lower plane spans a quarter of the middle, so its rays stay there).
-    res = render(planes(extent=0.25, rotation=30.0, rim=True), ABOVE)
+    # Real horizons: rotated survey, undefined nodes round the rim, so that the top's 12 border
+    # tiles hold holes. Rays to the lower plane, under the top's middle half, cross the top within
+    # 11 m of its middle, where it is whole: every tile is proven.
+    res = render(planes(extent=0.5, rotation=30.0, rim=2), ABOVE)
     assert res.stats["tiles_proven_hidden"] == 16
-    # Under the whole top, rays to the lower plane's border tiles cross the holed rim tiles.
-    res = render(planes(extent=1.0, rotation=30.0, rim=True), ABOVE)
-    assert 0 < res.stats["tiles_proven_hidden"] < 16
+    # With 8 undefined rows and columns round the top, the rays to the lower plane's border tiles
+    # (under the whole top) cross blocks of the top with holes: only the 4 middle ones are proven
+    # (the GPU passes find the others hidden); with 10, the border tiles are seen through the hole.
+    res = render(planes(extent=1.0, rotation=30.0, rim=8), ABOVE)
+    assert res.stats["tiles_proven_hidden"] == 4
+    res = render(planes(extent=1.0, rotation=30.0, rim=10), ABOVE)
+    assert res.stats["tiles_proven_hidden"] == 4
+    assert res.tile_drawn[16:].sum() == 12
 
 
 def test_a_stack_of_three_rotated_horizons_is_proven_under_the_top():
-    s = planes(extent=0.25, rotation=30.0, rim=True)
+    s = planes(extent=0.25, rotation=30.0, rim=2)
     # A third under the second, 40 m deeper, on the same footprint.
     s.add_heightfield(np.full((N, N), -90.0), origin=middle_at_20(5.0, 30.0), spacing=(0.25, 0.25), tiles=TILES,
                       rotation=30.0)
     res = render(s, ABOVE)
     assert res.stats["tiles_proven_hidden"] == 32  # both lower horizons, 16 tiles each
     assert not res.tile_drawn[16:].any()
+
+
+@pytest.mark.parametrize("gap", [1.0, 4.0])
+@pytest.mark.parametrize("projection", ["perspective", "orthographic"])
+def test_dipping_horizons_closer_than_a_tiles_relief_are_proven_block_by_block(gap, projection):
+    # Two rotated planes dipping 0.8 m per metre, ``gap`` apart: a top tile rises 8 m, 2 to 8 times
+    # the gap, so no tile box lies under the other's; each block's prism along its own plane,
+    # seen as heights over the top's dip, does.
+    x = np.arange(N, dtype=float)
+    s = gc.Scene()
+    s.add_heightfield(np.tile(0.8 * x, (N, 1)), origin=middle_at_20(20.0, 30.0), tiles=TILES, rotation=30.0)
+    s.add_heightfield(np.tile(0.4 * x, (N, 1)) + 8.0 - gap, origin=middle_at_20(10.0, 30.0), spacing=(0.5, 0.5),
+                      tiles=TILES, rotation=30.0)
+    cam = ABOVE if projection == "perspective" else gc.Camera.look_at(
+        (20.0, 20.0, 60.0), (20.0, 20.1, -50.0), projection="orthographic", ortho_height=30.0)
+    res = render(s, cam)
+    assert res.stats["tiles_proven_hidden"] == 16
 
 
 def test_orthographic_from_above():

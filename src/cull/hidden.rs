@@ -2,143 +2,190 @@
 //! (three_pass conservative, temporal): tiles that lie wholly under (over) a hole-free stretch of
 //! a height field, seen from above (below) through it.
 //!
-//! The argument runs in the height field's own grid frame: (x, y) in render space is an affine
-//! map of the sample indices (column, row), z is z. Let A be a height field and its usable tiles
-//! those drawn this frame and hole-free (all cells of the tile defined): over any set of usable
-//! tiles that share borders, A's surface, at any level of detail, is continuous (tiles share their
-//! border samples at full resolution) and covers their footprints, with heights within their
-//! boxes' [zlo, zhi]. Let B be another object's tile, wholly under zlo, with the eye above zhi
-//! (perspective; orthographic: looking down), and R the index-space rectangle holding, for every
-//! corner of B's box, the points q_hi and q_lo where the ray from the eye through that corner
-//! crosses the heights zhi and zlo, with [zlo, zhi] the range of A's tiles that meet R (found by
-//! growing R until the range no longer changes), every one of them usable. For any point P of
-//! B's box, its ray's q_hi and q_lo lie in R too (the box is convex, its central or parallel
-//! projections onto those planes are the hulls of its corners', and the affine map to indices
-//! keeps hulls), so the ray between the two heights stays over usable tiles of A: above A's
-//! surface at zhi, at or under it at zlo, it crosses the surface at a point X in front of P. With
-//! R inside A's grid shrunk against the f32 rounding of its vertices, X lies where A's triangles
-//! cover every pixel centre, so each fragment of B has a fragment of A in front of it on its
-//! pixel; were A hidden at X, what hides it hides P too. B has no visible pixel. The same holds
-//! upside down. Holes, tiles outside the frustum and other tiles not drawn only make R's tiles
-//! unusable where a ray meets them: stacks of rotated horizons with undefined rims are proven
-//! tile by tile. Given up (the tile left to the GPU passes): R meeting an unusable tile or leaving
-//! the grid, crossings nearer than the near plane (clipped), a gap between B and zlo under 1e-4
-//! of the depth (the depth test could let B through), and ranges that keep growing.
+//! The argument runs in the height field's own grid frame ((x, y) in render space is an affine
+//! map of the sample indices) over its height blocks (`lod::blocks`: whole fine cells, about 8 a
+//! side). A's usable blocks are those without a hole whose tile is drawn this frame at level 0 or
+//! at a lattice level (whose error bounds its distance to the fine surface everywhere); over any
+//! set of usable blocks that share borders A's surface is continuous (tiles share their border
+//! samples at every level) and covers their footprints, with heights, over any plane, within the
+//! bounds [`hider::Hider`] gives. Let P be a plane (none, or A's local dip: heights are measured
+//! over it, a shear that keeps rays straight, vertical order and convex hulls) and B a convex
+//! solid holding what another object draws, given by 8 corners (a box, or a height block's prism
+//! along its own plane), wholly under zlo, with the eye above zhi (perspective; orthographic:
+//! looking down), and R the index-space rectangle holding, for every corner of B, the points
+//! q_hi and q_lo where the ray from the eye through that corner crosses the heights zhi and zlo,
+//! with [zlo, zhi] the range of A's blocks that meet R (found by growing R until the range no
+//! longer changes), every one of them usable. For any point X of B, its ray's q_hi and q_lo lie in
+//! R too (B is convex, its central or parallel projections onto those sheared planes are the hulls
+//! of its corners', and the affine map to indices keeps hulls), so the ray between the two heights
+//! stays over usable blocks of A: above A's surface at zhi, at or under it at zlo, it crosses the
+//! surface in front of X. With R inside A's grid shrunk against the f32 rounding of its vertices,
+//! that crossing lies where A's triangles cover every pixel centre, so each fragment of B has a
+//! fragment of A in front of it on its pixel; were A hidden there, what hides it hides X too. B
+//! has no visible pixel. The same holds upside down. A tile is proven when its box is, or, part by
+//! part, every height block (its prism along its own plane, or its box) or sub-box.
+//!
+//! Given up (the tile left to the GPU passes): R meeting an unusable block or leaving the grid,
+//! crossings nearer than the near plane (clipped), a gap between B and zlo whose length along the
+//! ray is under 1e-4 of the depth (the depth test could let B through), and ranges that keep
+//! growing. Holes, tiles outside the frustum and tiles not drawn only make blocks unusable where a
+//! ray meets them: stacks of rotated, dipping horizons with undefined rims are proven part by part.
+
+mod hider;
 
 use super::{box_corners, FrameInputs};
 use crate::camera::Projection;
-use crate::lod::tile_bounds;
-use glam::{DMat2, DVec2, DVec3};
-
-/// A height field drawn this frame: its tiles on their grid, in index space.
-struct Hider {
-    object: u32,
-    /// Render-space (x, y) -> (column, row) of the grid: `inv * (xy - at0)`.
-    at0: DVec2,
-    inv: DMat2,
-    /// Tile column and row boundaries in samples: tile (ix, iy) spans columns xb[ix]..xb[ix + 1]
-    /// and rows yb[iy]..yb[iy + 1].
-    xb: Vec<f64>,
-    yb: Vec<f64>,
-    /// Per tile (row-major by iy, then ix) its render-space z range; None = not usable (holes,
-    /// not drawn this frame, empty).
-    z: Vec<Option<(f64, f64)>>,
-}
-
-impl Hider {
-    /// Column and row of render-space (x, y).
-    fn index(&self, p: DVec2) -> DVec2 {
-        self.inv * (p - self.at0)
-    }
-
-    /// The z range of the tiles meeting index rectangle `lo..hi`, or None when it leaves the
-    /// grid shrunk by `m` samples or meets a tile that is not usable.
-    fn range(&self, lo: DVec2, hi: DVec2, m: f64) -> Option<(f64, f64)> {
-        let (xb, yb) = (&self.xb, &self.yb);
-        let (tx, ty) = (xb.len() - 1, yb.len() - 1);
-        if !(lo.x >= xb[0] + m && hi.x <= xb[tx] - m && lo.y >= yb[0] + m && hi.y <= yb[ty] - m) {
-            return None;
-        }
-        self.tiles_meeting(lo, hi).try_fold((f64::INFINITY, f64::NEG_INFINITY), |r, z| {
-            let (a, b) = z?;
-            Some((r.0.min(a), r.1.max(b)))
-        })
-    }
-
-    /// The z range of the usable tiles meeting `lo..hi` (clamped to the grid), None without any:
-    /// where the proof starts from, not what it rests on.
-    fn first_guess(&self, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
-        let r = self
-            .tiles_meeting(lo, hi)
-            .flatten()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |r, (a, b)| (r.0.min(a), r.1.max(b)));
-        (r.0 <= r.1).then_some(r)
-    }
-
-    /// The tiles meeting index rectangle `lo..hi`, the grid's border tiles for parts beyond it.
-    fn tiles_meeting(&self, lo: DVec2, hi: DVec2) -> impl Iterator<Item = Option<(f64, f64)>> + '_ {
-        let (xb, yb) = (&self.xb, &self.yb);
-        let (tx, ty) = (xb.len() - 1, yb.len() - 1);
-        let i0 = xb[1..tx].partition_point(|&b| b < lo.x);
-        let i1 = xb[1..tx].partition_point(|&b| b <= hi.x);
-        let j0 = yb[1..ty].partition_point(|&b| b < lo.y);
-        let j1 = yb[1..ty].partition_point(|&b| b <= hi.y);
-        (j0..=j1).flat_map(move |j| self.z[j * tx + i0..=j * tx + i1].iter().copied())
-    }
-}
+use crate::gpu::layout::DrawArgs;
+use crate::lod::blocks::HeightBlocks;
+use glam::{DVec2, DVec3};
+use hider::{Hider, Plane};
+use rayon::prelude::*;
 
 /// Per tile: proven hidden by a height field (see the module docs). Only visible tiles with a
-/// draw are considered, as hiders and as hidden.
-pub fn hidden_by_heightfields(f: &FrameInputs<'_>) -> Vec<bool> {
+/// draw are considered, as hiders and as hidden, and only those where `candidate` holds as hidden
+/// (temporal frames skip the tiles seen in the last frame: they are drawn first anyway).
+pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) -> bool + Sync)) -> Vec<bool> {
     let g = f.geometry;
     let n = g.n_tiles();
     let drawn = |i: usize| f.object_visible[i] && f.draw_args[i].index_count > 0 && f.draw_args[i].instance_count > 0;
-    let hiders = hiders(f, &drawn);
+    let hiders = hider::hiders(f, &drawn, &|i| level_error(f, i));
     let mut hidden = vec![false; n];
     if hiders.is_empty() {
         return hidden;
     }
-    for (b, h) in hidden.iter_mut().enumerate().filter(|(b, _)| drawn(*b)) {
-        let (lo, hi, near) = f.render_box(b, g.bbox[b].0, g.bbox[b].1);
-        *h = !near && hiders.iter().any(|a| a.object != g.tile_object_cpu[b] && hides(f, a, (lo, hi)));
-    }
+    hidden.par_iter_mut().enumerate().filter(|(b, _)| drawn(*b) && candidate(*b)).for_each(|(b, h)| {
+        let object = g.tile_object_cpu[b];
+        let hidden_solid = |corners: &[DVec3; 8], dip: bool| {
+            let near = corners.iter().any(|&p| (p - f.fc.eye).dot(f.fc.forward) <= f.fc.near * 1.001 + 1e-9);
+            !near && hiders.iter().any(|a| a.object != object && hides(f, a, corners, dip))
+        };
+        // Boxes are tested with heights as they are: a box is level, shearing it makes it taller.
+        let hidden_box = |lo: DVec3, hi: DVec3| {
+            let (lo, hi, near) = f.render_box(b, lo, hi);
+            !near && hidden_solid(&box_corners(lo, hi), false)
+        };
+        *h = hidden_box(g.bbox[b].0, g.bbox[b].1) || hidden_in_parts(f, b, &hidden_box, &hidden_solid);
+    });
     hidden
 }
 
-fn hiders(f: &FrameInputs<'_>, drawn: &dyn Fn(usize) -> bool) -> Vec<Hider> {
+/// Whether every part of tile `b` is hidden (`hidden_box`: an origin-relative box,
+/// `hidden_solid`: a render-space solid): a height-field tile's height blocks (a failing one
+/// ends the test), grown by the error of the level drawn; another tile's sub-boxes when drawn at
+/// level 0.
+fn hidden_in_parts(
+    f: &FrameInputs<'_>,
+    b: usize,
+    hidden_box: &dyn Fn(DVec3, DVec3) -> bool,
+    hidden_solid: &dyn Fn(&[DVec3; 8], bool) -> bool,
+) -> bool {
     let g = f.geometry;
-    let mut first = 0usize;
-    let mut out = Vec::new();
-    for (oi, o) in f.scene.objects().iter().enumerate() {
-        let range = first..first + o.tiles.len();
-        first = range.end;
-        let Some(axes) = o.grid_axes() else { continue };
-        let tx = o.tiles.iter().map(|t| t.ix).max().unwrap_or(0) as usize + 1;
-        let ty = o.tiles.iter().map(|t| t.iy).max().unwrap_or(0) as usize + 1;
-        let m = DMat2::from_cols(DVec2::from(axes.u), DVec2::from(axes.v));
-        if range.is_empty() || tx * ty != o.tiles.len() || axes.nx < 2 || axes.ny < 2 || m.determinant() == 0.0 {
-            continue;
-        }
-        let (bx, by) = (tile_bounds(axes.nx, tx), tile_bounds(axes.ny, ty));
-        let mut z = vec![None; tx * ty];
-        let mut any = false;
-        for (t, i) in o.tiles.iter().zip(range) {
-            let (ix, iy) = (t.ix as usize, t.iy as usize);
-            let cells = (bx[ix + 1] - bx[ix]) * (by[iy + 1] - by[iy]);
-            if drawn(i) && g.occluder[i].index_count > 0 && cells > 0 && t.fine_triangles() == 2 * cells {
-                let (lo, hi) = f.render_space_box(i, g.bbox[i].0, g.bbox[i].1);
-                z[iy * tx + ix] = Some((lo.z, hi.z));
-                any = true;
-            }
-        }
-        let sorted = |b: &[usize]| b.windows(2).all(|w| w[0] < w[1]);
-        if any && sorted(&bx) && sorted(&by) {
-            let at0 = DVec2::from(axes.o) + f.placement(oi).truncate();
-            let as_f64 = |b: Vec<usize>| b.into_iter().map(|v| v as f64).collect();
-            out.push(Hider { object: oi as u32, at0, inv: m.inverse(), xb: as_f64(bx), yb: as_f64(by), z });
-        }
+    if let (Some(hb), Some(e), Some(prism)) = (&g.height_blocks[b], level_error(f, b), Prisms::of(f, b)) {
+        let parts = Parts { hb, e, prism, hidden_box, hidden_solid };
+        return parts.hidden();
     }
-    out
+    let parts = &g.sub_boxes[b];
+    same_draw(f.draw_args[b], g.fine[b]) && parts.len() > 1 && parts.iter().all(|&(lo, hi)| hidden_box(lo, hi))
+}
+
+/// A height-field tile's blocks as the proof tests them.
+struct Parts<'a> {
+    hb: &'a HeightBlocks,
+    /// The drawn level's error bound, world units.
+    e: f64,
+    prism: Prisms,
+    hidden_box: &'a dyn Fn(DVec3, DVec3) -> bool,
+    hidden_solid: &'a dyn Fn(&[DVec3; 8], bool) -> bool,
+}
+
+impl Parts<'_> {
+    /// Whether every block is hidden, each by its prism or its box; the first that is not ends
+    /// the test (a visible tile costs a test or two per hider).
+    fn hidden(&self) -> bool {
+        let hb = self.hb;
+        let dz = DVec3::Z * self.e;
+        (0..hb.rows.len() - 1).all(|q| {
+            (0..hb.columns()).all(|p| {
+                let blk = hb.block(p, q);
+                blk.is_empty()
+                    || (self.hidden_solid)(&self.prism.of_block(hb, p, q, self.e), true)
+                    || (self.hidden_box)(
+                        DVec3::from(blk.lo.map(f64::from)) - dz,
+                        DVec3::from(blk.hi.map(f64::from)) + dz,
+                    )
+            })
+        })
+    }
+}
+
+/// What makes a height-field tile's block prisms in render space: its grid, its first sample,
+/// its object's placement and the frame's exaggeration.
+struct Prisms {
+    axes: crate::scene::GridAxes,
+    first: (usize, usize),
+    placement: DVec3,
+    z_scale: f64,
+}
+
+impl Prisms {
+    fn of(f: &FrameInputs<'_>, b: usize) -> Option<Self> {
+        let oi = f.geometry.tile_object_cpu[b] as usize;
+        let o = &f.scene.objects()[oi];
+        let axes = o.grid_axes()?;
+        let first_tile = f.geometry.tile_object_cpu.partition_point(|&t| (t as usize) < oi);
+        let t = o.tiles.get(b - first_tile)?;
+        let tx = o.tiles.iter().map(|t| t.ix).max()? as usize + 1;
+        let ty = o.tiles.iter().map(|t| t.iy).max()? as usize + 1;
+        if tx * ty != o.tiles.len() || tx >= axes.nx || ty >= axes.ny {
+            return None;
+        }
+        let first =
+            (crate::lod::tile_bounds(axes.nx, tx)[t.ix as usize], crate::lod::tile_bounds(axes.ny, ty)[t.iy as usize]);
+        Some(Prisms { axes, first, placement: f.placement(oi), z_scale: f.camera.z_scale })
+    }
+
+    /// Block (p, q)'s prism: its footprint's corners, at its plane's heights less and more its
+    /// residual and `e`, in render space, pushed out against round-off as `render_box` grows
+    /// boxes. Corner c: bit 0 the larger column, bit 1 the larger row, bit 2 the top.
+    fn of_block(&self, hb: &HeightBlocks, p: usize, q: usize, e: f64) -> [DVec3; 8] {
+        let blk = hb.block(p, q);
+        let [z00, z10, z01] = blk.plane.map(f64::from);
+        let own = [z00, z10, z01, z10 + z01 - z00];
+        let r = blk.residual as f64 + e;
+        let (u, v) = (DVec2::from(self.axes.u).normalize(), DVec2::from(self.axes.v).normalize());
+        let zs = self.z_scale;
+        let corners: [DVec3; 8] = std::array::from_fn(|c| {
+            let (i, j) = (self.first.0 + hb.cols[p + (c & 1)], self.first.1 + hb.rows[q + (c >> 1 & 1)]);
+            let xy = DVec2::from(self.axes.pos(i, j)) + self.placement.truncate();
+            let z = own[c & 3] + if c & 4 != 0 { r } else { -r };
+            DVec3::new(xy.x, xy.y, (z + self.placement.z) * zs)
+        });
+        let (lo, hi) = corners.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &p| (a.min(p), b.max(p)));
+        let grow = 1e-6 * lo.abs().max(hi.abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;
+        std::array::from_fn(|c| {
+            let s = |bit: usize| if c & bit != 0 { 1.0 } else { -1.0 };
+            let push = (u * s(1) + v * s(2)) * grow;
+            corners[c] + DVec3::new(push.x, push.y, s(4) * grow * zs.signum())
+        })
+    }
+}
+
+/// Whether two draws draw the same triangles.
+fn same_draw(a: DrawArgs, b: DrawArgs) -> bool {
+    (a.index_count, a.first_index, a.base_vertex) == (b.index_count, b.first_index, b.base_vertex)
+}
+
+/// The error bound (world units, not exaggerated) between what height-field tile `i` draws this
+/// frame and its fine surface, everywhere: 0 at level 0, a lattice level's error (`lod::levels`);
+/// None for other levels (their error is not a bound everywhere) and tiles without a slab.
+fn level_error(f: &FrameInputs<'_>, i: usize) -> Option<f64> {
+    let g = f.geometry;
+    let d = f.draw_args[i];
+    if same_draw(d, g.fine[i]) {
+        return Some(0.0);
+    }
+    let exact = g.slab_draws[i].is_some_and(|(_, exact)| exact);
+    g.levels[i].iter().find(|l| exact && same_draw(d, l.args)).map(|l| l.error as f64)
 }
 
 /// The index-space bounds of render-space points `ps`.
@@ -146,37 +193,54 @@ fn index_bounds(a: &Hider, ps: impl Iterator<Item = DVec2>) -> (DVec2, DVec2) {
     ps.map(|p| a.index(p)).fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), q| (lo.min(q), hi.max(q)))
 }
 
-/// Whether height field `a` hides every point of box `blo..bhi` (the module docs' argument).
-fn hides(f: &FrameInputs<'_>, a: &Hider, (blo, bhi): (DVec3, DVec3)) -> bool {
+/// Whether height field `a` hides every point of the convex hull of `corners` (render space;
+/// the module docs' argument): with heights as they are, else (`dip`) as heights over `a`'s
+/// local dip around it.
+fn hides(f: &FrameInputs<'_>, a: &Hider, corners: &[DVec3; 8], dip: bool) -> bool {
+    let m = a.margin();
+    let (lo, hi) = index_bounds(a, corners.iter().map(|p| p.truncate()));
+    hides_over(f, a, corners, (lo, hi), m, &Plane::FLAT)
+        || dip && a.dip(lo, hi).is_some_and(|plane| hides_over(f, a, corners, (lo, hi), m, &plane))
+}
+
+/// The module docs' argument with heights over `plane`: `corners` those of B, `lo..hi` its
+/// footprint in `a`'s index space, `m` the margin in samples.
+fn hides_over(
+    f: &FrameInputs<'_>,
+    a: &Hider,
+    corners: &[DVec3; 8],
+    (lo, hi): (DVec2, DVec2),
+    m: f64,
+    plane: &Plane,
+) -> bool {
     let fc = f.fc;
     let persp = fc.projection == Projection::Perspective;
-    // Against the f32 rounding of A's vertices: a margin in world units, then in samples (the
-    // inverse map stretches no length by more than its Frobenius norm).
-    let diagonal = a.inv.inverse() * DVec2::new(a.xb[a.xb.len() - 1], a.yb[a.yb.len() - 1]);
-    let world = 1e-4 * diagonal.length() + 1e-6 * a.at0.abs().max_element().max(diagonal.abs().max_element());
-    let m = world * (a.inv.x_axis.length_squared() + a.inv.y_axis.length_squared()).sqrt();
-    let corners = box_corners(blo, bhi);
-    // Start from the tiles under B's own footprint, then grow.
-    let (lo, hi) = index_bounds(a, corners[..4].iter().map(|p| p.truncate()));
-    let Some(mut z) = a.first_guess(lo, hi) else { return false };
+    let (bz_lo, bz_hi) = corners
+        .iter()
+        .map(|&p| plane.over(p))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |r, z| (r.0.min(z), r.1.max(z)));
+    let (eye, forward) = (plane.over(fc.eye), plane.slope(fc.forward));
+    // Start from the blocks under B's own footprint, then grow.
+    let Some(mut z) = a.first_guess(lo, hi, plane) else { return false };
     for _ in 0..6 {
         let (zlo, zhi) = z;
-        let down = bhi.z < zlo && if persp { fc.eye.z > zhi } else { fc.forward.z < 0.0 };
-        let up = blo.z > zhi && if persp { fc.eye.z < zlo } else { fc.forward.z > 0.0 };
+        let down = bz_hi < zlo && if persp { eye > zhi } else { forward < 0.0 };
+        let up = bz_lo > zhi && if persp { eye < zlo } else { forward > 0.0 };
         if !(down || up) {
             return false;
         }
-        let gap = if down { zlo - bhi.z } else { blo.z - zhi };
+        let gap = if down { zlo - bz_hi } else { bz_lo - zhi };
         let mut crossings = Vec::with_capacity(16);
-        for &p in &corners {
+        for &p in corners {
             let d = if persp { p - fc.eye } else { fc.forward };
+            let dz = plane.slope(d);
             // The ray's length over the gap, against the point's depth, must stay far above the
             // depth buffer's precision.
-            if d.z == 0.0 || gap * d.length() / d.z.abs() <= 1e-4 * (p - fc.eye).dot(fc.forward).abs() {
+            if dz == 0.0 || gap * d.length() / dz.abs() <= 1e-4 * (p - fc.eye).dot(fc.forward).abs() {
                 return false;
             }
             for h in [zlo, zhi] {
-                let q = p + d * ((h - p.z) / d.z);
+                let q = p + d * ((h - plane.over(p)) / dz);
                 if (q - fc.eye).dot(fc.forward) <= fc.near * 1.001 + 1e-9 {
                     return false;
                 }
@@ -184,9 +248,9 @@ fn hides(f: &FrameInputs<'_>, a: &Hider, (blo, bhi): (DVec3, DVec3)) -> bool {
             }
         }
         let (lo, hi) = index_bounds(a, crossings.into_iter());
-        let Some(met) = a.range(lo, hi, m) else { return false };
+        let Some(met) = a.range(lo, hi, m, plane) else { return false };
         if met.0 >= zlo && met.1 <= zhi {
-            return true; // the tiles R meets lie within the range R was made from
+            return true; // the blocks R meets lie within the range R was made from
         }
         z = (met.0.min(zlo), met.1.max(zhi));
     }
@@ -194,9 +258,9 @@ fn hides(f: &FrameInputs<'_>, a: &Hider, (blo, bhi): (DVec3, DVec3)) -> bool {
 }
 
 /// `f`'s per-tile visibility with the tiles proven hidden switched off (so that no pass draws,
-/// counts or tests them), and how many there are.
-pub fn visible_without_hidden(f: &FrameInputs<'_>) -> (Vec<bool>, u64) {
-    let hidden = hidden_by_heightfields(f);
+/// counts or tests them), and how many there are; `candidate` as [`hidden_by_heightfields`].
+pub fn visible_without_hidden(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) -> bool + Sync)) -> (Vec<bool>, u64) {
+    let hidden = hidden_by_heightfields(f, candidate);
     let mask: Vec<bool> = f.object_visible.iter().zip(&hidden).map(|(&v, &h)| v && !h).collect();
     (mask, hidden.iter().filter(|&&h| h).count() as u64)
 }

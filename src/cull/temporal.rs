@@ -44,16 +44,17 @@ impl CullStrategy for Temporal {
     }
 
     fn visible_set(&mut self, f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -> Result<Visible> {
-        // The tiles proven hidden by height fields (`hidden`) are left out of every pass.
-        let (mask, proven_hidden) = super::hidden::visible_without_hidden(f);
-        let f = &FrameInputs { object_visible: &mask, ..*f };
-        let d = &f.ctx.device;
         let n = f.n_tiles();
         let key = f.geometry.key;
         let seen = match &self.last {
             Some((k, m)) if *k == key && m.len() == n => Some(m.as_slice()),
             _ => None,
         };
+        // The tiles proven hidden by height fields (`hidden`) are left out of every pass; those
+        // seen in the last frame are drawn first whatever the proof says, so it skips them.
+        let (mask, proven_hidden) = super::hidden::visible_without_hidden(f, &|i| seen.is_none_or(|s| !s[i]));
+        let f = &FrameInputs { object_visible: &mask, ..*f };
+        let d = &f.ctx.device;
         let threshold = f.options.pixel_threshold as f32;
         let mut stats = Vec::new();
         let (first, fine) = match seen {

@@ -109,7 +109,7 @@ impl CullStrategy for ThreePass {
         // and find what the first set misses: their prepass may use the cheapest proxy of each
         // tile. The paper's method (and its predictor) culls by the built proxies only.
         let (mask, proven_hidden) = if f.options.conservative {
-            let (m, k) = super::hidden::visible_without_hidden(f);
+            let (m, k) = super::hidden::visible_without_hidden(f, &|_| true);
             (Some(m), k)
         } else {
             (None, 0)

@@ -51,6 +51,9 @@ pub struct SceneGeometry {
     /// Per tile, boxes whose union holds its fine triangles (`TileMesh::sub_boxes`, [`SUB_BOXES`]²
     /// cells), origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
     pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
+    /// Per tile, a height-field tile's height blocks (`Object::height_blocks`, origin-relative
+    /// like `bbox`): what the CPU proof of hidden tiles (`cull::hidden`) reads; None for others.
+    pub height_blocks: Vec<Option<crate::lod::blocks::HeightBlocks>>,
     /// Every height-field tile's slab (`TileMesh::slab`, `lod::slab`), the box tests' occludee of
     /// such tiles: its draw in `slabs` (one instance, first_instance = the tile) and whether its
     /// levels of detail lie within their errors of the fine surface everywhere (lattice levels),
@@ -746,6 +749,7 @@ impl SceneGeometry {
         });
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
         let sub_boxes = tiles.par_iter().map(|t| tile_sub_boxes(t)).collect();
+        let height_blocks = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
         let (slabs, slab_draws) = upload_slabs(d, &tiles);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
@@ -767,6 +771,7 @@ impl SceneGeometry {
             levels,
             bbox,
             sub_boxes,
+            height_blocks,
             slab_draws,
             slabs,
             shading,

@@ -13,6 +13,7 @@
 //! and its rows may run towards -y ([`GridSpec::pos`]); tiles, tile order and triangles are those
 //! of the grid's own (i, j) frame either way, only the vertex positions are turned.
 
+pub mod blocks;
 pub mod levels;
 pub mod normals;
 pub mod shading;

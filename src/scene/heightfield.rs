@@ -342,47 +342,10 @@ impl Object {
     /// damaged scene never gets a slab that does not hold what it draws. Nothing for other kinds.
     pub(crate) fn rebuild_slabs(&mut self) {
         let Some(g) = self.grid_axes() else { return };
-        let ObjectKind::Heightfield { tiles: (tx, ty), .. } = self.kind else { return };
-        let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;
-        if !fits(g.nx, tx) || !fits(g.ny, ty) || self.tiles.len() != tx * ty {
-            return;
-        }
-        let (bx, by) = (lod::tile_bounds(g.nx, tx), lod::tile_bounds(g.ny, ty));
-        let tol = 1e-3 * g.dx.abs().min(g.dy.abs());
+        let Some(bounds) = self.tile_sample_bounds() else { return };
         for tile in &mut self.tiles {
             tile.slab = None;
-            let (ix, iy) = (tile.ix as usize, tile.iy as usize);
-            if ix >= tx || iy >= ty {
-                continue;
-            }
-            let (i0, j0) = (bx[ix], by[iy]);
-            let (w, h) = (bx[ix + 1] - i0 + 1, by[iy + 1] - j0 + 1);
-            if w * h > 4 * tile.positions.len() + 64 {
-                continue;
-            }
-            // Each vertex's local sample, and each sample's vertex.
-            let mut map = vec![u32::MAX; w * h];
-            let mut local = Vec::with_capacity(tile.positions.len());
-            let on_grid = tile.positions.iter().enumerate().all(|(k, p)| {
-                let Some((i, j)) = g.sample_at(p[0] as f64, p[1] as f64) else { return false };
-                let q = g.pos(i, j);
-                let near = (q[0] - p[0] as f64).abs() <= tol && (q[1] - p[1] as f64).abs() <= tol;
-                if !near || !(i0..i0 + w).contains(&i) || !(j0..j0 + h).contains(&j) {
-                    return false;
-                }
-                let slot = &mut map[(j - j0) * w + i - i0];
-                local.push((i - i0, j - j0));
-                std::mem::replace(slot, k as u32) == u32::MAX
-            });
-            let lattice = on_grid
-                && tile.fine.chunks_exact(3).all(|t| {
-                    let [a, b, c] = [t[0], t[1], t[2]].map(|k| local.get(k as usize).copied());
-                    let (Some(a), Some(b), Some(c)) = (a, b, c) else { return false };
-                    (b == (a.0 + 1, a.1) && c == (a.0 + 1, a.1 + 1)) || (b == (a.0 + 1, a.1 + 1) && c == (a.0, a.1 + 1))
-                });
-            if !lattice {
-                continue;
-            }
+            let Some(((i0, j0), (w, h), map)) = lattice_map(&g, &bounds, tile) else { continue };
             let holes = tile.fine_triangles() != 2 * (w - 1) * (h - 1);
             let grid_xy = |li: usize, lj: usize| {
                 let q = g.pos(i0 + li, j0 + lj);
@@ -391,6 +354,35 @@ impl Object {
             let slab = lod::slab::tile_slab(tile, (w, h), |li, lj| map[lj * w + li], grid_xy);
             tile.slab = slab.map(|s| lod::slab::Slab { levels_exact: !holes, ..s });
         }
+    }
+
+    /// Per tile of a height field, its height blocks (`lod::blocks`), for tiles with a slab (whose
+    /// vertices are distinct samples of the tile and whose triangles are the lattice's: every tile
+    /// this crate builds, and tiles read from bytes that pass [`Self::rebuild_slabs`]); None for
+    /// other tiles and kinds.
+    pub fn height_blocks(&self) -> Vec<Option<lod::blocks::HeightBlocks>> {
+        let none = || vec![None; self.tiles.len()];
+        let (Some(g), Some(bounds)) = (self.grid_axes(), self.tile_sample_bounds()) else { return none() };
+        use rayon::prelude::*;
+        self.tiles
+            .par_iter()
+            .map(|tile| {
+                tile.slab.as_ref()?;
+                let (_, (w, h), map) = lattice_map(&g, &bounds, tile)?;
+                let at = |li: usize, lj: usize| tile.positions.get(map[lj * w + li] as usize).copied();
+                Some(lod::blocks::height_blocks(w, h, at))
+            })
+            .collect()
+    }
+
+    /// A height field's tile boundaries in samples (`lod::tile_bounds` of each axis), when its
+    /// tile counts fit its grid and its tiles; None otherwise and for other kinds.
+    fn tile_sample_bounds(&self) -> Option<(Vec<usize>, Vec<usize>)> {
+        let g = self.grid_axes()?;
+        let ObjectKind::Heightfield { tiles: (tx, ty), .. } = self.kind else { return None };
+        let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;
+        (fits(g.nx, tx) && fits(g.ny, ty) && self.tiles.len() == tx * ty)
+            .then(|| (lod::tile_bounds(g.nx, tx), lod::tile_bounds(g.ny, ty)))
     }
 
     /// The fine surface of a height field as the lit pass samples it: at every sample the
@@ -459,4 +451,48 @@ impl Object {
         }
         Some(())
     }
+}
+
+/// A tile of a height field on its grid (`bounds`: the tile boundaries in samples): its first
+/// sample (i0, j0), its size (w, h) in samples and per local sample (row-major) its vertex
+/// (u32::MAX: none), when its vertices are distinct samples within its range (within a thousandth
+/// of a spacing) and its triangles are the lattice's (each over a fine cell, as
+/// `lod::tile_heightfield` makes them); None otherwise.
+#[allow(clippy::type_complexity)]
+fn lattice_map(
+    g: &GridAxes,
+    (bx, by): &(Vec<usize>, Vec<usize>),
+    tile: &TileMesh,
+) -> Option<((usize, usize), (usize, usize), Vec<u32>)> {
+    let (ix, iy) = (tile.ix as usize, tile.iy as usize);
+    if ix + 1 >= bx.len() || iy + 1 >= by.len() {
+        return None;
+    }
+    let (i0, j0) = (bx[ix], by[iy]);
+    let (w, h) = (bx[ix + 1] - i0 + 1, by[iy + 1] - j0 + 1);
+    if w * h > 4 * tile.positions.len() + 64 {
+        return None;
+    }
+    let tol = 1e-3 * g.dx.abs().min(g.dy.abs());
+    // Each vertex's local sample, and each sample's vertex.
+    let mut map = vec![u32::MAX; w * h];
+    let mut local = Vec::with_capacity(tile.positions.len());
+    let on_grid = tile.positions.iter().enumerate().all(|(k, p)| {
+        let Some((i, j)) = g.sample_at(p[0] as f64, p[1] as f64) else { return false };
+        let q = g.pos(i, j);
+        let near = (q[0] - p[0] as f64).abs() <= tol && (q[1] - p[1] as f64).abs() <= tol;
+        if !near || !(i0..i0 + w).contains(&i) || !(j0..j0 + h).contains(&j) {
+            return false;
+        }
+        let slot = &mut map[(j - j0) * w + i - i0];
+        local.push((i - i0, j - j0));
+        std::mem::replace(slot, k as u32) == u32::MAX
+    });
+    let lattice = on_grid
+        && tile.fine.chunks_exact(3).all(|t| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|k| local.get(k as usize).copied());
+            let (Some(a), Some(b), Some(c)) = (a, b, c) else { return false };
+            (b == (a.0 + 1, a.1) && c == (a.0 + 1, a.1 + 1)) || (b == (a.0 + 1, a.1 + 1) && c == (a.0, a.1 + 1))
+        });
+    lattice.then_some(((i0, j0), (w, h), map))
 }

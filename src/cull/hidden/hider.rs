@@ -1,0 +1,234 @@
+//! The hiders of a frame: each height field drawn, as the render-space heights of its tiles'
+//! height blocks (`lod::blocks`) on its grid, in index space, and the queries the proof makes of
+//! them (`super`).
+
+use super::super::FrameInputs;
+use crate::lod::blocks;
+use crate::lod::tile_bounds;
+use glam::{DMat2, DVec2, DVec3};
+
+/// The most blocks of a hider one query reads (the proof's work per test stays bounded).
+const MAX_BLOCKS: usize = 4096;
+
+/// A usable block's heights in render space: its box's z range, its plane's heights at its
+/// corners (p, q), (p + 1, q), (p, q + 1), and how far its surface may lie from that plane
+/// (residual and level error).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BlockZ {
+    lo: f64,
+    hi: f64,
+    plane: [f64; 3],
+    r: f64,
+}
+
+/// A height field drawn this frame: its tiles' height blocks on its grid, in index space.
+pub(super) struct Hider {
+    pub object: u32,
+    /// Render-space (x, y) -> (column, row) of the grid: `inv * (xy - at0)`; `fwd` its inverse.
+    at0: DVec2,
+    inv: DMat2,
+    fwd: DMat2,
+    /// Block column and row boundaries in samples: block (p, q) spans columns xb[p]..xb[p + 1]
+    /// and rows yb[q]..yb[q + 1].
+    xb: Vec<f64>,
+    yb: Vec<f64>,
+    /// Per block (row-major by q, then p) its heights; None where what its tile draws is not
+    /// known to cover the block (a hole in it, its tile not drawn, or drawn at a level whose
+    /// error is not a bound everywhere).
+    z: Vec<Option<BlockZ>>,
+}
+
+/// A plane `z = a (x - centre.x) + b (y - centre.y)` in render space, which the proof subtracts
+/// from every height (a shear: vertical lines, vertical order and vertical distances stay, rays
+/// stay straight, convex hulls stay hulls).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Plane {
+    a: f64,
+    b: f64,
+    centre: DVec2,
+}
+
+impl Plane {
+    pub const FLAT: Plane = Plane { a: 0.0, b: 0.0, centre: DVec2::ZERO };
+
+    fn at(&self, xy: DVec2) -> f64 {
+        self.a * (xy.x - self.centre.x) + self.b * (xy.y - self.centre.y)
+    }
+    /// Height over the plane of point `p`.
+    pub fn over(&self, p: DVec3) -> f64 {
+        p.z - self.at(p.truncate())
+    }
+    /// The rate of change of [`Self::over`] along direction `d`.
+    pub fn slope(&self, d: DVec3) -> f64 {
+        d.z - self.a * d.x - self.b * d.y
+    }
+}
+
+impl Hider {
+    /// Column and row of render-space (x, y).
+    pub fn index(&self, p: DVec2) -> DVec2 {
+        self.inv * (p - self.at0)
+    }
+
+    /// Render-space (x, y) of column and row `c`.
+    fn xy(&self, c: DVec2) -> DVec2 {
+        self.at0 + self.fwd * c
+    }
+
+    /// The margin, in samples, that keeps the proof's rectangles off the grid's rim against the
+    /// f32 rounding of its vertices: in world units, then through the inverse map (which
+    /// stretches no length by more than its Frobenius norm).
+    pub fn margin(&self) -> f64 {
+        let diagonal = self.fwd * DVec2::new(self.xb[self.xb.len() - 1], self.yb[self.yb.len() - 1]);
+        let world = 1e-4 * diagonal.length() + 1e-6 * self.at0.abs().max_element().max(diagonal.abs().max_element());
+        world * (self.inv.x_axis.length_squared() + self.inv.y_axis.length_squared()).sqrt()
+    }
+
+    /// The range of heights over `plane` of the blocks meeting index rectangle `lo..hi`, or None
+    /// when it leaves the grid shrunk by `m` samples, meets a block that is not usable, or meets
+    /// more than [`MAX_BLOCKS`].
+    pub fn range(&self, lo: DVec2, hi: DVec2, m: f64, plane: &Plane) -> Option<(f64, f64)> {
+        let (xb, yb) = (&self.xb, &self.yb);
+        let (tx, ty) = (xb.len() - 1, yb.len() - 1);
+        if !(lo.x >= xb[0] + m && hi.x <= xb[tx] - m && lo.y >= yb[0] + m && hi.y <= yb[ty] - m) {
+            return None;
+        }
+        self.blocks_meeting(lo, hi)?.try_fold((f64::INFINITY, f64::NEG_INFINITY), |r, (p, q, z)| {
+            let (a, b) = self.over(p, q, &z?, plane);
+            Some((r.0.min(a), r.1.max(b)))
+        })
+    }
+
+    /// The range of heights over `plane` of the usable blocks meeting `lo..hi` (clamped to the
+    /// grid), None without any: where the proof starts from, not what it rests on.
+    pub fn first_guess(&self, lo: DVec2, hi: DVec2, plane: &Plane) -> Option<(f64, f64)> {
+        let r = self
+            .blocks_meeting(lo, hi)?
+            .filter_map(|(p, q, z)| Some(self.over(p, q, &z?, plane)))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |r, (a, b)| (r.0.min(a), r.1.max(b)));
+        (r.0 <= r.1).then_some(r)
+    }
+
+    /// Block (p, q)'s heights over `plane`: both of its bounds (the box's z range less the
+    /// plane's extremes, its own plane less `plane` at its corners, where the difference of two
+    /// planes over a parallelogram peaks, widened by its residual), intersected.
+    fn over(&self, p: usize, q: usize, z: &BlockZ, plane: &Plane) -> (f64, f64) {
+        let [z00, z10, z01] = z.plane;
+        let own = [z00, z10, z01, z10 + z01 - z00];
+        if plane.a == 0.0 && plane.b == 0.0 {
+            let (lo, hi) = own.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, &v| (r.0.min(v), r.1.max(v)));
+            return ((lo - z.r).max(z.lo), (hi + z.r).min(z.hi));
+        }
+        let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+        for (k, c) in [(p, q), (p + 1, q), (p, q + 1), (p + 1, q + 1)].into_iter().enumerate() {
+            let v = plane.at(self.xy(DVec2::new(self.xb[c.0], self.yb[c.1])));
+            (lo.0, hi.0) = (lo.0.min(own[k] - v), hi.0.max(own[k] - v));
+            (lo.1, hi.1) = (lo.1.min(v), hi.1.max(v));
+        }
+        ((lo.0 - z.r).max(z.lo - hi.1), (hi.0 + z.r).min(z.hi - lo.1))
+    }
+
+    /// The plane of the usable block under the middle of index rectangle `lo..hi` (the
+    /// field's local dip, which the proof shears away), through the block's middle; None where
+    /// that block is not usable or the rectangle's middle is off the grid.
+    pub fn dip(&self, lo: DVec2, hi: DVec2) -> Option<Plane> {
+        let (tx, ty) = (self.xb.len() - 1, self.yb.len() - 1);
+        let c = (lo + hi) / 2.0;
+        if !(c.x >= self.xb[0] && c.x <= self.xb[tx] && c.y >= self.yb[0] && c.y <= self.yb[ty]) {
+            return None;
+        }
+        let p = self.xb[1..tx].partition_point(|&b| b < c.x);
+        let q = self.yb[1..ty].partition_point(|&b| b < c.y);
+        let z = self.z[q * tx + p]?;
+        // The block's plane is linear in (column, row): its gradient there, then in (x, y).
+        let (w, h) = (self.xb[p + 1] - self.xb[p], self.yb[q + 1] - self.yb[q]);
+        let grad = DVec2::new((z.plane[1] - z.plane[0]) / w, (z.plane[2] - z.plane[0]) / h);
+        let g = self.inv.transpose() * grad;
+        let centre = self.xy(DVec2::new(self.xb[p] + w / 2.0, self.yb[q] + h / 2.0));
+        g.is_finite().then_some(Plane { a: g.x, b: g.y, centre })
+    }
+
+    /// The blocks meeting index rectangle `lo..hi`, the grid's border blocks for parts beyond
+    /// it, as (column, row, heights); None when they are more than [`MAX_BLOCKS`].
+    #[allow(clippy::type_complexity)]
+    fn blocks_meeting(
+        &self,
+        lo: DVec2,
+        hi: DVec2,
+    ) -> Option<impl Iterator<Item = (usize, usize, Option<BlockZ>)> + '_> {
+        let (xb, yb) = (&self.xb, &self.yb);
+        let (tx, ty) = (xb.len() - 1, yb.len() - 1);
+        let i0 = xb[1..tx].partition_point(|&b| b < lo.x);
+        let i1 = xb[1..tx].partition_point(|&b| b <= hi.x);
+        let j0 = yb[1..ty].partition_point(|&b| b < lo.y);
+        let j1 = yb[1..ty].partition_point(|&b| b <= hi.y);
+        ((i1 - i0 + 1) * (j1 - j0 + 1) <= MAX_BLOCKS)
+            .then(|| (j0..=j1).flat_map(move |q| (i0..=i1).map(move |p| (p, q, self.z[q * tx + p]))))
+    }
+}
+
+/// The frame's hiders: every visible height field with a usable block. `drawn(i)`: tile i is
+/// drawn this frame; `level_error(i)`: the bound between what it draws and its fine surface
+/// (world units), None where there is none.
+pub(super) fn hiders(
+    f: &FrameInputs<'_>,
+    drawn: &dyn Fn(usize) -> bool,
+    level_error: &dyn Fn(usize) -> Option<f64>,
+) -> Vec<Hider> {
+    let g = f.geometry;
+    let mut first = 0usize;
+    let mut out = Vec::new();
+    for (oi, o) in f.scene.objects().iter().enumerate() {
+        let range = first..first + o.tiles.len();
+        first = range.end;
+        let Some(axes) = o.grid_axes() else { continue };
+        let tx = o.tiles.iter().map(|t| t.ix).max().unwrap_or(0) as usize + 1;
+        let ty = o.tiles.iter().map(|t| t.iy).max().unwrap_or(0) as usize + 1;
+        let m = DMat2::from_cols(DVec2::from(axes.u), DVec2::from(axes.v));
+        if range.is_empty() || tx * ty != o.tiles.len() || tx >= axes.nx || ty >= axes.ny || m.determinant() == 0.0 {
+            continue;
+        }
+        // Every tile column (row) cut into its blocks, numbered across the grid.
+        let cut = |tb: &[usize]| -> (Vec<f64>, Vec<usize>) {
+            let mut b = vec![0.0];
+            let mut first = Vec::with_capacity(tb.len());
+            for w in tb.windows(2) {
+                first.push(b.len() - 1);
+                b.extend(blocks::bounds(w[1] - w[0]).into_iter().skip(1).map(|c| (w[0] + c) as f64));
+            }
+            (b, first)
+        };
+        let (tbx, tby) = (tile_bounds(axes.nx, tx), tile_bounds(axes.ny, ty));
+        let ((xb, fx), (yb, fy)) = (cut(&tbx), cut(&tby));
+        let bw = xb.len() - 1;
+        let mut z = vec![None; bw * (yb.len() - 1)];
+        let (pz, zs) = (f.placement(oi).z, f.camera.z_scale);
+        let render = |v: f32| (v as f64 + pz) * zs;
+        for (t, i) in o.tiles.iter().zip(range) {
+            let (ix, iy) = (t.ix as usize, t.iy as usize);
+            let (Some(hb), true, Some(e)) = (&g.height_blocks[i], drawn(i), level_error(i)) else { continue };
+            if (&hb.cols, &hb.rows) != (&blocks::bounds(tbx[ix + 1] - tbx[ix]), &blocks::bounds(tby[iy + 1] - tby[iy]))
+            {
+                continue;
+            }
+            for q in 0..hb.rows.len() - 1 {
+                for p in 0..hb.columns() {
+                    let b = hb.block(p, q);
+                    let (lo, hi) = (render(b.lo[2]) - e * zs.abs(), render(b.hi[2]) + e * zs.abs());
+                    let usable = BlockZ {
+                        lo: lo.min(hi),
+                        hi: lo.max(hi),
+                        plane: b.plane.map(render),
+                        r: (b.residual as f64 + e) * zs.abs(),
+                    };
+                    z[(fy[iy] + q) * bw + fx[ix] + p] = b.complete.then_some(usable);
+                }
+            }
+        }
+        if z.iter().any(Option::is_some) {
+            let at0 = DVec2::from(axes.o) + f.placement(oi).truncate();
+            out.push(Hider { object: oi as u32, at0, inv: m.inverse(), fwd: m, xb, yb, z });
+        }
+    }
+    out
+}
