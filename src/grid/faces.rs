@@ -168,6 +168,19 @@ struct SideCell {
     bot: Line,
 }
 
+/// One side of an interface as [`Level0::interface`] draws it: its faces' direction, whether
+/// their (t, s) outlines are reversed, its column and the one across, the interface's pillars
+/// (at t = 0 and t = 1) and whether they lie on a seam.
+#[derive(Clone, Copy)]
+struct Side {
+    dir: u8,
+    rev: bool,
+    col: (usize, usize),
+    other_col: Option<(usize, usize)>,
+    pillars: ((usize, usize), (usize, usize)),
+    on_border: bool,
+}
+
 /// A pillar's breakpoints: (height s, position), sorted by s.
 type Breakpoints = Vec<(f64, [f64; 3])>;
 
@@ -402,89 +415,107 @@ impl<'c, 'a> Level0<'c, 'a> {
             }
             let Some(col) = col else { continue };
             let other_col = if dir == lo_dir { hi } else { lo };
+            let side = Side { dir, rev, col, other_col, pillars: (p0, p1), on_border };
             for a in own.iter() {
                 let region = ctx.region(a.cell);
                 let tol = tol_of(a.cell);
                 if !faulted {
-                    let across = other_col.map(|(j, i)| ctx.cell(a.k, j, i));
-                    let interior = across.is_some_and(|c| ctx.present(c) && ctx.region(c) == region);
-                    if interior {
-                        continue;
-                    }
-                    let fk = match across {
-                        None => kind::OUTER,
-                        Some(c) if ctx.present(c) => kind::REGION,
-                        Some(c) if ctx.enclosed(c) => kind::CAVITY,
-                        Some(_) => kind::HOLE,
-                    };
-                    // Counter-clockwise in (t, s): bottom t0 -> bottom t1 -> top t1 -> top t0.
-                    let mut poly = Vec::with_capacity(4);
-                    let bp = |s: &mut Self, p: [f64; 3], pil: (usize, usize)| {
-                        let (b, id) = (s.pillar_border(pil.0, pil.1), s.pillar_id(pil.0, pil.1));
-                        s.verts.get(p, region, b, id)
-                    };
-                    poly.push(bp(self, a.bot.p0, p0));
-                    poly.push(bp(self, a.bot.p1, p1));
-                    self.breakpoints(p1.0, p1.1, a.bot.s1, a.top.s1, region, &mut poly);
-                    poly.push(bp(self, a.top.p1, p1));
-                    poly.push(bp(self, a.top.p0, p0));
-                    self.breakpoints(p0.0, p0.1, a.top.s0, a.bot.s0, region, &mut poly);
-                    if rev {
-                        poly.reverse();
-                    }
-                    self.push(&poly, (dir, fk), a.k, col, a.cell, true, tol);
-                    continue;
+                    self.unfaulted_face(a, side, region, tol);
+                } else {
+                    self.faulted_pieces(a, other, side, region, tol);
                 }
-                // Faulted: the crossings of this cell's top and bottom with the other side's lines
-                // (for its top/bottom faces), then the pieces.
-                for (tb, l) in [(0u8, a.top), (1u8, a.bot)] {
-                    let mut xs: Vec<(f64, u32)> = Vec::new();
-                    for o in other.iter() {
-                        for m in [o.top, o.bot] {
-                            if let Some((t, p)) = crossing(&l, &m) {
-                                xs.push((t, self.verts.get(p, region, on_border, NO_PILLAR)));
-                            }
-                        }
-                    }
-                    if !xs.is_empty() {
-                        xs.sort_by(|x, y| x.0.total_cmp(&y.0));
-                        let mut ids: Vec<u32> = xs.iter().map(|x| x.1).collect();
-                        ids.dedup();
-                        self.cross.insert((a.cell, dir, tb), ids);
-                    }
-                }
-                let range = |c: &SideCell| (c.bot.s0.min(c.bot.s1), c.top.s0.max(c.top.s1));
-                let (alo, ahi) = range(a);
-                let mut prev: Option<&SideCell> = None;
-                for o in other.iter() {
-                    let (olo, ohi) = range(o);
-                    if olo < ahi && ohi > alo {
-                        let drawn = ctx.region(o.cell) != region;
-                        if drawn {
-                            self.piece(
-                                a,
-                                Some(o.bot),
-                                Some(o.top),
-                                (p0, p1),
-                                on_border,
-                                (dir, rev, col, tol, false, kind::FAULT_REGION),
-                            );
-                        }
-                    }
-                    // The gap above o (below prev).
-                    let how = (dir, rev, col, tol, false, kind::FAULT_GAP);
-                    self.piece(a, Some(o.top), prev.map(|p| p.bot), (p0, p1), on_border, how);
-                    prev = Some(o);
-                }
-                let whole = other.is_empty();
-                let fk = match (whole, other_col) {
-                    (false, _) => kind::FAULT_GAP,
-                    (true, None) => kind::OUTER,
-                    (true, Some(_)) => kind::HOLE,
-                };
-                self.piece(a, None, prev.map(|p| p.bot), (p0, p1), on_border, (dir, rev, col, tol, whole, fk));
             }
         }
+    }
+
+    /// The face of cell `a` on an unfaulted interface (none where the cell across is present and
+    /// of the same region: interior), its corners and the pillars' breakpoints between them.
+    fn unfaulted_face(&mut self, a: &SideCell, side: Side, region: i32, tol: f64) {
+        let ctx = self.ctx;
+        let Side { dir, rev, col, other_col, pillars: (p0, p1), .. } = side;
+        let across = other_col.map(|(j, i)| ctx.cell(a.k, j, i));
+        let interior = across.is_some_and(|c| ctx.present(c) && ctx.region(c) == region);
+        if interior {
+            return;
+        }
+        let fk = match across {
+            None => kind::OUTER,
+            Some(c) if ctx.present(c) => kind::REGION,
+            Some(c) if ctx.enclosed(c) => kind::CAVITY,
+            Some(_) => kind::HOLE,
+        };
+        // Counter-clockwise in (t, s): bottom t0 -> bottom t1 -> top t1 -> top t0.
+        let mut poly = Vec::with_capacity(4);
+        let bp = |s: &mut Self, p: [f64; 3], pil: (usize, usize)| {
+            let (b, id) = (s.pillar_border(pil.0, pil.1), s.pillar_id(pil.0, pil.1));
+            s.verts.get(p, region, b, id)
+        };
+        poly.push(bp(self, a.bot.p0, p0));
+        poly.push(bp(self, a.bot.p1, p1));
+        self.breakpoints(p1.0, p1.1, a.bot.s1, a.top.s1, region, &mut poly);
+        poly.push(bp(self, a.top.p1, p1));
+        poly.push(bp(self, a.top.p0, p0));
+        self.breakpoints(p0.0, p0.1, a.top.s0, a.bot.s0, region, &mut poly);
+        if rev {
+            poly.reverse();
+        }
+        self.push(&poly, (dir, fk), a.k, col, a.cell, true, tol);
+    }
+
+    /// The pieces of cell `a`'s face on a faulted interface against the cells across (`other`):
+    /// first the crossings of its top and bottom with their lines (for its top and bottom faces),
+    /// then a piece per cell across of another region, per gap, and above the last.
+    fn faulted_pieces(&mut self, a: &SideCell, other: &[SideCell], side: Side, region: i32, tol: f64) {
+        let ctx = self.ctx;
+        let Side { dir, rev, col, other_col, pillars: (p0, p1), on_border } = side;
+        // Faulted: the crossings of this cell's top and bottom with the other side's lines
+        // (for its top/bottom faces), then the pieces.
+        for (tb, l) in [(0u8, a.top), (1u8, a.bot)] {
+            let mut xs: Vec<(f64, u32)> = Vec::new();
+            for o in other.iter() {
+                for m in [o.top, o.bot] {
+                    if let Some((t, p)) = crossing(&l, &m) {
+                        xs.push((t, self.verts.get(p, region, on_border, NO_PILLAR)));
+                    }
+                }
+            }
+            if !xs.is_empty() {
+                xs.sort_by(|x, y| x.0.total_cmp(&y.0));
+                let mut ids: Vec<u32> = xs.iter().map(|x| x.1).collect();
+                ids.dedup();
+                self.cross.insert((a.cell, dir, tb), ids);
+            }
+        }
+        let range = |c: &SideCell| (c.bot.s0.min(c.bot.s1), c.top.s0.max(c.top.s1));
+        let (alo, ahi) = range(a);
+        let mut prev: Option<&SideCell> = None;
+        for o in other.iter() {
+            let (olo, ohi) = range(o);
+            if olo < ahi && ohi > alo {
+                let drawn = ctx.region(o.cell) != region;
+                if drawn {
+                    self.piece(
+                        a,
+                        Some(o.bot),
+                        Some(o.top),
+                        (p0, p1),
+                        on_border,
+                        (dir, rev, col, tol, false, kind::FAULT_REGION),
+                    );
+                }
+            }
+            // The gap above o (below prev).
+            let how = (dir, rev, col, tol, false, kind::FAULT_GAP);
+            self.piece(a, Some(o.top), prev.map(|p| p.bot), (p0, p1), on_border, how);
+            prev = Some(o);
+        }
+        let whole = other.is_empty();
+        let fk = match (whole, other_col) {
+            (false, _) => kind::FAULT_GAP,
+            (true, None) => kind::OUTER,
+            (true, Some(_)) => kind::HOLE,
+        };
+        self.piece(a, None, prev.map(|p| p.bot), (p0, p1), on_border, (dir, rev, col, tol, whole, fk));
     }
 
     /// The piece of cell `a`'s face between lines `lo` and `hi` (None = unbounded), if it has an

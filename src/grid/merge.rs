@@ -69,6 +69,16 @@ struct Group {
     fault: bool,
 }
 
+/// What the stages of [`next_level`] read: the level below, the height made, the block, and
+/// whether the grid is coloured per cell.
+#[derive(Clone, Copy)]
+struct Step<'a> {
+    prev: &'a LevelFaces,
+    h: u32,
+    b: Block,
+    cells: bool,
+}
+
 /// Level h (>= 1) from level h - 1.
 pub(crate) fn next_level(
     prev: &LevelFaces,
@@ -78,10 +88,7 @@ pub(crate) fn next_level(
     cells: bool,
     verts: &mut Verts,
 ) -> LevelFaces {
-    let (bw, bh) = ((b.i1 - b.i0) as u32, (b.j1 - b.j0) as u32);
-    let nodes_at = |n: u32, hh: u32| n.div_ceil(1 << hh);
-    let (cw, ch) = (nodes_at(bw, h - 1), nodes_at(bh, h - 1));
-    let (pw, ph) = (nodes_at(bw, h), nodes_at(bh, h));
+    let s = Step { prev, h, b, cells };
     let nv = verts.len();
     let mut use_count = vec![0u32; nv];
     for f in &prev.faces {
@@ -89,6 +96,49 @@ pub(crate) fn next_level(
             use_count[v as usize] += 1;
         }
     }
+    let (mut groups, carried) = node_groups(s, (ni, nj), &use_count, verts);
+    fault_groups(prev, h, b, (ni, nj), &use_count, verts, &mut groups);
+    if cells {
+        // Strips are coloured flat (`cells::FLAT`): only pieces of one value merge.
+        groups.retain(|g| !g.fault || super::cells::strip_ok(&g.members, &prev.faces));
+    }
+    let (accepted, drop) = accept_groups(s, &groups, &use_count, verts);
+    // The new level: untouched faces, then merged ones.
+    let (mut err, mut shade) = (0.0f64, 0.0f64);
+    let (mut faces, remap) = untouched_faces(prev, &groups, &accepted);
+    let mut nodes: FastMap<Key, u32> = FastMap::default();
+    for (key, f) in carried {
+        if remap[f as usize] != u32::MAX {
+            nodes.insert(key, remap[f as usize]);
+        }
+    }
+    for (g, grp) in groups.iter().enumerate() {
+        if !accepted[g] {
+            continue;
+        }
+        let face = merged_face(s, grp, &drop, verts, (&mut err, &mut shade));
+        if !grp.fault {
+            nodes.insert(grp.key, faces.len() as u32);
+        }
+        faces.push(face);
+    }
+    LevelFaces { faces, nodes, error: prev.error + err, shading: prev.shading + shade }
+}
+
+/// The groups of whole faces covering a parent node's side that may merge (every child along
+/// the side has one, all of one region, not on a seam, no T-junction), and the node sides
+/// carried over as one face (a single child).
+fn node_groups(
+    s: Step<'_>,
+    (ni, nj): (usize, usize),
+    use_count: &[u32],
+    verts: &Verts,
+) -> (Vec<Group>, Vec<(Key, u32)>) {
+    let Step { prev, h, b, .. } = s;
+    let (bw, bh) = ((b.i1 - b.i0) as u32, (b.j1 - b.j0) as u32);
+    let nodes_at = |n: u32, hh: u32| n.div_ceil(1 << hh);
+    let (cw, ch) = (nodes_at(bw, h - 1), nodes_at(bh, h - 1));
+    let (pw, ph) = (nodes_at(bw, h), nodes_at(bh, h));
     let pillar_id = |pi: u32, pj: u32| pj * (ni as u32 + 1) + pi;
     // Parent keys with at least one child face, in a fixed order.
     let mut parents: Vec<Key> = prev.nodes.keys().map(|&(i, j, k, d)| (i / 2, j / 2, k, d)).collect();
@@ -146,66 +196,27 @@ pub(crate) fn next_level(
             continue;
         }
         if let Some((outline, inner)) = outline_of(&members, &prev.faces) {
-            if free(&members, &inner, &prev.faces, &use_count, verts) {
+            if free(&members, &inner, &prev.faces, use_count, verts) {
                 groups.push(Group { key, members, outline, inner, corner_pillars, fault: false });
             }
         }
     }
-    fault_groups(prev, h, b, (ni, nj), &use_count, verts, &mut groups);
-    if cells {
-        // Strips are coloured flat (`cells::FLAT`): only pieces of one value merge.
-        groups.retain(|g| !g.fault || super::cells::strip_ok(&g.members, &prev.faces));
-    }
-    // Accept groups until the vertex removals are consistent and every reduced face is convex
-    // and within tolerance.
+    (groups, carried)
+}
+
+/// Accepts groups until the vertex removals are consistent and every reduced face is convex
+/// and within tolerance. Returns per group whether it merges, and per vertex whether it is
+/// removed.
+fn accept_groups(s: Step<'_>, groups: &[Group], use_count: &[u32], verts: &Verts) -> (Vec<bool>, Vec<bool>) {
+    let Step { prev, cells, .. } = s;
+    let nv = use_count.len();
     let mut accepted = vec![true; groups.len()];
     let mut drop = vec![false; nv];
     // Per group: the reduced outline last checked (a fingerprint) and whether its shape passed
     // (ear clipping a long strip is the costly part; most outlines do not change between rounds).
     let mut shape_seen: Vec<Option<(u64, bool)>> = vec![None; groups.len()];
     loop {
-        let mut claims = vec![0u8; nv];
-        let mut nb: FastMap<u32, (u32, u32)> = FastMap::default();
-        let mut pair_ok = vec![true; nv];
-        let mut new_use = use_count.clone();
-        for (g, grp) in groups.iter().enumerate() {
-            if !accepted[g] {
-                continue;
-            }
-            for &m in &grp.members {
-                for &v in &prev.faces[m as usize].verts {
-                    new_use[v as usize] -= 1;
-                }
-            }
-            let n = grp.outline.len();
-            for w in 0..n {
-                let v = grp.outline[w];
-                new_use[v as usize] += 1;
-                let vi = v as usize;
-                if verts.border[vi] || grp.corner_pillars.contains(&verts.pillar[vi]) {
-                    continue;
-                }
-                let (u, x) = (grp.outline[(w + n - 1) % n], grp.outline[(w + 1) % n]);
-                // A strip removes only vertices on straight stretches of its outline (its corners,
-                // where the pieces' lines meet, are no node's corners).
-                if grp.fault {
-                    let (e1, e2) = (verts.p(v) - verts.p(u), verts.p(x) - verts.p(v));
-                    if e1.cross(e2).length() > STRAIGHT * e1.length() * e2.length() {
-                        continue;
-                    }
-                }
-                claims[vi] = claims[vi].saturating_add(1);
-                match nb.get(&v) {
-                    None => {
-                        nb.insert(v, (u, x));
-                    }
-                    Some(&(a, c)) => pair_ok[vi] &= (a, c) == (x, u),
-                }
-            }
-        }
-        for v in 0..nv {
-            drop[v] = claims[v] == 2 && new_use[v] == 2 && pair_ok[v];
-        }
+        removals(prev, groups, &accepted, use_count, verts, &mut drop);
         let mut changed = false;
         for (g, grp) in groups.iter().enumerate() {
             if !accepted[g] {
@@ -236,9 +247,68 @@ pub(crate) fn next_level(
             break;
         }
     }
-    // The new level: untouched faces, then merged ones.
+    (accepted, drop)
+}
+
+/// The vertices the accepted groups remove (into `drop`): claimed by exactly two of them along
+/// the same two edges, used by those two faces only after merging, and not a corner.
+fn removals(
+    prev: &LevelFaces,
+    groups: &[Group],
+    accepted: &[bool],
+    use_count: &[u32],
+    verts: &Verts,
+    drop: &mut [bool],
+) {
+    let nv = use_count.len();
+    let mut claims = vec![0u8; nv];
+    let mut nb: FastMap<u32, (u32, u32)> = FastMap::default();
+    let mut pair_ok = vec![true; nv];
+    let mut new_use = use_count.to_vec();
+    for (g, grp) in groups.iter().enumerate() {
+        if !accepted[g] {
+            continue;
+        }
+        for &m in &grp.members {
+            for &v in &prev.faces[m as usize].verts {
+                new_use[v as usize] -= 1;
+            }
+        }
+        let n = grp.outline.len();
+        for w in 0..n {
+            let v = grp.outline[w];
+            new_use[v as usize] += 1;
+            let vi = v as usize;
+            if verts.border[vi] || grp.corner_pillars.contains(&verts.pillar[vi]) {
+                continue;
+            }
+            let (u, x) = (grp.outline[(w + n - 1) % n], grp.outline[(w + 1) % n]);
+            // A strip removes only vertices on straight stretches of its outline (its corners,
+            // where the pieces' lines meet, are no node's corners).
+            if grp.fault {
+                let (e1, e2) = (verts.p(v) - verts.p(u), verts.p(x) - verts.p(v));
+                if e1.cross(e2).length() > STRAIGHT * e1.length() * e2.length() {
+                    continue;
+                }
+            }
+            claims[vi] = claims[vi].saturating_add(1);
+            match nb.get(&v) {
+                None => {
+                    nb.insert(v, (u, x));
+                }
+                Some(&(a, c)) => pair_ok[vi] &= (a, c) == (x, u),
+            }
+        }
+    }
+    for v in 0..nv {
+        drop[v] = claims[v] == 2 && new_use[v] == 2 && pair_ok[v];
+    }
+}
+
+/// The faces of `prev` in no accepted group, copied in order, and each face's index among them
+/// (`u32::MAX` for merged ones).
+fn untouched_faces(prev: &LevelFaces, groups: &[Group], accepted: &[bool]) -> (Vec<Face>, Vec<u32>) {
     let mut in_group = vec![false; prev.faces.len()];
-    let (mut err, mut shade) = (0.0f64, 0.0f64);
     for (g, grp) in groups.iter().enumerate() {
         if accepted[g] {
             for &m in &grp.members {
@@ -267,67 +337,60 @@ pub(crate) fn next_level(
             });
         }
     }
-    let mut nodes: FastMap<Key, u32> = FastMap::default();
-    for (key, f) in carried {
-        if remap[f as usize] != u32::MAX {
-            nodes.insert(key, remap[f as usize]);
-        }
+    (faces, remap)
+}
+
+/// The merged face of the accepted group `grp` (its outline less the `drop`ped vertices),
+/// raising the level's error and shading chord (`err`, `shade`) by its own.
+fn merged_face(s: Step<'_>, grp: &Group, drop: &[bool], verts: &mut Verts, (err, shade): (&mut f64, &mut f64)) -> Face {
+    let Step { prev, h, b, cells } = s;
+    let reduced: Vec<u32> = grp.outline.iter().copied().filter(|&v| !drop[v as usize]).collect();
+    *err = err.max(removal_error(grp, &reduced, drop, verts));
+    *shade = shade.max(normal_chord(&reduced, &grp.members, &prev.faces, verts));
+    let first = &prev.faces[grp.members[0] as usize];
+    // The members' cell coordinates of a vertex (they agree: see `cells`).
+    let lat_of = |v: u32| grp.members.iter().find_map(|&m| super::cells::of(&prev.faces[m as usize], v));
+    if cells && !grp.fault {
+        // Colours move with the lattice's map on the face: that is part of the error too.
+        *err = err.max(super::cells::drift(first.dir, &grp.outline, &grp.inner, &reduced, drop, verts, &lat_of));
     }
-    for (g, grp) in groups.iter().enumerate() {
-        if !accepted[g] {
-            continue;
-        }
-        let reduced: Vec<u32> = grp.outline.iter().copied().filter(|&v| !drop[v as usize]).collect();
-        err = err.max(removal_error(grp, &reduced, &drop, verts));
-        shade = shade.max(normal_chord(&reduced, &grp.members, &prev.faces, verts));
-        let first = &prev.faces[grp.members[0] as usize];
-        // The members' cell coordinates of a vertex (they agree: see `cells`).
-        let lat_of = |v: u32| grp.members.iter().find_map(|&m| super::cells::of(&prev.faces[m as usize], v));
-        if cells && !grp.fault {
-            // Colours move with the lattice's map on the face: that is part of the error too.
-            err = err.max(super::cells::drift(first.dir, &grp.outline, &grp.inner, &reduced, &drop, verts, &lat_of));
-        }
-        let vals: Vec<f64> =
-            grp.members.iter().map(|&m| prev.faces[m as usize].value).filter(|v| !v.is_nan()).collect();
-        let value = if vals.is_empty() { f64::NAN } else { vals.iter().sum::<f64>() / vals.len() as f64 };
-        let tol = grp.members.iter().map(|&m| prev.faces[m as usize].tol).fold(f64::INFINITY, f64::min);
-        let mut tris = Vec::with_capacity(reduced.len());
-        match (convex(&reduced, verts), ear_clip(&reduced, verts)) {
-            (false, Some(t)) => tris = t,
-            _ => triangulate(&reduced, verts, first.region, &mut tris),
-        }
-        let (ci, cj, k) = if grp.fault {
-            let m = |f: fn(&Face) -> u32| grp.members.iter().map(|&x| f(&prev.faces[x as usize])).min().unwrap_or(0);
-            (m(|f| f.ci), m(|f| f.cj), m(|f| f.k))
+    let vals: Vec<f64> = grp.members.iter().map(|&m| prev.faces[m as usize].value).filter(|v| !v.is_nan()).collect();
+    let value = if vals.is_empty() { f64::NAN } else { vals.iter().sum::<f64>() / vals.len() as f64 };
+    let tol = grp.members.iter().map(|&m| prev.faces[m as usize].tol).fold(f64::INFINITY, f64::min);
+    let mut tris = Vec::with_capacity(reduced.len());
+    match (convex(&reduced, verts), ear_clip(&reduced, verts)) {
+        (false, Some(t)) => tris = t,
+        _ => triangulate(&reduced, verts, first.region, &mut tris),
+    }
+    let (ci, cj, k) = if grp.fault {
+        let m = |f: fn(&Face) -> u32| grp.members.iter().map(|&x| f(&prev.faces[x as usize])).min().unwrap_or(0);
+        (m(|f| f.ci), m(|f| f.cj), m(|f| f.k))
+    } else {
+        (b.i0 as u32 + (grp.key.0 << h), b.j0 as u32 + (grp.key.1 << h), first.k)
+    };
+    let lat = match (cells, grp.fault) {
+        (false, _) => Vec::new(),
+        (true, true) => vec![super::cells::FLAT; reduced.len()],
+        (true, false) => reduced.iter().map(|&v| lat_of(v).unwrap_or(0)).collect(),
+    };
+    Face {
+        verts: reduced,
+        tris,
+        dir: first.dir,
+        k,
+        ci,
+        cj,
+        region: first.region,
+        value,
+        whole: !grp.fault,
+        tol,
+        kind: if grp.members.iter().all(|&m| prev.faces[m as usize].kind == first.kind) {
+            first.kind
         } else {
-            nodes.insert(grp.key, faces.len() as u32);
-            (b.i0 as u32 + (grp.key.0 << h), b.j0 as u32 + (grp.key.1 << h), first.k)
-        };
-        let lat = match (cells, grp.fault) {
-            (false, _) => Vec::new(),
-            (true, true) => vec![super::cells::FLAT; reduced.len()],
-            (true, false) => reduced.iter().map(|&v| lat_of(v).unwrap_or(0)).collect(),
-        };
-        faces.push(Face {
-            verts: reduced,
-            tris,
-            dir: first.dir,
-            k,
-            ci,
-            cj,
-            region: first.region,
-            value,
-            whole: !grp.fault,
-            tol,
-            kind: if grp.members.iter().all(|&m| prev.faces[m as usize].kind == first.kind) {
-                first.kind
-            } else {
-                kind::MIXED
-            },
-            lat,
-        });
+            kind::MIXED
+        },
+        lat,
     }
-    LevelFaces { faces, nodes, error: prev.error + err, shading: prev.shading + shade }
 }
 
 /// The largest chord between the unit normal of the merged polygon `reduced` and those of its

@@ -209,9 +209,10 @@ impl<'a> Walker<'a> {
         Vec3::new(exit(c.x, t0.x, dt.x), exit(c.y, t0.y, dt.y), exit(c.z, t0.z, dt.z))
     }
 
-    /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes and counts its
-    /// `steps` (none when it misses the box).
-    fn ray(&self, x: u32, y: u32, steps: &mut u32) -> f32 {
+    /// Pixel `(x, y)`'s ray as the walk follows it (see [`Ray`]), its first march cell and that
+    /// cell's exits per axis; None when it misses the volume's box (with the margin).
+    #[inline]
+    fn enter(&self, x: u32, y: u32) -> Option<(Ray, IVec3, Vec3)> {
         let p = self.p;
         let (w, h) = (p.dims[3], p.size[0]);
         let ndc = [(x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0];
@@ -231,16 +232,16 @@ impl<'a> Walker<'a> {
         let t0 = tmin.x.max(tmin.y).max(tmin.z.max(0.0));
         let t1 = tmax.x.min(tmax.y).min(tmax.z);
         if t0 >= t1 || t0.is_nan() || t1.is_nan() {
-            return 0.0;
+            return None;
         }
         let pt = o + d * t0;
-        let mut c = ((pt - lo) / node).floor().clamp(Vec3::ZERO, (dims - 1).as_vec3()).as_ivec3();
+        let c = ((pt - lo) / node).floor().clamp(Vec3::ZERO, (dims - 1).as_vec3()).as_ivec3();
         let fwd = d.cmpgt(Vec3::ZERO);
         let stp = IVec3::select(fwd, IVec3::ONE, IVec3::NEG_ONE);
         let ahead = pick(fwd, Vec3::ONE, Vec3::ZERO);
         let xt0 = pick(parallel, Vec3::splat(1e30), (lo + ahead * node - o) * inv);
         let xdt = pick(parallel, Vec3::ZERO, node * inv);
-        let mut tnext = Self::exits(c, xt0, xdt);
+        let tnext = Self::exits(c, xt0, xdt);
         // 1 / |dt| (+inf along a parallel axis, whose crossings are at 1e30).
         let rdt = 1.0 / xdt.abs();
         // (SIMD vectors for the per-step point arithmetic: each lane rounds as the scalar
@@ -248,6 +249,16 @@ impl<'a> Walker<'a> {
         let dg = Vec3A::from(d / node);
         let og = Vec3A::from((o - lo) / node);
         let ext = Vec3A::from((hi - lo) / node);
+        let ray = Ray { o, d, in0, in1, t0, t1, stp, xt0, xdt, rdt, dg, og, ext };
+        Some((ray, c, tnext))
+    }
+
+    /// iso.wgsl `cs_map` for pixel `(x, y)`: its map depth; marks as it goes and counts its
+    /// `steps` (none when it misses the box).
+    fn ray(&self, x: u32, y: u32, steps: &mut u32) -> f32 {
+        let p = self.p;
+        let Some((r, mut c, mut tnext)) = self.enter(x, y) else { return 0.0 };
+        let Ray { o, d, in0, in1, t0, t1, stp, xt0, xdt, dg, og, ext, .. } = r;
         let hw = self.margin;
         let hw3 = Vec3A::splat(hw);
         let single = p.size[2] == 1;
@@ -328,70 +339,104 @@ impl<'a> Walker<'a> {
                 c[a] += stp[a];
                 tnext[a] = exit(c[a], xt0[a], xdt[a]);
             } else {
-                // (A coarse brick in a skippable third-level brick: that one's exit.)
-                let level = match info & 8 != 0 {
-                    true if self.huge_class(c) == k => HUGE_SHIFT,
-                    true => p.bricks[1],
-                    false => p.bricks[0],
-                };
-                let s = p.size[1] + level;
-                let blo = (c >> s as i32) << s as i32;
-                let bhi = blo + IVec3::splat((1 << s) - 1);
-                let mut e = IVec3::select(stp.cmpgt(IVec3::ZERO), bhi.min(dims - 1), blo);
-                let mut xe = Self::exits(e, xt0, xdt);
-                // (A box of bricks of the class about this one, when the ray leaves it later.)
-                let r = self.reach(c);
-                if r >= 2 {
-                    let half = (r - 1) << (p.size[1] + 2);
-                    let b = (c >> (p.size[1] as i32 + 2)) << (p.size[1] as i32 + 2);
-                    let (rlo, rhi) =
-                        ((b - IVec3::splat(half)).max(IVec3::ZERO), b + IVec3::splat(half + (4 << p.size[1]) - 1));
-                    let re = IVec3::select(stp.cmpgt(IVec3::ZERO), rhi.min(dims - 1), rlo);
-                    let rxe = Self::exits(re, xt0, xdt);
-                    if rxe.min_element() > xe.min_element() {
-                        (e, xe) = (re, rxe);
-                    }
-                }
-                let a01 = usize::from(xe.y < xe.x);
-                a = if xe.z < xe.x.min(xe.y) { 2 } else { a01 };
-                tx = xe[a];
-                if tx >= t1 {
-                    return 0.0;
-                }
-                let most = (e - c).abs();
-                let mut n = IVec3::ZERO;
-                for i in 0..3 {
-                    if i == a {
-                        continue;
-                    }
-                    let lower = i < a;
-                    // ceil((tx - tnext) / |dt|) within [0, most] (`max` drops a NaN).
-                    let est = ((tx - tnext[i]) * rdt[i]).max(0.0).min(most[i] as f32);
-                    let mut ni = est as i32;
-                    ni += i32::from((ni as f32) < est);
-                    let xb = exit(c[i] + (ni - 1) * stp[i], xt0[i], xdt[i]);
-                    if ni > 0 && !(xb < tx || (xb == tx && lower)) {
-                        ni -= 1;
-                    }
-                    let xn = exit(c[i] + ni * stp[i], xt0[i], xdt[i]);
-                    if ni < most[i] && (xn < tx || (xn == tx && lower)) {
-                        ni += 1;
-                    }
-                    n[i] = ni;
-                }
-                c += n * stp;
-                c[a] = e[a] + stp[a];
-                tnext = Self::exits(c, xt0, xdt);
+                let Some(jump) = self.skip_brick(&r, &mut c, &mut tnext, info, k) else { return 0.0 };
+                (a, tx) = jump;
             }
             t_enter = tx;
             crossed = a as i32;
             prev_info = info;
             stepped = !skip;
-            if c.cmplt(IVec3::ZERO).any() || c.cmpge(dims).any() {
+            if c.cmplt(IVec3::ZERO).any() || c.cmpge(self.dims).any() {
                 return 0.0;
             }
         }
     }
+
+    /// A jump across the skippable brick of class `k` holding march cell `c` (`info`: its
+    /// node's byte), or across the box of bricks of that class about it when the ray leaves that
+    /// later: moves `c` to the cell it enters and `tnext` to that cell's exits. Returns the axis
+    /// crossed and where, or None when the ray leaves the box first.
+    #[inline]
+    fn skip_brick(&self, r: &Ray, c: &mut IVec3, tnext: &mut Vec3, info: u32, k: u32) -> Option<(usize, f32)> {
+        let p = self.p;
+        let dims = self.dims;
+        let Ray { t1, stp, xt0, xdt, rdt, .. } = *r;
+        // (A coarse brick in a skippable third-level brick: that one's exit.)
+        let level = match info & 8 != 0 {
+            true if self.huge_class(*c) == k => HUGE_SHIFT,
+            true => p.bricks[1],
+            false => p.bricks[0],
+        };
+        let s = p.size[1] + level;
+        let blo = (*c >> s as i32) << s as i32;
+        let bhi = blo + IVec3::splat((1 << s) - 1);
+        let mut e = IVec3::select(stp.cmpgt(IVec3::ZERO), bhi.min(dims - 1), blo);
+        let mut xe = Self::exits(e, xt0, xdt);
+        // (A box of bricks of the class about this one, when the ray leaves it later.)
+        let rr = self.reach(*c);
+        if rr >= 2 {
+            let half = (rr - 1) << (p.size[1] + 2);
+            let b = (*c >> (p.size[1] as i32 + 2)) << (p.size[1] as i32 + 2);
+            let (rlo, rhi) = ((b - IVec3::splat(half)).max(IVec3::ZERO), b + IVec3::splat(half + (4 << p.size[1]) - 1));
+            let re = IVec3::select(stp.cmpgt(IVec3::ZERO), rhi.min(dims - 1), rlo);
+            let rxe = Self::exits(re, xt0, xdt);
+            if rxe.min_element() > xe.min_element() {
+                (e, xe) = (re, rxe);
+            }
+        }
+        let a01 = usize::from(xe.y < xe.x);
+        let a = if xe.z < xe.x.min(xe.y) { 2 } else { a01 };
+        let tx = xe[a];
+        if tx >= t1 {
+            return None;
+        }
+        let most = (e - *c).abs();
+        let mut n = IVec3::ZERO;
+        for i in 0..3 {
+            if i == a {
+                continue;
+            }
+            let lower = i < a;
+            // ceil((tx - tnext) / |dt|) within [0, most] (`max` drops a NaN).
+            let est = ((tx - tnext[i]) * rdt[i]).max(0.0).min(most[i] as f32);
+            let mut ni = est as i32;
+            ni += i32::from((ni as f32) < est);
+            let xb = exit(c[i] + (ni - 1) * stp[i], xt0[i], xdt[i]);
+            if ni > 0 && !(xb < tx || (xb == tx && lower)) {
+                ni -= 1;
+            }
+            let xn = exit(c[i] + ni * stp[i], xt0[i], xdt[i]);
+            if ni < most[i] && (xn < tx || (xn == tx && lower)) {
+                ni += 1;
+            }
+            n[i] = ni;
+        }
+        *c += n * stp;
+        c[a] = e[a] + stp[a];
+        *tnext = Self::exits(*c, xt0, xdt);
+        Some((a, tx))
+    }
+}
+
+/// A pixel's ray as the walk follows it ([`Walker::enter`]): origin and direction (render
+/// space), where it enters and leaves the box (`in0`, `in1`) and the box with the margin (`t0`,
+/// `t1`), its step per axis, the first cell crossings and their spacing per axis (`xt0`, `xdt`,
+/// `rdt` = 1 / |`xdt`|), and in march cells its direction, origin and the box's extent.
+#[derive(Clone, Copy)]
+struct Ray {
+    o: Vec3,
+    d: Vec3,
+    in0: f32,
+    in1: f32,
+    t0: f32,
+    t1: f32,
+    stp: IVec3,
+    xt0: Vec3,
+    xdt: Vec3,
+    rdt: Vec3,
+    dg: Vec3A,
+    og: Vec3A,
+    ext: Vec3A,
 }
 
 /// iso.wgsl `contour_side`: the side of the surface (1 = below, 2 = above, 0 = not known) of
@@ -456,214 +501,4 @@ fn contour_side(f: [f32; 4], uv: [f32; 2], ray: [f32; 3], m: f32) -> u32 {
 }
 
 #[cfg(test)]
-mod tests {
-    use std::sync::Arc;
-
-    use super::*;
-    use crate::camera::{Camera, Projection};
-    use crate::gpu::GpuContext;
-    use crate::iso::render::{IsoCulling, IsoOptions, IsoRenderer, IsoWalk};
-    use crate::iso::{MinMaxOctree, Volume};
-
-    /// Deterministic noise in [-1, 1] (a hash of the index).
-    fn noise(i: usize, seed: u64) -> f32 {
-        let mut x = (i as u64 ^ seed).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        x ^= x >> 29;
-        x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        x ^= x >> 32;
-        (x as f64 / u64::MAX as f64 * 2.0 - 1.0) as f32
-    }
-
-    /// The host's walk and the compute pass give the same cells seen (per node), the same map to
-    /// a few ulps (the shader's fused multiply-adds) and the unculled image, on a dense wavy
-    /// field (contours), smoothed noise with NaN samples and samples on the isovalue, and a
-    /// sphere; single-cell and coarser occluders, perspective and orthographic views.
-    #[test]
-    fn host_walk_matches_the_compute_walk() {
-        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
-        let mut r = IsoRenderer::new(&ctx);
-        let wavy = crate::iso::wavy_field();
-        let (nx, ny, nz) = (23, 19, 17);
-        let mut v: Vec<f32> = (0..nx * ny * nz).map(|i| noise(i, 7)).collect();
-        for _ in 0..2 {
-            let at = |i: usize, j: usize, k: usize| v[(k * ny + j) * nx + i];
-            let mut s = v.clone();
-            for k in 1..nz {
-                for j in 1..ny {
-                    for i in 1..nx {
-                        s[(k * ny + j) * nx + i] =
-                            (at(i, j, k) + at(i - 1, j, k) + at(i, j - 1, k) + at(i, j, k - 1)) / 4.0;
-                    }
-                }
-            }
-            v = s;
-        }
-        for (i, x) in v.iter_mut().enumerate() {
-            let h = noise(i, 11);
-            if h > 0.97 {
-                *x = f32::NAN;
-            } else if h < -0.95 {
-                *x = 0.0;
-            }
-        }
-        let noisy = Volume::new(Arc::from(v), (nx, ny, nz), [0.0; 3], [1.0; 3]).unwrap();
-        let sphere = crate::iso::sphere_field(24, 0.6);
-        let mut compared = 0;
-        for vol in [&wavy, &noisy, &sphere] {
-            let tree = MinMaxOctree::build(vol);
-            let md = tree.max_depth();
-            for (eye, cam) in crate::iso::test_views(vol) {
-                let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
-                let none = r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &none_opts).unwrap();
-                // (Contours chosen explicitly: by default the host's walk places them on any
-                // surface, the compute walk only on dense ones.)
-                for (occluder_depth, face_contours) in [(md, false), (md, true), (md - 1, false)] {
-                    let mut frame = |walk| {
-                        let (occluder_depth, face_contours) = (Some(occluder_depth), Some(face_contours));
-                        let opts =
-                            IsoOptions { occluder_depth, face_contours, walk, return_map: true, ..Default::default() };
-                        r.render(&ctx, 64, 56, vol, &tree, 0.0, &cam, &opts).unwrap()
-                    };
-                    let (gpu, host) = (frame(IsoWalk::Gpu), frame(IsoWalk::Cpu));
-                    assert_eq!(gpu.stats.walk_on_host, Some(false));
-                    assert_eq!(host.stats.walk_on_host, Some(true));
-                    assert_eq!(host.node_pixels, gpu.node_pixels, "{eye:?} {occluder_depth:?}");
-                    assert_eq!(host.image, none.image, "{eye:?} {occluder_depth:?}");
-                    assert_eq!(gpu.image, none.image, "{eye:?} {occluder_depth:?}");
-                    assert_eq!(host.depth, none.depth);
-                    for (a, b) in host.map.unwrap().iter().zip(gpu.map.as_ref().unwrap()) {
-                        assert!(a == b || (a - b).abs() <= 1e-5 * a.abs(), "map {a} against {b}");
-                    }
-                    compared += gpu.node_pixels.iter().filter(|&&n| n > 0).count();
-                }
-            }
-        }
-        assert!(compared > 1000, "the walks saw cells to compare ({compared})");
-    }
-
-    /// Jumps of the third skip level (64³ cells) and across boxes of skippable bricks
-    /// (`skip_reach`; thousands of them in these views) land where the compute walk's steps do:
-    /// a volume below a plane and above it, with blobs of the other class at a few places and a
-    /// NaN slab, large enough for whole 64³ bricks (and their rings) of each class.
-    #[test]
-    fn huge_jumps_see_what_the_compute_walk_sees() {
-        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
-        let mut r = IsoRenderer::new(&ctx);
-        let blobs = [[70.0, 66.0, 40.0], [20.0, 100.0, 100.0], [130.5, 64.0, 66.5], [64.0, 20.0, 90.0]];
-        let mut vol = Volume::from_fn((150, 140, 136), [0.0; 3], [1.0; 3], |x, y, z| {
-            let bump: f64 = blobs
-                .iter()
-                .map(|b| (-((x - b[0]).powi(2) + (y - b[1]).powi(2) + (z - b[2]).powi(2)) / 8.0).exp())
-                .sum();
-            let base = if z > 66.5 { 1.0 } else { -1.0 };
-            (base * (1.0 - 2.5 * bump)) as f32
-        })
-        .unwrap();
-        let mut v = vol.values.to_vec();
-        for k in 100..110 {
-            for j in 0..40 {
-                for i in 0..150 {
-                    v[(k * 140 + j) * 150 + i] = f32::NAN;
-                }
-            }
-        }
-        vol = Volume::new(Arc::from(v), (150, 140, 136), [0.0; 3], [1.0; 3]).unwrap();
-        let tree = MinMaxOctree::build(&vol);
-        let md = tree.max_depth();
-        let dims = tree.dims_at_depth(md).unwrap();
-        let mut nodes = tree.leaf_nodes(0.0).unwrap();
-        crate::iso::bricks::dilate_nan(&mut nodes, dims);
-        let (huge, _) = crate::iso::bricks::pack_nodes(&nodes, dims, true).2.unwrap();
-        for k in [1, 2] {
-            assert!(huge.contains(&k), "whole 64³ bricks of class {k}");
-        }
-        let c = [75.0, 70.0, 68.0];
-        for (eye, proj) in [
-            ([300.0, 210.0, 190.0], Projection::Perspective),
-            ([-120.0, 40.0, -60.0], Projection::Perspective),
-            ([75.5, 70.0, 400.0], Projection::Orthographic),
-        ] {
-            let cam = Camera::look_at(eye, c, [0.0, 0.0, 1.0], 40.0, None, None, proj, Some(200.0), 1.0).unwrap();
-            let none_opts = IsoOptions { culling: IsoCulling::None, ..Default::default() };
-            let none = r.render(&ctx, 64, 56, &vol, &tree, 0.0, &cam, &none_opts).unwrap();
-            let mut frame = |walk| {
-                let opts = IsoOptions { walk, return_map: true, face_contours: Some(true), ..Default::default() };
-                r.render(&ctx, 64, 56, &vol, &tree, 0.0, &cam, &opts).unwrap()
-            };
-            let (gpu, host) = (frame(IsoWalk::Gpu), frame(IsoWalk::Cpu));
-            assert_eq!(host.node_pixels, gpu.node_pixels, "{eye:?}");
-            assert_eq!(host.image, none.image, "{eye:?}");
-            assert_eq!(gpu.image, none.image, "{eye:?}");
-            for (a, b) in host.map.unwrap().iter().zip(gpu.map.as_ref().unwrap()) {
-                assert!(a == b || (a - b).abs() <= 1e-5 * a.abs(), "map {a} against {b}");
-            }
-            assert!(host.stats.surface_triangles < none.stats.surface_triangles, "{eye:?}");
-        }
-    }
-
-    /// The walk's counts on a scene whose answer is known: a horizontal plane between sample
-    /// layers 2 and 3 of 8, seen straight down and orthographically over the middle of the box (6 × 4
-    /// of its 7 × 7 cells), so that every pixel's ray enters the box; cell by cell (no skipping) each takes the 4 cells
-    /// above the surface, the one holding it and the one below, where its face proves the crossing
-    /// (6 steps). Jumping skippable bricks takes fewer; the GPU's walk counts nothing.
-    #[test]
-    fn walk_counts_on_a_plane_seen_from_above() {
-        let Ok(ctx) = GpuContext::new("auto", wgpu::Features::empty()) else { return };
-        let mut r = IsoRenderer::new(&ctx);
-        let vol = Volume::from_fn((8, 8, 8), [0.0; 3], [1.0; 3], |_, _, z| (z - 2.5) as f32).unwrap();
-        let tree = MinMaxOctree::build(&vol);
-        let cam = Camera::look_at(
-            [3.5, 3.5, 50.0],
-            [3.5, 3.5, 0.0],
-            [0.0, 1.0, 0.0],
-            40.0,
-            None,
-            None,
-            Projection::Orthographic,
-            Some(4.0),
-            1.0,
-        )
-        .unwrap();
-        let (w, h) = (24, 16);
-        let frame = |r: &mut IsoRenderer, walk, space_skipping| {
-            let opts = IsoOptions { walk, space_skipping, ..Default::default() };
-            r.render(&ctx, w, h, &vol, &tree, 0.0, &cam, &opts).unwrap().stats
-        };
-        let cells = frame(&mut r, IsoWalk::Cpu, false);
-        assert_eq!(cells.walk_rays, u64::from(w * h));
-        assert_eq!(cells.walk_steps, 6 * u64::from(w * h));
-        let skipping = frame(&mut r, IsoWalk::Cpu, true);
-        assert_eq!(skipping.walk_rays, u64::from(w * h));
-        assert!(skipping.walk_steps <= cells.walk_steps, "{} steps", skipping.walk_steps);
-        let gpu = frame(&mut r, IsoWalk::Gpu, false);
-        assert_eq!((gpu.walk_rays, gpu.walk_steps), (0, 0));
-        let none = r
-            .render(&ctx, w, h, &vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() })
-            .unwrap()
-            .stats;
-        assert_eq!((none.walk_rays, none.walk_steps), (0, 0));
-    }
-
-    /// `contour_side` on faces whose answer is known: uniform faces, a corner cut off, a segment
-    /// across, a corner on the isovalue, and a point too near the segment for the margin.
-    #[test]
-    fn contour_side_known_faces() {
-        let straight = [0.0, 0.0, 1.0];
-        assert_eq!(contour_side([-1.0; 4], [0.5, 0.5], straight, 0.01), 1);
-        assert_eq!(contour_side([1.0; 4], [0.3, 0.9], straight, 0.01), 2);
-        // Corner (0, 0) above, cut off at u = v = 0.5: inside its triangle above, beyond it below.
-        let f = [1.0, -1.0, -1.0, -1.0];
-        assert_eq!(contour_side(f, [0.1, 0.1], straight, 0.01), 2);
-        assert_eq!(contour_side(f, [0.8, 0.8], straight, 0.01), 1);
-        assert_eq!(contour_side(f, [0.2, 0.2], straight, 0.01), 2);
-        assert_eq!(contour_side(f, [0.251, 0.251], straight, 0.01), 0, "within the margin of the segment");
-        // Two corners on each side: the segment from (0.25, 0) to (0.75, 1).
-        let f = [1.0, -3.0, 3.0, -1.0];
-        assert_eq!(contour_side(f, [0.1, 0.5], straight, 0.01), 2);
-        assert_eq!(contour_side(f, [0.9, 0.5], straight, 0.01), 1);
-        // A corner on the isovalue: not known.
-        assert_eq!(contour_side([0.0, 1.0, 1.0, 1.0], [0.9, 0.9], straight, 0.01), 0);
-        // Ambiguous face (opposite corners alike): its middle is not known.
-        assert_eq!(contour_side([1.0, -1.0, -1.0, 1.0], [0.5, 0.5], straight, 0.01), 0);
-    }
-}
+mod tests;

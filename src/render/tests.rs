@@ -2,7 +2,8 @@
 
 use super::*;
 use crate::camera::Projection;
-use crate::cull::Stat;
+use crate::cull::{CullOptions, Stat};
+use crate::error::Interrupt;
 use crate::gpu::BACKGROUND;
 use crate::scene::{AddOptions, GridFrame};
 

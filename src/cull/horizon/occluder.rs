@@ -55,6 +55,25 @@ impl HorizonTree {
         s.cross.clear();
         s.unc.clear();
         s.ue.clear();
+        self.occluder_edges(view, t, proj, s);
+        for &[a, b] in &s.ue {
+            let (a, b) = (a as usize, b as usize);
+            let (qa, qb) = (self.pos(a % self.nx, a / self.nx), self.pos(b % self.nx, b / self.nx));
+            let (ca, cb) = (view.clip(qa), view.clip(qb));
+            let (pa, pb) = (view.screen(ca), view.screen(cb));
+            add_edge(pa, pb, view.w, &mut s.cross);
+            add_band(pa, pb, view.err_px(qa, ca), view.err_px(qb, cb), view, &mut s.unc);
+        }
+        if s.cross.is_empty() {
+            return;
+        }
+        Self::raise_columns(view, k, stack, s);
+    }
+
+    /// The boundary edges of tile `t`'s occluder into `s.ue` (the tile's own, credited to it in
+    /// `s.tile_edges` / `s.pool`, joined with its drawn neighbours' and their shared sides
+    /// cancelled).
+    fn occluder_edges(&self, view: &View, t: usize, proj: &NodeProj, s: &mut Scratch) {
         // The occluder is the union of this tile's covered set with those of its already drawn
         // neighbours (each with the edge set it was credited with, static or per-frame): their
         // shared sides cancel, so the margin is only taken around the union's boundary. Tile seams must not get a margin: the GPU gives a
@@ -114,17 +133,11 @@ impl HorizonTree {
             }
             s.ue.truncate(out);
         }
-        for &[a, b] in &s.ue {
-            let (a, b) = (a as usize, b as usize);
-            let (qa, qb) = (self.pos(a % self.nx, a / self.nx), self.pos(b % self.nx, b / self.nx));
-            let (ca, cb) = (view.clip(qa), view.clip(qb));
-            let (pa, pb) = (view.screen(ca), view.screen(cb));
-            add_edge(pa, pb, view.w, &mut s.cross);
-            add_band(pa, pb, view.err_px(qa, ca), view.err_px(qb, cb), view, &mut s.unc);
-        }
-        if s.cross.is_empty() {
-            return;
-        }
+    }
+
+    /// Raises the horizon `k` of every column the occluder's crossings (`s.cross`) cover, less
+    /// the rows within the margin of its boundary edges (`s.unc`).
+    fn raise_columns(view: &View, k: &mut [u32], stack: &[(u32, NodeProj)], s: &mut Scratch) {
         s.cross.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
         s.unc.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let mut ui = 0;

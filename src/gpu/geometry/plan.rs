@@ -1,0 +1,204 @@
+//! What the upload writes, counted before any buffer exists ([`Plan`]): each tile's draws, with
+//! the draws of lattice tiles as patterns shared by every tile of the same shape.
+
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// `indices` (into `n` vertices) renumbered into `out` over the vertices they use, which are
+/// returned in first-use order; `remap` is scratch.
+pub(super) fn compact_indices(indices: &[u32], n: usize, remap: &mut Vec<u32>, out: &mut Vec<u32>) -> Vec<u32> {
+    remap.clear();
+    remap.resize(n, u32::MAX);
+    out.clear();
+    let mut used = Vec::new();
+    for &k in indices {
+        let slot = &mut remap[k as usize];
+        if *slot == u32::MAX {
+            *slot = used.len() as u32;
+            used.push(k);
+        }
+        out.push(*slot);
+    }
+    used
+}
+
+/// A draw of a lattice tile as a pattern: compact vertices as (column, row) relative to the
+/// tile's first sample, and the triangle list into them. Tiles of one size without holes share
+/// theirs.
+pub(super) type Pattern = (Vec<[u32; 2]>, Vec<u32>);
+
+/// The occluder of a hole-free lattice tile (`local`: its vertices' (column, row)): its corner,
+/// mid-side and centre samples as 2 × 2 cells, 8 triangles wound as the tile's (1 × 1 cells on a
+/// side of 2 samples); the empty pattern for a tile with holes. A first guess for prepasses whose
+/// frame does not rest on their proxies ([`SceneGeometry::occluder`]).
+fn occluder_pattern(t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Pattern {
+    let w = local.iter().map(|p| p[0]).max().unwrap_or(0) as usize + 1;
+    let h = local.iter().map(|p| p[1]).max().unwrap_or(0) as usize + 1;
+    if w < 2 || h < 2 || t.fine_triangles() != 2 * (w - 1) * (h - 1) {
+        return (Vec::new(), Vec::new());
+    }
+    let steps = |n: usize| -> Vec<u32> {
+        let mut s = vec![0, ((n - 1) / 2) as u32, (n - 1) as u32];
+        s.dedup();
+        s
+    };
+    let (xs, ys) = (steps(w), steps(h));
+    let verts: Vec<[u32; 2]> = ys.iter().flat_map(|&y| xs.iter().map(move |&x| [x, y])).collect();
+    let k = |i: usize, j: usize| (j * xs.len() + i) as u32;
+    let mut idx = Vec::new();
+    for j in 0..ys.len() - 1 {
+        for i in 0..xs.len() - 1 {
+            let (a, b, c, d) = (k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1));
+            idx.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    (verts, idx)
+}
+
+/// What the upload writes, counted before any buffer exists.
+///
+/// A *lattice tile* is a height-field tile whose object has its heights in the normal map
+/// (`SceneGeometry::shading`), its values (if any) in `SceneGeometry::sample_values` and no
+/// per-vertex normals: its vertices are rebuilt by
+/// the vertex stage from the tile's first sample, the grid's axes and the normal map's heights
+/// (`tile_position` in common.wgsl), so its draws (fine, coarse, levels) need no vertices of
+/// their own, only indices into a pattern of (column, row) vertices shared by every tile of the
+/// same shape. The heights are the tiles' own f32 heights bit for bit; x and y are the corner's
+/// f32 position plus column and row times the axes, in f32, within a few units in the last place
+/// of the tile's extent of the vertices it replaces.
+pub(super) struct Plan {
+    /// Per tile: the patterns of its fine, coarse and level draws (in that order) for a lattice
+    /// tile, None for a tile drawn from vertices of its own.
+    pub(super) runs: Vec<Option<Vec<usize>>>,
+    pub(super) patterns: Vec<Pattern>,
+    /// Three vec4 per tile (`tile_grid` in common.wgsl).
+    pub(super) tile_grid: Vec<[f32; 4]>,
+    pub(super) nv: u64,
+    pub(super) ni: u64,
+}
+
+impl Plan {
+    /// `shading_base`: each object's first sample in the normal map; `values_base`: in the
+    /// per-sample values (`SceneGeometry::sample_values`), for height fields coloured by data.
+    pub(super) fn new(scene: &Scene, shading_base: &[Option<u32>], values_base: &[Option<u32>]) -> Self {
+        // Each tile's draws, worked out in parallel (the costly part: compacting and hashing the
+        // patterns), then numbered in tile order, so the patterns are those of a serial pass. In
+        // batches of tiles, so that only a batch's patterns are held besides the distinct ones.
+        let tiles: Vec<(usize, &crate::lod::TileMesh)> =
+            scene.objects().iter().enumerate().flat_map(|(oi, o)| o.tiles.iter().map(move |t| (oi, t))).collect();
+        let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
+        // Pattern ids by hash (a list per hash, compared in full), in first-use order.
+        let mut by_hash: std::collections::HashMap<u64, Vec<usize>> = std::collections::HashMap::new();
+        for batch in tiles.chunks(PLAN_BATCH) {
+            let work: Vec<TileWork> = batch
+                .par_iter()
+                .map_init(
+                    || (Vec::new(), Vec::new()),
+                    |(remap, cidx), &(oi, t)| tile_work(scene, oi, t, shading_base, values_base, remap, cidx),
+                )
+                .collect();
+            for w in work {
+                match w {
+                    TileWork::Own { nv, ni } => {
+                        plan.runs.push(None);
+                        let none = f32::from_bits(u32::MAX);
+                        plan.tile_grid.extend([[0.0; 4], [0.0, 0.0, none, 0.0], [none, 0.0, 0.0, 0.0]]);
+                        plan.nv += nv;
+                        plan.ni += ni;
+                    }
+                    TileWork::Lattice { patterns, grid } => {
+                        let run = patterns
+                            .into_iter()
+                            .map(|(h, p)| {
+                                let ids = by_hash.entry(h).or_default();
+                                match ids.iter().find(|&&k| plan.patterns[k] == p) {
+                                    Some(&k) => k,
+                                    None => {
+                                        ids.push(plan.patterns.len());
+                                        plan.patterns.push(p);
+                                        plan.patterns.len() - 1
+                                    }
+                                }
+                            })
+                            .collect();
+                        plan.runs.push(Some(run));
+                        plan.tile_grid.extend(grid);
+                    }
+                }
+            }
+        }
+        for (verts, idx) in &plan.patterns {
+            plan.nv += verts.len() as u64;
+            plan.ni += idx.len() as u64;
+        }
+        plan
+    }
+}
+
+/// Tiles [`Plan::new`] works out at a time.
+const PLAN_BATCH: usize = 64;
+
+/// What [`Plan::new`] needs of one tile.
+enum TileWork {
+    /// Drawn from vertices of its own: the vertices and indices of its draws.
+    Own { nv: u64, ni: u64 },
+    /// A lattice tile: the patterns (with their hashes) of its fine, coarse, level and occluder
+    /// draws, and its three `tile_grid` vec4.
+    Lattice { patterns: Vec<(u64, Pattern)>, grid: [[f32; 4]; 3] },
+}
+
+/// Tile `t` of object `oi` as [`Plan::new`] counts it (`remap`, `cidx`: scratch).
+fn tile_work(
+    scene: &Scene,
+    oi: usize,
+    t: &crate::lod::TileMesh,
+    shading_base: &[Option<u32>],
+    values_base: &[Option<u32>],
+    remap: &mut Vec<u32>,
+    cidx: &mut Vec<u32>,
+) -> TileWork {
+    use std::hash::{Hash, Hasher};
+    let o = &scene.objects()[oi];
+    let lattice = match (shading_base[oi], o.grid_axes()) {
+        (Some(base), Some(g))
+            if (t.values.is_empty() || values_base[oi].is_some()) && t.normals.is_empty() && !t.is_empty() =>
+        {
+            o.tile_lattice(t).map(|l| (base, g, l))
+        }
+        _ => None,
+    };
+    let Some((base, g, l)) = lattice else {
+        let (mut nv, mut ni) = (t.positions.len() as u64, t.fine.len() as u64);
+        let mut seen = Vec::new();
+        for idx in std::iter::once(&t.coarse).chain(t.levels.iter().map(|l| &l.indices)) {
+            seen.clear();
+            seen.resize(t.positions.len(), false);
+            nv += idx.iter().filter(|&&k| !std::mem::replace(&mut seen[k as usize], true)).count() as u64;
+            ni += idx.len() as u64;
+        }
+        return TileWork::Own { nv, ni };
+    };
+    let hashed = |p: Pattern| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        p.hash(&mut h);
+        (h.finish(), p)
+    };
+    let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
+    let mut patterns: Vec<(u64, Pattern)> = draws
+        .map(|idx| {
+            let used = compact_indices(idx, t.positions.len(), remap, cidx);
+            hashed((used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone()))
+        })
+        .collect();
+    patterns.push(hashed(occluder_pattern(t, &l.local)));
+    let corner = g.pos(l.i0, l.j0);
+    let first = l.j0 * g.nx + l.i0;
+    let k0 = base as usize + first;
+    let v0 = values_base[oi].map_or(u32::MAX, |b| b + first as u32);
+    let grid = [
+        [corner[0] as f32, corner[1] as f32, g.u[0] as f32, g.u[1] as f32],
+        [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
+        [f32::from_bits(v0), 0.0, 0.0, 0.0],
+    ];
+    TileWork::Lattice { patterns, grid }
+}

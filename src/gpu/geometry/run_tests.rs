@@ -1,0 +1,26 @@
+use super::*;
+use crate::scene::{AddOptions, GridFrame};
+
+#[test]
+fn height_fields_with_a_normal_map_draw_as_fields() {
+    let mut s = Scene::new();
+    let z: Vec<f64> = (0..81).map(|k| (k % 9) as f64 * 0.1).collect();
+    let frame = || GridFrame::new([0.0, 0.0], [10.0, 10.0]);
+    s.add_heightfield(&z, 9, 9, frame(), (2, 1), None, AddOptions::new(1.0)).unwrap();
+    let v = [[0.0, 0.0, -5.0], [10.0, 0.0, -5.0], [0.0, 10.0, 5.0]];
+    s.add_mesh(&v, &[[0, 1, 2]], "fault", None, AddOptions::new(1.0)).unwrap();
+    s.add_heightfield(&z, 9, 9, frame(), (1, 1), None, AddOptions::new(1.0)).unwrap();
+    s.add_heightfield(&z, 9, 9, frame(), (1, 1), None, AddOptions::new(1.0)).unwrap();
+    let tile_object: Vec<u32> =
+        s.objects().iter().enumerate().flat_map(|(o, ob)| std::iter::repeat_n(o as u32, ob.tiles.len())).collect();
+    assert_eq!(tile_object, [0, 0, 1, 2, 3]);
+    // The last height field's normal map did not fit: it draws as a mesh (fs_main).
+    let runs = draw_runs(&s, &tile_object, &[Some(0), None, Some(81), None], &[None; 4], &[false; 4]);
+    let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
+    assert_eq!(got, [(0..2, true, false), (2..3, false, false), (3..4, true, false), (4..5, false, false)]);
+    // A grid mesh is never a field.
+    let (base, dims) = ([Some(0), Some(81), Some(90), Some(171)], [None, Some((2, 2)), None, None]);
+    let runs = draw_runs(&s, &tile_object, &base, &dims, &[false; 4]);
+    let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
+    assert_eq!(got, [(0..2, true, false), (2..3, false, true), (3..5, true, false)]);
+}

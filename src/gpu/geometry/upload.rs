@@ -1,0 +1,424 @@
+//! [`SceneGeometry::upload`] in stages: the normal map and per-sample values, the plan of what
+//! is written, the mapped vertex and index buffers filled tile by tile, the slabs, the tables.
+
+use super::plan::Plan;
+use super::{
+    check_buffer_sizes, draw_runs, normal_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words, CompactDraw,
+    LevelDraw, SceneGeometry,
+};
+use crate::error::Result;
+use crate::gpu::layout::DrawArgs;
+use crate::gpu::readback::map_err;
+use crate::gpu::GpuContext;
+use crate::scene::{ObjectKind, Scene};
+use rayon::prelude::*;
+use wgpu::util::DeviceExt;
+
+/// The normal map of the lit pass: every height field's shading samples and every structured
+/// grid mesh's fine normals, as long as they fit one storage binding (later height fields fall
+/// back to facet normals and vertex heights, later grid meshes to their vertex normals). Returns
+/// the buffer, each object's first sample, and each grid mesh's grid size.
+#[allow(clippy::type_complexity)]
+fn upload_shading(
+    ctx: &GpuContext,
+    scene: &Scene,
+) -> Result<(wgpu::Buffer, Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
+    let max_samples = ctx.limits.max_storage_buffer_binding_size / 8;
+    let mut total = 0u64;
+    let mut dims = vec![None; scene.objects().len()];
+    // Per object in the map: its sample count and, for a grid mesh, its fine normals (small:
+    // faults), until they are written.
+    let mut parts: Vec<(usize, u64, Option<Vec<u32>>)> = Vec::new();
+    let base: Vec<Option<u32>> = scene
+        .objects()
+        .iter()
+        .enumerate()
+        .map(|(oi, o)| {
+            let (n, normals) = match o.kind {
+                ObjectKind::Heightfield { nx, ny, .. } => ((nx * ny) as u64, None),
+                _ => {
+                    let (nu, nv, normals) = o.grid_normals()?;
+                    dims[oi] = Some((nu as u32, nv as u32));
+                    ((nu * nv) as u64, Some(normals))
+                }
+            };
+            if total + n > max_samples {
+                dims[oi] = None;
+                return None;
+            }
+            total += n;
+            parts.push((oi, n, normals));
+            Some((total - n) as u32)
+        })
+        .collect();
+    // Written in place (no staging copy where the device maps storage buffers), a few objects at
+    // a time: no host copy of the whole map.
+    let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
+        wgpu::BufferUsages::MAP_WRITE
+    } else {
+        wgpu::BufferUsages::empty()
+    };
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("shading"),
+        size: 8 * total.max(1),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | direct,
+        mapped_at_creation: true,
+    });
+    {
+        let mut map = buf.slice(..).get_mapped_range_mut().map_err(map_err)?;
+        let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
+        let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
+            match normals {
+                // A grid mesh: its packed fine normal, then 0.
+                Some(normals) => normals.iter().map(|&n| [n, 0]).collect(),
+                None => {
+                    let mut out = Vec::new();
+                    scene.objects()[*oi]
+                        .for_each_shading_sample(|[gx, gy, z]| out.push([h(gx) | (h(gy) << 16), z.to_bits()]));
+                    out
+                }
+            }
+        };
+        // As many objects at a time as there are threads, each into a vector of its own, then
+        // copied (mapped memory is write-only and stays on this thread).
+        let mut at = 0usize;
+        for batch in parts.chunks(rayon::current_num_threads().max(1)) {
+            for words in batch.par_iter().map(samples).collect::<Vec<_>>() {
+                map.slice(at * 8..(at + words.len()) * 8).copy_from_slice(bytemuck::cast_slice(&words));
+                at += words.len();
+            }
+        }
+    }
+    buf.unmap();
+    Ok((buf, base, dims))
+}
+
+/// The per-sample values of the height fields coloured by data (`SceneGeometry::sample_values`)
+/// and each object's first sample in them, for those whose heights are in the normal map
+/// (`shading_base`), as long as they fit one storage binding (later ones keep vertices of their
+/// own).
+/// Then the cell values of grids coloured per fragment ([`crate::gpu::cell_values`]).
+fn upload_values(
+    ctx: &GpuContext,
+    scene: &Scene,
+    shading_base: &[Option<u32>],
+) -> (wgpu::Buffer, Vec<Option<u32>>, crate::gpu::cell_values::CellTables) {
+    let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
+    let mut words: Vec<f32> = Vec::new();
+    let base = scene
+        .objects()
+        .iter()
+        .zip(shading_base)
+        .map(|(o, b)| {
+            b.as_ref()?;
+            let v = o.value_grid()?;
+            if (words.len() + v.len()) as u64 > max_words {
+                return None;
+            }
+            let first = words.len() as u32;
+            words.extend(v.into_iter().map(scalar_word));
+            Some(first)
+        })
+        .collect();
+    let cells = crate::gpu::cell_values::append(scene, &mut words, max_words, scalar_word);
+    if words.is_empty() {
+        words.push(0.0);
+    }
+    let buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("sample_values"),
+        contents: bytemuck::cast_slice(&words),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    (buf, base, cells)
+}
+
+/// The slabs of `tiles` in one vertex and one index buffer, and per tile its slab's draw with
+/// whether its levels are lattice levels (`SceneGeometry::slab_draws`).
+#[allow(clippy::type_complexity)]
+fn upload_slabs(
+    d: &wgpu::Device,
+    tiles: &[&crate::lod::TileMesh],
+) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<(DrawArgs, bool)>>) {
+    let (mut verts, mut idx): (Vec<[f32; 4]>, Vec<u32>) = (Vec::new(), Vec::new());
+    let draws: Vec<Option<(DrawArgs, bool)>> = tiles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let s = t.slab.as_ref()?;
+            let (v, ix) = (&s.vertices, &s.indices);
+            let args = DrawArgs {
+                index_count: ix.len() as u32,
+                instance_count: 1,
+                first_index: idx.len() as u32,
+                base_vertex: verts.len() as i32,
+                first_instance: i as u32,
+            };
+            verts.extend_from_slice(v);
+            idx.extend_from_slice(ix);
+            Some((args, s.levels_exact))
+        })
+        .collect();
+    if idx.is_empty() {
+        return (None, draws);
+    }
+    let buf = |label, contents: &[u8], usage| {
+        d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+    };
+    let vb = buf("slab_vertices", bytemuck::cast_slice(&verts), wgpu::BufferUsages::VERTEX);
+    let ib = buf("slab_indices", bytemuck::cast_slice(&idx), wgpu::BufferUsages::INDEX);
+    (Some((vb, ib)), draws)
+}
+
+/// The per-tile tables the upload builds, one entry per tile in draw order.
+#[derive(Default)]
+struct TileDraws {
+    fine: Vec<DrawArgs>,
+    coarse: Vec<DrawArgs>,
+    occluder: Vec<DrawArgs>,
+    levels: Vec<Vec<LevelDraw>>,
+    tile_object: Vec<u32>,
+    bbox: Vec<(glam::DVec3, glam::DVec3)>,
+    own_vertices: Vec<Vec<u32>>,
+}
+
+impl SceneGeometry {
+    /// Uploads `scene`'s geometry. Sizes are computed first (the coarse proxies and LOD levels get
+    /// compact copies of the vertices they use; the draws of lattice tiles become shared
+    /// patterns), so that the geometry is written straight into mapped GPU buffers without host
+    /// temporaries beyond the patterns.
+    pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
+        let d = &ctx.device;
+        let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
+        let (sample_values, values_base, cells) = upload_values(ctx, scene, &shading_base);
+        let mut plan = Plan::new(scene, &shading_base, &values_base);
+        cell_table_grid(&mut plan, &cells);
+        let (nv, ni) = (plan.nv, plan.ni);
+        check_buffer_sizes(nv, ni, ctx.limits.max_buffer_size)?;
+        let (vb, sb, ib) = mapped_buffers(ctx, nv, ni);
+        let mut draws = TileDraws::default();
+        if let (Some(vb), Some(sb), Some(ib)) = (&vb, &sb, &ib) {
+            write_tiles(scene, &plan, &grid_dims, [vb, sb, ib], &mut draws)?;
+        } else {
+            empty_tiles(scene, &mut draws);
+        }
+        for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
+            b.unmap();
+        }
+        let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
+        // Storage buffers may not be empty: pad with one element.
+        let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
+        let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tile_object"),
+            contents: bytemuck::cast_slice(&to),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let grid = if plan.tile_grid.is_empty() { vec![[0.0f32; 4]; 3] } else { plan.tile_grid };
+        let tile_grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tile_grid"),
+            contents: bytemuck::cast_slice(&grid),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
+        let sub_boxes = tiles.par_iter().map(|t| tile_sub_boxes(t)).collect();
+        let height_blocks = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
+        let (slabs, slab_draws) = upload_slabs(d, &tiles);
+        let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
+        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
+        let bytes = bytes + slab_bytes;
+        let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
+        ctx.take_error()?;
+        Ok(Self {
+            key: scene.geometry_key(),
+            vertices: vb,
+            values: sb,
+            indices: ib,
+            tile_object: tob,
+            tile_object_cpu: tile_object,
+            tile_grid,
+            sample_values,
+            fine,
+            coarse,
+            occluder,
+            levels,
+            bbox,
+            sub_boxes,
+            height_blocks,
+            slab_draws,
+            slabs,
+            shading,
+            shading_base,
+            grid_dims,
+            cell_colors: cells.objects,
+            draw_runs,
+            bytes,
+            own_vertices,
+        })
+    }
+}
+
+/// Grid tiles with cell tables (drawn from vertices of their own): the table's columns and
+/// first word where the vertex stage would look for a lattice (common.wgsl `tile_grid`).
+fn cell_table_grid(plan: &mut Plan, cells: &crate::gpu::cell_values::CellTables) {
+    let none = f32::from_bits(u32::MAX);
+    for (t, c) in cells.tiles.iter().enumerate() {
+        if let Some([first, bw, bh]) = *c {
+            plan.tile_grid[3 * t + 1] = [f32::from_bits(bw), f32::from_bits(bh), none, 0.0];
+            plan.tile_grid[3 * t + 2] = [none, f32::from_bits(first), 0.0, 0.0];
+        }
+    }
+}
+
+/// The vertex, value and index buffers of `nv` vertices and `ni` indices, mapped for writing
+/// (None where empty).
+fn mapped_buffers(
+    ctx: &GpuContext,
+    nv: u64,
+    ni: u64,
+) -> (Option<wgpu::Buffer>, Option<wgpu::Buffer>, Option<wgpu::Buffer>) {
+    let d = &ctx.device;
+    let mapped = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+        (size > 0).then(|| {
+            d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: true })
+        })
+    };
+    let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
+        wgpu::BufferUsages::MAP_WRITE
+    } else {
+        wgpu::BufferUsages::empty()
+    };
+    // COPY_DST: an object whose geometry is replaced in place is written by `patch`.
+    let dst = wgpu::BufferUsages::COPY_DST;
+    let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | dst | direct);
+    let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | dst | direct);
+    let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | dst | direct);
+    (vb, sb, ib)
+}
+
+/// Writes the plan's patterns, then every tile's draws, into the mapped vertex, value and index
+/// buffers (`[vb, sb, ib]`), and fills `draws`.
+fn write_tiles(
+    scene: &Scene,
+    plan: &Plan,
+    grid_dims: &[Option<(u32, u32)>],
+    [vb, sb, ib]: [&wgpu::Buffer; 3],
+    draws: &mut TileDraws,
+) -> Result<()> {
+    let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
+    let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
+    let mut smap = sb.slice(..).get_mapped_range_mut().map_err(map_err)?;
+    let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
+    // Mapped memory is write-only: append whole runs, counting in vertices and indices.
+    let (mut v, mut i) = (0usize, 0usize);
+    // Positions and their (scalar, normal) pairs (zeros when the tile has none), run for run.
+    let mut scratch: Vec<[u32; 2]> = Vec::new();
+    let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32], normals: &[u32]| {
+        vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
+        vertex_words(data.len(), vals, normals, &mut scratch);
+        smap.slice(*v * 8..(*v + data.len()) * 8).copy_from_slice(bytemuck::cast_slice(&scratch));
+        *v += data.len();
+    };
+    let mut put_i = |i: &mut usize, data: &[u32]| {
+        imap.slice(*i * 4..(*i + data.len()) * 4).copy_from_slice(bytemuck::cast_slice(data));
+        *i += data.len();
+    };
+    // The patterns first: vertices (column, row, 0) as exact floats (common.wgsl).
+    let mut pattern_args = Vec::with_capacity(plan.patterns.len());
+    let mut cverts: Vec<[f32; 3]> = Vec::new();
+    for (verts, idx) in &plan.patterns {
+        pattern_args.push(DrawArgs {
+            index_count: idx.len() as u32,
+            instance_count: 1,
+            first_index: i as u32,
+            base_vertex: v as i32,
+            first_instance: 0,
+        });
+        cverts.clear();
+        cverts.extend(verts.iter().map(|&[a, b]| [a as f32, b as f32, 0.0]));
+        put_v(&mut v, &cverts, &[], &[]);
+        put_i(&mut i, idx);
+    }
+    let mut cd = CompactDraw::default();
+    let mut runs = plan.runs.iter();
+    for (oi, o) in scene.objects().iter().enumerate() {
+        for t in &o.tiles {
+            let nrm = normal_slot(grid_dims[oi].is_some(), t);
+            let tile = fine.len() as u32;
+            tile_object.push(oi as u32);
+            bbox.push(tile_bbox(t));
+            if let Some(ids) = runs.next().expect("one plan per tile") {
+                let args = |p: usize| DrawArgs { first_instance: tile, ..pattern_args[p] };
+                fine.push(args(ids[0]));
+                coarse.push(args(ids[1]));
+                occluder.push(args(*ids.last().expect("fine, coarse, levels, occluder")));
+                levels.push(
+                    ids[2..]
+                        .iter()
+                        .zip(&t.levels)
+                        .map(|(&p, l)| LevelDraw { args: args(p), error: l.error, shading_error: l.shading_error })
+                        .collect(),
+                );
+                own_vertices.push(Vec::new());
+                continue;
+            }
+            occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
+            fine.push(DrawArgs {
+                index_count: t.fine.len() as u32,
+                instance_count: 1,
+                first_index: i as u32,
+                base_vertex: v as i32,
+                first_instance: tile,
+            });
+            put_v(&mut v, &t.positions, &t.values, nrm);
+            put_i(&mut i, &t.fine);
+            // The coarse proxy and each LOD level get their own compact copy of the
+            // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
+            // indexed draw's index range, so indexing into the fine vertices would make
+            // them cost as much as a fine draw.
+            let mut counts = vec![t.positions.len() as u32];
+            let mut compact = |indices: &[u32], v: &mut usize, i: &mut usize| {
+                cd.build(t, nrm, indices);
+                counts.push(cd.verts.len() as u32);
+                let args = DrawArgs {
+                    index_count: cd.idx.len() as u32,
+                    instance_count: 1,
+                    first_index: *i as u32,
+                    base_vertex: *v as i32,
+                    first_instance: tile,
+                };
+                put_v(v, &cd.verts, &cd.vals, &cd.normals);
+                put_i(i, &cd.idx);
+                args
+            };
+            coarse.push(compact(&t.coarse, &mut v, &mut i));
+            levels.push(
+                t.levels
+                    .iter()
+                    .map(|l| LevelDraw {
+                        args: compact(&l.indices, &mut v, &mut i),
+                        error: l.error,
+                        shading_error: l.shading_error,
+                    })
+                    .collect(),
+            );
+            own_vertices.push(counts);
+        }
+    }
+    debug_assert_eq!((v as u64, i as u64), (plan.nv, plan.ni));
+    Ok(())
+}
+
+/// No triangles anywhere: keep the tile table (all tiles empty).
+fn empty_tiles(scene: &Scene, draws: &mut TileDraws) {
+    for (oi, o) in scene.objects().iter().enumerate() {
+        for t in &o.tiles {
+            let tile = draws.fine.len() as u32;
+            draws.fine.push(DrawArgs { first_instance: tile, ..Default::default() });
+            draws.coarse.push(DrawArgs { first_instance: tile, ..Default::default() });
+            draws.occluder.push(DrawArgs { first_instance: tile, ..Default::default() });
+            draws.levels.push(Vec::new());
+            draws.own_vertices.push(Vec::new());
+            draws.tile_object.push(oi as u32);
+            draws.bbox.push(tile_bbox(t));
+        }
+    }
+}
