@@ -3,6 +3,7 @@
 had when they were Python classes."""
 
 import pickle
+import sys
 import warnings
 
 import pytest
@@ -56,6 +57,13 @@ def test_the_core_raises_the_extension_class():
     assert str(e.value) == "id: no object with id 5 in this scene"
     with pytest.raises(ValueError):
         gc.Scene().remove(5)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="a backend this platform never has")
+def test_the_core_raises_device_error():
+    with pytest.raises(gc.DeviceError, match="no graphics adapter found") as e:
+        gc.Renderer(8, 8, backend="metal")
+    assert type(e.value) is ext.DeviceError and isinstance(e.value, RuntimeError)
 
 
 @pytest.mark.parametrize("name", sorted(BASES))
