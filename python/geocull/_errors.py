@@ -1,20 +1,15 @@
-"""geocull's exception hierarchy (raised from Rust as well as from Python)."""
+"""geocull's exception hierarchy, defined in the extension (src/python/errors.rs, so that Rust raises
+the classes directly) and re-exported here and by ``geocull``:
 
+- ``GeocullError(Exception)``: the base class of every error geocull raises;
+- ``InputError(GeocullError, ValueError)``: a bad argument;
+- ``DeviceError(GeocullError, RuntimeError)``: no usable adapter, or the driver rejected the work;
+- ``GeocullWarning(UserWarning)``: something valid but almost certainly not what was meant.
 
-class GeocullError(Exception):
-    """Base class of every error geocull raises."""
+Their ``__module__`` is ``geocull._geocull``; pickles made when they were defined in this module
+(``geocull._errors.InputError``) still load, through these names.
+"""
 
+from ._geocull import DeviceError, GeocullError, GeocullWarning, InputError
 
-class InputError(GeocullError, ValueError):
-    """A bad argument: wrong shape, dtype, value or range. The message starts with the argument's
-    name and points at the first offending element."""
-
-
-class DeviceError(GeocullError, RuntimeError):
-    """No usable graphics adapter, or the driver rejected the work. On a machine without a GPU,
-    install Mesa's lavapipe: ``apt-get install libvulkan1 mesa-vulkan-drivers``."""
-
-
-class GeocullWarning(UserWarning):
-    """Something valid but almost certainly not what was meant, e.g. a frame that cannot show
-    anything because the whole scene lies nearer than the near plane."""
+__all__ = ["GeocullError", "InputError", "DeviceError", "GeocullWarning"]

@@ -18,6 +18,7 @@ from ._convert import MeshLike
 from ._errors import InputError
 from ._progress import ProgressLike
 from ._scene_colors import FAR_APART, SceneColorings, SharedZ, label_arg, pair
+from ._scene_inputs import grid_inputs, heightfield_inputs, mesh_inputs, well_inputs
 from ._scene_slices import SliceAxis, slice_position, stored_range
 from .results import GridLevel
 
@@ -58,15 +59,6 @@ _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fin
 
 def _doc(values: str) -> str:
     return _COLOR_DOC.format(values=values).strip("\n").lstrip()
-
-
-def _down(z_positive: Any, default_down: bool) -> bool:
-    """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
-    if z_positive is None:
-        return default_down
-    if z_positive not in ("up", "down"):
-        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
-    return z_positive == "down"
 
 
 class Scene(SceneColorings):
@@ -213,32 +205,8 @@ class Scene(SceneColorings):
         priority: 0..=15, who wins a depth tie (higher is seen); default by kind (:meth:`set_priority`).
         Returns the object id.
         """
-        from . import io
-
-        surface = io.xtgeo_kind(z) == "surface"
-        down = _down(z_positive, surface)
-        if surface:
-            kw = io.from_xtgeo_surface(z, z_positive="down" if down else "up")
-            name = io.xtgeo_name(z) if name is None else name
-            z = kw["z"]
-            origin = kw["origin"] if origin is None else origin
-            spacing = kw["spacing"] if spacing is None else spacing
-            rotation = kw["rotation"] if rotation is None else rotation
-            yflip = kw["yflip"] if yflip is None else yflip
-        elif down:
-            data, mask = cv.unmasked(z, "z")
-            neg = -cv.checked_array(data, "z", 2)
-            z = neg if mask is None else np.ma.MaskedArray(neg, mask=mask)
-        nv = None if null_value is None else cv.number(null_value, "null_value")
-        if nv is not None and down:
-            nv = -nv  # compared with the negated heights
-        origin = (0.0, 0.0) if origin is None else origin
-        spacing = (1.0, 1.0) if spacing is None else spacing
-        rotation = 0.0 if rotation is None else rotation
-        yflip = False if yflip is None else yflip
-        za = cv.heights(z, nv)
-        o = cv.vec2(origin, "origin")
-        sp = cv.vec2(spacing, "spacing")
+        za, o, sp, rotation, yflip, nv, name = heightfield_inputs(z, origin, spacing, rotation, yflip, null_value,
+                                                                  name, z_positive)
         t = cv.int_array(tiles, "tiles", 1, 2)
         tt = (cv.integer(t[0], "tiles[0]"), cv.integer(t[1], "tiles[1]"))
         lab = label_arg(label, values)
@@ -290,33 +258,7 @@ class Scene(SceneColorings):
         priority: 0..=15, who wins a depth tie (higher is seen); default by kind (:meth:`set_priority`).
         Returns the object id.
         """
-        from . import io
-
-        trisurf = io.xtgeo_kind(vertices) == "trisurface"
-        down = _down(z_positive, trisurf)
-        mesh = cv.mesh_arrays(vertices) if not trisurf else None
-        if trisurf:
-            if faces is not None:
-                raise InputError("faces: must be omitted when vertices is an xtgeo TriangulatedSurface")
-            name = io.xtgeo_name(vertices) if name is None else name
-            ts: Any = vertices
-            vertices, faces = np.asarray(ts.vertices), np.asarray(ts.triangles)
-        elif mesh is not None:
-            if faces is not None:
-                raise InputError(f"faces: must be omitted when vertices is a {type(vertices).__name__}")
-            vertices, faces = mesh.vertices, mesh.faces
-            name = mesh.name if name is None else name
-            color = mesh.color if color is None else color
-        elif faces is None:
-            raise InputError("faces: required with a vertex array (or pass a trimesh.Trimesh / pyvista.PolyData)")
-        v = cv.vertices(vertices)
-        f = cv.int_array(faces, "faces", 2, 3)
-        if f.dtype.kind == "u" and f.size and f.max() > np.iinfo(np.int64).max:
-            raise InputError("faces: index too large")
-        f = np.ascontiguousarray(f, dtype=np.int64)
-        if down:  # z = -depth: a mirror, so each face's order is reversed to keep its normal's side
-            v = v * np.array([1.0, 1.0, -1.0])
-            f = np.ascontiguousarray(f[:, ::-1])
+        v, f, name, color = mesh_inputs(vertices, faces, name, color, z_positive)
         if not isinstance(kind, str):
             raise InputError(f"kind: {kind!r} is not a string")
         k = None if tiles is None else cv.integer(tiles, "tiles")
@@ -368,25 +310,7 @@ class Scene(SceneColorings):
         :meth:`add_heightfield`).
         priority: 0..=15, who wins a depth tie (higher is seen); default by kind (:meth:`set_priority`).
         Returns the object id."""
-        from . import io
-
-        well = io.xtgeo_kind(path) == "well"
-        down = _down(z_positive, well)
-        lab = label_arg(label, values)
-        if well:
-            kw = io.from_xtgeo_well(path, log=log, max_stations=max_stations, z_positive="down" if down else "up")
-            name = io.xtgeo_name(path) if name is None else name
-            if values is None and lab is None and isinstance(log, str):
-                lab = log
-            values = kw["values"] if values is None else values
-            p = cv.float_array(kw["path"], "path", 2, 3)
-        else:
-            for arg, x in (("log", log), ("max_stations", max_stations)):
-                if x is not None:
-                    raise InputError(f"{arg}: only with an xtgeo Well as path (got {type(path).__name__})")
-            p = cv.float_array(path, "path", 2, 3)
-            if down:
-                p = p * np.array([1.0, 1.0, -1.0])
+        p, values, lab, name = well_inputs(path, values, label, log, max_stations, name, z_positive)
         c = cv.coloring(None, values, cmap, clim, nan_color, 1)
         return self._added(self._s.add_well(
             p, cv.number(radius, "radius"), cv.integer(sides, "sides"), cv.name(name), cv.color(color), c,
@@ -588,42 +512,7 @@ class Scene(SceneColorings):
             one, or a name; see :meth:`add_heightfield`).
             priority: 0..=15, who wins a depth tie (higher is seen); default by kind (:meth:`set_priority`).
             Returns the object id."""
-        from . import io
-
-        grid = io.xtgeo_kind(corners) == "grid"
-        down = _down(z_positive, grid)
-        if grid:
-            kw = io.from_xtgeo_grid(corners, values=None, z_positive="down" if down else "up")
-            name = io.xtgeo_name(corners) if name is None else name
-            active = kw["active"] if active is None else active
-            xgrid: Any = corners
-            corners = kw["corners"]
-        else:
-            xgrid = None
-            if down:
-                data, mask = cv.unmasked(corners, "corners")
-                corners = cv.float_array(data, "corners", 5) * np.array([1.0, 1.0, -1.0])
-                if mask is not None:
-                    corners = np.ma.MaskedArray(corners, mask=mask)
-        lab = label_arg(label, values)
-        if isinstance(values, str) or io.xtgeo_kind(values) == "gridproperty":
-            if lab is None and isinstance(values, str):
-                lab = values
-            values = io.xtgeo_property(values, xgrid, "values")
-        if isinstance(region, str) or io.xtgeo_kind(region) == "gridproperty":
-            r = io.xtgeo_property(region, xgrid, "region")
-            region = np.where(np.isfinite(r), r, -1).astype(np.int64)
-        data, mask = cv.unmasked(corners, "corners")
-        if mask is not None:
-            raise InputError("corners: masked corners are not supported; mark their cells inactive")
-        c = cv.float_array(data, "corners", 5)
-        act = None if active is None else cv.flags(active, "active", 3)
-        reg = None
-        if region is not None:
-            r = cv.int_array(region, "region", 3)
-            if r.size and (r.min() < np.iinfo(np.int32).min or r.max() > np.iinfo(np.int32).max):
-                raise InputError("region: ids must fit int32")
-            reg = np.ascontiguousarray(r, dtype=np.int32)
+        c, act, reg, values, lab, name = grid_inputs(corners, active, region, values, label, name, z_positive)
         b = cv.int_array(blocks, "blocks", 1)
         if b.shape != (2,):
             raise InputError(f"blocks: shape {b.shape} is not (2,)")

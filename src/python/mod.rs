@@ -1,46 +1,26 @@
 //! PyO3 bindings, a thin module list over the pure core: numpy in and out, the GIL released
 //! around every piece of real work, errors mapped once onto geocull's exception hierarchy
-//! (`From<Error> for PyErr`) and no panic ever crossing into Python. All value checking lives in
-//! the core; the Python package (python/geocull) only coerces types and shapes before calling in.
+//! (`From<Error> for PyErr` in errors.rs, which defines the classes) and no panic ever crossing
+//! into Python. All value checking lives in the core; the Python package (python/geocull) only
+//! coerces types and shapes before calling in.
 //!
 //! Threads: every class holding mutable core state (Scene, Renderer) keeps it in a `Mutex` and is
 //! a `frozen` pyclass (methods take `&self`); [`with_lock`] takes the lock with the GIL released.
 //! Lock order: a renderer before a scene, never the other way.
 //!
 //! One file per Python class: `scene.rs` (Scene), `camera.rs` (Camera), `renderer.rs` (Renderer
-//! and the frame dict), `iso.rs` (Volume, render_isosurface).
+//! and the frame dict), `iso.rs` (Volume, render_isosurface); `errors.rs` the exception classes.
 
-use crate::error::{Error, Interrupt};
+use crate::error::Interrupt;
 use pyo3::prelude::*;
-use pyo3::types::PyType;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 mod camera;
+mod errors;
 mod iso;
 mod renderer;
 mod scene;
-
-/// Raises geocull's exception class `name` (defined in python/geocull/_errors.py).
-fn raise(py: Python<'_>, name: &str, msg: String) -> PyErr {
-    match py.import("geocull._errors").and_then(|m| m.getattr(name)) {
-        Ok(cls) => match cls.cast_into::<PyType>() {
-            Ok(t) => PyErr::from_type(t, msg),
-            Err(_) => pyo3::exceptions::PyRuntimeError::new_err(msg),
-        },
-        Err(_) => pyo3::exceptions::PyRuntimeError::new_err(msg),
-    }
-}
-
-impl From<Error> for PyErr {
-    fn from(e: Error) -> PyErr {
-        Python::attach(|py| match e {
-            Error::Input { .. } => raise(py, "InputError", e.to_string()),
-            Error::Device(m) => raise(py, "DeviceError", m),
-            Error::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"),
-        })
-    }
-}
 
 /// [`run`] with a cancellation hook for `f` (see `crate::error::Interrupt`): Ctrl-C during a long
 /// render or build raises KeyboardInterrupt within about `Interrupt::POLL`, not at the end. The
@@ -106,7 +86,7 @@ pub(crate) fn run<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> 
                 .cloned()
                 .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_default();
-            Err(raise(py, "GeocullError", format!("internal error in geocull (please report): {what}")))
+            Err(errors::internal_error(&what))
         }
     }
 }
@@ -139,6 +119,7 @@ pub(crate) fn contiguous<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
 #[pymodule]
 fn _geocull(m: &Bound<'_, PyModule>) -> PyResult<()> {
     crate::error::record_process();
+    errors::register(m)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<renderer::PyRenderer>()?;
