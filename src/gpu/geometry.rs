@@ -49,8 +49,8 @@ pub struct SceneGeometry {
     pub levels: Vec<Vec<LevelDraw>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
-    /// Per tile, boxes whose union holds its fine triangles (`TileMesh::sub_boxes`, [`SUB_BOXES`]²
-    /// cells), origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
+    /// Per tile, boxes whose union holds its fine triangles (`TileMesh::occludee_boxes`),
+    /// origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
     pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
     /// Per tile, a height-field tile's height blocks (`Object::height_blocks`, origin-relative
     /// like `bbox`): what the CPU proof of hidden tiles (`cull::hidden`) reads; None for others.
@@ -105,9 +105,6 @@ pub struct DrawRun {
     pub cells: bool,
 }
 
-/// Cells per side of a tile's sub-boxes (`SceneGeometry::sub_boxes`).
-pub const SUB_BOXES: usize = 2;
-
 /// The draw of one LOD level of a tile and its errors (`lod::levels::Level`).
 #[derive(Clone, Copy, Debug)]
 pub struct LevelDraw {
@@ -152,10 +149,10 @@ fn tile_bbox(t: &crate::lod::TileMesh) -> (DVec3, DVec3) {
     (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
 }
 
-/// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them.
+/// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them (`TileMesh::occludee_boxes`).
 fn tile_sub_boxes(t: &crate::lod::TileMesh) -> Vec<(DVec3, DVec3)> {
     let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
-    t.sub_boxes(SUB_BOXES).into_iter().map(|(l, h)| (d(l), d(h))).collect()
+    t.occludee_boxes().into_iter().map(|(l, h)| (d(l), d(h))).collect()
 }
 
 /// The second vertex stream's words of `n` vertices (`SceneGeometry::values`): the scalar (0

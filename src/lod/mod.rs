@@ -130,6 +130,45 @@ impl TileMesh {
         (lo, hi)
     }
 
+    /// Boxes whose union holds every fine triangle, as the box test uses them in place of the
+    /// tile's box at level 0: of [`Self::sub_boxes`] (2 × 2 cells of the (x, y) box: a sloping
+    /// surface) and [`Self::slice_boxes`] (4 slices along the box's longest side: a tube, a steep
+    /// or long piece), the set of the smaller total volume.
+    pub fn occludee_boxes(&self) -> Vec<([f32; 3], [f32; 3])> {
+        let volume = |b: &[([f32; 3], [f32; 3])]| -> f64 {
+            b.iter().map(|(l, h)| (0..3).map(|a| (h[a] as f64 - l[a] as f64).max(0.0)).product::<f64>()).sum()
+        };
+        let (grid, slices) = (self.sub_boxes(2), self.slice_boxes(8));
+        if volume(&slices) < volume(&grid) {
+            slices
+        } else {
+            grid
+        }
+    }
+
+    /// Boxes whose union holds every fine triangle: the tile's box cut across its longest side
+    /// into `k` equal slices, each the bounding box of the triangles whose centroid lies in it
+    /// (their whole extent, so slices overlap where triangles straddle); empty slices left out.
+    pub fn slice_boxes(&self, k: usize) -> Vec<([f32; 3], [f32; 3])> {
+        let k = k.max(1);
+        let (lo, hi) = (self.bbox_min, self.bbox_max);
+        let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
+        let width = (hi[axis] - lo[axis]) / k as f32;
+        let mut boxes = vec![([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]); k];
+        for t in self.fine.chunks_exact(3) {
+            let p = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            let c = (p[0][axis] + p[1][axis] + p[2][axis]) / 3.0;
+            let slot = if width > 0.0 { (((c - lo[axis]) / width).floor().max(0.0) as usize).min(k - 1) } else { 0 };
+            let (l, h) = &mut boxes[slot];
+            for q in &p {
+                *l = std::array::from_fn(|a| l[a].min(q[a]));
+                *h = std::array::from_fn(|a| h[a].max(q[a]));
+            }
+        }
+        boxes.retain(|(l, h)| l[0] <= h[0]);
+        boxes
+    }
+
     /// Boxes whose union holds every fine triangle: the tile's (x, y) box cut into `s` × `s` cells,
     /// each the bounding box of the triangles whose own box overlaps it (so the boxes overlap
     /// where triangles straddle cells); cells without triangles are left out. Tighter than the
@@ -607,6 +646,50 @@ mod tests {
         assert!(!std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
         share_indices(&mut twins);
         assert!(std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
+    }
+
+    /// A slanted tube's tile: its 8 slices along its length hold every fine triangle and a
+    /// fraction of the 2 x 2 sub-boxes' volume, so `occludee_boxes` takes them; a square height
+    /// field sloping along x keeps its sub-boxes (its slices, across y of the tied longest sides,
+    /// span its whole height).
+    #[test]
+    fn occludee_boxes_follow_a_tube_and_hold_its_triangles() {
+        let path: Vec<DVec3> = (0..=64).map(|k| DVec3::new(k as f64, 0.5 * k as f64, -0.8 * k as f64)).collect();
+        let (v, f, _) = tube::tube(&path, 0.5, 8);
+        let t = TileMesh {
+            positions: v.iter().map(|p| p.map(|c| c as f32)).collect(),
+            fine: f.iter().flat_map(|t| t.map(|k| k as u32)).collect::<Vec<_>>().into(),
+            ..Default::default()
+        };
+        let mut t = t;
+        t.compute_bbox();
+        let vol = |b: &[([f32; 3], [f32; 3])]| -> f64 {
+            b.iter().map(|(l, h)| (0..3).map(|d| (h[d] - l[d]) as f64).product::<f64>()).sum()
+        };
+        let slices = t.slice_boxes(8);
+        assert_eq!(slices.len(), 8);
+        assert!(vol(&slices) < 0.2 * vol(&t.sub_boxes(2)), "{} {}", vol(&slices), vol(&t.sub_boxes(2)));
+        assert_eq!(t.occludee_boxes(), slices);
+        for tri in t.fine.chunks_exact(3) {
+            let p = [tri[0], tri[1], tri[2]].map(|k| t.positions[k as usize]);
+            let inside = |(l, h): &([f32; 3], [f32; 3])| p.iter().all(|q| (0..3).all(|d| l[d] <= q[d] && q[d] <= h[d]));
+            assert!(slices.iter().any(inside), "{p:?}");
+        }
+        let z: Vec<f64> = (0..21 * 21).map(|k| 0.5 * (k % 21) as f64).collect();
+        let g = GridSpec {
+            z: &z,
+            nx: 21,
+            ny: 21,
+            x0: 0.0,
+            y0: 0.0,
+            dx: 1.0,
+            dy: 1.0,
+            rot: (1.0, 0.0),
+            yflip: false,
+            values: None,
+        };
+        let hf = &tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default())[0];
+        assert_eq!(hf.occludee_boxes(), hf.sub_boxes(2));
     }
 
     #[test]
