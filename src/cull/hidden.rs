@@ -23,9 +23,11 @@
 //! that crossing lies where A's triangles cover every pixel centre, so each fragment of B has a
 //! fragment of A in front of it on its pixel; were A hidden there, what hides it hides X too. B
 //! has no visible pixel. The same holds upside down. A tile is proven when its box is, or, part by
-//! part, every height block (its prism along its own plane, or its box) or sub-box.
+//! part, its height blocks (prisms along planes fitted to them, in a quadtree from the whole tile
+//! down to single blocks) or its sub-boxes.
 //!
-//! Given up (the tile left to the GPU passes): R meeting an unusable block or leaving the grid,
+//! Given up (the tile left to the GPU passes): a tile after [`SOLIDS_PER_TILE`] solids, R
+//! meeting an unusable block or leaving the grid,
 //! crossings nearer than the near plane (clipped), a gap between B and zlo whose length along the
 //! ray is under 1e-4 of the depth (the depth test could let B through), and ranges that keep
 //! growing. Holes, tiles outside the frustum and tiles not drawn only make blocks unusable where a
@@ -41,6 +43,11 @@ use glam::{DVec2, DVec3};
 use hider::{Hider, Plane};
 use rayon::prelude::*;
 
+/// The most solids (box, prisms, sub-boxes) the proof tests of one tile before it gives up on
+/// it: a visible tile fails within two or three, a tile hidden under a smooth horizon is proven
+/// within a few; curved tiles that would need their every block are left to the GPU passes.
+const SOLIDS_PER_TILE: u32 = 16;
+
 /// Per tile: proven hidden by a height field (see the module docs). Only visible tiles with a
 /// draw are considered, as hiders and as hidden, and only those where `candidate` holds as hidden
 /// (temporal frames skip the tiles seen in the last frame: they are drawn first anyway).
@@ -55,7 +62,12 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
     }
     hidden.par_iter_mut().enumerate().filter(|(b, _)| drawn(*b) && candidate(*b)).for_each(|(b, h)| {
         let object = g.tile_object_cpu[b];
+        let budget = std::cell::Cell::new(SOLIDS_PER_TILE);
         let hidden_solid = |corners: &[DVec3; 8], dip: bool| {
+            if budget.get() == 0 {
+                return false;
+            }
+            budget.set(budget.get() - 1);
             let near = corners.iter().any(|&p| (p - f.fc.eye).dot(f.fc.forward) <= f.fc.near * 1.001 + 1e-9);
             !near && hiders.iter().any(|a| a.object != object && hides(f, a, corners, dip))
         };
@@ -70,8 +82,8 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
 }
 
 /// Whether every part of tile `b` is hidden (`hidden_box`: an origin-relative box,
-/// `hidden_solid`: a render-space solid): a height-field tile's height blocks (a failing one
-/// ends the test), grown by the error of the level drawn; another tile's sub-boxes when drawn at
+/// `hidden_solid`: a render-space solid): a height-field tile's height blocks as prisms, grown by
+/// the error of the level drawn ([`Parts::hidden`]); another tile's sub-boxes when drawn at
 /// level 0.
 fn hidden_in_parts(
     f: &FrameInputs<'_>,
@@ -81,8 +93,8 @@ fn hidden_in_parts(
 ) -> bool {
     let g = f.geometry;
     if let (Some(hb), Some(e), Some(prism)) = (&g.height_blocks[b], level_error(f, b), Prisms::of(f, b)) {
-        let parts = Parts { hb, e, prism, hidden_box, hidden_solid };
-        return parts.hidden();
+        let parts = Parts { hb, e, prism, hidden_solid };
+        return parts.hidden((0, hb.columns()), (0, hb.rows.len() - 1));
     }
     let parts = &g.sub_boxes[b];
     same_draw(f.draw_args[b], g.fine[b]) && parts.len() > 1 && parts.iter().all(|&(lo, hi)| hidden_box(lo, hi))
@@ -94,27 +106,25 @@ struct Parts<'a> {
     /// The drawn level's error bound, world units.
     e: f64,
     prism: Prisms,
-    hidden_box: &'a dyn Fn(DVec3, DVec3) -> bool,
     hidden_solid: &'a dyn Fn(&[DVec3; 8], bool) -> bool,
 }
 
 impl Parts<'_> {
-    /// Whether every block is hidden, each by its prism or its box; the first that is not ends
-    /// the test (a visible tile costs a test or two per hider).
-    fn hidden(&self) -> bool {
-        let hb = self.hb;
-        let dz = DVec3::Z * self.e;
-        (0..hb.rows.len() - 1).all(|q| {
-            (0..hb.columns()).all(|p| {
-                let blk = hb.block(p, q);
-                blk.is_empty()
-                    || (self.hidden_solid)(&self.prism.of_block(hb, p, q, self.e), true)
-                    || (self.hidden_box)(
-                        DVec3::from(blk.lo.map(f64::from)) - dz,
-                        DVec3::from(blk.hi.map(f64::from)) + dz,
-                    )
-            })
-        })
+    /// Whether blocks `p0..p1` × `q0..q1` are hidden: their prism along their plane (a quadtree
+    /// over the blocks: halves or quarters, down to single blocks, the first failing block
+    /// ending the test), so that a tile whose surface is nearly planar is proven by one prism.
+    fn hidden(&self, (p0, p1): (usize, usize), (q0, q1): (usize, usize)) -> bool {
+        let Some((plane, r)) = self.hb.node_plane((p0, p1), (q0, q1)) else { return true }; // no triangle
+        if (self.hidden_solid)(&self.prism.of_node(self.hb, (p0, p1), (q0, q1), plane, r + self.e), true) {
+            return true;
+        }
+        if p1 - p0 == 1 && q1 - q0 == 1 {
+            return false;
+        }
+        let (pm, qm) = ((p0 + p1) / 2, (q0 + q1) / 2);
+        let ps: &[(usize, usize)] = if p1 - p0 > 1 { &[(p0, pm), (pm, p1)] } else { &[(p0, p1)] };
+        let qs: &[(usize, usize)] = if q1 - q0 > 1 { &[(q0, qm), (qm, q1)] } else { &[(q0, q1)] };
+        qs.iter().all(|&q| ps.iter().all(|&p| self.hidden(p, q)))
     }
 }
 
@@ -144,18 +154,25 @@ impl Prisms {
         Some(Prisms { axes, first, placement: f.placement(oi), z_scale: f.camera.z_scale })
     }
 
-    /// Block (p, q)'s prism: its footprint's corners, at its plane's heights less and more its
-    /// residual and `e`, in render space, pushed out against round-off as `render_box` grows
-    /// boxes. Corner c: bit 0 the larger column, bit 1 the larger row, bit 2 the top.
-    fn of_block(&self, hb: &HeightBlocks, p: usize, q: usize, e: f64) -> [DVec3; 8] {
-        let blk = hb.block(p, q);
-        let [z00, z10, z01] = blk.plane.map(f64::from);
+    /// The prism of blocks `p0..p1` × `q0..q1`: their footprint's corners, at `plane`'s heights
+    /// (at its corners (p0, q0), (p1, q0), (p0, q1), origin-relative) less and more `r`, in render
+    /// space, pushed out against round-off as `render_box` grows boxes. Corner c: bit 0 the larger
+    /// column, bit 1 the larger row, bit 2 the top.
+    fn of_node(
+        &self,
+        hb: &HeightBlocks,
+        (p0, p1): (usize, usize),
+        (q0, q1): (usize, usize),
+        plane: [f64; 3],
+        r: f64,
+    ) -> [DVec3; 8] {
+        let [z00, z10, z01] = plane;
         let own = [z00, z10, z01, z10 + z01 - z00];
-        let r = blk.residual as f64 + e;
         let (u, v) = (DVec2::from(self.axes.u).normalize(), DVec2::from(self.axes.v).normalize());
         let zs = self.z_scale;
         let corners: [DVec3; 8] = std::array::from_fn(|c| {
-            let (i, j) = (self.first.0 + hb.cols[p + (c & 1)], self.first.1 + hb.rows[q + (c >> 1 & 1)]);
+            let (p, q) = (if c & 1 != 0 { p1 } else { p0 }, if c & 2 != 0 { q1 } else { q0 });
+            let (i, j) = (self.first.0 + hb.cols[p], self.first.1 + hb.rows[q]);
             let xy = DVec2::from(self.axes.pos(i, j)) + self.placement.truncate();
             let z = own[c & 3] + if c & 4 != 0 { r } else { -r };
             DVec3::new(xy.x, xy.y, (z + self.placement.z) * zs)
@@ -194,13 +211,15 @@ fn index_bounds(a: &Hider, ps: impl Iterator<Item = DVec2>) -> (DVec2, DVec2) {
 }
 
 /// Whether height field `a` hides every point of the convex hull of `corners` (render space;
-/// the module docs' argument): with heights as they are, else (`dip`) as heights over `a`'s
-/// local dip around it.
+/// the module docs' argument): with heights as they are, or (`dip`, where `a` has one there) as
+/// heights over `a`'s local dip around it.
 fn hides(f: &FrameInputs<'_>, a: &Hider, corners: &[DVec3; 8], dip: bool) -> bool {
     let m = a.margin();
     let (lo, hi) = index_bounds(a, corners.iter().map(|p| p.truncate()));
-    hides_over(f, a, corners, (lo, hi), m, &Plane::FLAT)
-        || dip && a.dip(lo, hi).is_some_and(|plane| hides_over(f, a, corners, (lo, hi), m, &plane))
+    match a.dip(lo, hi).filter(|_| dip) {
+        Some(plane) => hides_over(f, a, corners, (lo, hi), m, &plane),
+        None => hides_over(f, a, corners, (lo, hi), m, &Plane::FLAT),
+    }
 }
 
 /// The module docs' argument with heights over `plane`: `corners` those of B, `lo..hi` its

@@ -61,6 +61,43 @@ impl HeightBlocks {
     }
 }
 
+impl HeightBlocks {
+    /// Block (p, q)'s plane at local sample (c, r) (linear in the sample indices).
+    pub fn plane_at(&self, p: usize, q: usize, c: f64, r: f64) -> f64 {
+        let [z00, z10, z01] = self.block(p, q).plane.map(f64::from);
+        let (c0, r0) = (self.cols[p] as f64, self.rows[q] as f64);
+        let (w, h) = (self.cols[p + 1] as f64 - c0, self.rows[q + 1] as f64 - r0);
+        z00 + (z10 - z00) * (c - c0) / w + (z01 - z00) * (r - r0) / h
+    }
+
+    /// A plane and a residual for blocks `p0..p1` × `q0..q1` together: the plane (its heights at
+    /// the local samples (cols[p0], rows[q0]), (cols[p1], rows[q0]), (cols[p0], rows[q1])) fitted
+    /// to the corners of their non-empty blocks' planes, and a bound on the vertical distance
+    /// from it of every point of their triangles: over each block, the largest difference of the
+    /// two planes at its corners (two planes over a parallelogram differ most at a corner) plus
+    /// the block's residual, rounded up. None without a non-empty block or for a degenerate fit.
+    pub fn node_plane(&self, (p0, p1): (usize, usize), (q0, q1): (usize, usize)) -> Option<([f64; 3], f64)> {
+        let blocks =
+            || (q0..q1).flat_map(move |q| (p0..p1).map(move |p| (p, q))).filter(|&(p, q)| !self.block(p, q).is_empty());
+        let corners = |(p, q): (usize, usize)| {
+            [(p, q), (p + 1, q), (p, q + 1), (p + 1, q + 1)].map(|(i, j)| (self.cols[i] as f64, self.rows[j] as f64))
+        };
+        let points = blocks().flat_map(|b| corners(b).map(|(c, r)| ((c, r), self.plane_at(b.0, b.1, c, r))));
+        let (z0, a, b) = fit_plane(points)?;
+        let node = |c: f64, r: f64| z0 + a * c + b * r;
+        let (c0, c1, r0, r1) = (self.cols[p0] as f64, self.cols[p1] as f64, self.rows[q0] as f64, self.rows[q1] as f64);
+        let mut res = 0.0f64;
+        for blk in blocks() {
+            let d = corners(blk)
+                .iter()
+                .map(|&(c, r)| (self.plane_at(blk.0, blk.1, c, r) - node(c, r)).abs())
+                .fold(0.0, f64::max);
+            res = res.max(d + self.block(blk.0, blk.1).residual as f64);
+        }
+        Some(([node(c0, r0), node(c1, r0), node(c0, r1)], res * (1.0 + 1e-6) + 1e-9 * (1.0 + node(c0, r0).abs())))
+    }
+}
+
 /// Block boundaries along a side of `cells` cells (≥ 1): `0 = b[0] < ... < b[n] = cells`, `n` the
 /// fewest blocks of at most [`BLOCK_CELLS`] cells, as even as integers allow. The same for every
 /// tile side of the same length, so that the blocks of a tile row (column) line up.
@@ -184,6 +221,34 @@ mod tests {
             let (lo, hi) = b.windows(2).fold((usize::MAX, 0), |(lo, hi), w| (lo.min(w[1] - w[0]), hi.max(w[1] - w[0])));
             assert!(hi - lo <= 1, "{cells}: {b:?}");
         }
+    }
+
+    #[test]
+    fn a_node_plane_holds_its_blocks_surfaces() {
+        // A curved surface: every sample lies within the node residual of the node plane, for
+        // nodes of every size.
+        let z = |li: usize, lj: usize| (0.3 * li as f64).sin() * 4.0 + 0.05 * (li * lj) as f64;
+        let hb = height_blocks(30, 26, |li, lj| Some([li as f32, lj as f32, z(li, lj) as f32]));
+        let (pc, qc) = (hb.columns(), hb.rows.len() - 1);
+        for (p0, p1, q0, q1) in [(0, pc, 0, qc), (0, 1, 0, 1), (1, pc, 0, 2), (0, 2, 1, qc)] {
+            let (plane, res) = hb.node_plane((p0, p1), (q0, q1)).unwrap();
+            let (c0, r0) = (hb.cols[p0] as f64, hb.rows[q0] as f64);
+            let (w, h) = (hb.cols[p1] as f64 - c0, hb.rows[q1] as f64 - r0);
+            for lj in hb.rows[q0]..=hb.rows[q1] {
+                for li in hb.cols[p0]..=hb.cols[p1] {
+                    let v = plane[0]
+                        + (plane[1] - plane[0]) * (li as f64 - c0) / w
+                        + (plane[2] - plane[0]) * (lj as f64 - r0) / h;
+                    assert!(
+                        (z(li, lj) as f32 as f64 - v).abs() <= res,
+                        "({li}, {lj}): {} > {res}",
+                        (z(li, lj) - v).abs()
+                    );
+                }
+            }
+        }
+        let single = hb.node_plane((1, 2), (1, 2)).unwrap();
+        assert!(single.1 >= hb.block(1, 1).residual as f64);
     }
 
     #[test]

@@ -93,8 +93,9 @@ impl Hider {
         if !(lo.x >= xb[0] + m && hi.x <= xb[tx] - m && lo.y >= yb[0] + m && hi.y <= yb[ty] - m) {
             return None;
         }
+        let ip = self.index_plane(plane);
         self.blocks_meeting(lo, hi)?.try_fold((f64::INFINITY, f64::NEG_INFINITY), |r, (p, q, z)| {
-            let (a, b) = self.over(p, q, &z?, plane);
+            let (a, b) = self.over(p, q, &z?, ip);
             Some((r.0.min(a), r.1.max(b)))
         })
     }
@@ -102,28 +103,39 @@ impl Hider {
     /// The range of heights over `plane` of the usable blocks meeting `lo..hi` (clamped to the
     /// grid), None without any: where the proof starts from, not what it rests on.
     pub fn first_guess(&self, lo: DVec2, hi: DVec2, plane: &Plane) -> Option<(f64, f64)> {
+        let ip = self.index_plane(plane);
         let r = self
             .blocks_meeting(lo, hi)?
-            .filter_map(|(p, q, z)| Some(self.over(p, q, &z?, plane)))
+            .filter_map(|(p, q, z)| Some(self.over(p, q, &z?, ip)))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |r, (a, b)| (r.0.min(a), r.1.max(b)));
         (r.0 <= r.1).then_some(r)
     }
 
-    /// Block (p, q)'s heights over `plane`: both of its bounds (the box's z range less the
-    /// plane's extremes, its own plane less `plane` at its corners, where the difference of two
-    /// planes over a parallelogram peaks, widened by its residual), intersected.
-    fn over(&self, p: usize, q: usize, z: &BlockZ, plane: &Plane) -> (f64, f64) {
+    /// `plane` as a function of the sample indices: its value at column c, row r is
+    /// `k[0] + k[1] c + k[2] r` (the map to render space is affine); None for the flat plane.
+    fn index_plane(&self, plane: &Plane) -> Option<[f64; 3]> {
+        let g = DVec2::new(plane.a, plane.b);
+        (g != DVec2::ZERO).then(|| [g.dot(self.at0 - plane.centre), g.dot(self.fwd.x_axis), g.dot(self.fwd.y_axis)])
+    }
+
+    /// Block (p, q)'s heights over a plane (`ip`: [`Self::index_plane`]): both of its bounds (the
+    /// box's z range less the plane's extremes, its own plane less the plane at its corners,
+    /// where the difference of two planes over a parallelogram peaks, widened by its residual),
+    /// intersected.
+    fn over(&self, p: usize, q: usize, z: &BlockZ, ip: Option<[f64; 3]>) -> (f64, f64) {
         let [z00, z10, z01] = z.plane;
         let own = [z00, z10, z01, z10 + z01 - z00];
-        if plane.a == 0.0 && plane.b == 0.0 {
+        let Some([k0, kc, kr]) = ip else {
             let (lo, hi) = own.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, &v| (r.0.min(v), r.1.max(v)));
             return ((lo - z.r).max(z.lo), (hi + z.r).min(z.hi));
-        }
+        };
+        let (c0, c1, r0, r1) = (self.xb[p], self.xb[p + 1], self.yb[q], self.yb[q + 1]);
+        let v00 = k0 + kc * c0 + kr * r0;
+        let v = [v00, v00 + kc * (c1 - c0), v00 + kr * (r1 - r0), k0 + kc * c1 + kr * r1];
         let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
-        for (k, c) in [(p, q), (p + 1, q), (p, q + 1), (p + 1, q + 1)].into_iter().enumerate() {
-            let v = plane.at(self.xy(DVec2::new(self.xb[c.0], self.yb[c.1])));
-            (lo.0, hi.0) = (lo.0.min(own[k] - v), hi.0.max(own[k] - v));
-            (lo.1, hi.1) = (lo.1.min(v), hi.1.max(v));
+        for k in 0..4 {
+            (lo.0, hi.0) = (lo.0.min(own[k] - v[k]), hi.0.max(own[k] - v[k]));
+            (lo.1, hi.1) = (lo.1.min(v[k]), hi.1.max(v[k]));
         }
         ((lo.0 - z.r).max(z.lo - hi.1), (hi.0 + z.r).min(z.hi - lo.1))
     }
