@@ -442,6 +442,41 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     frame after it was sent to the browser (an exception there is shown under the image, as any
     other in the viewer's callbacks, and kept as ``viewer.last_error``). Needs ``anywidget`` (and
     with it ipywidgets): ``pip install anywidget``."""
+    canvas_cls, box_cls = _widget_classes()
+    import ipywidgets as widgets
+
+    canvas = canvas_cls()
+    stats = widgets.HTML()
+    stats.add_class("geocull-stats")
+    link = _Link(canvas, stats, on_frame)
+    state = ViewerState(scene, width, height, culling, pixel_threshold, camera, renderer, link.show, min_distance,
+                        z_scale, **render_options)
+    link.state = state
+    canvas.z_scale = state.z_scale
+    canvas.on_msg(link.on_msg)
+    mode, thr, zs, reset_button = _controls(state)
+    link.zs = zs
+    mode.observe(lambda ch: link.guarded("culling menu", state.set_culling, ch["new"]), names="value")
+    thr.observe(lambda ch: link.guarded("pixel threshold slider", state.set_pixel_threshold, ch["new"]),
+                names="value")
+    reset_button.on_click(lambda _b: link.guarded("reset button", link.reset))
+    zs.observe(lambda ch: link.slid(ch["new"]), names="value")
+    canvas.observe(lambda ch: link.guarded("vertical exaggeration", link.apply_z, ch["new"]), names="z_scale")
+    box = box_cls([canvas, widgets.HBox([mode, thr, zs, reset_button]), stats])
+    link.box = box
+    box.state = state
+    box.canvas = canvas
+    box.stats = stats
+    box.controls = dict(culling=mode, pixel_threshold=thr, z_scale=zs, reset=reset_button)
+    box.handle_message = lambda content: link.on_msg(canvas, content, [])
+    box.last_error = None
+    link.guarded("first frame", state.render)
+    return box
+
+
+def _widget_classes() -> tuple[Any, Any]:
+    """The viewer's canvas (an anywidget with the browser side :data:`_ESM`) and its box (the
+    canvas, the controls and the stats; with a PNG of the last frame where no widget can be drawn)."""
     try:
         import anywidget
         import ipywidgets as widgets
@@ -466,111 +501,115 @@ def Viewer(  # noqa: N802 - a factory that reads as the class it returns
     class _ViewerBox(widgets.VBox):
         def _repr_mimebundle_(self, **kwargs: Any) -> Any:
             data = super()._repr_mimebundle_(**kwargs)
+            state = self.state
             if isinstance(data, dict) and state.result is not None:  # where no widget can be drawn
                 data["image/png"] = base64.b64encode(encode_png(state.result.image)).decode("ascii")
                 data["text/plain"] = f"geocull Viewer · {state.stats_text()}"
             return data
 
-    canvas = _Canvas()
-    stats = widgets.HTML()
-    stats.add_class("geocull-stats")
+    return _Canvas, _ViewerBox
 
-    def stats_html() -> str:
-        return f"<span style='font-family:monospace'>{state.stats_text()}</span>"
 
-    def show(res: RenderResult[RenderStats]) -> None:
-        h, w = res.image.shape[:2]
-        with canvas.hold_sync():
-            canvas.width, canvas.height = int(w), int(h)
-            canvas.frame = res.image.tobytes()
-            canvas.frames = state.frames
-        stats.value = stats_html()
-        if on_frame is not None:
-            on_frame(res)
-        canvas.error = ""
+def _controls(state: ViewerState) -> tuple[Any, Any, Any, Any]:
+    """The controls under the image: the culling menu, the pixel-threshold and vertical-exaggeration
+    sliders (at the state's values) and the reset button."""
+    import ipywidgets as widgets
 
-    def guarded(what: str, fn: Callable[..., object], *args: Any) -> None:
-        try:
-            fn(*args)
-        except Exception as e:  # noqa: BLE001 - shown under the image: the viewer must go on
-            box.last_error = e
-            canvas.error = _describe(what, e)
-
-    state = ViewerState(scene, width, height, culling, pixel_threshold, camera, renderer, show, min_distance,
-                        z_scale, **render_options)
-    canvas.z_scale = state.z_scale
-
-    def note_browser(content: dict[str, Any]) -> None:
-        fps, lat = _opt_float(content.get("fps")), _opt_float(content.get("latency_ms"))
-        if fps is not None:
-            state.browser_fps = fps
-        if lat is not None:
-            state.browser_latency_ms = lat
-
-    def view(content: dict[str, Any]) -> None:
-        note_browser(content)
-        if content.get("epoch", canvas.epoch) != canvas.epoch:
-            return  # motion made before "reset view": dropped
-        state.move(*(float(content.get(k) or 0.0) for k in ("dx", "dy", "wheel")))
-
-    def on_msg(_widget: Any, content: Any, _buffers: Any) -> None:
-        if not isinstance(content, dict):
-            return
-        if content.get("type") == "stats":
-            note_browser(content)
-            if state.result is not None:
-                stats.value = stats_html()
-        elif content.get("type") == "view":
-            t0 = time.perf_counter()
-            if EARLY_NEXT:  # the browser may send its next request now: it waits behind this one
-                canvas.send({"type": "started", "id": str(content.get("id")), "seq": content.get("seq")})
-            with canvas.hold_sync():  # the frame and its answer in one update
-                try:
-                    guarded("drag/zoom", view, content)
-                finally:
-                    canvas.ack = {"id": str(content.get("id")), "seq": content.get("seq"),
-                                  "kernel_ms": round((time.perf_counter() - t0) * 1000.0, 2)}
-
-    def reset() -> None:
-        canvas.epoch += 1  # first, so that the browser drops what it has queued
-        state.reset()
-
-    canvas.on_msg(on_msg)
     mode = widgets.Dropdown(options=list(CULLING_MODES), value=state.culling, description="culling")
     stops = sorted({*THRESHOLD_STOPS, float(state.pixel_threshold)})
     thr = widgets.SelectionSlider(options=[(f"{v:g}", v) for v in stops], value=float(state.pixel_threshold),
                                   description="pixels ≤", continuous_update=False)
     zs = widgets.SelectionSlider(options=_stops(Z_SCALE_STOPS, state.z_scale), value=state.z_scale,
                                  description="z ×", continuous_update=False)
+    reset_button = widgets.Button(description="reset view")
+    return mode, thr, zs, reset_button
 
-    syncing = [False]  # the slider follows the trait: its own events then are not the user's
 
-    def apply_z(z: float) -> None:
+class _Link:
+    """A Viewer's callbacks between the browser, the controls and its :class:`ViewerState`: frames
+    to the canvas, the browser's messages (views, its measurements), reset, the vertical
+    exaggeration's slider and trait, and exceptions shown under the image."""
+
+    state: ViewerState  # set by Viewer once the state exists (its on_frame is :meth:`show`)
+    zs: Any  # the vertical-exaggeration slider, set by Viewer
+    box: Any  # the widget, set by Viewer: its last_error
+
+    def __init__(self, canvas: Any, stats: Any,
+                 on_frame: Callable[[RenderResult[RenderStats]], object] | None) -> None:
+        self.canvas = canvas
+        self.stats = stats
+        self.on_frame = on_frame
+        self.syncing = False  # the slider follows the trait: its own events then are not the user's
+
+    def stats_html(self) -> str:
+        return f"<span style='font-family:monospace'>{self.state.stats_text()}</span>"
+
+    def show(self, res: RenderResult[RenderStats]) -> None:
+        canvas = self.canvas
+        h, w = res.image.shape[:2]
+        with canvas.hold_sync():
+            canvas.width, canvas.height = int(w), int(h)
+            canvas.frame = res.image.tobytes()
+            canvas.frames = self.state.frames
+        self.stats.value = self.stats_html()
+        if self.on_frame is not None:
+            self.on_frame(res)
+        canvas.error = ""
+
+    def guarded(self, what: str, fn: Callable[..., object], *args: Any) -> None:
+        try:
+            fn(*args)
+        except Exception as e:  # noqa: BLE001 - shown under the image: the viewer must go on
+            self.box.last_error = e
+            self.canvas.error = _describe(what, e)
+
+    def note_browser(self, content: dict[str, Any]) -> None:
+        fps, lat = _opt_float(content.get("fps")), _opt_float(content.get("latency_ms"))
+        if fps is not None:
+            self.state.browser_fps = fps
+        if lat is not None:
+            self.state.browser_latency_ms = lat
+
+    def view(self, content: dict[str, Any]) -> None:
+        self.note_browser(content)
+        if content.get("epoch", self.canvas.epoch) != self.canvas.epoch:
+            return  # motion made before "reset view": dropped
+        self.state.move(*(float(content.get(k) or 0.0) for k in ("dx", "dy", "wheel")))
+
+    def on_msg(self, _widget: Any, content: Any, _buffers: Any) -> None:
+        canvas = self.canvas
+        if not isinstance(content, dict):
+            return
+        if content.get("type") == "stats":
+            self.note_browser(content)
+            if self.state.result is not None:
+                self.stats.value = self.stats_html()
+        elif content.get("type") == "view":
+            t0 = time.perf_counter()
+            if EARLY_NEXT:  # the browser may send its next request now: it waits behind this one
+                canvas.send({"type": "started", "id": str(content.get("id")), "seq": content.get("seq")})
+            with canvas.hold_sync():  # the frame and its answer in one update
+                try:
+                    self.guarded("drag/zoom", self.view, content)
+                finally:
+                    canvas.ack = {"id": str(content.get("id")), "seq": content.get("seq"),
+                                  "kernel_ms": round((time.perf_counter() - t0) * 1000.0, 2)}
+
+    def reset(self) -> None:
+        self.canvas.epoch += 1  # first, so that the browser drops what it has queued
+        self.state.reset()
+
+    def apply_z(self, z: float) -> None:
+        state, zs = self.state, self.zs
         state.set_z_scale(z)
-        syncing[0] = True
+        self.syncing = True
         try:
             if state.z_scale not in [v for _, v in zs.options]:  # a value from Python or the keys: a stop of its own
                 zs.options = _stops([v for _, v in zs.options], state.z_scale)
             zs.value = state.z_scale
         finally:
-            syncing[0] = False
+            self.syncing = False
 
-    def slid(z: float) -> None:
-        if not syncing[0]:
-            canvas.z_scale = z
-
-    reset_button = widgets.Button(description="reset view")
-    mode.observe(lambda ch: guarded("culling menu", state.set_culling, ch["new"]), names="value")
-    thr.observe(lambda ch: guarded("pixel threshold slider", state.set_pixel_threshold, ch["new"]), names="value")
-    reset_button.on_click(lambda _b: guarded("reset button", reset))
-    zs.observe(lambda ch: slid(ch["new"]), names="value")
-    canvas.observe(lambda ch: guarded("vertical exaggeration", apply_z, ch["new"]), names="z_scale")
-    box = _ViewerBox([canvas, widgets.HBox([mode, thr, zs, reset_button]), stats])
-    box.state = state
-    box.canvas = canvas
-    box.stats = stats
-    box.controls = dict(culling=mode, pixel_threshold=thr, z_scale=zs, reset=reset_button)
-    box.handle_message = lambda content: on_msg(canvas, content, [])
-    box.last_error = None
-    guarded("first frame", state.render)
-    return box
+    def slid(self, z: float) -> None:
+        if not self.syncing:
+            self.canvas.z_scale = z

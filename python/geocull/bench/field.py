@@ -39,6 +39,7 @@ Nothing is asserted: the tests check what holds by construction.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import statistics
@@ -378,130 +379,193 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
     grid_rows=...)``."""
     import geocull as gc
 
-    from . import report
-
     t_start = time.perf_counter()
     w, h, rep = int(cfg["width"]), int(cfg["height"]), max(1, int(cfg.get("repeats", 3)))
     data = cfg.get("data") or str(default_data_dir())
     _say(f"bench[field/{cfg.get('mode', 'full')}]: reading and building the field from {data}")
-    field = build_field(data)
-    scene = field["scene"]
-    _say(f"bench: field read in {field['read_s']:.1f} s, built in {field['build_s']:.1f} s: "
+    fld = build_field(data)
+    scene = fld["scene"]
+    _say(f"bench: field read in {fld['read_s']:.1f} s, built in {fld['build_s']:.1f} s: "
          f"{scene.n_triangles:,} triangles in {scene.n_tiles} tiles")
-    vs = views(field["reservoir_bounds"], w, h, cfg.get("views"))
+    vs = views(fld["reservoir_bounds"], w, h, cfg.get("views"))
     renderer, r_grid = gc.Renderer(w, h), gc.Renderer(w, h)
-    kinds = field["tile_kind"]
     meths = methods()
-    by_name = dict(meths)
-
-    gpv = None
-    frozen = None
-    pv_version: dict[str, str] = {}
+    ctx = _Run(fld=fld, renderer=renderer, r_grid=r_grid, meths=meths, by_name=dict(meths), w=w, h=h, rep=rep,
+               t_start=t_start)
     if cfg.get("pyvista", True):
-        try:
-            import pyvista
-            import vtk
-
-            from .. import pyvista as gpv_mod
-
-            gpv = gpv_mod
-            frozen = _Frozen(scene)
-            pv_version = dict(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
-        except Exception as e:  # pragma: no cover - environment dependent
-            _say(f"bench: PyVista unavailable ({e}); skipping its rows")
-
-    rows: list[dict[str, Any]] = []
-    pv_setup_s: list[float] = []
-    grid_rows: list[dict[str, Any]] = []
+        _import_pyvista(ctx)
     for vi, (vname, cam, angles) in enumerate(vs):
         _say(f"bench: view {vi + 1}/{len(vs)} {vname}: warm-up and image errors")
-        ref = renderer.render(scene, cam, culling="none")
-        oracle = renderer.render(scene, cam, culling="oracle")
-        visible = np.asarray(oracle.tile_pixels)
-        oracle_tiles = int(np.count_nonzero(visible))
-        first: dict[str, dict[str, Any]] = {}
-        primed = False  # temporal's history (one per renderer, whatever its options) is this view
-        for name, rk in meths:
-            if name == "none" or rk == dict(culling="oracle"):
-                res = ref if name == "none" else oracle
-            else:
-                res = renderer.render(scene, cam, **rk)
-                if rk["culling"] == "temporal" and not primed:
-                    res, primed = renderer.render(scene, cam, **rk), True
-            s: dict[str, Any] = dict(res.stats)
-            # tiles drawn per object kind, against the oracle's (visible in the unculled image)
-            by_kind = {k: [int(np.count_nonzero(res.tile_drawn & (kinds == k))),
-                           int(np.count_nonzero((visible > 0) & (kinds == k)))] for k in field["kinds"]}
-            first[name] = dict(stats={k: s[k] for k in STAT_KEYS if k in s}, tiles_by_kind=by_kind,
-                               **_diff_summary(res, ref, visible))
-            del res
-        del oracle
-        near, far = ref.near, ref.far
+        _run_view(ctx, vname, cam, angles)
+    return dict(summary=_summary(cfg, ctx, data, vs), rows=ctx.rows, grid_rows=ctx.grid_rows)
 
-        def job(rk: dict[str, Any], cam: Any = cam) -> Any:
-            return lambda: renderer.render(scene, cam, **rk).stats["total_ms"]
 
-        jobs: list[tuple[str, Any]] = [(name, job(rk)) for name, rk in meths]
-        setup = None
-        pv_err: dict[str, Any] = {}
-        if gpv is not None:
-            t0 = time.perf_counter()
-            setup = gpv._Setup(frozen, cam, w, h, False, True, near, far, (0.0, 0.0, 0.0), 1e-4)
-            setup.render()  # warm-up: context, shaders, geometry upload
-            pv_setup_s.append(time.perf_counter() - t0)
-            jobs.append(("pyvista", setup.render))
-        try:
-            _say(f"bench: view {vname}: {rep} timed round(s) of {len(jobs)} methods")
-            times = report.timed_rounds(jobs, rep)
-            if setup is not None:
-                from ..compare import coverage_agreement, depth_error
+@dataclasses.dataclass
+class _Run:
+    """A run's field, renderers, methods and settings, PyVista where imported, and the rows gathered."""
 
-                pv_img, pv_depth = setup.read()
-                del pv_img
-                pv_err = dict(coverage_agreement=coverage_agreement(pv_depth, ref.depth),
-                              depth_median_rel=depth_error(pv_depth, ref.depth)["median_rel"])
-        finally:
-            if setup is not None:
-                setup.close()
-        med = {k: statistics.median(v) for k, v in times.items()}
-        t_none, t_oracle, t_pv = med["none"], med["oracle"], med.get("pyvista")
-        for name, _ in jobs:
-            row: dict[str, Any] = dict(view=vname, **angles, method=name, median_ms=med[name],
-                                       best_ms=min(times[name]), times_ms=times[name], x_none=med[name] / t_none,
-                                       x_oracle=med[name] / t_oracle,
-                                       x_pyvista=med[name] / t_pv if t_pv else None, oracle_tiles=oracle_tiles)
-            if name in first:
-                f = first[name]
-                row.update(renderer="geocull", kwargs=by_name[name], exact=name in EXACT, **f["stats"],
-                           **{k: v for k, v in f.items() if k != "stats"})
-            else:
-                row.update(renderer="pyvista", kwargs=dict(msaa=False), exact=False,
-                           triangles_drawn=int(scene.n_triangles), **pv_err)
-            rows.append(row)
-        del ref
+    fld: dict[str, Any]
+    renderer: Any
+    r_grid: Any  # the grid alone, in its own renderer
+    meths: list[tuple[str, dict[str, Any]]]
+    by_name: dict[str, dict[str, Any]]
+    w: int
+    h: int
+    rep: int
+    t_start: float
+    gpv: Any = None
+    frozen: Any = None
+    pv_version: dict[str, str] = dataclasses.field(default_factory=dict)
+    rows: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    pv_setup_s: list[float] = dataclasses.field(default_factory=list)
+    grid_rows: list[dict[str, Any]] = dataclasses.field(default_factory=list)
 
-        # The grid alone: its screen-error levels against level 0.
-        gmodes: dict[str, dict[str, Any]] = {"full": dict(grid_lod="full"),
-                  f"screen_error({LOD_ERROR:g})": dict(grid_lod="screen_error", max_pixel_error=LOD_ERROR)}
-        gref = r_grid.render(field["grid_scene"], cam, **gmodes["full"])
-        gfirst: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}
-        for gname, gk in gmodes.items():
-            res = r_grid.render(field["grid_scene"], cam, **gk)
-            gfirst[gname] = (dict(res.stats), _diff_summary(res, gref, np.asarray(gref.tile_pixels)))
 
-        def gjob(gk: dict[str, Any], cam: Any = cam) -> Any:
-            return lambda: r_grid.render(field["grid_scene"], cam, **gk).stats["total_ms"]
+def _import_pyvista(ctx: _Run) -> None:
+    """geocull.pyvista, the scene read once for it and the versions into ``ctx``; a message and no
+    PyVista rows where it cannot be imported."""
+    try:
+        import pyvista
+        import vtk
 
-        gt = report.timed_rounds([(n, gjob(gk)) for n, gk in gmodes.items()], rep)
-        gmed = {k: statistics.median(v) for k, v in gt.items()}
-        for gname, (st, err) in gfirst.items():
-            grid_rows.append(dict(view=vname, mode=gname, median_ms=gmed[gname], x_full=gmed[gname] / gmed["full"],
-                                  triangles_drawn=int(st["triangles_drawn"]),
-                                  faces=sum(int(v) for k, v in st.items() if k.startswith("grid_faces_level")),
-                                  **{k: int(v) for k, v in st.items() if k.startswith("grid_faces_level")},
-                                  **err))
-        _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
+        from .. import pyvista as gpv_mod
 
+        ctx.gpv = gpv_mod
+        ctx.frozen = _Frozen(ctx.fld["scene"])
+        ctx.pv_version = dict(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
+    except Exception as e:  # pragma: no cover - environment dependent
+        _say(f"bench: PyVista unavailable ({e}); skipping its rows")
+
+
+def _run_view(ctx: _Run, vname: str, cam: Any, angles: dict[str, float]) -> None:
+    """One view: warm-up frames and image errors, timed rounds, its rows; then the grid alone."""
+    ref, oracle_tiles, first = _warm_up(ctx, cam)
+    jobs, times, pv_err = _timed_view(ctx, cam, vname, ref)
+    ctx.rows.extend(_view_rows(ctx, vname, angles, jobs, times, first, pv_err, oracle_tiles))
+    del ref
+    ctx.grid_rows.extend(_grid_alone(ctx, cam, vname))
+    _say(f"bench: view {vname}: done ({time.perf_counter() - ctx.t_start:.0f} s so far)")
+
+
+def _warm_up(ctx: _Run, cam: Any) -> tuple[Any, int, dict[str, dict[str, Any]]]:
+    """One warm-up frame per method (the first temporal one two: temporal's history is then this
+    view), each reduced at once to its stats, tiles drawn per object kind and image errors against
+    none's. Returns (none's frame, tiles visible in the oracle's image, per method those numbers)."""
+    renderer, scene, kinds, field = ctx.renderer, ctx.fld["scene"], ctx.fld["tile_kind"], ctx.fld
+    ref = renderer.render(scene, cam, culling="none")
+    oracle = renderer.render(scene, cam, culling="oracle")
+    visible = np.asarray(oracle.tile_pixels)
+    oracle_tiles = int(np.count_nonzero(visible))
+    first: dict[str, dict[str, Any]] = {}
+    primed = False  # temporal's history (one per renderer, whatever its options) is this view
+    for name, rk in ctx.meths:
+        if name == "none" or rk == dict(culling="oracle"):
+            res = ref if name == "none" else oracle
+        else:
+            res = renderer.render(scene, cam, **rk)
+            if rk["culling"] == "temporal" and not primed:
+                res, primed = renderer.render(scene, cam, **rk), True
+        s: dict[str, Any] = dict(res.stats)
+        # tiles drawn per object kind, against the oracle's (visible in the unculled image)
+        by_kind = {k: [int(np.count_nonzero(res.tile_drawn & (kinds == k))),
+                       int(np.count_nonzero((visible > 0) & (kinds == k)))] for k in field["kinds"]}
+        first[name] = dict(stats={k: s[k] for k in STAT_KEYS if k in s}, tiles_by_kind=by_kind,
+                           **_diff_summary(res, ref, visible))
+        del res
+    del oracle
+    return ref, oracle_tiles, first
+
+
+def _timed_view(ctx: _Run, cam: Any, vname: str,
+                ref: Any) -> tuple[list[tuple[str, Any]], dict[str, list[float]], dict[str, Any]]:
+    """The timed rounds of one view: every method, and PyVista (set up and warmed up first) where
+    imported. Returns (jobs, their times, PyVista's depth errors against none's)."""
+    from . import report
+
+    renderer, scene, w, h, rep = ctx.renderer, ctx.fld["scene"], ctx.w, ctx.h, ctx.rep
+    near, far = ref.near, ref.far
+
+    def job(rk: dict[str, Any], cam: Any = cam) -> Any:
+        return lambda: renderer.render(scene, cam, **rk).stats["total_ms"]
+
+    jobs: list[tuple[str, Any]] = [(name, job(rk)) for name, rk in ctx.meths]
+    setup = None
+    pv_err: dict[str, Any] = {}
+    if ctx.gpv is not None:
+        t0 = time.perf_counter()
+        setup = ctx.gpv._Setup(ctx.frozen, cam, w, h, False, True, near, far, (0.0, 0.0, 0.0), 1e-4)
+        setup.render()  # warm-up: context, shaders, geometry upload
+        ctx.pv_setup_s.append(time.perf_counter() - t0)
+        jobs.append(("pyvista", setup.render))
+    try:
+        _say(f"bench: view {vname}: {rep} timed round(s) of {len(jobs)} methods")
+        times = report.timed_rounds(jobs, rep)
+        if setup is not None:
+            from ..compare import coverage_agreement, depth_error
+
+            pv_img, pv_depth = setup.read()
+            del pv_img
+            pv_err = dict(coverage_agreement=coverage_agreement(pv_depth, ref.depth),
+                          depth_median_rel=depth_error(pv_depth, ref.depth)["median_rel"])
+    finally:
+        if setup is not None:
+            setup.close()
+    return jobs, times, pv_err
+
+
+def _view_rows(ctx: _Run, vname: str, angles: dict[str, float], jobs: list[tuple[str, Any]],
+               times: dict[str, list[float]], first: dict[str, dict[str, Any]], pv_err: dict[str, Any],
+               oracle_tiles: int) -> list[dict[str, Any]]:
+    """The rows of one view, one per timed job, in the jobs' order."""
+    med = {k: statistics.median(v) for k, v in times.items()}
+    t_none, t_oracle, t_pv = med["none"], med["oracle"], med.get("pyvista")
+    rows = []
+    for name, _ in jobs:
+        row: dict[str, Any] = dict(view=vname, **angles, method=name, median_ms=med[name],
+                                   best_ms=min(times[name]), times_ms=times[name], x_none=med[name] / t_none,
+                                   x_oracle=med[name] / t_oracle,
+                                   x_pyvista=med[name] / t_pv if t_pv else None, oracle_tiles=oracle_tiles)
+        if name in first:
+            f = first[name]
+            row.update(renderer="geocull", kwargs=ctx.by_name[name], exact=name in EXACT, **f["stats"],
+                       **{k: v for k, v in f.items() if k != "stats"})
+        else:
+            row.update(renderer="pyvista", kwargs=dict(msaa=False), exact=False,
+                       triangles_drawn=int(ctx.fld["scene"].n_triangles), **pv_err)
+        rows.append(row)
+    return rows
+
+
+def _grid_alone(ctx: _Run, cam: Any, vname: str) -> list[dict[str, Any]]:
+    """The grid alone in one view: its screen-error levels against level 0 (image errors, timed rounds)."""
+    from . import report
+
+    r_grid, field, rep = ctx.r_grid, ctx.fld, ctx.rep
+    gmodes: dict[str, dict[str, Any]] = {"full": dict(grid_lod="full"),
+              f"screen_error({LOD_ERROR:g})": dict(grid_lod="screen_error", max_pixel_error=LOD_ERROR)}
+    gref = r_grid.render(field["grid_scene"], cam, **gmodes["full"])
+    gfirst: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}
+    for gname, gk in gmodes.items():
+        res = r_grid.render(field["grid_scene"], cam, **gk)
+        gfirst[gname] = (dict(res.stats), _diff_summary(res, gref, np.asarray(gref.tile_pixels)))
+
+    def gjob(gk: dict[str, Any], cam: Any = cam) -> Any:
+        return lambda: r_grid.render(field["grid_scene"], cam, **gk).stats["total_ms"]
+
+    gt = report.timed_rounds([(n, gjob(gk)) for n, gk in gmodes.items()], rep)
+    gmed = {k: statistics.median(v) for k, v in gt.items()}
+    grid_rows = []
+    for gname, (st, err) in gfirst.items():
+        grid_rows.append(dict(view=vname, mode=gname, median_ms=gmed[gname], x_full=gmed[gname] / gmed["full"],
+                              triangles_drawn=int(st["triangles_drawn"]),
+                              faces=sum(int(v) for k, v in st.items() if k.startswith("grid_faces_level")),
+                              **{k: int(v) for k, v in st.items() if k.startswith("grid_faces_level")},
+                              **err))
+    return grid_rows
+
+
+def _per_method(rows: list[dict[str, Any]], kinds: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Per method over the views: geometric means of the ratios, max image errors, summed tiles."""
     per_method: dict[str, dict[str, Any]] = {}
     for name in dict.fromkeys(r["method"] for r in rows):
         rs = [r for r in rows if r["method"] == name]
@@ -522,8 +586,13 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
             tiles_proven_hidden=(sum(r["tiles_proven_hidden"] for r in rs)
                                  if geo and all("tiles_proven_hidden" in r for r in rs) else None),
             mean_tiles_by_kind=({k: [sum(r["tiles_by_kind"][k][i] for r in rs) / len(rs) for i in (0, 1)]
-                                 for k in field["kinds"]} if geo else None),
+                                 for k in kinds} if geo else None),
         )
+    return per_method
+
+
+def _grid_summary(grid_rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per grid mode over the views: the geometric mean of x full, mean triangles, max image errors."""
     grid_summary: dict[str, dict[str, Any]] = {}
     for gname in dict.fromkeys(r["mode"] for r in grid_rows):
         rs = [r for r in grid_rows if r["mode"] == gname]
@@ -532,18 +601,27 @@ def run(cfg: dict[str, Any]) -> dict[str, Any]:
                                    max_differing_pixel_fraction=max(r["differing_pixel_fraction"] for r in rs),
                                    max_differing_pixel_fraction_tol4=max(r["differing_pixel_fraction_tol4"]
                                                                          for r in rs))
-    summary = dict(
-        scene="field", mode=cfg.get("mode", "full"), data=str(data), files=field["files"], width=w, height=h,
-        repeats=rep, views=[dict(name=n, **a) for n, _, a in vs], n_triangles=int(scene.n_triangles),
+    return grid_summary
+
+
+def _summary(cfg: dict[str, Any], ctx: _Run, data: str, vs: list[tuple[str, Any, dict[str, float]]]) -> dict[str, Any]:
+    """The run's summary: the field, the settings, the environment, per-method and grid-alone means."""
+    import geocull as gc
+
+    field, scene = ctx.fld, ctx.fld["scene"]
+    per_method = _per_method(ctx.rows, field["kinds"])
+    grid_summary = _grid_summary(ctx.grid_rows)
+    return dict(
+        scene="field", mode=cfg.get("mode", "full"), data=str(data), files=field["files"], width=ctx.w,
+        height=ctx.h, repeats=ctx.rep, views=[dict(name=n, **a) for n, _, a in vs], n_triangles=int(scene.n_triangles),
         n_tiles=int(scene.n_tiles), kinds=field["kinds"], wells=field["wells"], grid_dims=field["grid_dims"],
         grid_active=field["grid_active"], clim_z=field["clim_z"], clim_poro=field["clim_poro"],
         tiles=f"{TILES[0]}x{TILES[1]}", coarse_factor=COARSE_FACTOR, grid_blocks=f"{GRID_BLOCKS[0]}x{GRID_BLOCKS[1]}",
         read_s=field["read_s"], build_s=field["build_s"], culling_modes=list(gc.CULLING_MODES),
-        adapter=renderer.adapter_info, cpu_count=os.cpu_count(), geocull=gc.__version__, **pv_version,
-        pyvista_setup_s=pv_setup_s, per_method=per_method, grid_alone=grid_summary,
-        wall_s=time.perf_counter() - t_start,
+        adapter=ctx.renderer.adapter_info, cpu_count=os.cpu_count(), geocull=gc.__version__, **ctx.pv_version,
+        pyvista_setup_s=ctx.pv_setup_s, per_method=per_method, grid_alone=grid_summary,
+        wall_s=time.perf_counter() - ctx.t_start,
     )
-    return dict(summary=summary, rows=rows, grid_rows=grid_rows)
 
 
 def _gmean(xs: Any) -> float | None:

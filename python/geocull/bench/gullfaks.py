@@ -11,6 +11,8 @@ import resource
 import statistics
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -67,13 +69,52 @@ def run(cfg: dict[str, Any], progress: ProgressLike = None) -> dict[str, Any]:
 
 
 def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
+    t_start = time.perf_counter()
+    sc = _build_scenes(cfg, task)
+    views = _select_views(cfg["views"], (sc.spec, 45.0, 1.0, sc.w / sc.h))
+    methods = _methods(cfg)
+    acc = _Acc()
+    for vi, (vname, kw) in enumerate(views):
+        _run_view(cfg, task, sc, acc, methods, vi, views, vname, kw, t_start)
+    orbit = _orbit(sc.render, views, cfg)
+    return dict(summary=_summary(cfg, sc, acc, views, orbit, t_start), rows=acc.rows)
+
+
+@dataclass
+class _Scenes:
+    """The built scenes of a run (two coarse factors, each in its own renderer) and what their
+    building measured."""
+
+    w: int
+    h: int
+    spec: Any
+    gen_s: float
+    build_s: float
+    rss_before: float
+    rss_fixed: float
+    scene: Any
+    renderer: Any
+    render: Callable[[Any, dict[str, Any]], Any]
+
+
+@dataclass
+class _Acc:
+    """What the views loop gathers: the rows, the first view's memory, PyVista's module and setups."""
+
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    rss_geocull: float | None = None
+    gpu_bytes: int | None = None
+    pv_setup_s: list[float] = field(default_factory=list)
+    gpv: Any = None
+    pv_versions: dict[str, str] = field(default_factory=dict)
+
+
+def _build_scenes(cfg: dict[str, Any], task: _progress.Task) -> _Scenes:
+    """The build stage: the scene's data, a renderer's fixed cost, the two scenes and their renderers."""
     import geocull as gc
 
-    from ..compare import coverage_agreement, depth_error
     from ..data import gullfaks_like
-    from . import report
 
-    t_start = time.perf_counter()
     w, h = int(cfg["width"]), int(cfg["height"])
     _say(f"bench[{cfg['mode']}]: generating scene {cfg['size']}x{cfg['size']} samples, {cfg['n_faults']} faults")
     t0 = time.perf_counter()
@@ -113,8 +154,12 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
         sc, rr = targets[rk.pop("coarse_factor", COARSE_FACTOR)]
         return rr.render(sc, cam, **rk)
 
-    views = _select_views(cfg["views"], (spec, 45.0, 1.0, w / h))
+    return _Scenes(w=w, h=h, spec=spec, gen_s=gen_s, build_s=build_s, rss_before=rss_before, rss_fixed=rss_fixed,
+                   scene=scene, renderer=renderer, render=render)
 
+
+def _methods(cfg: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """(name, render keyword arguments) of geocull's methods, in table order."""
     methods: list[tuple[str, dict[str, Any]]] = [
         ("none", dict(culling="none")),
         ("three_pass(s=1)", dict(culling="three_pass", pixel_threshold=THRESHOLD, prepass_scale=1.0,
@@ -139,146 +184,183 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
     ]
     if cfg["horizon"]:
         methods.append(("horizon", dict(culling="horizon")))
+    return methods
 
-    gpv = None
-    pv_versions: dict[str, str] = {}
 
-    def import_pyvista():
-        # imported after geocull's first view so that peak_rss_geocull_mb excludes VTK
-        nonlocal gpv
-        try:
-            import pyvista
-            import vtk
+def _import_pyvista(acc: _Acc) -> None:
+    """geocull.pyvista and the versions into ``acc`` (imported after geocull's first view so that
+    peak_rss_geocull_mb excludes VTK); a message and no PyVista rows where it cannot be imported."""
+    try:
+        import pyvista
+        import vtk
 
-            from .. import pyvista as gpv_mod
+        from .. import pyvista as gpv_mod
 
-            pv_versions.update(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
-            gpv = gpv_mod
-        except Exception as e:  # pragma: no cover - environment dependent
-            _say(f"bench: PyVista unavailable ({e}); skipping its rows")
+        acc.pv_versions.update(pyvista=pyvista.__version__, vtk=vtk.vtkVersion.GetVTKVersion())
+        acc.gpv = gpv_mod
+    except Exception as e:  # pragma: no cover - environment dependent
+        _say(f"bench: PyVista unavailable ({e}); skipping its rows")
 
-    rows: list[dict[str, Any]] = []
-    rss_geocull = None
-    gpu_bytes = None
-    pv_setup_s: list[float] = []
-    for vi, (vname, kw) in enumerate(views):
-        task.update(task.done, f"bench: view {vi + 1}/{len(views)} {vname}")
-        cam = gc.Camera.look_at(**kw)
-        _say(f"bench: view {vi + 1}/{len(views)} {vname}: warm-up")
-        # One warm-up frame per method (temporal twice: its history is then this view, the timed
-        # rounds' case). Only the reference frames (none; the oracle's visible tiles) are kept:
-        # every other frame is reduced to the numbers its row needs at once, so that the memory
-        # measured below is geocull's and not a dozen 1280x1024 frames held by this benchmark.
-        ref = render(cam, dict(methods)["none"])
-        visible = np.asarray(render(cam, dict(methods)["oracle"]).tile_pixels)
-        first: dict[str, dict[str, Any]] = {}
-        for name, rk in methods:
-            res = ref if name == "none" else render(cam, rk)
-            if rk["culling"] == "temporal":
-                res = render(cam, rk)
-            first[name] = _warm_summary(res, ref, visible)
-            del res
-        if gpu_bytes is None:
-            gpu_bytes = int(renderer.gpu_bytes)
-        if rss_geocull is None:
-            rss_geocull = _rss_mb()
-            if cfg["pyvista"]:
-                import_pyvista()
 
-        def gjob(rk, cam=cam):  # cam bound at definition (B023); the jobs run in this iteration
-            return lambda: render(cam, rk).stats["total_ms"]
+def _run_view(cfg: dict[str, Any], task: _progress.Task, sc: _Scenes, acc: _Acc,
+              methods: list[tuple[str, dict[str, Any]]], vi: int, views: list, vname: str, kw: Any,
+              t_start: float) -> None:
+    """One view: warm-up frames and image errors, the first view's memory, timed rounds, its rows."""
+    import geocull as gc
 
-        jobs = [(name, gjob(rk)) for name, rk in methods]
-        setups = {}
-        if gpv is not None:
-            for name, msaa in (("pyvista", False), ("pyvista_msaa", True)):
-                _say(f"bench: view {vname}: PyVista setup ({'MSAA on' if msaa else 'MSAA off'})")
-                t0 = time.perf_counter()
-                st = gpv._Setup(scene, cam, w, h, msaa, True, ref.near, ref.far, (0.0, 0.0, 0.0), 1e-4)
-                st.render()  # warm-up: context, shaders, geometry upload
-                pv_setup_s.append(time.perf_counter() - t0)
-                setups[name] = st
-                jobs.append((name, st.render))
-        try:
-            _say(f"bench: view {vname}: {cfg['repeats']} timed round(s) of {len(jobs)} methods")
-            times = report.timed_rounds(jobs, cfg["repeats"])
-            pv_out = {name: st.read() for name, st in setups.items()}
-        finally:
-            for st in setups.values():
-                st.close()
+    task.update(task.done, f"bench: view {vi + 1}/{len(views)} {vname}")
+    cam = gc.Camera.look_at(**kw)
+    _say(f"bench: view {vi + 1}/{len(views)} {vname}: warm-up")
+    ref, first = _warm_up(sc.render, cam, methods)
+    if acc.gpu_bytes is None:
+        acc.gpu_bytes = int(sc.renderer.gpu_bytes)
+    if acc.rss_geocull is None:
+        acc.rss_geocull = _rss_mb()
+        if cfg["pyvista"]:
+            _import_pyvista(acc)
+    jobs, times, pv_out = _timed_view(cfg, sc, acc, methods, cam, vname, ref)
+    acc.rows.extend(_view_rows(vname, jobs, times, first, dict(methods), pv_out, ref, sc.scene))
+    del first, ref
+    _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
+    task.advance(1)
 
-        t_none = min(times["none"])
-        t_oracle = min(times["oracle"])
-        t_pv = min(times["pyvista"]) if "pyvista" in times else None
-        t_pvm = min(times["pyvista_msaa"]) if "pyvista_msaa" in times else None
-        for name, _ in jobs:
-            t = min(times[name])
-            row: dict[str, Any] = dict(
-                view=vname,
-                method=name,
-                total_ms=t,
-                median_ms=statistics.median(times[name]),
-                ratio_to_none=t / t_none,
-                ratio_to_oracle=t / t_oracle,
-                ratio_to_pyvista=t / t_pv if t_pv else None,
-                ratio_to_pyvista_msaa=t / t_pvm if t_pvm else None,
-                times_ms=times[name],
-            )
-            if name in first:
-                warm = first[name]
-                s = warm["stats"]
-                rk = dict(methods)[name]
-                row.update(
-                    renderer="geocull",
-                    culling=rk["culling"],
-                    pixel_threshold=rk.get("pixel_threshold"),
-                    prepass_scale=rk.get("prepass_scale"),
-                    coarse_factor=rk.get("coarse_factor", COARSE_FACTOR) if rk["culling"] == "three_pass" else None,
-                    triangles_drawn=int(s["triangles_drawn"]),
-                    triangles_prepass=int(s.get("triangles_prepass", 0)),
-                    tiles_drawn=int(s["tiles_drawn"]),
-                    tiles_total=int(s["tiles_total"]),
-                    differing_pixel_fraction=warm["differing_pixel_fraction"],
-                    # beyond a shading tolerance of 4/255: LOD changes the flat shading of facets
-                    differing_pixel_fraction_tol4=warm["differing_pixel_fraction_tol4"],
-                    psnr=warm["psnr"],
-                    missing_tiles=warm["missing_tiles"],
-                    coverage_agreement=warm["coverage_agreement"],
-                    depth_median_rel=None,
-                    depth_p99_rel=None,
-                    prepass_ms=float(s.get("prepass_ms", 0.0)),
-                    count_ms=float(s.get("count_ms", 0.0)),
-                    draw_ms=float(s.get("draw_ms", 0.0)),
-                    cull_ms=float(s.get("cull_ms", 0.0)),
-                )
-            else:
-                img, depth = pv_out[name]
-                de = depth_error(depth, ref.depth)
-                row.update(
-                    renderer="pyvista",
-                    culling=None,
-                    msaa=name == "pyvista_msaa",
-                    pixel_threshold=None,
-                    prepass_scale=None,
-                    triangles_drawn=int(scene.n_triangles),
-                    tiles_drawn=None,
-                    tiles_total=None,
-                    differing_pixel_fraction=None,
-                    psnr=None,
-                    missing_tiles=None,
-                    coverage_agreement=coverage_agreement(depth, ref.depth),
-                    depth_median_rel=de["median_rel"],
-                    depth_p99_rel=de["p99_rel"],
-                    depth_fraction_over_1e3=de["fraction_over_tol"],
-                )
-            rows.append(row)
-        del first, ref
-        _say(f"bench: view {vname}: done ({time.perf_counter() - t_start:.0f} s so far)")
-        task.advance(1)
 
-    orbit = _orbit(render, views, cfg)
+def _warm_up(render: Callable[[Any, dict[str, Any]], Any], cam: Any,
+             methods: list[tuple[str, dict[str, Any]]]) -> tuple[Any, dict[str, dict[str, Any]]]:
+    """One warm-up frame per method (temporal twice: its history is then this view, the timed
+    rounds' case). Only the reference frames (none; the oracle's visible tiles) are kept: every
+    other frame is reduced to the numbers its row needs at once, so that the memory measured after
+    the first view is geocull's and not a dozen 1280x1024 frames held by this benchmark. Returns
+    (none's frame, per method :func:`_warm_summary`)."""
+    ref = render(cam, dict(methods)["none"])
+    visible = np.asarray(render(cam, dict(methods)["oracle"]).tile_pixels)
+    first: dict[str, dict[str, Any]] = {}
+    for name, rk in methods:
+        res = ref if name == "none" else render(cam, rk)
+        if rk["culling"] == "temporal":
+            res = render(cam, rk)
+        first[name] = _warm_summary(res, ref, visible)
+        del res
+    return ref, first
 
-    # geometric means over views, per method
+
+def _timed_view(cfg: dict[str, Any], sc: _Scenes, acc: _Acc, methods: list[tuple[str, dict[str, Any]]], cam: Any,
+                vname: str, ref: Any) -> tuple[list[tuple[str, Any]], dict[str, list[float]], dict[str, Any]]:
+    """The timed rounds of one view: every method, and PyVista (set up and warmed up first) where
+    imported. Returns (jobs, their times, PyVista's (image, depth) per row name)."""
+    from . import report
+
+    render = sc.render
+
+    def gjob(rk, cam=cam):  # cam bound at definition (B023); the jobs run in this call
+        return lambda: render(cam, rk).stats["total_ms"]
+
+    jobs = [(name, gjob(rk)) for name, rk in methods]
+    setups = {}
+    if acc.gpv is not None:
+        for name, msaa in (("pyvista", False), ("pyvista_msaa", True)):
+            _say(f"bench: view {vname}: PyVista setup ({'MSAA on' if msaa else 'MSAA off'})")
+            t0 = time.perf_counter()
+            st = acc.gpv._Setup(sc.scene, cam, sc.w, sc.h, msaa, True, ref.near, ref.far, (0.0, 0.0, 0.0), 1e-4)
+            st.render()  # warm-up: context, shaders, geometry upload
+            acc.pv_setup_s.append(time.perf_counter() - t0)
+            setups[name] = st
+            jobs.append((name, st.render))
+    try:
+        _say(f"bench: view {vname}: {cfg['repeats']} timed round(s) of {len(jobs)} methods")
+        times = report.timed_rounds(jobs, cfg["repeats"])
+        pv_out = {name: st.read() for name, st in setups.items()}
+    finally:
+        for st in setups.values():
+            st.close()
+    return jobs, times, pv_out
+
+
+def _view_rows(vname: str, jobs: list[tuple[str, Any]], times: dict[str, list[float]],
+               first: dict[str, dict[str, Any]], by_name: dict[str, dict[str, Any]], pv_out: dict[str, Any],
+               ref: Any, scene: Any) -> list[dict[str, Any]]:
+    """The rows of one view, one per timed job, in the jobs' order."""
+    t_none = min(times["none"])
+    t_oracle = min(times["oracle"])
+    t_pv = min(times["pyvista"]) if "pyvista" in times else None
+    t_pvm = min(times["pyvista_msaa"]) if "pyvista_msaa" in times else None
+    rows = []
+    for name, _ in jobs:
+        t = min(times[name])
+        row: dict[str, Any] = dict(
+            view=vname,
+            method=name,
+            total_ms=t,
+            median_ms=statistics.median(times[name]),
+            ratio_to_none=t / t_none,
+            ratio_to_oracle=t / t_oracle,
+            ratio_to_pyvista=t / t_pv if t_pv else None,
+            ratio_to_pyvista_msaa=t / t_pvm if t_pvm else None,
+            times_ms=times[name],
+        )
+        if name in first:
+            row.update(_geocull_columns(first[name], by_name[name]))
+        else:
+            row.update(_pyvista_columns(name, pv_out[name], ref, scene))
+        rows.append(row)
+    return rows
+
+
+def _geocull_columns(warm: dict[str, Any], rk: dict[str, Any]) -> dict[str, Any]:
+    """A geocull row's columns beyond the times: its method's options, warm-up stats and image errors."""
+    s = warm["stats"]
+    return dict(
+        renderer="geocull",
+        culling=rk["culling"],
+        pixel_threshold=rk.get("pixel_threshold"),
+        prepass_scale=rk.get("prepass_scale"),
+        coarse_factor=rk.get("coarse_factor", COARSE_FACTOR) if rk["culling"] == "three_pass" else None,
+        triangles_drawn=int(s["triangles_drawn"]),
+        triangles_prepass=int(s.get("triangles_prepass", 0)),
+        tiles_drawn=int(s["tiles_drawn"]),
+        tiles_total=int(s["tiles_total"]),
+        differing_pixel_fraction=warm["differing_pixel_fraction"],
+        # beyond a shading tolerance of 4/255: LOD changes the flat shading of facets
+        differing_pixel_fraction_tol4=warm["differing_pixel_fraction_tol4"],
+        psnr=warm["psnr"],
+        missing_tiles=warm["missing_tiles"],
+        coverage_agreement=warm["coverage_agreement"],
+        depth_median_rel=None,
+        depth_p99_rel=None,
+        prepass_ms=float(s.get("prepass_ms", 0.0)),
+        count_ms=float(s.get("count_ms", 0.0)),
+        draw_ms=float(s.get("draw_ms", 0.0)),
+        cull_ms=float(s.get("cull_ms", 0.0)),
+    )
+
+
+def _pyvista_columns(name: str, out: Any, ref: Any, scene: Any) -> dict[str, Any]:
+    """A PyVista row's columns beyond the times: its depth against none's."""
+    from ..compare import coverage_agreement, depth_error
+
+    img, depth = out
+    de = depth_error(depth, ref.depth)
+    return dict(
+        renderer="pyvista",
+        culling=None,
+        msaa=name == "pyvista_msaa",
+        pixel_threshold=None,
+        prepass_scale=None,
+        triangles_drawn=int(scene.n_triangles),
+        tiles_drawn=None,
+        tiles_total=None,
+        differing_pixel_fraction=None,
+        psnr=None,
+        missing_tiles=None,
+        coverage_agreement=coverage_agreement(depth, ref.depth),
+        depth_median_rel=de["median_rel"],
+        depth_p99_rel=de["p99_rel"],
+        depth_fraction_over_1e3=de["fraction_over_tol"],
+    )
+
+
+def _per_method(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Geometric means over views of the ratios, mean/max image errors, per method."""
     per_method: dict[str, dict[str, Any]] = {}
     for name in dict.fromkeys(r["method"] for r in rows):
         rs = [r for r in rows if r["method"] == name]
@@ -295,49 +377,59 @@ def _run(cfg: dict[str, Any], task: _progress.Task) -> dict[str, Any]:
             missing_tiles=sum(r["missing_tiles"] for r in rs) if rs[0]["missing_tiles"] is not None else None,
             mean_triangles_drawn=sum(r["triangles_drawn"] for r in rs) / len(rs),
         )
+    return per_method
+
+
+def _summary(cfg: dict[str, Any], sc: _Scenes, acc: _Acc, views: list, orbit: dict[str, Any],
+             t_start: float) -> dict[str, Any]:
+    """The run's summary: its settings, the scene, memory, the environment, per-method means, the orbit."""
+    import geocull as gc
+
+    per_method = _per_method(acc.rows)
+    scene, rss_geocull, gpu_bytes = sc.scene, acc.rss_geocull, acc.gpu_bytes
     n_tri = int(scene.n_triangles)
     host = int(scene.host_bytes)
-    summary = dict(
+    return dict(
         mode=cfg["mode"],
-        width=w,
-        height=h,
+        width=sc.w,
+        height=sc.h,
         repeats=int(cfg["repeats"]),
         views=[v for v, _ in views],
         samples=int(cfg["size"]),
-        n_horizons=len(spec.horizons),
-        n_faults=len(spec.faults),
+        n_horizons=len(sc.spec.horizons),
+        n_faults=len(sc.spec.faults),
         tiles=f"{TILES[0]}x{TILES[1]}",
         coarse_factor=COARSE_FACTOR,
         pixel_threshold=THRESHOLD,
-        scene_generate_s=gen_s,
-        scene_build_s=build_s,
+        scene_generate_s=sc.gen_s,
+        scene_build_s=sc.build_s,
         n_triangles=n_tri,
         n_tiles=int(scene.n_tiles),
         host_bytes=host,
         gpu_bytes=gpu_bytes,
         bytes_per_triangle=(host + (gpu_bytes or 0)) / n_tri if n_tri else None,
         peak_rss_geocull_mb=rss_geocull,
-        rss_before_geocull_mb=rss_before,
+        rss_before_geocull_mb=sc.rss_before,
         # Both scenes (two coarse factors) and their renderers count: the growth of the peak over
         # the process before geocull, per fine triangle of the two scenes.
-        rss_bytes_per_triangle=((rss_geocull - rss_before) * 2**20 / (2 * n_tri)) if rss_geocull and n_tri else None,
-        rss_fixed_mb=rss_fixed - rss_before,
+        rss_bytes_per_triangle=((rss_geocull - sc.rss_before) * 2**20 / (2 * n_tri))
+        if rss_geocull and n_tri else None,
+        rss_fixed_mb=sc.rss_fixed - sc.rss_before,
         pass_triangles=cfg.get("pass_triangles"),
         # The same growth above a renderer's fixed cost (driver, JIT pipelines): the scenes' own.
-        rss_scene_bytes_per_triangle=((rss_geocull - rss_fixed) * 2**20 / (2 * n_tri))
+        rss_scene_bytes_per_triangle=((rss_geocull - sc.rss_fixed) * 2**20 / (2 * n_tri))
         if rss_geocull and n_tri else None,
         peak_rss_mb=_rss_mb(),
-        pyvista_setup_s_mean=(sum(pv_setup_s) / len(pv_setup_s)) if pv_setup_s else None,
-        adapter=renderer.adapter_info,
+        pyvista_setup_s_mean=(sum(acc.pv_setup_s) / len(acc.pv_setup_s)) if acc.pv_setup_s else None,
+        adapter=sc.renderer.adapter_info,
         cpu_count=os.cpu_count(),
         python=platform.python_version(),
         geocull=gc.__version__,
-        **pv_versions,
+        **acc.pv_versions,
         wall_s=time.perf_counter() - t_start,
         per_method=per_method,
         orbit=orbit,
     )
-    return dict(summary=summary, rows=rows)
 
 
 ORBIT_METHODS: tuple[tuple[str, dict[str, Any]], ...] = (
