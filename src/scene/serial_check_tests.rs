@@ -234,3 +234,28 @@ fn height_fields_of_every_frame_load() {
     }
     assert_eq!(n, 240);
 }
+
+#[test]
+fn a_grid_has_no_more_cell_sizes_than_tiles_fit_the_bytes() {
+    // The block cell sizes (f32 pairs, stored as f64) were read whatever their count: a count
+    // that took the rest of the buffer held three times its bytes before the tables were checked.
+    let corners: Vec<f64> =
+        (0..8).flat_map(|q| [(q & 1) as f64, ((q >> 1) & 1) as f64, -(((q >> 2) & 1) as f64)]).collect();
+    let mut s = Scene::new();
+    s.add_grid((1, 1, 1), &corners, None, None, (1, 1), AddOptions::new(1.0)).unwrap();
+    let b = s.to_bytes();
+    Scene::from_bytes(&b).unwrap();
+    // The count of the cell sizes (2: one block), after nk, nj, ni, bi, bj (1 each).
+    let mut head = Vec::new();
+    for v in [1u64, 1, 1, 1, 1, 2] {
+        head.extend(v.to_le_bytes());
+    }
+    let at = b.windows(head.len()).position(|w| w == head).unwrap() + 40;
+    let rest = (b.len() - at - 8) as u64 / 4;
+    for n in [rest / 2 * 2, rest / 8 * 2] {
+        let mut v = b.clone();
+        v[at..at + 8].copy_from_slice(&n.to_le_bytes());
+        let e = Scene::from_bytes(&v).unwrap_err().to_string();
+        assert!(e.contains("its block cell sizes are not pairs, one per tile"), "{n}: {e}");
+    }
+}
