@@ -365,12 +365,13 @@ impl Scene {
                 tiles,
                 geometry_stamp: super::new_geometry_stamp(),
             });
-            // Slabs are not stored: rebuilt from the tiles' vertices, as they were built.
-            if let Some(o) = objects.last_mut() {
-                o.rebuild_slabs();
-            }
         }
         r.finish()?;
+        // Slabs are not stored: rebuilt from the tiles' vertices, as they were built, once every
+        // byte is read and checked (none is built for bytes that are refused).
+        for o in &mut objects {
+            o.rebuild_slabs();
+        }
         Ok(Scene {
             uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
             geometry_version: 0,
@@ -518,8 +519,9 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         }
     }
     // Before version 6 the shading error was not stored: measured again (meshes) or
-    // 0 (height fields, grids), as `lod` sets it when building.
-    for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
+    // 0 (height fields, grids), as `lod` sets it when building. From version 6 a NaN one is
+    // damage (`check::tile` refuses it), not measured again (that takes some 80 bytes per vertex).
+    for l in levels.iter_mut().filter(|l| version < 6 && l.shading_error.is_nan()) {
         l.shading_error = match kind {
             ObjectKind::Mesh { .. } => {
                 let shading = crate::lod::shading::Shading { normals: &normals, grid_uv: &grid_uv };
