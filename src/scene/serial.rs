@@ -45,6 +45,10 @@ mod check;
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
 const VERSION: u32 = 7;
 
+/// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
+/// coarse empty, proxy error, no levels).
+const MIN_TILE_BYTES: usize = 8 + 24 + 8 + 8 + 8 + 4 + 4;
+
 /// Little-endian writer.
 #[derive(Default)]
 pub(crate) struct Writer(pub(crate) Vec<u8>);
@@ -136,6 +140,17 @@ impl<'a> Reader<'a> {
         let n = self.u32()? as usize;
         let b = self.take(n)?;
         String::from_utf8(b.to_vec()).map_err(|_| self.err("a name is not UTF-8"))
+    }
+    /// Bytes not read yet.
+    pub(crate) fn remaining(&self) -> usize {
+        self.buf.len() - self.pos
+    }
+    /// How many of `n` records read into `T`s to reserve: at most a quarter of the bytes left to
+    /// read, so that a damaged count, beside the records read before it fails (about their size
+    /// in bytes) and the checks' temporaries, keeps the reader within twice the buffer's size
+    /// (tests/alloc_bound.rs). More records than that grow the vector as they are read.
+    pub(crate) fn capacity<T>(&self, n: usize) -> usize {
+        n.min(self.remaining() / (4 * std::mem::size_of::<T>().max(1)))
     }
     /// A count of `elem`-byte elements that the rest of the buffer can hold.
     fn count(&mut self, elem: usize) -> Result<usize> {
@@ -295,7 +310,7 @@ impl Scene {
         check::point(origin, "origin").map_err(|e| r.err(e))?;
         let next_id = r.u32()?;
         let n = r.u32()? as usize;
-        let mut objects: Vec<Object> = Vec::with_capacity(n.min(1 << 16));
+        let mut objects: Vec<Object> = Vec::with_capacity(r.capacity::<Object>(n));
         for _ in 0..n {
             let start = r.pos;
             let id = r.u32()?;
@@ -322,7 +337,7 @@ impl Scene {
                 return Err(r.err(format!("object {id}: its priority {priority} is not in 0..=15")));
             }
             let nt = r.u32()? as usize;
-            let mut tiles = Vec::with_capacity(nt.min(1 << 16));
+            let mut tiles = Vec::with_capacity(r.capacity::<TileMesh>(nt));
             for t in 0..nt {
                 let tile = read_tile(&mut r, version, id, &kind)?;
                 check::tile(&tile, object_origin).map_err(|e| r.err(format!("object {id}: tile {t}: {e}")))?;
@@ -350,12 +365,13 @@ impl Scene {
                 tiles,
                 geometry_stamp: super::new_geometry_stamp(),
             });
-            // Slabs are not stored: rebuilt from the tiles' vertices, as they were built.
-            if let Some(o) = objects.last_mut() {
-                o.rebuild_slabs();
-            }
         }
         r.finish()?;
+        // Slabs are not stored: rebuilt from the tiles' vertices, as they were built, once every
+        // byte is read and checked (none is built for bytes that are refused).
+        for o in &mut objects {
+            o.rebuild_slabs();
+        }
         Ok(Scene {
             uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
             geometry_version: 0,
@@ -383,13 +399,21 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
         2 if version >= 4 => {
             let d = [r.usize()?, r.usize()?, r.usize()?, r.usize()?, r.usize()?];
             let flat = r.f32s()?;
-            if flat.len() % 2 != 0 {
-                return Err(r.err(format!("object {id}: its block cell sizes are not pairs")));
+            // One pair per block, and a tile per block to follow (`check::grid`): no more pairs
+            // than tiles fit the rest (they are stored as f64, twice the bytes read).
+            if flat.len() % 2 != 0 || flat.len() / 2 > r.remaining() / MIN_TILE_BYTES {
+                return Err(r.err(format!("object {id}: its block cell sizes are not pairs, one per tile")));
             }
             let cell_size = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
             let get = |r: &mut Reader| -> Result<Vec<crate::grid::LevelStats>> {
                 let n = r.u32()? as usize;
-                let mut v = Vec::with_capacity(n.min(64));
+                // Each level takes 40 bytes (48 from version 5): a count the rest cannot hold is
+                // refused before anything is reserved for it.
+                let each = if version >= 5 { 48 } else { 40 };
+                if n.checked_mul(each).is_none_or(|b| b > r.remaining()) {
+                    return Err(r.err(format!("object {id}: a table of {n} grid levels does not fit the buffer")));
+                }
+                let mut v = Vec::with_capacity(n);
                 for _ in 0..n {
                     let (cells, faces, triangles, vertices) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
                     let volume = r.f64()?;
@@ -401,7 +425,7 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             };
             let levels = get(r)?;
             let nb = r.u32()? as usize;
-            let mut block_levels = Vec::with_capacity(nb.min(1 << 16));
+            let mut block_levels = Vec::with_capacity(r.capacity::<Vec<crate::grid::LevelStats>>(nb));
             for _ in 0..nb {
                 block_levels.push(get(r)?);
             }
@@ -495,8 +519,9 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         }
     }
     // Before version 6 the shading error was not stored: measured again (meshes) or
-    // 0 (height fields, grids), as `lod` sets it when building.
-    for l in levels.iter_mut().filter(|l| l.shading_error.is_nan()) {
+    // 0 (height fields, grids), as `lod` sets it when building. From version 6 a NaN one is
+    // damage (`check::tile` refuses it), not measured again (that takes some 80 bytes per vertex).
+    for l in levels.iter_mut().filter(|l| version < 6 && l.shading_error.is_nan()) {
         l.shading_error = match kind {
             ObjectKind::Mesh { .. } => {
                 let shading = crate::lod::shading::Shading { normals: &normals, grid_uv: &grid_uv };

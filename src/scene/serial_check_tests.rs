@@ -234,3 +234,50 @@ fn height_fields_of_every_frame_load() {
     }
     assert_eq!(n, 240);
 }
+
+#[test]
+fn a_stored_shading_error_that_is_nan_is_refused() {
+    // From version 6 the shading error is stored: a NaN one was measured again (some 80 bytes of
+    // temporaries per vertex, from damaged bytes); now it is refused as any NaN LOD error.
+    let n = 16;
+    let v: Vec<[f64; 3]> = (0..n * n)
+        .map(|k| [(k % n) as f64 * 10.0, (k / n) as f64 * 10.0, ((k % n) as f64 / 3.0).sin() * 20.0])
+        .collect();
+    let mut f = Vec::new();
+    for j in 0..n as i64 - 1 {
+        for i in 0..n as i64 - 1 {
+            let k = j * n as i64 + i;
+            f.extend([[k, k + 1, k + n as i64], [k + 1, k + n as i64 + 1, k + n as i64]]);
+        }
+    }
+    let mut s = Scene::new();
+    s.add_mesh(&v, &f, "fault", None, AddOptions { name: Some("sheet".into()), ..AddOptions::new(4.0) }).unwrap();
+    assert!(!s.objects()[0].tiles[0].levels.is_empty());
+    let e = refused(s, "sheet", |o| o.tiles[0].levels[0].shading_error = f32::NAN);
+    assert!(e.contains("an LOD error is NaN"), "{e}");
+}
+
+#[test]
+fn a_grid_has_no_more_cell_sizes_than_tiles_fit_the_bytes() {
+    // The block cell sizes (f32 pairs, stored as f64) were read whatever their count: a count
+    // that took the rest of the buffer held three times its bytes before the tables were checked.
+    let corners: Vec<f64> =
+        (0..8).flat_map(|q| [(q & 1) as f64, ((q >> 1) & 1) as f64, -(((q >> 2) & 1) as f64)]).collect();
+    let mut s = Scene::new();
+    s.add_grid((1, 1, 1), &corners, None, None, (1, 1), AddOptions::new(1.0)).unwrap();
+    let b = s.to_bytes();
+    Scene::from_bytes(&b).unwrap();
+    // The count of the cell sizes (2: one block), after nk, nj, ni, bi, bj (1 each).
+    let mut head = Vec::new();
+    for v in [1u64, 1, 1, 1, 1, 2] {
+        head.extend(v.to_le_bytes());
+    }
+    let at = b.windows(head.len()).position(|w| w == head).unwrap() + 40;
+    let rest = (b.len() - at - 8) as u64 / 4;
+    for n in [rest / 2 * 2, rest / 8 * 2] {
+        let mut v = b.clone();
+        v[at..at + 8].copy_from_slice(&n.to_le_bytes());
+        let e = Scene::from_bytes(&v).unwrap_err().to_string();
+        assert!(e.contains("its block cell sizes are not pairs, one per tile"), "{n}: {e}");
+    }
+}

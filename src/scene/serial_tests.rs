@@ -190,3 +190,21 @@ fn priorities_round_trip_and_a_bad_one_is_refused() {
     bad[at] = 16;
     assert!(Scene::from_bytes(&bad).unwrap_err().to_string().contains("priority 16"));
 }
+
+#[test]
+fn a_count_reserves_no_more_than_the_bytes_left() {
+    // n_objects, n_tiles and a grid's table counts reserved up to 2^16 records each (some 19 MB
+    // for u32::MAX objects in a 45-byte buffer): now at most a quarter of the bytes left to read.
+    let mut r = Reader::new(&[0; 1000], "data");
+    assert_eq!(r.capacity::<u64>(usize::MAX), 31);
+    assert_eq!(r.capacity::<Object>(u32::MAX as usize), 1000 / (4 * std::mem::size_of::<Object>()));
+    assert_eq!(r.capacity::<u8>(2), 2);
+    assert_eq!(r.capacity::<()>(5), 5);
+    r.take(990).unwrap();
+    assert_eq!((r.remaining(), r.capacity::<u16>(9)), (10, 1));
+    // Such counts are refused when the records run out.
+    let b = Scene::new().to_bytes();
+    let mut v = b.clone();
+    v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
+}
