@@ -63,20 +63,46 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
     hidden.par_iter_mut().enumerate().filter(|(b, _)| drawn(*b) && candidate(*b)).for_each(|(b, h)| {
         let object = g.tile_object_cpu[b];
         let budget = std::cell::Cell::new(SOLIDS_PER_TILE);
+        let hopeless = std::cell::RefCell::new(vec![false; hiders.len()]);
         let hidden_solid = |corners: &[DVec3; 8], dip: bool| {
             if budget.get() == 0 {
-                return false;
+                return Verdict::Hopeless;
             }
             budget.set(budget.get() - 1);
             let near = corners.iter().any(|&p| (p - f.fc.eye).dot(f.fc.forward) <= f.fc.near * 1.001 + 1e-9);
-            !near && hiders.iter().any(|a| a.object != object && hides(f, a, corners, dip))
+            if near {
+                return Verdict::Failed;
+            }
+            let mut verdict = Verdict::Hopeless;
+            for (k, a) in hiders.iter().enumerate().filter(|(k, a)| a.object != object && !hopeless.borrow()[*k]) {
+                let v = hides(f, a, corners, dip);
+                if !dip && v == Verdict::Hopeless {
+                    // The tile's box on the eye's side of this hider: so is every part of it.
+                    hopeless.borrow_mut()[k] = true;
+                }
+                match v {
+                    Verdict::Proven => return Verdict::Proven,
+                    Verdict::Failed => verdict = Verdict::Failed,
+                    Verdict::Hopeless => {}
+                }
+            }
+            verdict
         };
         // Boxes are tested with heights as they are: a box is level, shearing it makes it taller.
         let hidden_box = |lo: DVec3, hi: DVec3| {
             let (lo, hi, near) = f.render_box(b, lo, hi);
-            !near && hidden_solid(&box_corners(lo, hi), false)
+            if near {
+                Verdict::Failed
+            } else {
+                hidden_solid(&box_corners(lo, hi), false)
+            }
         };
-        *h = hidden_box(g.bbox[b].0, g.bbox[b].1) || hidden_in_parts(f, b, &hidden_box, &hidden_solid);
+        *h = match hidden_box(g.bbox[b].0, g.bbox[b].1) {
+            Verdict::Proven => true,
+            // The tile lies on the eye's side of every hider under it: so does every part of it.
+            Verdict::Hopeless => false,
+            Verdict::Failed => hidden_in_parts(f, b, &hidden_box, &hidden_solid),
+        };
     });
     hidden
 }
@@ -88,8 +114,8 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
 fn hidden_in_parts(
     f: &FrameInputs<'_>,
     b: usize,
-    hidden_box: &dyn Fn(DVec3, DVec3) -> bool,
-    hidden_solid: &dyn Fn(&[DVec3; 8], bool) -> bool,
+    hidden_box: &dyn Fn(DVec3, DVec3) -> Verdict,
+    hidden_solid: &dyn Fn(&[DVec3; 8], bool) -> Verdict,
 ) -> bool {
     let g = f.geometry;
     if let (Some(hb), Some(e), Some(prism)) = (&g.height_blocks[b], level_error(f, b), Prisms::of(f, b)) {
@@ -97,7 +123,9 @@ fn hidden_in_parts(
         return parts.hidden((0, hb.columns()), (0, hb.rows.len() - 1));
     }
     let parts = &g.sub_boxes[b];
-    same_draw(f.draw_args[b], g.fine[b]) && parts.len() > 1 && parts.iter().all(|&(lo, hi)| hidden_box(lo, hi))
+    same_draw(f.draw_args[b], g.fine[b])
+        && parts.len() > 1
+        && parts.iter().all(|&(lo, hi)| hidden_box(lo, hi) == Verdict::Proven)
 }
 
 /// A height-field tile's blocks as the proof tests them.
@@ -106,7 +134,7 @@ struct Parts<'a> {
     /// The drawn level's error bound, world units.
     e: f64,
     prism: Prisms,
-    hidden_solid: &'a dyn Fn(&[DVec3; 8], bool) -> bool,
+    hidden_solid: &'a dyn Fn(&[DVec3; 8], bool) -> Verdict,
 }
 
 impl Parts<'_> {
@@ -114,12 +142,14 @@ impl Parts<'_> {
     /// over the blocks: halves or quarters, down to single blocks, the first failing block
     /// ending the test), so that a tile whose surface is nearly planar is proven by one prism.
     fn hidden(&self, (p0, p1): (usize, usize), (q0, q1): (usize, usize)) -> bool {
-        let Some((plane, r)) = self.hb.node_plane((p0, p1), (q0, q1)) else { return true }; // no triangle
-        if (self.hidden_solid)(&self.prism.of_node(self.hb, (p0, p1), (q0, q1), plane, r + self.e), true) {
-            return true;
-        }
-        if p1 - p0 == 1 && q1 - q0 == 1 {
-            return false;
+        let whole = (p0, p1, q0, q1) == (0, self.hb.columns(), 0, self.hb.rows.len() - 1);
+        let node = if whole { self.hb.whole } else { self.hb.node_plane((p0, p1), (q0, q1)) };
+        let Some((plane, r)) = node else { return true }; // no triangle
+        match (self.hidden_solid)(&self.prism.of_node(self.hb, (p0, p1), (q0, q1), plane, r + self.e), true) {
+            Verdict::Proven => return true,
+            Verdict::Hopeless => return false,
+            Verdict::Failed if p1 - p0 == 1 && q1 - q0 == 1 => return false,
+            Verdict::Failed => {}
         }
         let (pm, qm) = ((p0 + p1) / 2, (q0 + q1) / 2);
         let ps: &[(usize, usize)] = if p1 - p0 > 1 { &[(p0, pm), (pm, p1)] } else { &[(p0, p1)] };
@@ -205,6 +235,18 @@ fn level_error(f: &FrameInputs<'_>, i: usize) -> Option<f64> {
     g.levels[i].iter().find(|l| exact && same_draw(d, l.args)).map(|l| l.error as f64)
 }
 
+/// What a test of one solid against the hiders found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Verdict {
+    Proven,
+    /// Not proven.
+    Failed,
+    /// Not proven, and no part of the solid would be: it lies wholly on the eye's side of every
+    /// hider's blocks under it (or no hider has a usable block there), or the tile's budget of
+    /// solids is spent. Only a shortcut: the tile is then left to the GPU passes.
+    Hopeless,
+}
+
 /// The index-space bounds of render-space points `ps`.
 fn index_bounds(a: &Hider, ps: impl Iterator<Item = DVec2>) -> (DVec2, DVec2) {
     ps.map(|p| a.index(p)).fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), q| (lo.min(q), hi.max(q)))
@@ -213,9 +255,18 @@ fn index_bounds(a: &Hider, ps: impl Iterator<Item = DVec2>) -> (DVec2, DVec2) {
 /// Whether height field `a` hides every point of the convex hull of `corners` (render space;
 /// the module docs' argument): with heights as they are, or (`dip`, where `a` has one there) as
 /// heights over `a`'s local dip around it.
-fn hides(f: &FrameInputs<'_>, a: &Hider, corners: &[DVec3; 8], dip: bool) -> bool {
+fn hides(f: &FrameInputs<'_>, a: &Hider, corners: &[DVec3; 8], dip: bool) -> Verdict {
     let m = a.margin();
     let (lo, hi) = index_bounds(a, corners.iter().map(|p| p.truncate()));
+    // Quick rejection by the tiles' ranges, which hold the blocks' (heights as they are).
+    let Some((zlo, zhi)) = a.coarse(lo, hi) else { return Verdict::Hopeless };
+    let (bz_lo, bz_hi) = corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, p| (r.0.min(p.z), r.1.max(p.z)));
+    let (fc, persp) = (f.fc, f.fc.projection == Projection::Perspective);
+    let above = if persp { fc.eye.z > zhi } else { fc.forward.z < 0.0 };
+    let below = if persp { fc.eye.z < zlo } else { fc.forward.z > 0.0 };
+    if !dip && ((above && bz_lo > zhi) || (below && bz_hi < zlo)) {
+        return Verdict::Hopeless;
+    }
     match a.dip(lo, hi).filter(|_| dip) {
         Some(plane) => hides_over(f, a, corners, (lo, hi), m, &plane),
         None => hides_over(f, a, corners, (lo, hi), m, &Plane::FLAT),
@@ -231,7 +282,7 @@ fn hides_over(
     (lo, hi): (DVec2, DVec2),
     m: f64,
     plane: &Plane,
-) -> bool {
+) -> Verdict {
     let fc = f.fc;
     let persp = fc.projection == Projection::Perspective;
     let (bz_lo, bz_hi) = corners
@@ -240,13 +291,17 @@ fn hides_over(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |r, z| (r.0.min(z), r.1.max(z)));
     let (eye, forward) = (plane.over(fc.eye), plane.slope(fc.forward));
     // Start from the blocks under B's own footprint, then grow.
-    let Some(mut z) = a.first_guess(lo, hi, plane) else { return false };
+    let Some(mut z) = a.first_guess(lo, hi, plane) else { return Verdict::Hopeless };
+    let (above, below) = (if persp { eye > z.1 } else { forward < 0.0 }, if persp { eye < z.0 } else { forward > 0.0 });
+    if (above && bz_lo > z.1) || (below && bz_hi < z.0) {
+        return Verdict::Hopeless; // B lies wholly on the eye's side of A's blocks under it
+    }
     for _ in 0..6 {
         let (zlo, zhi) = z;
         let down = bz_hi < zlo && if persp { eye > zhi } else { forward < 0.0 };
         let up = bz_lo > zhi && if persp { eye < zlo } else { forward > 0.0 };
         if !(down || up) {
-            return false;
+            return Verdict::Failed;
         }
         let gap = if down { zlo - bz_hi } else { bz_lo - zhi };
         let mut crossings = Vec::with_capacity(16);
@@ -256,24 +311,24 @@ fn hides_over(
             // The ray's length over the gap, against the point's depth, must stay far above the
             // depth buffer's precision.
             if dz == 0.0 || gap * d.length() / dz.abs() <= 1e-4 * (p - fc.eye).dot(fc.forward).abs() {
-                return false;
+                return Verdict::Failed;
             }
             for h in [zlo, zhi] {
                 let q = p + d * ((h - plane.over(p)) / dz);
                 if (q - fc.eye).dot(fc.forward) <= fc.near * 1.001 + 1e-9 {
-                    return false;
+                    return Verdict::Failed;
                 }
                 crossings.push(q.truncate());
             }
         }
         let (lo, hi) = index_bounds(a, crossings.into_iter());
-        let Some(met) = a.range(lo, hi, m, plane) else { return false };
+        let Some(met) = a.range(lo, hi, m, plane) else { return Verdict::Failed };
         if met.0 >= zlo && met.1 <= zhi {
-            return true; // the blocks R meets lie within the range R was made from
+            return Verdict::Proven; // the blocks R meets lie within the range R was made from
         }
         z = (met.0.min(zlo), met.1.max(zhi));
     }
-    false
+    Verdict::Failed
 }
 
 /// `f`'s per-tile visibility with the tiles proven hidden switched off (so that no pass draws,

@@ -50,6 +50,8 @@ pub struct HeightBlocks {
     pub rows: Vec<usize>,
     /// Row-major by block row, then column.
     pub blocks: Vec<Block>,
+    /// [`Self::node_plane`] of all the blocks, computed once.
+    pub whole: Option<([f64; 3], f64)>,
 }
 
 impl HeightBlocks {
@@ -149,7 +151,9 @@ pub fn height_blocks(w: usize, h: usize, at: impl Fn(usize, usize) -> Option<[f3
             blocks.push(b);
         }
     }
-    HeightBlocks { cols, rows, blocks }
+    let mut hb = HeightBlocks { cols, rows, blocks, whole: None };
+    hb.whole = hb.node_plane((0, hb.columns()), (0, hb.rows.len() - 1));
+    hb
 }
 
 /// The least-squares plane `z = z0 + a u + b v` of points `((u, v), z)`; None for fewer than 3

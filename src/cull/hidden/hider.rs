@@ -36,6 +36,11 @@ pub(super) struct Hider {
     /// known to cover the block (a hole in it, its tile not drawn, or drawn at a level whose
     /// error is not a bound everywhere).
     z: Vec<Option<BlockZ>>,
+    /// Tile column and row boundaries in samples, and per tile (row-major) the z range of its
+    /// usable blocks (empty: none): a coarse bound for quick rejections.
+    txb: Vec<f64>,
+    tyb: Vec<f64>,
+    tile_z: Vec<(f64, f64)>,
 }
 
 /// A plane `z = a (x - centre.x) + b (y - centre.y)` in render space, which the proof subtracts
@@ -108,6 +113,21 @@ impl Hider {
             .blocks_meeting(lo, hi)?
             .filter_map(|(p, q, z)| Some(self.over(p, q, &z?, ip)))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |r, (a, b)| (r.0.min(a), r.1.max(b)));
+        (r.0 <= r.1).then_some(r)
+    }
+
+    /// The z range of the usable blocks of the tiles meeting index rectangle `lo..hi` (clamped
+    /// to the grid): it holds [`Self::first_guess`]'s range with heights as they are. None
+    /// without any.
+    pub fn coarse(&self, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
+        let (tx, ty) = (self.txb.len() - 1, self.tyb.len() - 1);
+        let i0 = self.txb[1..tx].partition_point(|&b| b < lo.x);
+        let i1 = self.txb[1..tx].partition_point(|&b| b <= hi.x);
+        let j0 = self.tyb[1..ty].partition_point(|&b| b < lo.y);
+        let j1 = self.tyb[1..ty].partition_point(|&b| b <= hi.y);
+        let r = (j0..=j1)
+            .flat_map(|j| self.tile_z[j * tx + i0..=j * tx + i1].iter())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |r, t| (r.0.min(t.0), r.1.max(t.1)));
         (r.0 <= r.1).then_some(r)
     }
 
@@ -214,6 +234,7 @@ pub(super) fn hiders(
         let ((xb, fx), (yb, fy)) = (cut(&tbx), cut(&tby));
         let bw = xb.len() - 1;
         let mut z = vec![None; bw * (yb.len() - 1)];
+        let mut tile_z = vec![(f64::INFINITY, f64::NEG_INFINITY); tx * ty];
         let (pz, zs) = (f.placement(oi).z, f.camera.z_scale);
         let render = |v: f32| (v as f64 + pz) * zs;
         for (t, i) in o.tiles.iter().zip(range) {
@@ -234,12 +255,18 @@ pub(super) fn hiders(
                         r: (b.residual as f64 + e) * zs.abs(),
                     };
                     z[(fy[iy] + q) * bw + fx[ix] + p] = b.complete.then_some(usable);
+                    if b.complete {
+                        let t = &mut tile_z[iy * tx + ix];
+                        *t = (t.0.min(usable.lo), t.1.max(usable.hi));
+                    }
                 }
             }
         }
         if z.iter().any(Option::is_some) {
             let at0 = DVec2::from(axes.o) + f.placement(oi).truncate();
-            out.push(Hider { object: oi as u32, at0, inv: m.inverse(), fwd: m, xb, yb, z });
+            let as_f64 = |b: &[usize]| b.iter().map(|&v| v as f64).collect();
+            let (txb, tyb) = (as_f64(&tbx), as_f64(&tby));
+            out.push(Hider { object: oi as u32, at0, inv: m.inverse(), fwd: m, xb, yb, z, txb, tyb, tile_z });
         }
     }
     out
