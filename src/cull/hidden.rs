@@ -37,7 +37,6 @@ mod hider;
 
 use super::{box_corners, FrameInputs};
 use crate::camera::Projection;
-use crate::gpu::layout::DrawArgs;
 use crate::lod::blocks::HeightBlocks;
 use glam::{DVec2, DVec3};
 use hider::{Hider, Plane};
@@ -55,7 +54,7 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
     let g = f.geometry;
     let n = g.n_tiles();
     let drawn = |i: usize| f.object_visible[i] && f.draw_args[i].index_count > 0 && f.draw_args[i].instance_count > 0;
-    let hiders = hider::hiders(f, &drawn, &|i| level_error(f, i));
+    let hiders = hider::hiders(f, &drawn);
     let mut hidden = vec![false; n];
     if hiders.is_empty() {
         return hidden;
@@ -118,12 +117,12 @@ fn hidden_in_parts(
     hidden_solid: &dyn Fn(&[DVec3; 8], bool) -> Verdict,
 ) -> bool {
     let g = f.geometry;
-    if let (Some(hb), Some(e), Some(prism)) = (&g.height_blocks[b], level_error(f, b), Prisms::of(f, b)) {
+    if let (Some(hb), Some(e), Some(prism)) = (&g.height_blocks[b], f.exact_level_error(b), Prisms::of(f, b)) {
         let parts = Parts { hb, e, prism, hidden_solid };
         return parts.hidden((0, hb.columns()), (0, hb.rows.len() - 1));
     }
     let parts = &g.sub_boxes[b];
-    same_draw(f.draw_args[b], g.fine[b])
+    f.draw_args[b] == g.fine[b]
         && parts.len() > 1
         && parts.iter().all(|&(lo, hi)| hidden_box(lo, hi) == Verdict::Proven)
 }
@@ -174,13 +173,8 @@ impl Prisms {
         let axes = o.grid_axes()?;
         let first_tile = f.geometry.tile_object_cpu.partition_point(|&t| (t as usize) < oi);
         let t = o.tiles.get(b - first_tile)?;
-        let tx = o.tiles.iter().map(|t| t.ix).max()? as usize + 1;
-        let ty = o.tiles.iter().map(|t| t.iy).max()? as usize + 1;
-        if tx * ty != o.tiles.len() || tx >= axes.nx || ty >= axes.ny {
-            return None;
-        }
-        let first =
-            (crate::lod::tile_bounds(axes.nx, tx)[t.ix as usize], crate::lod::tile_bounds(axes.ny, ty)[t.iy as usize]);
+        let (bx, by) = o.tile_sample_bounds()?;
+        let first = (*bx.get(t.ix as usize)?, *by.get(t.iy as usize)?);
         Some(Prisms { axes, first, placement: f.placement(oi), z_scale: f.camera.z_scale })
     }
 
@@ -215,24 +209,6 @@ impl Prisms {
             corners[c] + DVec3::new(push.x, push.y, s(4) * grow * zs.signum())
         })
     }
-}
-
-/// Whether two draws draw the same triangles.
-fn same_draw(a: DrawArgs, b: DrawArgs) -> bool {
-    (a.index_count, a.first_index, a.base_vertex) == (b.index_count, b.first_index, b.base_vertex)
-}
-
-/// The error bound (world units, not exaggerated) between what height-field tile `i` draws this
-/// frame and its fine surface, everywhere: 0 at level 0, a lattice level's error (`lod::levels`);
-/// None for other levels (their error is not a bound everywhere) and tiles without a slab.
-fn level_error(f: &FrameInputs<'_>, i: usize) -> Option<f64> {
-    let g = f.geometry;
-    let d = f.draw_args[i];
-    if same_draw(d, g.fine[i]) {
-        return Some(0.0);
-    }
-    let exact = g.slab_draws[i].is_some_and(|(_, exact)| exact);
-    g.levels[i].iter().find(|l| exact && same_draw(d, l.args)).map(|l| l.error as f64)
 }
 
 /// What a test of one solid against the hiders found.

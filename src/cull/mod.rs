@@ -148,6 +148,20 @@ impl FrameInputs<'_> {
         self.scene.objects()[oi].placement(self.origin)
     }
 
+    /// The bound (world units, not exaggerated) on the vertical distance between what tile `i`
+    /// draws this frame and its fine surface, everywhere: 0 at level 0, a level's error where its
+    /// levels are lattice levels (`SceneGeometry::slab_draws`' flag, `lod::levels`); None for other
+    /// levels, whose error is not a bound everywhere.
+    pub fn exact_level_error(&self, i: usize) -> Option<f64> {
+        let g = self.geometry;
+        let d = self.draw_args[i];
+        if d == g.fine[i] {
+            return Some(0.0);
+        }
+        let exact = g.slab_draws[i].is_some_and(|(_, exact)| exact);
+        g.levels[i].iter().find(|l| exact && l.args == d).map(|l| l.error as f64)
+    }
+
     /// Tile `i`'s box in render space (its object's placement and z_scale applied), grown against
     /// f32 round-off, as the box passes draw it, and whether it reaches the near plane (then its
     /// front faces may be clipped and a box test cannot be trusted to see it).

@@ -242,17 +242,11 @@ pub fn tile_boxes(f: &FrameInputs<'_>, drawn: Option<&[bool]>) -> TileBoxes {
 /// round-off as `FrameInputs::render_box` grows boxes.
 fn slab_test(f: &FrameInputs<'_>, i: usize, near: bool) -> Option<(DrawArgs, f64)> {
     let g = f.geometry;
-    let (args, exact) = g.slab_draws[i]?;
+    let (args, _) = g.slab_draws[i]?;
     if near {
         return None;
     }
-    let error = if f.draw_args[i] == g.fine[i] {
-        0.0
-    } else if exact {
-        g.levels[i].iter().find(|l| l.args == f.draw_args[i])?.error as f64
-    } else {
-        return None;
-    };
+    let error = f.exact_level_error(i)?;
     let (lo, hi) = g.bbox[i];
     let off = f.placement(g.tile_object_cpu[i] as usize);
     let margin = 1e-6 * (lo + off).abs().max((hi + off).abs()).max_element() + 1e-4 * (hi - lo).length() + 1e-9;

@@ -377,7 +377,7 @@ impl Object {
 
     /// A height field's tile boundaries in samples (`lod::tile_bounds` of each axis), when its
     /// tile counts fit its grid and its tiles; None otherwise and for other kinds.
-    fn tile_sample_bounds(&self) -> Option<(Vec<usize>, Vec<usize>)> {
+    pub fn tile_sample_bounds(&self) -> Option<(Vec<usize>, Vec<usize>)> {
         let g = self.grid_axes()?;
         let ObjectKind::Heightfield { tiles: (tx, ty), .. } = self.kind else { return None };
         let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;

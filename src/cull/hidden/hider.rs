@@ -4,7 +4,6 @@
 
 use super::super::FrameInputs;
 use crate::lod::blocks;
-use crate::lod::tile_bounds;
 use glam::{DMat2, DVec2, DVec3};
 
 /// The most blocks of a hider one query reads (the proof's work per test stays bounded).
@@ -120,11 +119,8 @@ impl Hider {
     /// to the grid): it holds [`Self::first_guess`]'s range with heights as they are. None
     /// without any.
     pub fn coarse(&self, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
-        let (tx, ty) = (self.txb.len() - 1, self.tyb.len() - 1);
-        let i0 = self.txb[1..tx].partition_point(|&b| b < lo.x);
-        let i1 = self.txb[1..tx].partition_point(|&b| b <= hi.x);
-        let j0 = self.tyb[1..ty].partition_point(|&b| b < lo.y);
-        let j1 = self.tyb[1..ty].partition_point(|&b| b <= hi.y);
+        let tx = self.txb.len() - 1;
+        let ((i0, i1), (j0, j1)) = (cells_meeting(&self.txb, lo.x, hi.x), cells_meeting(&self.tyb, lo.y, hi.y));
         let r = (j0..=j1)
             .flat_map(|j| self.tile_z[j * tx + i0..=j * tx + i1].iter())
             .fold((f64::INFINITY, f64::NEG_INFINITY), |r, t| (r.0.min(t.0), r.1.max(t.1)));
@@ -169,8 +165,7 @@ impl Hider {
         if !(c.x >= self.xb[0] && c.x <= self.xb[tx] && c.y >= self.yb[0] && c.y <= self.yb[ty]) {
             return None;
         }
-        let p = self.xb[1..tx].partition_point(|&b| b < c.x);
-        let q = self.yb[1..ty].partition_point(|&b| b < c.y);
+        let (p, q) = (cells_meeting(&self.xb, c.x, c.x).0, cells_meeting(&self.yb, c.y, c.y).0);
         let z = self.z[q * tx + p]?;
         // The block's plane is linear in (column, row): its gradient there, then in (x, y).
         let (w, h) = (self.xb[p + 1] - self.xb[p], self.yb[q + 1] - self.yb[q]);
@@ -188,36 +183,33 @@ impl Hider {
         lo: DVec2,
         hi: DVec2,
     ) -> Option<impl Iterator<Item = (usize, usize, Option<BlockZ>)> + '_> {
-        let (xb, yb) = (&self.xb, &self.yb);
-        let (tx, ty) = (xb.len() - 1, yb.len() - 1);
-        let i0 = xb[1..tx].partition_point(|&b| b < lo.x);
-        let i1 = xb[1..tx].partition_point(|&b| b <= hi.x);
-        let j0 = yb[1..ty].partition_point(|&b| b < lo.y);
-        let j1 = yb[1..ty].partition_point(|&b| b <= hi.y);
+        let tx = self.xb.len() - 1;
+        let ((i0, i1), (j0, j1)) = (cells_meeting(&self.xb, lo.x, hi.x), cells_meeting(&self.yb, lo.y, hi.y));
         ((i1 - i0 + 1) * (j1 - j0 + 1) <= MAX_BLOCKS)
             .then(|| (j0..=j1).flat_map(move |q| (i0..=i1).map(move |p| (p, q, self.z[q * tx + p]))))
     }
 }
 
+/// The first and last of the cells between boundaries `b` (sorted) that meet `lo..=hi`, the
+/// first (last) cell for parts before (beyond) them.
+fn cells_meeting(b: &[f64], lo: f64, hi: f64) -> (usize, usize) {
+    let n = b.len() - 1;
+    (b[1..n].partition_point(|&v| v < lo), b[1..n].partition_point(|&v| v <= hi))
+}
+
 /// The frame's hiders: every visible height field with a usable block. `drawn(i)`: tile i is
-/// drawn this frame; `level_error(i)`: the bound between what it draws and its fine surface
-/// (world units), None where there is none.
-pub(super) fn hiders(
-    f: &FrameInputs<'_>,
-    drawn: &dyn Fn(usize) -> bool,
-    level_error: &dyn Fn(usize) -> Option<f64>,
-) -> Vec<Hider> {
+/// drawn this frame.
+pub(super) fn hiders(f: &FrameInputs<'_>, drawn: &dyn Fn(usize) -> bool) -> Vec<Hider> {
     let g = f.geometry;
     let mut first = 0usize;
     let mut out = Vec::new();
     for (oi, o) in f.scene.objects().iter().enumerate() {
         let range = first..first + o.tiles.len();
         first = range.end;
-        let Some(axes) = o.grid_axes() else { continue };
-        let tx = o.tiles.iter().map(|t| t.ix).max().unwrap_or(0) as usize + 1;
-        let ty = o.tiles.iter().map(|t| t.iy).max().unwrap_or(0) as usize + 1;
+        let (Some(axes), Some((tbx, tby))) = (o.grid_axes(), o.tile_sample_bounds()) else { continue };
+        let (tx, ty) = (tbx.len() - 1, tby.len() - 1);
         let m = DMat2::from_cols(DVec2::from(axes.u), DVec2::from(axes.v));
-        if range.is_empty() || tx * ty != o.tiles.len() || tx >= axes.nx || ty >= axes.ny || m.determinant() == 0.0 {
+        if m.determinant() == 0.0 {
             continue;
         }
         // Every tile column (row) cut into its blocks, numbered across the grid.
@@ -230,7 +222,6 @@ pub(super) fn hiders(
             }
             (b, first)
         };
-        let (tbx, tby) = (tile_bounds(axes.nx, tx), tile_bounds(axes.ny, ty));
         let ((xb, fx), (yb, fy)) = (cut(&tbx), cut(&tby));
         let bw = xb.len() - 1;
         let mut z = vec![None; bw * (yb.len() - 1)];
@@ -239,7 +230,7 @@ pub(super) fn hiders(
         let render = |v: f32| (v as f64 + pz) * zs;
         for (t, i) in o.tiles.iter().zip(range) {
             let (ix, iy) = (t.ix as usize, t.iy as usize);
-            let (Some(hb), true, Some(e)) = (&g.height_blocks[i], drawn(i), level_error(i)) else { continue };
+            let (Some(hb), true, Some(e)) = (&g.height_blocks[i], drawn(i), f.exact_level_error(i)) else { continue };
             if (&hb.cols, &hb.rows) != (&blocks::bounds(tbx[ix + 1] - tbx[ix]), &blocks::bounds(tby[iy + 1] - tby[iy]))
             {
                 continue;
