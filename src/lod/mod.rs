@@ -135,11 +135,8 @@ impl TileMesh {
     /// surface) and [`Self::slice_boxes`] (4 slices along the box's longest side: a tube, a steep
     /// or long piece), the set of the smaller total volume.
     pub fn occludee_boxes(&self) -> Vec<([f32; 3], [f32; 3])> {
-        let volume = |b: &[([f32; 3], [f32; 3])]| -> f64 {
-            b.iter().map(|(l, h)| (0..3).map(|a| (h[a] as f64 - l[a] as f64).max(0.0)).product::<f64>()).sum()
-        };
         let (grid, slices) = (self.sub_boxes(2), self.slice_boxes(8));
-        if volume(&slices) < volume(&grid) {
+        if boxes_volume(&slices) < boxes_volume(&grid) {
             slices
         } else {
             grid
@@ -285,6 +282,11 @@ impl GridSpec<'_> {
             (self.x0 + (c * u - s * v), self.y0 + (s * u + c * v))
         }
     }
+}
+
+/// The summed volume of boxes `lo..hi` (overlaps counted twice; an empty box counts 0).
+pub fn boxes_volume(boxes: &[([f32; 3], [f32; 3])]) -> f64 {
+    boxes.iter().map(|(l, h)| (0..3).map(|a| (h[a] as f64 - l[a] as f64).max(0.0)).product::<f64>()).sum()
 }
 
 /// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in

@@ -101,14 +101,9 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
     let t = &tiles[0];
     let boxes = t.sub_boxes(2);
     assert_eq!(boxes.len(), 3, "the hole's cell has no triangles");
-    for tri in t.fine.chunks_exact(3) {
-        let p = [tri[0], tri[1], tri[2]].map(|k| t.positions[k as usize]);
-        let inside = |(l, h): &([f32; 3], [f32; 3])| p.iter().all(|q| (0..3).all(|d| l[d] <= q[d] && q[d] <= h[d]));
-        assert!(boxes.iter().any(inside), "{p:?}");
-    }
-    let vol = |l: [f32; 3], h: [f32; 3]| (0..3).map(|d| (h[d] - l[d]) as f64).product::<f64>();
-    let sum: f64 = boxes.iter().map(|&(l, h)| vol(l, h)).sum();
-    assert!(sum < 0.5 * vol(t.bbox_min, t.bbox_max), "{sum} {}", vol(t.bbox_min, t.bbox_max));
+    assert_boxes_hold_fine_triangles(t, &boxes);
+    let (sum, whole) = (boxes_volume(&boxes), boxes_volume(&[(t.bbox_min, t.bbox_max)]));
+    assert!(sum < 0.5 * whole, "{sum} {whole}");
     let mut twins = vec![tiles[0].clone(), tiles.remove(0)];
     twins[1].fine = twins[0].fine.to_vec().into();
     assert!(!std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
@@ -124,25 +119,18 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
 fn occludee_boxes_follow_a_tube_and_hold_its_triangles() {
     let path: Vec<DVec3> = (0..=64).map(|k| DVec3::new(k as f64, 0.5 * k as f64, -0.8 * k as f64)).collect();
     let (v, f, _) = tube::tube(&path, 0.5, 8);
-    let t = TileMesh {
+    let mut t = TileMesh {
         positions: v.iter().map(|p| p.map(|c| c as f32)).collect(),
         fine: f.iter().flat_map(|t| t.map(|k| k as u32)).collect::<Vec<_>>().into(),
         ..Default::default()
     };
-    let mut t = t;
     t.compute_bbox();
-    let vol = |b: &[([f32; 3], [f32; 3])]| -> f64 {
-        b.iter().map(|(l, h)| (0..3).map(|d| (h[d] - l[d]) as f64).product::<f64>()).sum()
-    };
     let slices = t.slice_boxes(8);
     assert_eq!(slices.len(), 8);
-    assert!(vol(&slices) < 0.2 * vol(&t.sub_boxes(2)), "{} {}", vol(&slices), vol(&t.sub_boxes(2)));
+    let (sliced, grid) = (boxes_volume(&slices), boxes_volume(&t.sub_boxes(2)));
+    assert!(sliced < 0.2 * grid, "{sliced} {grid}");
     assert_eq!(t.occludee_boxes(), slices);
-    for tri in t.fine.chunks_exact(3) {
-        let p = [tri[0], tri[1], tri[2]].map(|k| t.positions[k as usize]);
-        let inside = |(l, h): &([f32; 3], [f32; 3])| p.iter().all(|q| (0..3).all(|d| l[d] <= q[d] && q[d] <= h[d]));
-        assert!(slices.iter().any(inside), "{p:?}");
-    }
+    assert_boxes_hold_fine_triangles(&t, &slices);
     let z: Vec<f64> = (0..21 * 21).map(|k| 0.5 * (k % 21) as f64).collect();
     let g = GridSpec {
         z: &z,
@@ -177,4 +165,13 @@ fn all_nan_tile_is_empty() {
     };
     let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &Work::default());
     assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
+}
+
+/// Every fine triangle of `t` lies in one of `boxes`.
+fn assert_boxes_hold_fine_triangles(t: &TileMesh, boxes: &[([f32; 3], [f32; 3])]) {
+    for tri in t.fine.chunks_exact(3) {
+        let p = [tri[0], tri[1], tri[2]].map(|k| t.positions[k as usize]);
+        let inside = |(l, h): &([f32; 3], [f32; 3])| p.iter().all(|q| (0..3).all(|d| l[d] <= q[d] && q[d] <= h[d]));
+        assert!(boxes.iter().any(inside), "{p:?}");
+    }
 }
