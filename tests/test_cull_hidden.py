@@ -27,17 +27,17 @@ def planes(top_z=0.0, low_z=-50.0, hole=False, rotation=0.0, extent=1.0, rim=0):
     if rim:
         top[:rim], top[-rim:], top[:, :rim], top[:, -rim:] = np.nan, np.nan, np.nan, np.nan
     s = gc.Scene()
-    s.add_heightfield(top, origin=middle_at_20(20.0, rotation), tiles=TILES, rotation=rotation)
-    s.add_heightfield(np.full((N, N), low_z), origin=middle_at_20(20.0 * extent, rotation), spacing=(extent, extent),
+    s.add_heightfield(top, origin=middle_at(20.0, rotation), tiles=TILES, rotation=rotation)
+    s.add_heightfield(np.full((N, N), low_z), origin=middle_at(20.0 * extent, rotation), spacing=(extent, extent),
                       tiles=TILES, rotation=rotation)
     return s
 
 
-def middle_at_20(half, rotation):
+def middle_at(half, rotation, at=20.0):
     """The origin that puts the middle of a grid ``2 half`` wide, rotated by ``rotation`` degrees
-    about its origin, at (20, 20)."""
+    about its origin, at (``at``, ``at``)."""
     c, s = np.cos(np.radians(rotation)), np.sin(np.radians(rotation))
-    return (20.0 - (c * half - s * half), 20.0 - (s * half + c * half))
+    return (at - (c * half - s * half), at - (s * half + c * half))
 
 
 def render(s, cam, culling="three_pass", **kw):
@@ -93,7 +93,7 @@ def test_a_rotated_top_with_an_undefined_rim_hides_what_lies_under_its_defined_m
 def test_a_stack_of_three_rotated_horizons_is_proven_under_the_top():
     s = planes(extent=0.25, rotation=30.0, rim=2)
     # A third under the second, 40 m deeper, on the same footprint.
-    s.add_heightfield(np.full((N, N), -90.0), origin=middle_at_20(5.0, 30.0), spacing=(0.25, 0.25), tiles=TILES,
+    s.add_heightfield(np.full((N, N), -90.0), origin=middle_at(5.0, 30.0), spacing=(0.25, 0.25), tiles=TILES,
                       rotation=30.0)
     res = render(s, ABOVE)
     assert res.stats["tiles_proven_hidden"] == 32  # both lower horizons, 16 tiles each
@@ -108,8 +108,8 @@ def test_dipping_horizons_closer_than_a_tiles_relief_are_proven_block_by_block(g
     # seen as heights over the top's dip, does.
     x = np.arange(N, dtype=float)
     s = gc.Scene()
-    s.add_heightfield(np.tile(0.8 * x, (N, 1)), origin=middle_at_20(20.0, 30.0), tiles=TILES, rotation=30.0)
-    s.add_heightfield(np.tile(0.4 * x, (N, 1)) + 8.0 - gap, origin=middle_at_20(10.0, 30.0), spacing=(0.5, 0.5),
+    s.add_heightfield(np.tile(0.8 * x, (N, 1)), origin=middle_at(20.0, 30.0), tiles=TILES, rotation=30.0)
+    s.add_heightfield(np.tile(0.4 * x, (N, 1)) + 8.0 - gap, origin=middle_at(10.0, 30.0), spacing=(0.5, 0.5),
                       tiles=TILES, rotation=30.0)
     cam = ABOVE if projection == "perspective" else gc.Camera.look_at(
         (20.0, 20.0, 60.0), (20.0, 20.1, -50.0), projection="orthographic", ortho_height=30.0)
@@ -182,8 +182,7 @@ def _random_stack_renders_as_none(seed, gap, elev, az, dist, ortho, z_scale, lod
             z[:w], z[:, -w:] = np.nan, np.nan
         elif holes == "scattered":
             z[rng.random((17, 17)) < 0.006] = np.nan  # a node or two: most tiles stay whole
-        c, si = np.cos(np.radians(rotation)), np.sin(np.radians(rotation))
-        middle = (8.0 - (c - si) * 8.0, 8.0 - (si + c) * 8.0)  # puts the grid's middle at (8, 8)
+        middle = middle_at(8.0, rotation, at=8.0)  # the grid's middle at (8, 8)
         s.add_heightfield(z, origin=(middle[0] + rng.uniform(-2, 2), middle[1] + rng.uniform(-2, 2)), tiles=(4, 4),
                           rotation=rotation)
     e, a = np.radians(elev), np.radians(az)
