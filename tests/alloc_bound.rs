@@ -203,12 +203,12 @@ impl Walk<'_> {
     }
 }
 
-/// The fields of scene bytes, version 7 (src/scene/serial.rs's module docs): every integer of
+/// The fields of scene bytes, version 8 (src/scene/serial.rs's module docs): every integer of
 /// every object and tile; floats and array elements of each object and its first tile.
 fn scene_fields(b: &[u8]) -> Vec<Field> {
     assert_eq!(&b[..8], b"GCSCENE\0");
     let mut p = Walk { b, pos: 8, out: Vec::new(), all: true };
-    assert_eq!(p.get("version", Ty::U32), 7, "the scene format changed: update scene_fields");
+    assert_eq!(p.get("version", Ty::U32), 8, "the scene format changed: update scene_fields");
     p.get("has_origin", Ty::U8);
     for a in "xyz".chars() {
         p.get(&format!("origin.{a}"), Ty::F64);
@@ -287,6 +287,7 @@ fn scene_fields(b: &[u8]) -> Vec<Field> {
             for v in 0..nl {
                 p.get(&format!("{q}.level{v}.error"), Ty::F32);
                 p.get(&format!("{q}.level{v}.shading_error"), Ty::F32);
+                p.get(&format!("{q}.level{v}.error_z"), Ty::F32);
                 p.arr(&format!("{q}.level{v}.indices"), Ty::U32);
             }
         }

@@ -89,11 +89,11 @@ class _Fields:
 
 
 def scene_fields(b: bytes) -> list[Field]:
-    """The fields of scene bytes, version 7 (layout: src/scene/serial.rs's module docs)."""
+    """The fields of scene bytes, version 8 (layout: src/scene/serial.rs's module docs)."""
     p = _Fields(b)
     assert b[:8] == b"GCSCENE\0"
     p.pos = 8
-    assert p.get("version", "<I") == 7, "the scene format changed: update scene_fields"
+    assert p.get("version", "<I") == 8, "the scene format changed: update scene_fields"
     p.get("has_origin", "<B")
     for a in "xyz":
         p.get(f"origin.{a}", "<d")
@@ -162,6 +162,7 @@ def scene_fields(b: bytes) -> list[Field]:
             for v in range(q.get("n_levels", "<I")):
                 q.get(f"level{v}.error", "<f")
                 q.get(f"level{v}.shading_error", "<f")
+                q.get(f"level{v}.error_z", "<f")
                 q.arr(f"level{v}.indices", "<I")
             if t == 0:
                 p.out.extend(q.out)

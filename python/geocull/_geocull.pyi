@@ -98,6 +98,7 @@ class TileTable(TypedDict):
     proxy_error: npt.NDArray[np.float64]  # (n,) metres
     level_triangles: npt.NDArray[np.uint32]  # (n, 6)
     level_error: npt.NDArray[np.float64]  # (n, 6) metres, NaN past a tile's last level
+    level_error_z: npt.NDArray[np.float64]  # (n, 6) metres, the vertical part of level_error
     level_shading_error: npt.NDArray[np.float64]  # (n, 6) normal chord (unitless), NaN past the last level
     bbox_min: npt.NDArray[np.float64]  # (n, 3) world coordinates (metres), NaN for empty tiles
     bbox_max: npt.NDArray[np.float64]  # (n, 3)

@@ -54,7 +54,7 @@ _COLOR_DOC = """
 _TILE_DTYPE = np.dtype([("object", "u4"), ("ix", "u4"), ("iy", "u4"), ("tris_fine", "u4"),
                         ("tris_coarse", "u4"), ("proxy_error", "f8"), ("bbox_min", "f8", (3,)),
                         ("bbox_max", "f8", (3,)), ("level_triangles", "u4", (6,)), ("level_error", "f8", (6,)),
-                        ("level_shading_error", "f8", (6,))])
+                        ("level_error_z", "f8", (6,)), ("level_shading_error", "f8", (6,))])
 
 
 def _doc(values: str) -> str:
@@ -662,7 +662,10 @@ class Scene(SceneColorings):
         meshoptimizer's estimate), bbox_min (3,), bbox_max (3,) (world coordinates, metres; NaN if
         empty), level_triangles (6,) and level_error (6,): the LOD levels 0..5 of the tile (level 0
         = fine, error 0; each further level about a quarter of the triangles; error in metres, NaN
-        past the tile's last level) that ``lod="screen_error"`` chooses from, and level_shading_error
+        past the tile's last level) that ``lod="screen_error"`` chooses from, level_error_z (6,):
+        the vertical part of that error (metres, at most level_error; vertical exaggeration
+        stretches only this part: a vertical well's thinner polygon does not grow on screen), and
+        level_shading_error
         (6,): how far the lit pass's normals on each level may turn from level 0's (the largest chord
         between unit normals, unitless, 0 to sqrt(2); 0 for height fields, which shade from their
         fine surface at every level, and grids; NaN past the last level): ``lod="screen_error"``

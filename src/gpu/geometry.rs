@@ -109,10 +109,14 @@ pub struct DrawRun {
 #[derive(Clone, Copy, Debug)]
 pub struct LevelDraw {
     pub args: DrawArgs,
-    /// Geometric error, world units (not exaggerated).
+    /// Geometric error, world units (not exaggerated), and its vertical part (`Level::error_z`).
     pub error: f32,
+    pub error_z: f32,
     /// Shading error, a normal chord (unitless; `lod::shading`).
     pub shading_error: f32,
+    /// The largest |z| of the normals that error compares, plus the error
+    /// (`lod::shading::level_steepness`): how far vertical exaggeration may turn them.
+    pub steep: f32,
 }
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
@@ -281,7 +285,7 @@ impl SceneGeometry {
                     }
                     put(args, &cd.verts, &cd.vals, &cd.normals, &cd.idx);
                 }
-                tiles_done.push((k, t));
+                tiles_done.push((k, t, o.kind_name() == "well"));
             }
         }
         for (buffer, offset, data) in writes {
@@ -289,11 +293,12 @@ impl SceneGeometry {
                 ctx.queue.write_buffer(buffer, offset, &data);
             }
         }
-        for (k, t) in tiles_done {
+        for (k, t, tube) in tiles_done {
             self.bbox[k] = tile_bbox(t);
             self.sub_boxes[k] = tile_sub_boxes(t);
-            for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
-                (l.error, l.shading_error) = (new.error, new.shading_error);
+            let steep = crate::lod::shading::level_steepness(t, !tube);
+            for ((l, new), s) in self.levels[k].iter_mut().zip(&t.levels).zip(steep) {
+                (l.error, l.error_z, l.shading_error, l.steep) = (new.error, new.error_z, new.shading_error, s);
             }
         }
         self.key = scene.geometry_key();

@@ -431,7 +431,8 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         }
         stats.push(st);
         kinds.push(kind_counts(&lev));
-        tile.levels.push(Level { indices: idx.into(), error: lev.error as f32, shading_error: lev.shading as f32 });
+        let error = lev.error as f32;
+        tile.levels.push(Level { indices: idx.into(), error, error_z: error, shading_error: lev.shading as f32 });
     }
     match tile.levels.last() {
         Some(l) => {

@@ -36,8 +36,15 @@ pub const MAX_LEVELS: usize = 5;
 #[derive(Clone, Debug, Default)]
 pub struct Level {
     pub indices: super::Indices,
-    /// Geometric error, world units (not exaggerated).
+    /// Geometric error, world units (not exaggerated): every point of the level lies within this
+    /// distance of level 0's surface, and every point of level 0's within it of the level's.
     pub error: f32,
+    /// The vertical part of that error (at most `error`): the displacement that `error` bounds
+    /// has a z component of at most this. Vertical exaggeration stretches only that part, so a
+    /// level whose error is horizontal (a vertical well's thinner polygon, a path's sideways
+    /// wiggle) keeps its size on screen under exaggeration (`render::levels`). Height-field levels
+    /// (vertical error) and isotropic ones (simplified meshes, grids) have `error_z == error`.
+    pub error_z: f32,
     /// Shading error: the largest chord between the lit pass's unit normals on this level and on
     /// level 0 ([`super::shading::shading_error`]; unitless, 0..=sqrt 2). 0 for height-field
     /// levels (shaded from the fine surface); reservoir-grid levels bound it by summing each
@@ -84,7 +91,7 @@ pub fn lattice_levels(
         prev = tris.len();
         let error = lattice_error(&tris, &z) as f32;
         let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
-        levels.push(Level { indices, error, shading_error: 0.0 });
+        levels.push(Level { indices, error, error_z: error, shading_error: 0.0 });
     }
     levels
 }
@@ -195,7 +202,7 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], shading: Option<s
         }
         error += step;
         let shading_error = shading.map_or(0.0, |sh| shading::shading_error(positions, sh, fine, &idx));
-        levels.push(Level { indices: idx.as_slice().into(), error, shading_error });
+        levels.push(Level { indices: idx.as_slice().into(), error, error_z: error, shading_error });
         prev = idx;
     }
     levels

@@ -232,11 +232,22 @@ fn to_segment(p: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
     ((a + t * ab - p).length(), t)
 }
 
+/// What [`decimate`] kept and the bounds it measured.
+struct Decimated {
+    /// The kept stations, in order.
+    kept: Vec<usize>,
+    /// The largest distance of a dropped station from its kept segment, and the largest vertical
+    /// part of that displacement.
+    dev: f64,
+    dev_z: f64,
+    /// The largest chord between a station's direction and the level's there (its segment's for
+    /// a dropped station, its ring's for a kept one).
+    chord: f64,
+}
+
 /// The stations of `a..=b` kept at tolerance `tol` and normal chord `chord` (see the module's
-/// contract), in order, the largest distance of a dropped station from the kept polyline and
-/// the largest chord between a station's direction and the level's there (its segment's for a
-/// dropped station, its ring's for a kept one).
-fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> (Vec<usize>, f64, f64) {
+/// contract) and the level's bounds.
+fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> Decimated {
     let (path, values) = (spec.path, spec.values);
     let mut keep = vec![false; b - a + 1];
     keep[0] = true;
@@ -252,7 +263,7 @@ fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> (V
     }
     let runs: Vec<usize> = (a..=b).filter(|&k| keep[k - a]).collect();
     let mut stack: Vec<(usize, usize)> = runs.windows(2).map(|w| (w[0], w[1])).collect();
-    let mut max_dev = 0.0f64;
+    let (mut max_dev, mut max_dev_z) = (0.0f64, 0.0f64);
     while let Some((i, j)) = stack.pop() {
         // The station breaking the bounds most (by its ratio to them), if any.
         let mut worst: Option<(usize, f64)> = None;
@@ -280,7 +291,9 @@ fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> (V
             }
             None => {
                 for k in i + 1..j {
-                    max_dev = max_dev.max(to_segment(path[k], path[i], path[j]).0);
+                    let (d, t) = to_segment(path[k], path[i], path[j]);
+                    max_dev = max_dev.max(d);
+                    max_dev_z = max_dev_z.max((path[i].z + t * (path[j].z - path[i].z) - path[k].z).abs());
                 }
             }
         }
@@ -299,7 +312,17 @@ fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> (V
             max_chord = max_chord.max((direction(path, w[0]) - direction(&pts, m)).length());
         }
     }
-    (kept, max_dev, max_chord)
+    Decimated { kept, dev: max_dev, dev_z: max_dev_z, chord: max_chord }
+}
+
+/// The largest horizontal length of a unit direction of the path's stations `a..=b` and of the
+/// level's segments between `kept` stations: a vector normal to a direction d has a vertical part
+/// of at most |d_xy| of its length (a ring of a vertical well lies flat).
+fn ring_tilt(path: &[DVec3], a: usize, b: usize, kept: &[usize]) -> f64 {
+    let flat = |d: DVec3| d.truncate().length().min(1.0);
+    let fine = (a..=b).map(|k| flat(direction(path, k)));
+    let level = kept.windows(2).map(|w| flat((path[w[1]] - path[w[0]]).normalize_or_zero()));
+    fine.chain(level).fold(0.0, f64::max)
 }
 
 /// Frames of a level's kept stations: level 0's at both ends, parallel transport between with
@@ -344,7 +367,8 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
             let mut prev = n_fine;
             for l in 0..MAX_LEVELS {
                 let sides = LEVEL_SIDES[l].min(spec.sides);
-                let (kept, dev, chord) = decimate(spec, a, b, LEVEL_TOL_RADII[l] * spec.radius, LEVEL_CHORD[l]);
+                let Decimated { kept, dev, dev_z, chord } =
+                    decimate(spec, a, b, LEVEL_TOL_RADII[l] * spec.radius, LEVEL_CHORD[l]);
                 let n_tris = 2 * (kept.len() - 1) * sides + 2 * (sides - 2);
                 if n_tris as f64 > 0.8 * prev as f64 {
                     continue;
@@ -355,7 +379,11 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
                 let (sides_tris, caps) = piece(spec, origin, &kept, &lf, (sides, r), (true, true), &mut tile);
                 let indices: Vec<u32> = sides_tris.into_iter().chain(caps).collect();
                 let error = (dev + polygon) as f32;
-                tile.levels.push(Level { indices: indices.into(), error, shading_error: chord as f32 });
+                // The polygons' gap lies in the rings' planes, tilted from the horizontal by at
+                // most `ring_tilt`; f32 rounding up, never past the error.
+                let error_z = ((dev_z + polygon * ring_tilt(spec.path, a, b, &kept)) as f32).min(error);
+                let level = Level { indices: indices.into(), error, error_z, shading_error: chord as f32 };
+                tile.levels.push(level);
             }
             let target = n_fine as f64 / coarse_factor.max(1.0) as f64;
             let proxy = tile.levels.iter().find(|l| (l.indices.len() / 3) as f64 <= target).or(tile.levels.last());

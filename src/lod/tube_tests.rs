@@ -55,13 +55,15 @@ fn every_dropped_station_lies_within_the_level_error_of_the_kept_path() {
     for (l, (&sides, &tol)) in LEVEL_SIDES.iter().zip(&LEVEL_TOL_RADII).enumerate() {
         let a = 0;
         let b = SEGMENTS_PER_TILE;
-        let (kept, dev, chord) = decimate(&spec(&path, None, radius, 0.0), a, b, tol * radius, LEVEL_CHORD[l]);
+        let Decimated { kept, dev, dev_z, chord } =
+            decimate(&spec(&path, None, radius, 0.0), a, b, tol * radius, LEVEL_CHORD[l]);
         assert_eq!((kept[0], *kept.last().unwrap()), (a, b));
         // Each dropped station within tol of the kept segment about it, and dev the largest such.
-        let mut largest = 0.0f64;
+        let (mut largest, mut largest_z) = (0.0f64, 0.0f64);
         for w in kept.windows(2) {
             for k in w[0] + 1..w[1] {
-                let d = to_segment(path[k], path[w[0]], path[w[1]]).0;
+                let (d, t) = to_segment(path[k], path[w[0]], path[w[1]]);
+                largest_z = largest_z.max((path[w[0]].lerp(path[w[1]], t) - path[k]).z.abs());
                 assert!(d <= tol * radius + 1e-9, "level {l}: station {k} {d} > {}", tol * radius);
                 let turn = (direction(&path, k) - (path[w[1]] - path[w[0]]).normalize()).length();
                 assert!(turn <= LEVEL_CHORD[l] + 1e-12 && turn <= chord + 1e-12);
@@ -69,11 +71,13 @@ fn every_dropped_station_lies_within_the_level_error_of_the_kept_path() {
             }
         }
         assert!((largest - dev).abs() < 1e-12);
+        assert!((largest_z - dev_z).abs() < 1e-9 && dev_z <= dev + 1e-12);
         // A tile's level with these sides has this error.
         let polygon = level_polygon(radius, 8, sides).1;
         if let Some(lv) = tiles[0].levels.get(l) {
             assert!((lv.error as f64 - (dev + polygon)).abs() < 1e-4, "level {l}: {} vs {}", lv.error, dev + polygon);
             assert!((lv.shading_error as f64 - chord).abs() < 1e-6);
+            assert!(lv.error_z >= (dev_z as f32) * (1.0 - 1e-6) && lv.error_z <= lv.error, "level {l}");
         }
     }
     // Every vertex of every level within its error + radius of the fine path's nearest segment.
@@ -167,7 +171,7 @@ fn a_log_keeps_its_colours_within_the_tolerance() {
         .collect();
     let tol = 0.3 / 512.0;
     let s = spec(&path, Some(&log), 1.0, tol);
-    let (kept, _, _) = decimate(&s, 0, 128, 64.0, 1.0);
+    let kept = decimate(&s, 0, 128, 64.0, 1.0).kept;
     // The NaN run and the ramp collapse to their ends; the noise keeps every station.
     assert!(kept.contains(&39) && kept.contains(&40) && kept.contains(&79), "{kept:?}");
     assert!(!kept.contains(&20) && !kept.contains(&60), "{kept:?}");
@@ -237,3 +241,27 @@ fn level_polygons_keep_the_perimeter_and_bound_the_gap() {
 }
 
 const TAU_STEP: f64 = std::f64::consts::TAU / 3600.0;
+
+#[test]
+fn a_vertical_well_has_horizontal_level_errors() {
+    // Straight down 0.5 m a station, wiggling sideways by up to 3 m: the path leans at most
+    // 0.06 / hypot(0.06, 0.5) = 0.119 from the vertical, so a level's polygons lie nearly flat and
+    // its dropped stations move sideways: exaggeration must stretch at most that part of its error.
+    let path: Vec<DVec3> = (0..600).map(|k| DVec3::new(3.0 * (k as f64 * 0.02).sin(), 0.0, -0.5 * k as f64)).collect();
+    let tiles = tube_tiles(&spec(&path, None, 2.0, 0.0), DVec3::ZERO, 25.0);
+    let levels: Vec<&Level> = tiles.iter().flat_map(|t| &t.levels).collect();
+    assert!(levels.len() >= 2 * tiles.len(), "{} levels", levels.len());
+    for l in levels {
+        assert!(l.error > 0.05 && l.error_z <= 0.125 * l.error, "{} vs {}", l.error_z, l.error);
+    }
+    // A well along the horizontal: its polygons stand upright, so their whole gap is vertical
+    // (at least the 6-sided polygon's, the smallest of the levels').
+    let flat: Vec<DVec3> = (0..300).map(|k| DVec3::new(0.5 * k as f64, 3.0 * (k as f64 * 0.02).sin(), 0.0)).collect();
+    let least_gap = level_polygon(2.0, 8, 6).1 as f32;
+    for t in tube_tiles(&spec(&flat, None, 2.0, 0.0), DVec3::ZERO, 25.0) {
+        assert!(!t.levels.is_empty());
+        for l in &t.levels {
+            assert!(l.error_z >= 0.99 * least_gap && l.error_z <= l.error, "{} vs {}", l.error_z, l.error);
+        }
+    }
+}

@@ -490,6 +490,7 @@ impl PyScene {
         d.set_item("proxy_error", t.proxy_error.into_pyarray(py))?;
         d.set_item("level_triangles", Array2::from_shape_vec((n, NL), t.level_tris).unwrap().into_pyarray(py))?;
         d.set_item("level_error", Array2::from_shape_vec((n, NL), t.level_err).unwrap().into_pyarray(py))?;
+        d.set_item("level_error_z", Array2::from_shape_vec((n, NL), t.level_err_z).unwrap().into_pyarray(py))?;
         let shading = Array2::from_shape_vec((n, NL), t.level_shading).unwrap();
         d.set_item("level_shading_error", shading.into_pyarray(py))?;
         d.set_item("bbox_min", Array2::from_shape_vec((n, 3), t.lo).unwrap().into_pyarray(py))?;
@@ -526,6 +527,7 @@ struct TileColumns {
     /// levels) per level.
     level_tris: Vec<u32>,
     level_err: Vec<f64>,
+    level_err_z: Vec<f64>,
     level_shading: Vec<f64>,
     lo: Vec<f64>,
     hi: Vec<f64>,
@@ -544,13 +546,14 @@ impl TileColumns {
                 t.proxy_error.push(tile.proxy_error as f64);
                 for l in 0..NL {
                     let lv = if l == 0 {
-                        Some((tile.fine_triangles(), 0.0, 0.0))
+                        Some((tile.fine_triangles(), 0.0, 0.0, 0.0))
                     } else {
-                        tile.levels.get(l - 1).map(|v| (v.indices.len() / 3, v.error, v.shading_error))
+                        tile.levels.get(l - 1).map(|v| (v.indices.len() / 3, v.error, v.shading_error, v.error_z))
                     };
                     t.level_tris.push(lv.map_or(0, |v| v.0 as u32));
                     t.level_err.push(lv.map_or(f64::NAN, |v| v.1 as f64));
                     t.level_shading.push(lv.map_or(f64::NAN, |v| v.2 as f64));
+                    t.level_err_z.push(lv.map_or(f64::NAN, |v| v.3 as f64));
                 }
                 for a in 0..3 {
                     let off = o.origin[a] + o.offset[a];

@@ -22,9 +22,10 @@ const LEVEL_STATS: [&str; 1 + crate::lod::levels::MAX_LEVELS] = [
 pub(super) type ChosenLevels = (Vec<u8>, Vec<f32>);
 
 /// Stage 2b: the level of detail of every tile for this frame, and with `Lod::ScreenError` each
-/// tile's chosen level and its error in pixels. The error of a level (world units) is scaled by the
-/// exaggeration where that enlarges it and projected at the tile box's nearest point (perspective)
-/// or with the orthographic scale; a box that contains the eye gets level 0. Cheap on the CPU (one
+/// tile's chosen level and its error in pixels. The error of a level (world units) is exaggerated
+/// where that enlarges it ([`exaggerated`]: only its vertical part stretches) and projected at the
+/// tile box's nearest point (perspective) or with the orthographic scale; a box that contains the
+/// eye gets level 0. Cheap on the CPU (one
 /// pass over the tiles), so it runs there, before the strategy, with no read-back.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn choose_levels(
@@ -52,33 +53,40 @@ pub(super) fn choose_levels(
     let proj = fc.view_proj * fc.view.inverse();
     let px_per_unit = proj.y_axis.y.abs() * height as f64 / 2.0;
     let perspective = fc.projection == crate::camera::Projection::Perspective;
-    let zs = camera.z_scale.max(1.0);
     let zv = DVec3::new(1.0, 1.0, camera.z_scale);
     let objects = scene.objects();
-    // Per object, 8-bit colour levels per unit of shading error.
-    let shade_levels: Vec<f64> = objects
-        .iter()
-        .map(|o| crate::lod::shading::shade_levels_per_chord(o.max_color_channel() as f64, camera.z_scale))
-        .collect();
+    // Per object, its brightest colour channel: 8-bit colour levels per unit of shading error
+    // with the exaggeration's turn of each level's normals (`LevelDraw::steep`).
+    let channel: Vec<f64> = objects.iter().map(|o| o.max_color_channel() as f64).collect();
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {
         let scale = if perspective {
             if d2 > 0.0 {
-                zs * px_per_unit / d2.sqrt()
+                px_per_unit / d2.sqrt()
             } else {
                 f64::INFINITY
             }
         } else {
-            zs * px_per_unit
+            px_per_unit
         };
-        let px_of = |lerr: f32| if lerr == 0.0 { 0.0 } else { lerr as f64 * scale };
-        let per_chord = shade_levels[g.tile_object_cpu[i] as usize];
+        let px_of = |l: &crate::gpu::geometry::LevelDraw| {
+            let e = exaggerated(l.error, l.error_z, camera.z_scale);
+            if e == 0.0 {
+                0.0
+            } else {
+                e * scale
+            }
+        };
+        let c = channel[g.tile_object_cpu[i] as usize];
+        let per_chord = |l: &crate::gpu::geometry::LevelDraw| {
+            crate::lod::shading::shade_levels_per_chord(c, camera.z_scale, l.steep as f64)
+        };
         // The coarsest level within `max_px` pixels of error and MAX_SHADING_LEVELS of colour.
         let screen = |max_px: f64| {
             let mut l = 0usize;
             for (k, lv) in g.levels[i].iter().enumerate() {
-                if px_of(lv.error) > max_px || lv.shading_error as f64 * per_chord > MAX_SHADING_LEVELS {
+                if px_of(lv) > max_px || lv.shading_error as f64 * per_chord(lv) > MAX_SHADING_LEVELS {
                     break;
                 }
                 l = k + 1;
@@ -98,12 +106,23 @@ pub(super) fn choose_levels(
             (None, _, Lod::ScreenError { max_pixel_error }) => screen(max_pixel_error),
         };
         let (a, e) =
-            if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].args, px_of(g.levels[i][l - 1].error) as f32) };
+            if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].args, px_of(&g.levels[i][l - 1]) as f32) };
         args.push(a);
         level.push(l as u8);
         err_px.push(e);
     }
     (args, Some((level, err_px)))
+}
+
+/// The length, after exaggerating z by `z_scale`, of a displacement of length at most `error`
+/// whose z part is at most `error_z` (world units): `sqrt(error² + (z_scale² - 1) error_z²)`, as
+/// `z_scale` stretches only the z part; `error` where `z_scale` <= 1 (nothing grows).
+pub(super) fn exaggerated(error: f32, error_z: f32, z_scale: f64) -> f64 {
+    let (e, ez) = (error as f64, (error_z.min(error)) as f64);
+    if z_scale <= 1.0 {
+        return e;
+    }
+    (e * e + (z_scale * z_scale - 1.0) * ez * ez).sqrt()
 }
 
 impl Renderer {

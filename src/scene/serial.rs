@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 7 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 8 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -26,7 +26,7 @@
 //!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
 //!             measured again on reading: `lod::shading`, 0 for height fields and grids),
-//!             indices [u32]
+//!             error_z f32 (version 8; before, the error), indices [u32]
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
@@ -43,7 +43,7 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 7;
+const VERSION: u32 = 8;
 
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
@@ -292,6 +292,7 @@ impl Scene {
                 for l in &t.levels {
                     w.f32(l.error);
                     w.f32(l.shading_error);
+                    w.f32(l.error_z);
                     w.u32s(&l.indices);
                 }
             }
@@ -511,7 +512,8 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     for _ in 0..nl {
         let error = r.f32()?;
         let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
-        levels.push(crate::lod::levels::Level { error, shading_error, indices: r.u32s()?.into() });
+        let error_z = if version >= 8 { r.f32()? } else { error };
+        levels.push(crate::lod::levels::Level { error, error_z, shading_error, indices: r.u32s()?.into() });
     }
     for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
         if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {

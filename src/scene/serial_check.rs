@@ -66,9 +66,13 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
             t.bbox_min, t.bbox_max
         ));
     }
-    let errors = std::iter::once(t.proxy_error).chain(t.levels.iter().flat_map(|l| [l.error, l.shading_error]));
+    let errors =
+        std::iter::once(t.proxy_error).chain(t.levels.iter().flat_map(|l| [l.error, l.error_z, l.shading_error]));
     if let Some(e) = errors.into_iter().find(|e| e.is_nan() || *e < 0.0) {
         return Err(format!("an LOD error is {e}; errors are >= 0"));
+    }
+    if let Some(l) = t.levels.iter().find(|l| l.error_z > l.error) {
+        return Err(format!("a level's vertical error {} exceeds its error {}", l.error_z, l.error));
     }
     Ok(())
 }

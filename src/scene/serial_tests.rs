@@ -121,15 +121,15 @@ fn version_5_meshes_measure_their_shading_error_again() {
     s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
     let t = &s.objects()[0].tiles[0];
     assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
-    let v7 = s.to_bytes();
+    let v8 = s.to_bytes();
     // Version 5: the same bytes without the object's priority byte (by kind, after its opacity),
     let mut pri = 1.0f32.to_le_bytes().to_vec();
     pri.extend([u8::MAX]);
     pri.extend(1u32.to_le_bytes());
-    let pri_at = v7.windows(pri.len()).position(|w| w == pri).unwrap() + 4;
-    let v6 = [&v7[..pri_at], &v7[pri_at + 1..]].concat();
+    let pri_at = v8.windows(pri.len()).position(|w| w == pri).unwrap() + 4;
+    let v6 = [&v8[..pri_at], &v8[pri_at + 1..]].concat();
     // without the tile's (empty) grid coordinates, after its
-    // normals, and without each level's shading error (the f32 after its error).
+    // normals, and without each level's shading error and vertical error (the f32s after its error).
     let mut normals_then = (t.normals.len() as u64).to_le_bytes().to_vec();
     normals_then.extend(t.normals.iter().flat_map(|n| n.to_le_bytes()));
     normals_then.extend(0u64.to_le_bytes());
@@ -146,7 +146,7 @@ fn version_5_meshes_measure_their_shading_error_again() {
     let mut at = start;
     for l in &t.levels {
         v5.extend(&w[at..at + 4]); // error
-        at += 8; // and the shading error, dropped
+        at += 12; // and the shading and vertical errors, dropped
         let len = 8 + 4 * l.indices.len();
         v5.extend(&w[at..at + len]);
         at += len;
@@ -154,7 +154,35 @@ fn version_5_meshes_measure_their_shading_error_again() {
     v5.extend(&w[at..]);
     v5[8..12].copy_from_slice(&5u32.to_le_bytes());
     let back = Scene::from_bytes(&v5).unwrap();
-    assert_eq!(back.to_bytes(), v7);
+    assert_eq!(back.to_bytes(), v8);
+}
+
+#[test]
+fn version_7_levels_take_their_whole_error_as_vertical() {
+    // A vertical well: its levels' errors are horizontal (error_z well below error).
+    let path: Vec<[f64; 3]> = (0..400).map(|k| [3.0 * (k as f64 * 0.02).sin(), 0.0, -0.5 * k as f64]).collect();
+    let mut s = Scene::new();
+    s.add_well(&path, 2.0, 8, AddOptions::new(4.0)).unwrap();
+    let levels: Vec<_> = s.objects()[0].tiles.iter().flat_map(|t| t.levels.clone()).collect();
+    assert!(!levels.is_empty() && levels.iter().all(|l| l.error_z < 0.5 * l.error));
+    let v8 = s.to_bytes();
+    assert_eq!(Scene::from_bytes(&v8).unwrap().to_bytes(), v8);
+    // Version 7: the same bytes without each level's error_z (the f32 after its shading error).
+    let mut v7 = v8.clone();
+    for l in levels.iter().rev() {
+        let mut at_level = l.error.to_le_bytes().to_vec();
+        at_level.extend(l.shading_error.to_le_bytes());
+        at_level.extend(l.error_z.to_le_bytes());
+        at_level.extend((l.indices.len() as u64).to_le_bytes());
+        let at = v7.windows(at_level.len()).rposition(|w| w == at_level).unwrap() + 8;
+        v7.drain(at..at + 4);
+    }
+    v7[8..12].copy_from_slice(&7u32.to_le_bytes());
+    let back = Scene::from_bytes(&v7).unwrap();
+    // Read as bounded by the whole error: what the level choice took before version 8.
+    let got: Vec<_> = back.objects()[0].tiles.iter().flat_map(|t| t.levels.clone()).collect();
+    assert_eq!(got.len(), levels.len());
+    assert!(got.iter().zip(&levels).all(|(g, l)| g.error_z == l.error && g.error == l.error));
 }
 
 #[test]

@@ -204,7 +204,17 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
-        let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
+        let TileDraws { fine, coarse, occluder, mut levels, tile_object, bbox, own_vertices } = draws;
+        // How far exaggeration may turn each level's normals, tiles in parallel.
+        let owned: Vec<(bool, &crate::lod::TileMesh)> =
+            scene.objects().iter().flat_map(|o| o.tiles.iter().map(move |t| (o.kind_name() != "well", t))).collect();
+        let steep: Vec<Vec<f32>> =
+            owned.par_iter().map(|&(caps, t)| crate::lod::shading::level_steepness(t, caps)).collect();
+        for (lv, s) in levels.iter_mut().zip(steep) {
+            for (l, s) in lv.iter_mut().zip(s) {
+                l.steep = s;
+            }
+        }
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -354,7 +364,13 @@ fn write_tiles(
                     ids[2..]
                         .iter()
                         .zip(&t.levels)
-                        .map(|(&p, l)| LevelDraw { args: args(p), error: l.error, shading_error: l.shading_error })
+                        .map(|(&p, l)| LevelDraw {
+                            args: args(p),
+                            error: l.error,
+                            error_z: l.error_z,
+                            shading_error: l.shading_error,
+                            steep: 1.0,
+                        })
                         .collect(),
                 );
                 own_vertices.push(Vec::new());
@@ -396,7 +412,9 @@ fn write_tiles(
                     .map(|l| LevelDraw {
                         args: compact(&l.indices, &mut v, &mut i),
                         error: l.error,
+                        error_z: l.error_z,
                         shading_error: l.shading_error,
+                        steep: 1.0,
                     })
                     .collect(),
             );
