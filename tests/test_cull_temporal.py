@@ -25,9 +25,8 @@ def test_temporal_is_registered():
 
 def test_first_frame_then_the_same_view_reuses_the_visible_set(renderer_small):
     """The pit scene from above: the first frame (no history) takes its first set from three_pass's
-    prepass (whose proxy misses the pit; the box test finds it); the second draws first exactly
-    the tiles seen, tests the others, finds the lower plane's tile through the pit, and draws
-    nothing hidden."""
+    prepass (whose proxy misses the pit; the box test finds it); the second repeats it and draws
+    exactly the tiles seen, untested: the lower plane's tile through the pit, nothing hidden."""
     r = gc.Renderer(96, 96)  # a renderer of its own: no history from other tests
     s, top, low = pit_scene()
     cam = top_down()
@@ -41,6 +40,8 @@ def test_first_frame_then_the_same_view_reuses_the_visible_set(renderer_small):
     np.testing.assert_array_equal(second.depth, none.depth)
     seen = none.tile_pixels > 0
     assert second.stats["tiles_reused"] == int(seen.sum())
+    assert (first.stats["frame_repeated"], second.stats["frame_repeated"]) == (0, 1)
+    assert second.stats["tiles_box_tested"] == 0
     np.testing.assert_array_equal(second.tile_drawn, seen)  # exactly the oracle's set
     obj = s.tile_table()["object"]
     assert second.tile_drawn[obj == low].sum() >= 1  # the lower plane's tile under the pit
@@ -61,6 +62,38 @@ def test_history_of_another_view_or_scene_is_only_a_guess(renderer_small):
     s.set_visible(top, False)
     res = r.render(s, cam, culling="temporal", pixel_threshold=0)
     np.testing.assert_array_equal(res.image, r.render(s, cam, culling="none").image)
+
+
+def test_whatever_decides_a_pixel_ends_a_repeat():
+    """A frame repeats the last one (its visible tiles drawn untested) only when nothing that decides
+    which tile wins a pixel changed: each change below is a frame that tests again, and every frame,
+    repeated or not, equals none's. A change of colour alone repeats."""
+    r = gc.Renderer(96, 96)
+    s, top, low = pit_scene()
+    cam = top_down(20.0, 25.0)
+
+    def frame(cam=cam, **kw):
+        res = r.render(s, cam, culling="temporal", pixel_threshold=0, **kw)
+        ref = r.render(s, cam, culling="none", **kw)
+        np.testing.assert_array_equal(res.image, ref.image)
+        np.testing.assert_array_equal(res.depth, ref.depth)
+        return res.stats["frame_repeated"]
+
+    frame()
+    assert frame() == 1
+    s.set_color(top, (0.9, 0.2, 0.2))
+    assert frame() == 1
+    for change in (lambda: s.translate(low, (0.0, 0.0, 30.0)), lambda: s.set_priority(low, 9),
+                   lambda: s.set_visible(top, False), lambda: s.set_visible(top, True)):
+        change()
+        assert frame() == 0 and frame() == 1
+    exaggerated = gc.Camera.look_at((20.0, 25.0, 40.0), (20.0, 25.0, 0.0), up=(0, 1, 0), fov_y=30.0, z_scale=3.0)
+    for kw in (dict(cam=top_down(20.0, 25.5)), dict(cam=exaggerated),
+               dict(cam=exaggerated, lod="screen_error", max_pixel_error=4.0)):
+        assert frame(**kw) == 0 and frame(**kw) == 1
+    # A threshold above 0 never repeats (its image is not none's).
+    r.render(s, cam, culling="temporal", pixel_threshold=5)
+    assert r.render(s, cam, culling="temporal", pixel_threshold=5).stats["frame_repeated"] == 0
 
 
 def test_threshold_keeps_its_meaning():

@@ -54,6 +54,7 @@ class RenderStats(TypedDict):
     tiles_slab_tested: NotRequired[int]  # of those, height-field tiles tested with their slabs
     triangles_slab_test: NotRequired[int]  # the slabs' triangles rasterised by the box test
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
+    frame_repeated: NotRequired[int]  # temporal: 1 when it repeated the last frame (its visible tiles, untested)
     tiles_proven_hidden: NotRequired[int]  # three_pass conservative, temporal: hidden by a height field (CPU proof)
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
     tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test

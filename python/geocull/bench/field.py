@@ -20,10 +20,13 @@ Views (:data:`VIEWS`): :meth:`geocull.Camera.fit` to the reservoir (horizons and
 shallow parts leave the image) from azimuths all round, elevations 10-90 degrees, ``z_scale`` 1, 5
 and 10, two of them zoomed in. Methods (:func:`methods`): ``none`` (the reference), three_pass
 conservative (threshold 0) and the paper's approximate mode (threshold 10, prepass scale 1),
-``temporal`` (threshold 0; its history is its own last frame of the same view), ``horizon``,
+``temporal`` (threshold 0, on its own renderer; its history is its last frame, the same view), ``horizon``,
 ``frustum``, ``oracle`` (the lower bound), any other mode of :data:`geocull.CULLING_MODES` with its
 defaults, ``temporal`` + ``lod="screen_error"`` 0.5 px, the same with ``grid_lod="screen_error"``
-too, and PyVista/VTK with MSAA off (:mod:`geocull.pyvista`, the same camera and clip range, flat colours).
+too, ``temporal`` and ``temporal`` + lod with a moving camera (``,moving``: every frame alternates
+between the view and the view turned by :data:`NUDGE_DEGREES` of azimuth, so that no frame repeats
+the last one, as in an orbit; the plain rows repeat the view, which temporal draws at the oracle's
+cost), and PyVista/VTK with MSAA off (:mod:`geocull.pyvista`, the same camera and clip range, flat colours).
 
 Timing as in :mod:`geocull.bench`: one warm-up frame per method (the first temporal one two, so
 that temporal's history is the view), whose image is compared with ``none``'s (differing pixels, beyond 4/255, largest
@@ -59,6 +62,8 @@ COARSE_FACTOR = 25
 GRID_BLOCKS = (8, 8)
 WELL_LOG = "Poro"
 LOD_ERROR = 0.5
+#: The moving-camera rows alternate between each view and the view turned by this (degrees).
+NUDGE_DEGREES = 0.25
 
 #: (name, azimuth, elevation, z_scale, zoom) of the views, in this order; ``--quick`` takes the first 4.
 VIEWS: tuple[tuple[str, float, float, float, float], ...] = (
@@ -73,7 +78,7 @@ VIEWS: tuple[tuple[str, float, float, float, float], ...] = (
 )
 
 #: Methods whose image must equal ``none``'s bit for bit (the renderer's contract).
-EXACT = ("none", "three_pass(cons,t=0)", "temporal(t=0)", "horizon", "frustum", "oracle")
+EXACT = ("none", "three_pass(cons,t=0)", "temporal(t=0)", "temporal(t=0,moving)", "horizon", "frustum", "oracle")
 
 
 def _say(msg: str) -> None:
@@ -113,6 +118,8 @@ def methods() -> list[tuple[str, dict[str, Any]]]:
     out += [
         (f"temporal(lod={LOD_ERROR:g})", dict(culling="temporal", pixel_threshold=0, **lod)),
         (f"temporal(lod+grid_lod={LOD_ERROR:g})", dict(culling="temporal", pixel_threshold=0, **(lod | glod))),
+        ("temporal(t=0,moving)", dict(culling="temporal", pixel_threshold=0)),
+        (f"temporal(lod={LOD_ERROR:g},moving)", dict(culling="temporal", pixel_threshold=0, **lod)),
     ]
     return [(n, rk) for n, rk in out if rk["culling"] in gc.CULLING_MODES]
 
@@ -415,6 +422,19 @@ class _Run:
     t_start: float
     gpv: Any = None
     frozen: Any = None
+    # Each temporal row's own renderer (its history: one per renderer), made on first use.
+    own: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    def renderer_for(self, name: str, rk: dict[str, Any]) -> Any:
+        """The renderer that draws method ``name``: its own for a temporal row (whose history
+        is then its own last frame, as a viewer's), else the shared one."""
+        if rk.get("culling") != "temporal":
+            return self.renderer
+        if name not in self.own:
+            import geocull as gc
+
+            self.own[name] = gc.Renderer(self.w, self.h)
+        return self.own[name]
     pv_version: dict[str, str] = dataclasses.field(default_factory=dict)
     rows: list[dict[str, Any]] = dataclasses.field(default_factory=list)
     pv_setup_s: list[float] = dataclasses.field(default_factory=list)
@@ -439,32 +459,42 @@ def _import_pyvista(ctx: _Run) -> None:
 
 def _run_view(ctx: _Run, vname: str, cam: Any, angles: dict[str, float]) -> None:
     """One view: warm-up frames and image errors, timed rounds, its rows; then the grid alone."""
-    ref, oracle_tiles, first = _warm_up(ctx, cam)
-    jobs, times, pv_err = _timed_view(ctx, cam, vname, ref)
+    import geocull as gc
+
+    turned = gc.Camera.fit(ctx.fld["reservoir_bounds"], azimuth=angles["azimuth"] + NUDGE_DEGREES,
+                           elevation=angles["elevation"], aspect=ctx.w / ctx.h, z_scale=angles["z_scale"])
+    if angles["zoom"] != 1.0:
+        turned = turned.zoomed(angles["zoom"])
+    ref, oracle_tiles, first = _warm_up(ctx, cam, turned)
+    jobs, times, pv_err = _timed_view(ctx, cam, turned, vname, ref)
     ctx.rows.extend(_view_rows(ctx, vname, angles, jobs, times, first, pv_err, oracle_tiles))
     del ref
     ctx.grid_rows.extend(_grid_alone(ctx, cam, vname))
     _say(f"bench: view {vname}: done ({time.perf_counter() - ctx.t_start:.0f} s so far)")
 
 
-def _warm_up(ctx: _Run, cam: Any) -> tuple[Any, int, dict[str, dict[str, Any]]]:
-    """One warm-up frame per method (the first temporal one two: temporal's history is then this
-    view), each reduced at once to its stats, tiles drawn per object kind and image errors against
-    none's. Returns (none's frame, tiles visible in the oracle's image, per method those numbers)."""
+def _warm_up(ctx: _Run, cam: Any, turned: Any) -> tuple[Any, int, dict[str, dict[str, Any]]]:
+    """One warm-up frame per method (a temporal one two, on its own renderer: its history is then
+    this view; a moving one's after a frame of the view ``turned``), each reduced at once to its
+    stats, tiles drawn per object kind and image errors against none's. Returns (none's frame,
+    tiles visible in the oracle's image, per method those numbers)."""
     renderer, scene, kinds, field = ctx.renderer, ctx.fld["scene"], ctx.fld["tile_kind"], ctx.fld
     ref = renderer.render(scene, cam, culling="none")
     oracle = renderer.render(scene, cam, culling="oracle")
     visible = np.asarray(oracle.tile_pixels)
     oracle_tiles = int(np.count_nonzero(visible))
     first: dict[str, dict[str, Any]] = {}
-    primed = False  # temporal's history (one per renderer, whatever its options) is this view
     for name, rk in ctx.meths:
+        r = ctx.renderer_for(name, rk)
         if name == "none" or rk == dict(culling="oracle"):
             res = ref if name == "none" else oracle
+        elif name.endswith(",moving)"):
+            r.render(scene, turned, **rk)
+            res = r.render(scene, cam, **rk)
         else:
-            res = renderer.render(scene, cam, **rk)
-            if rk["culling"] == "temporal" and not primed:
-                res, primed = renderer.render(scene, cam, **rk), True
+            res = r.render(scene, cam, **rk)
+            if rk["culling"] == "temporal":  # its history is now this view: the view repeated
+                res = r.render(scene, cam, **rk)
         s: dict[str, Any] = dict(res.stats)
         # tiles drawn per object kind, against the oracle's (visible in the unculled image)
         by_kind = {k: [int(np.count_nonzero(res.tile_drawn & (kinds == k))),
@@ -476,19 +506,28 @@ def _warm_up(ctx: _Run, cam: Any) -> tuple[Any, int, dict[str, dict[str, Any]]]:
     return ref, oracle_tiles, first
 
 
-def _timed_view(ctx: _Run, cam: Any, vname: str,
+def _timed_view(ctx: _Run, cam: Any, turned: Any, vname: str,
                 ref: Any) -> tuple[list[tuple[str, Any]], dict[str, list[float]], dict[str, Any]]:
-    """The timed rounds of one view: every method, and PyVista (set up and warmed up first) where
-    imported. Returns (jobs, their times, PyVista's depth errors against none's)."""
+    """The timed rounds of one view: every method (a moving one alternating between ``cam`` and
+    ``turned``), and PyVista (set up and warmed up first) where imported. Returns (jobs, their times,
+    PyVista's depth errors against none's)."""
     from . import report
 
-    renderer, scene, w, h, rep = ctx.renderer, ctx.fld["scene"], ctx.w, ctx.h, ctx.rep
+    scene, w, h, rep = ctx.fld["scene"], ctx.w, ctx.h, ctx.rep
     near, far = ref.near, ref.far
 
-    def job(rk: dict[str, Any], cam: Any = cam) -> Any:
-        return lambda: renderer.render(scene, cam, **rk).stats["total_ms"]
+    def job(name: str, rk: dict[str, Any]) -> Any:
+        r = ctx.renderer_for(name, rk)
+        if not name.endswith(",moving)"):
+            return lambda: r.render(scene, cam, **rk).stats["total_ms"]
+        cams = [turned, cam]
 
-    jobs: list[tuple[str, Any]] = [(name, job(rk)) for name, rk in ctx.meths]
+        def frame() -> float:
+            cams.reverse()
+            return float(r.render(scene, cams[0], **rk).stats["total_ms"])
+        return frame
+
+    jobs: list[tuple[str, Any]] = [(name, job(name, rk)) for name, rk in ctx.meths]
     setup = None
     pv_err: dict[str, Any] = {}
     if ctx.gpv is not None:
