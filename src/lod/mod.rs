@@ -91,9 +91,6 @@ pub struct TileMesh {
     /// Levels 1.. for screen-space-error LOD ([`levels`]): each about a quarter of the triangles
     /// of the one before, the tile's border at full resolution; level 0 is `fine`.
     pub levels: Vec<levels::Level>,
-    /// A height-field tile's slab ([`slab`]): the shell the box test uses as its occludee; None
-    /// for other tiles (they are tested with their boxes).
-    pub slab: Option<slab::Slab>,
 }
 
 impl TileMesh {
@@ -290,8 +287,9 @@ pub fn boxes_volume(boxes: &[([f32; 3], [f32; 3])]) -> f64 {
 }
 
 /// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in
-/// row-major order (index `iy * tx + ix`); tiles wholly inside holes are empty. Once `stop` is
-/// set, tiles not yet started are left empty (the caller discards the result; see
+/// row-major order (index `iy * tx + ix`; tiles wholly inside holes are empty) and their slabs
+/// ([`slab::tile_slab`]: the shells the box test uses as their occludees), in the same order. Once
+/// `stop` is set, tiles not yet started are left empty (the caller discards the result; see
 /// `crate::error::Interrupt::run_parallel`).
 pub fn tile_heightfield(
     g: &GridSpec,
@@ -299,7 +297,7 @@ pub fn tile_heightfield(
     tiles: (usize, usize),
     coarse_factor: f32,
     stop: &Work,
-) -> Vec<TileMesh> {
+) -> (Vec<TileMesh>, Vec<Option<slab::Slab>>) {
     let (tx, ty) = tiles;
     let bx = tile_bounds(g.nx, tx);
     let by = tile_bounds(g.ny, ty);
@@ -308,7 +306,7 @@ pub fn tile_heightfield(
         .map(|t| {
             let (ix, iy) = (t % tx, t / tx);
             if stop.load(Ordering::Relaxed) {
-                return TileMesh::default();
+                return (TileMesh::default(), None);
             }
             let (i0, i1, j0, j1) = (bx[ix], bx[ix + 1], by[iy], by[iy + 1]);
             let w = i1 - i0 + 1;
@@ -398,12 +396,12 @@ pub fn tile_heightfield(
                 let (x, y) = g.pos(i0 + li, j0 + lj);
                 (x - origin.x, y - origin.y)
             };
-            tile.slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
+            let slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
                 .map(|s| slab::Slab { levels_exact: !holes, ..s });
-            tile.finish(coarse_factor, lattice, true)
+            (tile.finish(coarse_factor, lattice, true), slab)
         })
         .inspect(|_| stop.item_done())
-        .collect()
+        .unzip()
 }
 
 /// Optional per-vertex attributes of a mesh, one per vertex each.

@@ -33,8 +33,9 @@
 //! reports a damaged or foreign buffer as an InputError naming `data`.
 
 use super::color::{resolve_clim, LUT_SIZE};
-use super::{ColorBy, ColorSource, Object, ObjectKind, Scene, NEXT_SCENE_UID};
+use super::{ColorBy, ColorSource, HeightfieldInfo, Object, ObjectKind, Scene, NEXT_SCENE_UID};
 use crate::error::{input_err, Error, Result};
+use crate::lod::slab::TileSlabs;
 use crate::lod::TileMesh;
 use glam::DVec3;
 use std::sync::atomic::Ordering;
@@ -210,15 +211,15 @@ impl Scene {
             w.u32(o.id);
             w.str(&o.name);
             match &o.kind {
-                ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles } => {
+                ObjectKind::Heightfield(hf) => {
                     w.u8(0);
-                    for v in [*nx, *ny] {
+                    for v in [hf.nx, hf.ny] {
                         w.u64(v as u64);
                     }
-                    for v in [*x0, *y0, *dx, *dy, *rotation] {
+                    for v in [hf.x0, hf.y0, hf.dx, hf.dy, hf.rotation] {
                         w.f64(v);
                     }
-                    for v in [tiles.0, tiles.1] {
+                    for v in [hf.tiles.0, hf.tiles.1] {
                         w.u64(v as u64);
                     }
                 }
@@ -367,11 +368,8 @@ impl Scene {
             });
         }
         r.finish()?;
-        // Slabs are not stored: rebuilt from the tiles' vertices, as they were built, once every
-        // byte is read and checked (none is built for bytes that are refused).
-        for o in &mut objects {
-            o.rebuild_slabs();
-        }
+        // Slabs are not stored: a height field's are rebuilt from its tiles' vertices, as they
+        // were built, when a renderer first needs them (`Object::slabs`), not here.
         Ok(Scene {
             uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
             geometry_version: 0,
@@ -393,7 +391,8 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
             let rotation = if version >= 2 { r.f64()? } else { 0.0 };
             let tiles = (r.usize()?, r.usize()?);
-            ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
+            let slabs = TileSlabs::default();
+            ObjectKind::Heightfield(Box::new(HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles, slabs }))
         }
         1 => ObjectKind::Mesh { kind: r.str()? },
         2 if version >= 4 => {
@@ -533,22 +532,7 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     if levels.iter().any(|l| l.shading_error < 0.0) {
         return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
     }
-    Ok(TileMesh {
-        ix,
-        iy,
-        positions,
-        values,
-        normals,
-        grid_uv,
-        fine,
-        coarse,
-        bbox_min,
-        bbox_max,
-        proxy_error,
-        levels,
-        // Not stored: rebuilt by `Object::rebuild_slabs`.
-        slab: None,
-    })
+    Ok(TileMesh { ix, iy, positions, values, normals, grid_uv, fine, coarse, bbox_min, bbox_max, proxy_error, levels })
 }
 
 #[cfg(test)]

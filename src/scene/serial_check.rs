@@ -9,7 +9,7 @@
 use super::super::color::check_rgb;
 use super::super::grid::GridInfo;
 use super::super::heightfield::{GridAxes, GridFrame};
-use super::super::ObjectKind;
+use super::super::{HeightfieldInfo, ObjectKind};
 use crate::camera::MAX_COORD;
 use crate::error::num;
 use crate::lod::{tile_bounds, TileMesh};
@@ -78,7 +78,7 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
 /// object's size in the buffer.
 pub(super) fn object(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usize) -> Check {
     match kind {
-        ObjectKind::Heightfield { .. } => heightfield(kind, tiles, origin, bytes)?,
+        ObjectKind::Heightfield(_) => heightfield(kind, tiles, origin, bytes)?,
         ObjectKind::Grid(g) => return grid(g, tiles).and_then(|_| cells(g, tiles)),
         ObjectKind::Mesh { .. } => {}
     }
@@ -107,9 +107,8 @@ fn cells(g: &GridInfo, tiles: &[TileMesh]) -> Check {
 /// tiles at one height in each tile that has it: horizon culling rebuilds the grid from the
 /// frame and the vertices, so they must be the grid the tiles draw.
 fn heightfield(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usize) -> Check {
-    let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles: (tx, ty) } = *kind else {
-        return Ok(());
-    };
+    let ObjectKind::Heightfield(hf) = kind else { return Ok(()) };
+    let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles: (tx, ty), .. } = **hf;
     let frame =
         GridFrame { origin: [x0 + origin.x, y0 + origin.y], spacing: [dx, dy.abs()], rotation, yflip: dy < 0.0 };
     frame.check(nx, ny, (tx, ty)).map_err(|e| e.to_string())?;

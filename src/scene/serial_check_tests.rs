@@ -2,7 +2,7 @@
 
 use super::super::tests::scene;
 use super::*;
-use crate::scene::{AddOptions, Object, Scene};
+use crate::scene::{AddOptions, HeightfieldInfo, Object, Scene};
 
 /// The error reading back `s` with object `name` changed by `f` (it must name `data`).
 fn refused(mut s: Scene, name: &str, f: impl FnOnce(&mut Object)) -> String {
@@ -15,7 +15,8 @@ fn refused(mut s: Scene, name: &str, f: impl FnOnce(&mut Object)) -> String {
 /// `scene()`'s rotated, yflipped 2 x 2-tile height field with its kind changed by `f`.
 fn frame_refused(f: impl FnOnce(&mut usize, &mut usize, &mut [f64; 5], &mut (usize, usize))) -> String {
     refused(scene(), "turned", |o| {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles } = &mut o.kind else { panic!() };
+        let ObjectKind::Heightfield(hf) = &mut o.kind else { panic!() };
+        let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles, .. } = &mut **hf;
         let mut v = [*x0, *y0, *dx, *dy, *rotation];
         f(nx, ny, &mut v, tiles);
         [*x0, *y0, *dx, *dy, *rotation] = v;
@@ -51,8 +52,8 @@ fn a_height_field_has_no_more_samples_than_its_bytes_bound() {
     // One more column (a column of holes) is a grid the tiles still draw.
     let mut s = scene();
     let o = s.objects.iter_mut().find(|o| o.name == "base").unwrap();
-    let ObjectKind::Heightfield { nx, .. } = &mut o.kind else { panic!() };
-    *nx += 1;
+    let ObjectKind::Heightfield(hf) = &mut o.kind else { panic!() };
+    hf.nx += 1;
     Scene::from_bytes(&s.to_bytes()).unwrap();
 }
 
