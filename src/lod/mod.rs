@@ -16,6 +16,7 @@
 pub mod blocks;
 pub mod levels;
 pub mod normals;
+pub mod per_vertex;
 pub mod shading;
 pub mod simplify;
 pub mod slab;
@@ -23,6 +24,7 @@ pub mod tube;
 
 use crate::error::Work;
 use glam::DVec3;
+pub use per_vertex::PerVertex;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 
@@ -65,17 +67,17 @@ pub struct TileMesh {
     /// Per-vertex scalar for colour by data (`values=` of the add functions; a grid's cell
     /// property): empty when the object has none, else one per entry of `positions`. NaN = no
     /// data (drawn in the colour map's NaN colour).
-    pub values: Vec<f32>,
+    pub values: PerVertex<f32>,
     /// Per-vertex smooth normals for the lit pass ([`normals`]: packed, `normals::NONE` for none):
     /// empty when the object shades by its facets (height fields take theirs from the fine
     /// surface instead, grids are flat), else one per entry of `positions`.
-    pub normals: Vec<u32>,
+    pub normals: PerVertex<u32>,
     /// Per-vertex grid coordinates of a mesh that is a structured grid with smooth normals
     /// ([`structured_grid`]): `i | j << 16` for column i and row j (packed as two u16). The lit
     /// pass then shades every level from the fine grid's normals at the interpolated (i, j), as
     /// height fields do from their fine surface. Empty otherwise, else one per entry of
     /// `positions`.
-    pub grid_uv: Vec<u32>,
+    pub grid_uv: PerVertex<u32>,
     /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
     /// [`share_indices`]).
     pub fine: Indices,

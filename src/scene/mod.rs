@@ -43,8 +43,9 @@ pub struct Object {
     pub kind: ObjectKind,
     /// The flat colour (used when `color_by` is None).
     pub color: [f32; 3],
-    /// Colour through a colour map by z or by the tiles' values (None: the flat `color`).
-    pub color_by: Option<ColorBy>,
+    /// Colour through a colour map by z or by the tiles' values (None: the flat `color`; boxed:
+    /// most objects have none, and an empty object read from bytes stays small, issue 39).
+    pub color_by: Option<Box<ColorBy>>,
     /// 1 for opaque objects; below 1 a translucent one (a volume lens): never an occluder, drawn
     /// blended after the opaque image, back to front, unlit.
     pub opacity: f32,
@@ -451,7 +452,7 @@ impl Scene {
             name,
             kind,
             color,
-            color_by,
+            color_by: color_by.map(Box::new),
             opacity: 1.0,
             visible: true,
             offset: DVec3::ZERO,
@@ -531,7 +532,7 @@ impl Scene {
             format!("object {id} was built without values; color_by=\"values\" needs them (add it with values=)")
         })?;
         let c = arg.resolve(o.scalars(&arg.source))?;
-        self.object_mut(id)?.color_by = Some(c);
+        self.object_mut(id)?.color_by = Some(Box::new(c));
         Ok(())
     }
 

@@ -188,7 +188,14 @@ fn grid_block_tables_count_the_triangles_drawn() {
     assert!(e.contains("grid block 0 level 0"), "{e}");
     let e = refused(s.clone(), "g", |o| grid(o).cell_size[0].1 = f64::NAN);
     assert!(e.contains("cell size"), "{e}");
-    let e = refused(s, "g", |o| grid(o).block_levels.clear());
+    // Refused as read (the tables are reserved whole, one per block), before `check::grid`.
+    let e = refused(s.clone(), "g", |o| grid(o).block_levels.clear());
+    assert!(e.contains("0 grid block tables for 4 blocks"), "{e}");
+    let e = refused(s, "g", |o| {
+        let g = grid(o);
+        g.block_levels.pop();
+        g.cell_size.pop();
+    });
     assert!(e.contains("block tables do not match its 4 tiles"), "{e}");
     // Coloured by values: cell coordinates within the blocks and layers (they size a table).
     let mut s = Scene::new();
