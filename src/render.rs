@@ -483,12 +483,10 @@ fn frame_state(
                 }
             };
             let (mut grid, mut grid_rows, mut normal_map) = ([0.0; 4], [0.0; 4], [0; 4]);
-            if let (ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. }, Some(base)) =
-                (&o.kind, geom.shading_base[oi])
-            {
-                let (c, s) = cos_sin_deg(*rotation);
-                grid = [*x0 as f32, *y0 as f32, (c / dx) as f32, (s / dx) as f32];
-                grid_rows = [(-s / dy) as f32, (c / dy) as f32, *nx as f32, *ny as f32];
+            if let (ObjectKind::Heightfield(hf), Some(base)) = (&o.kind, geom.shading_base[oi]) {
+                let (c, s) = cos_sin_deg(hf.rotation);
+                grid = [hf.x0 as f32, hf.y0 as f32, (c / hf.dx) as f32, (s / hf.dx) as f32];
+                grid_rows = [(-s / hf.dy) as f32, (c / hf.dy) as f32, hf.nx as f32, hf.ny as f32];
                 normal_map[0] = base + 1;
             }
             normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));

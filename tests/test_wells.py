@@ -38,11 +38,14 @@ def test_a_well_hidden_behind_a_horizon_is_culled_piece_by_piece(renderer_small)
     cam = gc.Camera.look_at((-900.0, -700.0, 1200.0), (500.0, 500.0, 0.0), fov_y=40.0)
     ref = r.render(s, cam, culling="none")
     for mode in ("three_pass", "temporal"):
-        for _ in range(2):  # temporal's second frame starts from the first one's set
-            res = r.render(s, cam, culling=mode, pixel_threshold=0)
-        np.testing.assert_array_equal(res.image, ref.image, err_msg=mode)
-        assert not res.tile_drawn[below].any(), mode
-        assert res.tile_drawn[above].all(), mode
+        # temporal's second frame repeats the first: it draws the tiles seen, untested.
+        frames = [r.render(s, cam, culling=mode, pixel_threshold=0) for _ in range(2)]
+        for res in frames:
+            np.testing.assert_array_equal(res.image, ref.image, err_msg=mode)
+            assert not res.tile_drawn[below].any(), mode
+        # The tested frame keeps the piece above the horizon (its box shows; the tube itself is
+        # thinner than a pixel here, so a repeat leaves it out).
+        assert frames[0].tile_drawn[above].all(), mode
 
 
 def test_levels_cut_a_straight_well_to_a_few_triangles():

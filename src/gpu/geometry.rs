@@ -246,7 +246,7 @@ impl SceneGeometry {
             let first = self.tile_object_cpu.iter().position(|&x| x as usize == oi).unwrap_or(0);
             let n = self.tile_object_cpu.iter().skip(first).take_while(|&&x| x as usize == oi).count();
             // (A grid coloured per cell has its tables in `sample_values`: uploaded afresh.)
-            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield { .. }) || self.cell_colors[oi] {
+            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield(_)) || self.cell_colors[oi] {
                 return Ok(false);
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
@@ -336,9 +336,8 @@ fn draw_runs(
     for (k, &oi) in tile_object.iter().enumerate() {
         let o = oi as usize;
         let grid_mesh = grid_dims[o].is_some();
-        let field = !grid_mesh
-            && shading_base[o].is_some()
-            && matches!(scene.objects()[o].kind, ObjectKind::Heightfield { .. });
+        let field =
+            !grid_mesh && shading_base[o].is_some() && matches!(scene.objects()[o].kind, ObjectKind::Heightfield(_));
         let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
         let cells = cell_colors.get(o).copied().unwrap_or(false);
         let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells };

@@ -16,6 +16,7 @@
 pub mod blocks;
 pub mod levels;
 pub mod normals;
+pub mod per_vertex;
 pub mod shading;
 pub mod simplify;
 pub mod slab;
@@ -23,6 +24,7 @@ pub mod tube;
 
 use crate::error::Work;
 use glam::DVec3;
+pub use per_vertex::PerVertex;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 
@@ -65,17 +67,17 @@ pub struct TileMesh {
     /// Per-vertex scalar for colour by data (`values=` of the add functions; a grid's cell
     /// property): empty when the object has none, else one per entry of `positions`. NaN = no
     /// data (drawn in the colour map's NaN colour).
-    pub values: Vec<f32>,
+    pub values: PerVertex<f32>,
     /// Per-vertex smooth normals for the lit pass ([`normals`]: packed, `normals::NONE` for none):
     /// empty when the object shades by its facets (height fields take theirs from the fine
     /// surface instead, grids are flat), else one per entry of `positions`.
-    pub normals: Vec<u32>,
+    pub normals: PerVertex<u32>,
     /// Per-vertex grid coordinates of a mesh that is a structured grid with smooth normals
     /// ([`structured_grid`]): `i | j << 16` for column i and row j (packed as two u16). The lit
     /// pass then shades every level from the fine grid's normals at the interpolated (i, j), as
     /// height fields do from their fine surface. Empty otherwise, else one per entry of
     /// `positions`.
-    pub grid_uv: Vec<u32>,
+    pub grid_uv: PerVertex<u32>,
     /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
     /// [`share_indices`]).
     pub fine: Indices,
@@ -91,9 +93,6 @@ pub struct TileMesh {
     /// Levels 1.. for screen-space-error LOD ([`levels`]): each about a quarter of the triangles
     /// of the one before, the tile's border at full resolution; level 0 is `fine`.
     pub levels: Vec<levels::Level>,
-    /// A height-field tile's slab ([`slab`]): the shell the box test uses as its occludee; None
-    /// for other tiles (they are tested with their boxes).
-    pub slab: Option<slab::Slab>,
 }
 
 impl TileMesh {
@@ -290,8 +289,9 @@ pub fn boxes_volume(boxes: &[([f32; 3], [f32; 3])]) -> f64 {
 }
 
 /// Cuts a height field into `tiles = (tx, ty)` tiles (in parallel). Returns `tx * ty` tiles in
-/// row-major order (index `iy * tx + ix`); tiles wholly inside holes are empty. Once `stop` is
-/// set, tiles not yet started are left empty (the caller discards the result; see
+/// row-major order (index `iy * tx + ix`; tiles wholly inside holes are empty) and their slabs
+/// ([`slab::tile_slab`]: the shells the box test uses as their occludees), in the same order. Once
+/// `stop` is set, tiles not yet started are left empty (the caller discards the result; see
 /// `crate::error::Interrupt::run_parallel`).
 pub fn tile_heightfield(
     g: &GridSpec,
@@ -299,7 +299,7 @@ pub fn tile_heightfield(
     tiles: (usize, usize),
     coarse_factor: f32,
     stop: &Work,
-) -> Vec<TileMesh> {
+) -> (Vec<TileMesh>, Vec<Option<slab::Slab>>) {
     let (tx, ty) = tiles;
     let bx = tile_bounds(g.nx, tx);
     let by = tile_bounds(g.ny, ty);
@@ -308,7 +308,7 @@ pub fn tile_heightfield(
         .map(|t| {
             let (ix, iy) = (t % tx, t / tx);
             if stop.load(Ordering::Relaxed) {
-                return TileMesh::default();
+                return (TileMesh::default(), None);
             }
             let (i0, i1, j0, j1) = (bx[ix], bx[ix + 1], by[iy], by[iy + 1]);
             let w = i1 - i0 + 1;
@@ -398,12 +398,12 @@ pub fn tile_heightfield(
                 let (x, y) = g.pos(i0 + li, j0 + lj);
                 (x - origin.x, y - origin.y)
             };
-            tile.slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
+            let slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
                 .map(|s| slab::Slab { levels_exact: !holes, ..s });
-            tile.finish(coarse_factor, lattice, true)
+            (tile.finish(coarse_factor, lattice, true), slab)
         })
         .inspect(|_| stop.item_done())
-        .collect()
+        .unzip()
 }
 
 /// Optional per-vertex attributes of a mesh, one per vertex each.

@@ -51,6 +51,36 @@ pub struct Slab {
     pub levels_exact: bool,
 }
 
+/// A height field's slabs, one per tile (None: the tile gets none and is box-tested), built at
+/// most once: with its tiles (`super::tile_heightfield`), or for tiles read from bytes when a
+/// renderer first needs them (`Object::slabs`), so that loading a scene allocates no slabs. Clones
+/// keep what is built.
+#[derive(Clone, Default)]
+pub struct TileSlabs(std::sync::OnceLock<Vec<Option<Slab>>>);
+
+impl TileSlabs {
+    /// Slabs already built.
+    pub fn built(slabs: Vec<Option<Slab>>) -> Self {
+        Self(std::sync::OnceLock::from(slabs))
+    }
+    /// The slabs, if built.
+    pub fn get(&self) -> Option<&[Option<Slab>]> {
+        self.0.get().map(Vec::as_slice)
+    }
+    /// The slabs, built by `build` on the first call (concurrent first calls build once).
+    pub fn get_or_build(&self, build: impl FnOnce() -> Vec<Option<Slab>>) -> &[Option<Slab>] {
+        self.0.get_or_init(build)
+    }
+}
+
+/// Opaque: slabs are derived from the tiles, so whether they are built yet does not show (an
+/// object read back from bytes formats as the one written).
+impl std::fmt::Debug for TileSlabs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("TileSlabs(..)")
+    }
+}
+
 /// A cell's samples: all finite, none, or some.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Fill {

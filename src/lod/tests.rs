@@ -43,13 +43,13 @@ fn grid_triangles_and_holes() {
     let (nx, ny) = (5, 4);
     let mut z = vec![0.0; nx * ny];
     let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-    let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &Work::default());
+    let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 3), 1.0, &Work::default()).0;
     let total: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
     assert_eq!(total, 2 * (nx - 1) * (ny - 1));
     // One NaN sample in the interior removes the 6 triangles touching it.
     z[nx + 2] = f64::NAN;
     let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-    let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &Work::default());
+    let tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 1.0, &Work::default()).0;
     assert_eq!(tiles[0].fine_triangles(), 2 * (nx - 1) * (ny - 1) - 6);
     assert!(tiles[0].positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
 }
@@ -60,7 +60,7 @@ fn lattice_proxy_reaches_the_factor_and_neighbours_share_border_samples() {
     let z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + ((k / nx) as f64 * 0.2).cos()).collect();
     let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
     for (cf, want) in [(25.0, 25.0), (100.0, 100.0), (400.0, 400.0)] {
-        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &Work::default());
+        let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), cf, &Work::default()).0;
         let fine: usize = tiles.iter().map(|t| t.fine_triangles()).sum();
         let coarse: usize = tiles.iter().map(|t| t.coarse_triangles()).sum();
         let ratio = fine as f64 / coarse as f64;
@@ -97,7 +97,7 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
         }
     }
     let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-    let mut tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default());
+    let mut tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0;
     let t = &tiles[0];
     let boxes = t.sub_boxes(2);
     assert_eq!(boxes.len(), 3, "the hole's cell has no triangles");
@@ -144,7 +144,7 @@ fn occludee_boxes_follow_a_tube_and_hold_its_triangles() {
         yflip: false,
         values: None,
     };
-    let hf = &tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default())[0];
+    let hf = &tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0[0];
     assert_eq!(hf.occludee_boxes(), hf.sub_boxes(2));
 }
 
@@ -163,7 +163,7 @@ fn all_nan_tile_is_empty() {
         yflip: false,
         values: None,
     };
-    let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &Work::default());
+    let tiles = tile_heightfield(&g, DVec3::ZERO, (2, 2), 4.0, &Work::default()).0;
     assert!(tiles.iter().all(|t| t.is_empty() && t.coarse.is_empty()));
 }
 

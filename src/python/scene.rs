@@ -443,7 +443,8 @@ impl PyScene {
     }
 
     fn object_info<'py>(&self, py: Python<'py>, id: i64) -> PyResult<Bound<'py, PyDict>> {
-        type Info = (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize, Option<crate::scene::ColorBy>, u8);
+        type Info =
+            (u32, String, String, [f32; 3], bool, glam::DVec3, usize, usize, Option<Box<crate::scene::ColorBy>>, u8);
         let (id, name, kind, color, visible, offset, n_tiles, n_tris, color_by, priority): Info =
             with_lock(py, &self.inner, move |s| {
                 let o = s.object(object_id(id)?)?;

@@ -100,7 +100,7 @@ impl Scene {
         // coloured by values keep their levels: push would drop them for other kinds.
         let id = self.next_id;
         self.push(o, opts.name, ObjectKind::Grid(Box::new(info)), color, None, tiles);
-        self.object_mut(id)?.color_by = color_by;
+        self.object_mut(id)?.color_by = color_by.map(Box::new);
         Ok(id)
     }
 

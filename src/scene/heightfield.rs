@@ -12,8 +12,30 @@
 use super::{check_coarse_factor, check_color, AddOptions, ColorByArg, ColorSource, Object, ObjectKind, Scene};
 use crate::camera::MAX_COORD;
 use crate::error::{ensure, num, Result};
+use crate::lod::slab::{Slab, TileSlabs};
 use crate::lod::{self, cos_sin_deg, GridSpec, TileMesh};
 use glam::DVec3;
+use rayon::prelude::*;
+
+/// What a height-field object keeps besides its tiles ([`ObjectKind::Heightfield`]): its grid
+/// layout in the grid's own frame, and its tiles' slabs. Sample (i, j) lies at `(x0, y0) +
+/// R(rotation) (i dx, j dy)` (x0, y0 relative to the object's origin; `dy < 0` for a yflipped
+/// grid; R counter-clockwise by `rotation` degrees, see `lod::cos_sin_deg`). The heights live only
+/// in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler needs it.
+#[derive(Clone, Debug)]
+pub struct HeightfieldInfo {
+    pub nx: usize,
+    pub ny: usize,
+    pub x0: f64,
+    pub y0: f64,
+    pub dx: f64,
+    pub dy: f64,
+    pub rotation: f64,
+    /// Tiles (columns, rows) the grid is cut into (`lod::tile_bounds` of each axis).
+    pub tiles: (usize, usize),
+    /// Per tile, its slab ([`Object::slabs`]): built with the tiles, or on first use.
+    pub slabs: TileSlabs,
+}
 
 /// Where a height field's grid lies: sample (i, j) at `origin + R(rotation) (i dx, ±j dy)` (world
 /// units), rows towards -y in the grid's frame when `yflip`.
@@ -181,8 +203,9 @@ impl Scene {
         };
         let grid = GridSpec { z: &zz, nx, ny, x0, y0, dx, dy, rot, yflip, values };
         // Interruptible between tiles; on Err the scene is unchanged (the origin is set by push).
-        let tile_meshes = opts.interrupt.run_parallel(|stop| lod::tile_heightfield(&grid, o, (tx, ty), cf, stop))?;
-        let kind = ObjectKind::Heightfield {
+        let (tile_meshes, slabs) =
+            opts.interrupt.run_parallel(|stop| lod::tile_heightfield(&grid, o, (tx, ty), cf, stop))?;
+        let kind = ObjectKind::Heightfield(Box::new(HeightfieldInfo {
             nx,
             ny,
             x0: x0 - o.x,
@@ -191,7 +214,8 @@ impl Scene {
             dy: if yflip { -dy } else { dy },
             rotation,
             tiles: (tx, ty),
-        };
+            slabs: TileSlabs::built(slabs),
+        }));
         Ok(self.push(o, opts.name, kind, color, color_by, tile_meshes))
     }
 }
@@ -233,7 +257,8 @@ pub struct GridAxes {
 impl GridAxes {
     /// The grid of a height field's kind; None for other kinds.
     pub(crate) fn of(kind: &ObjectKind) -> Option<Self> {
-        let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, .. } = *kind else { return None };
+        let ObjectKind::Heightfield(hf) = kind else { return None };
+        let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, .. } = **hf;
         let (c, s) = cos_sin_deg(rotation);
         Some(GridAxes { o: [x0, y0], u: [c * dx, s * dx], v: [-s * dy, c * dy], nx, ny, rot: (c, s), dx, dy })
     }
@@ -335,39 +360,57 @@ impl Object {
 }
 
 impl Object {
-    /// Rebuilds the slabs (`lod::slab`) of a height field's tiles from their vertices, as
-    /// `lod::tile_heightfield` builds them (scenes read from bytes do not store them). A tile gets
-    /// none (it is box-tested) unless its vertices are distinct samples of its grid within its
-    /// tile's range and its triangles are the lattice's (as every tile built by this crate), so a
-    /// damaged scene never gets a slab that does not hold what it draws. Nothing for other kinds.
-    pub(crate) fn rebuild_slabs(&mut self) {
-        let Some(g) = self.grid_axes() else { return };
-        let Some(bounds) = self.tile_sample_bounds() else { return };
-        for tile in &mut self.tiles {
-            tile.slab = None;
-            let Some(((i0, j0), (w, h), map)) = lattice_map(&g, &bounds, tile) else { continue };
-            let holes = tile.fine_triangles() != 2 * (w - 1) * (h - 1);
-            let grid_xy = |li: usize, lj: usize| {
-                let q = g.pos(i0 + li, j0 + lj);
-                (q[0], q[1])
-            };
-            let slab = lod::slab::tile_slab(tile, (w, h), |li, lj| map[lj * w + li], grid_xy);
-            tile.slab = slab.map(|s| lod::slab::Slab { levels_exact: !holes, ..s });
-        }
+    /// Per tile of a height field, its slab (`lod::slab`: the shell the box test uses as its
+    /// occludee; None: the tile is box-tested); empty for other kinds. Built with the tiles by
+    /// [`Scene::add_heightfield`]; for a height field read from bytes (which do not store slabs:
+    /// loading allocates none) built on the first call, from the tiles' vertices as
+    /// `lod::tile_heightfield` builds them, and kept. A tile gets none unless its vertices are
+    /// distinct samples of its grid within its tile's range and its triangles are the lattice's
+    /// (as every tile built by this crate), so a damaged scene never gets a slab that does not
+    /// hold what it draws.
+    pub fn slabs(&self) -> &[Option<Slab>] {
+        let ObjectKind::Heightfield(hf) = &self.kind else { return &[] };
+        hf.slabs.get_or_build(|| self.build_slabs())
+    }
+
+    /// Tile `t`'s slab ([`Self::slabs`]); None for tiles without one and for other kinds.
+    pub fn slab(&self, t: usize) -> Option<&Slab> {
+        self.slabs().get(t)?.as_ref()
+    }
+
+    /// [`Self::slabs`] built from the tiles' vertices (in parallel).
+    fn build_slabs(&self) -> Vec<Option<Slab>> {
+        let (Some(g), Some(bounds)) = (self.grid_axes(), self.tile_sample_bounds()) else {
+            return vec![None; self.tiles.len()];
+        };
+        self.tiles
+            .par_iter()
+            .map(|tile| {
+                let ((i0, j0), (w, h), map) = lattice_map(&g, &bounds, tile)?;
+                let holes = tile.fine_triangles() != 2 * (w - 1) * (h - 1);
+                let grid_xy = |li: usize, lj: usize| {
+                    let q = g.pos(i0 + li, j0 + lj);
+                    (q[0], q[1])
+                };
+                let slab = lod::slab::tile_slab(tile, (w, h), |li, lj| map[lj * w + li], grid_xy)?;
+                Some(Slab { levels_exact: !holes, ..slab })
+            })
+            .collect()
     }
 
     /// Per tile of a height field, its height blocks (`lod::blocks`), for tiles with a slab (whose
     /// vertices are distinct samples of the tile and whose triangles are the lattice's: every tile
-    /// this crate builds, and tiles read from bytes that pass [`Self::rebuild_slabs`]); None for
+    /// this crate builds, and tiles read from bytes that pass [`Self::slabs`]' checks); None for
     /// other tiles and kinds.
     pub fn height_blocks(&self) -> Vec<Option<lod::blocks::HeightBlocks>> {
         let none = || vec![None; self.tiles.len()];
         let (Some(g), Some(bounds)) = (self.grid_axes(), self.tile_sample_bounds()) else { return none() };
-        use rayon::prelude::*;
+        let slabs = self.slabs();
         self.tiles
             .par_iter()
-            .map(|tile| {
-                tile.slab.as_ref()?;
+            .enumerate()
+            .map(|(t, tile)| {
+                slabs.get(t)?.as_ref()?;
                 let (_, (w, h), map) = lattice_map(&g, &bounds, tile)?;
                 let at = |li: usize, lj: usize| tile.positions.get(map[lj * w + li] as usize).copied();
                 Some(lod::blocks::height_blocks(w, h, at))
@@ -379,7 +422,8 @@ impl Object {
     /// tile counts fit its grid and its tiles; None otherwise and for other kinds.
     pub fn tile_sample_bounds(&self) -> Option<(Vec<usize>, Vec<usize>)> {
         let g = self.grid_axes()?;
-        let ObjectKind::Heightfield { tiles: (tx, ty), .. } = self.kind else { return None };
+        let ObjectKind::Heightfield(hf) = &self.kind else { return None };
+        let (tx, ty) = hf.tiles;
         let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;
         (fits(g.nx, tx) && fits(g.ny, ty) && self.tiles.len() == tx * ty)
             .then(|| (lod::tile_bounds(g.nx, tx), lod::tile_bounds(g.ny, ty)))
@@ -407,7 +451,8 @@ impl Object {
     /// Holds only the (ny, nx) f32 height grid meanwhile (the upload writes straight into the
     /// GPU buffer). None, without a call, for other kinds.
     pub fn for_each_shading_sample(&self, mut out: impl FnMut([f32; 3])) -> Option<()> {
-        let ObjectKind::Heightfield { nx, ny, dx, dy, rotation, .. } = self.kind else { return None };
+        let ObjectKind::Heightfield(hf) = &self.kind else { return None };
+        let HeightfieldInfo { nx, ny, dx, dy, rotation, .. } = **hf;
         let z = self.height_grid()?;
         let at = |i: usize, j: usize| z[j * nx + i];
         // One axis' derivative per sample step, from the neighbours before and after.

@@ -21,18 +21,15 @@ pub mod slice;
 pub mod well;
 
 pub use color::{CmapArg, ColorBy, ColorByArg, ColorSource};
-pub use heightfield::{GridAxes, GridFrame, TileLattice};
+pub use heightfield::{GridAxes, GridFrame, HeightfieldInfo, TileLattice};
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
 #[derive(Clone, Debug)]
 pub enum ObjectKind {
-    /// A height field: its grid layout in the grid's own frame. Sample (i, j) lies at
-    /// `(x0, y0) + R(rotation) (i dx, j dy)` (x0, y0 relative to the object's origin; `dy < 0` for a
-    /// yflipped grid; R counter-clockwise by `rotation` degrees, see `lod::cos_sin_deg`). The heights
-    /// live only in the tiles' vertices; [`Object::height_grid`] rebuilds the grid when a CPU culler
-    /// needs it.
-    Heightfield { nx: usize, ny: usize, x0: f64, y0: f64, dx: f64, dy: f64, rotation: f64, tiles: (usize, usize) },
+    /// A height field: its grid layout in the grid's own frame and its tiles' slabs (boxed: an
+    /// object of another kind, which may be an empty record of some 84 bytes, stays small).
+    Heightfield(Box<HeightfieldInfo>),
     /// A triangle mesh; `kind` is the user's label ("fault", "mesh", "well", "slice", ...).
     Mesh { kind: String },
     /// A reservoir grid: its blocks are the tiles, their levels the cell-merging levels.
@@ -46,8 +43,9 @@ pub struct Object {
     pub kind: ObjectKind,
     /// The flat colour (used when `color_by` is None).
     pub color: [f32; 3],
-    /// Colour through a colour map by z or by the tiles' values (None: the flat `color`).
-    pub color_by: Option<ColorBy>,
+    /// Colour through a colour map by z or by the tiles' values (None: the flat `color`; boxed:
+    /// most objects have none, and an empty object read from bytes stays small, issue 39).
+    pub color_by: Option<Box<ColorBy>>,
     /// 1 for opaque objects; below 1 a translucent one (a volume lens): never an occluder, drawn
     /// blended after the opaque image, back to front, unlit.
     pub opacity: f32,
@@ -93,7 +91,7 @@ impl Object {
     /// every culling mode, whatever the draw order.
     pub fn priority(&self) -> u8 {
         self.priority.unwrap_or(match &self.kind {
-            ObjectKind::Heightfield { .. } => 4,
+            ObjectKind::Heightfield(_) => 4,
             ObjectKind::Grid(_) => 2,
             ObjectKind::Mesh { kind } => match kind.as_str() {
                 "well" => 5,
@@ -106,7 +104,7 @@ impl Object {
 
     pub fn kind_name(&self) -> &str {
         match &self.kind {
-            ObjectKind::Heightfield { .. } => "heightfield",
+            ObjectKind::Heightfield(_) => "heightfield",
             ObjectKind::Mesh { kind } => kind,
             ObjectKind::Grid(_) => "grid",
         }
@@ -454,7 +452,7 @@ impl Scene {
             name,
             kind,
             color,
-            color_by,
+            color_by: color_by.map(Box::new),
             opacity: 1.0,
             visible: true,
             offset: DVec3::ZERO,
@@ -534,7 +532,7 @@ impl Scene {
             format!("object {id} was built without values; color_by=\"values\" needs them (add it with values=)")
         })?;
         let c = arg.resolve(o.scalars(&arg.source))?;
-        self.object_mut(id)?.color_by = Some(c);
+        self.object_mut(id)?.color_by = Some(Box::new(c));
         Ok(())
     }
 

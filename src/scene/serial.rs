@@ -33,9 +33,10 @@
 //! reports a damaged or foreign buffer as an InputError naming `data`.
 
 use super::color::{resolve_clim, LUT_SIZE};
-use super::{ColorBy, ColorSource, Object, ObjectKind, Scene, NEXT_SCENE_UID};
+use super::{ColorBy, ColorSource, HeightfieldInfo, Object, ObjectKind, Scene, NEXT_SCENE_UID};
 use crate::error::{input_err, Error, Result};
-use crate::lod::TileMesh;
+use crate::lod::slab::TileSlabs;
+use crate::lod::{PerVertex, TileMesh};
 use glam::DVec3;
 use std::sync::atomic::Ordering;
 
@@ -48,6 +49,20 @@ const VERSION: u32 = 8;
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
 const MIN_TILE_BYTES: usize = 8 + 24 + 8 + 8 + 8 + 4 + 4;
+
+/// The fewest bytes a tile takes in `version`: [`MIN_TILE_BYTES`] and the counts of its empty
+/// values (version 4), normals (5) and grid coordinates (6): 88 bytes from version 6.
+fn min_tile_bytes(version: u32) -> usize {
+    MIN_TILE_BYTES + 8 * [4, 5, 6].iter().filter(|&&v| version >= v).count()
+}
+
+/// The fewest bytes an object takes in `version`: a mesh (the smallest kind: its label's length)
+/// with no name nor tiles: id, name, kind, label, colour, visible, offset, tile count (54 bytes),
+/// its origin (version 3), colouring and opacity (4), priority (7): 84 bytes from version 7 on.
+fn min_object_bytes(version: u32) -> usize {
+    let later = [(3, 24), (4, 5), (7, 1)];
+    54 + later.iter().filter(|&&(v, _)| version >= v).map(|&(_, b)| b).sum::<usize>()
+}
 
 /// Little-endian writer.
 #[derive(Default)]
@@ -93,15 +108,24 @@ impl Writer {
 }
 
 /// Little-endian reader over a buffer; every error names `arg`.
+///
+/// Records declared by a count ([`Self::records`]) claim the fewest bytes each can take until
+/// each is read: arrays, strings and further counts may only take bytes no record claims. Every
+/// byte of the buffer then backs at most one thing held in memory, so the records' vectors can
+/// be reserved whole (no vector grows while reading, which holds its old and new blocks at
+/// once), and loading stays within about twice the buffer's size (issue 39,
+/// tests/alloc_bound.rs) however the counts are damaged.
 pub(crate) struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
     arg: &'static str,
+    /// Bytes claimed by records declared and not started yet ([`Self::records`]).
+    claimed: usize,
 }
 
 impl<'a> Reader<'a> {
     pub(crate) fn new(buf: &'a [u8], arg: &'static str) -> Self {
-        Self { buf, pos: 0, arg }
+        Self { buf, pos: 0, arg, claimed: 0 }
     }
     pub(crate) fn err(&self, what: impl std::fmt::Display) -> Error {
         input_err(self.arg, format!("{} at byte {}: {what}", self.arg, self.pos))
@@ -138,6 +162,9 @@ impl<'a> Reader<'a> {
     }
     pub(crate) fn str(&mut self) -> Result<String> {
         let n = self.u32()? as usize;
+        if n > self.unclaimed() {
+            return Err(self.err(format!("a name of {n} bytes does not fit the buffer")));
+        }
         let b = self.take(n)?;
         String::from_utf8(b.to_vec()).map_err(|_| self.err("a name is not UTF-8"))
     }
@@ -145,17 +172,32 @@ impl<'a> Reader<'a> {
     pub(crate) fn remaining(&self) -> usize {
         self.buf.len() - self.pos
     }
-    /// How many of `n` records read into `T`s to reserve: at most a quarter of the bytes left to
-    /// read, so that a damaged count, beside the records read before it fails (about their size
-    /// in bytes) and the checks' temporaries, keeps the reader within twice the buffer's size
-    /// (tests/alloc_bound.rs). More records than that grow the vector as they are read.
-    pub(crate) fn capacity<T>(&self, n: usize) -> usize {
-        n.min(self.remaining() / (4 * std::mem::size_of::<T>().max(1)))
+    /// Bytes not read yet that no declared record claims: what an array, a string or a count of
+    /// records may take.
+    pub(crate) fn unclaimed(&self) -> usize {
+        self.remaining().saturating_sub(self.claimed)
     }
-    /// A count of `elem`-byte elements that the rest of the buffer can hold.
+    /// Declares `n` records (`what`) of at least `min` bytes each to follow: refused when the
+    /// unclaimed bytes cannot hold them, else claimed until each starts ([`Self::record`]).
+    pub(crate) fn records(&mut self, n: usize, min: usize, what: &str) -> Result<()> {
+        let left = self.unclaimed();
+        match n.checked_mul(min) {
+            Some(b) if b <= left => {
+                self.claimed += b;
+                Ok(())
+            }
+            _ => Err(self.err(format!("truncated ({n} {what} of at least {min} bytes each; {left} bytes left)"))),
+        }
+    }
+    /// Starts reading one of the records [`Self::records`] declared with this `min`: its bytes
+    /// are no longer claimed (it reads them now).
+    pub(crate) fn record(&mut self, min: usize) {
+        self.claimed = self.claimed.saturating_sub(min);
+    }
+    /// A count of `elem`-byte elements that the unclaimed rest of the buffer can hold.
     fn count(&mut self, elem: usize) -> Result<usize> {
         let n = self.usize()?;
-        if n.checked_mul(elem).is_none_or(|b| b > self.buf.len() - self.pos) {
+        if n.checked_mul(elem).is_none_or(|b| b > self.unclaimed()) {
             return Err(self.err(format!("an array of {n} elements does not fit the buffer")));
         }
         Ok(n)
@@ -210,15 +252,15 @@ impl Scene {
             w.u32(o.id);
             w.str(&o.name);
             match &o.kind {
-                ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles } => {
+                ObjectKind::Heightfield(hf) => {
                     w.u8(0);
-                    for v in [*nx, *ny] {
+                    for v in [hf.nx, hf.ny] {
                         w.u64(v as u64);
                     }
-                    for v in [*x0, *y0, *dx, *dy, *rotation] {
+                    for v in [hf.x0, hf.y0, hf.dx, hf.dy, hf.rotation] {
                         w.f64(v);
                     }
-                    for v in [tiles.0, tiles.1] {
+                    for v in [hf.tiles.0, hf.tiles.1] {
                         w.u64(v as u64);
                     }
                 }
@@ -311,8 +353,11 @@ impl Scene {
         check::point(origin, "origin").map_err(|e| r.err(e))?;
         let next_id = r.u32()?;
         let n = r.u32()? as usize;
-        let mut objects: Vec<Object> = Vec::with_capacity(r.capacity::<Object>(n));
+        let min_object = min_object_bytes(version);
+        r.records(n, min_object, "objects")?;
+        let mut objects: Vec<Object> = Vec::with_capacity(n);
         for _ in 0..n {
+            r.record(min_object);
             let start = r.pos;
             let id = r.u32()?;
             // Ids grow with every object added and removing one keeps the order: ascending.
@@ -338,8 +383,11 @@ impl Scene {
                 return Err(r.err(format!("object {id}: its priority {priority} is not in 0..=15")));
             }
             let nt = r.u32()? as usize;
-            let mut tiles = Vec::with_capacity(r.capacity::<TileMesh>(nt));
+            let min_tile = min_tile_bytes(version);
+            r.records(nt, min_tile, "tiles")?;
+            let mut tiles = Vec::with_capacity(nt);
             for t in 0..nt {
+                r.record(min_tile);
                 let tile = read_tile(&mut r, version, id, &kind)?;
                 check::tile(&tile, object_origin).map_err(|e| r.err(format!("object {id}: tile {t}: {e}")))?;
                 tiles.push(tile);
@@ -368,11 +416,8 @@ impl Scene {
             });
         }
         r.finish()?;
-        // Slabs are not stored: rebuilt from the tiles' vertices, as they were built, once every
-        // byte is read and checked (none is built for bytes that are refused).
-        for o in &mut objects {
-            o.rebuild_slabs();
-        }
+        // Slabs are not stored: a height field's are rebuilt from its tiles' vertices, as they
+        // were built, when a renderer first needs them (`Object::slabs`), not here.
         Ok(Scene {
             uid: NEXT_SCENE_UID.fetch_add(1, Ordering::Relaxed),
             geometry_version: 0,
@@ -394,7 +439,8 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             let (x0, y0, dx, dy) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
             let rotation = if version >= 2 { r.f64()? } else { 0.0 };
             let tiles = (r.usize()?, r.usize()?);
-            ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles }
+            let slabs = TileSlabs::default();
+            ObjectKind::Heightfield(Box::new(HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles, slabs }))
         }
         1 => ObjectKind::Mesh { kind: r.str()? },
         2 if version >= 4 => {
@@ -402,16 +448,17 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             let flat = r.f32s()?;
             // One pair per block, and a tile per block to follow (`check::grid`): no more pairs
             // than tiles fit the rest (they are stored as f64, twice the bytes read).
-            if flat.len() % 2 != 0 || flat.len() / 2 > r.remaining() / MIN_TILE_BYTES {
+            if flat.len() % 2 != 0 || flat.len() / 2 > r.unclaimed() / min_tile_bytes(version) {
                 return Err(r.err(format!("object {id}: its block cell sizes are not pairs, one per tile")));
             }
-            let cell_size = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
+            let cell_size: Vec<(f64, f64)> = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();
+            drop(flat);
             let get = |r: &mut Reader| -> Result<Vec<crate::grid::LevelStats>> {
                 let n = r.u32()? as usize;
                 // Each level takes 40 bytes (48 from version 5): a count the rest cannot hold is
                 // refused before anything is reserved for it.
                 let each = if version >= 5 { 48 } else { 40 };
-                if n.checked_mul(each).is_none_or(|b| b > r.remaining()) {
+                if n.checked_mul(each).is_none_or(|b| b > r.unclaimed()) {
                     return Err(r.err(format!("object {id}: a table of {n} grid levels does not fit the buffer")));
                 }
                 let mut v = Vec::with_capacity(n);
@@ -426,7 +473,12 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             };
             let levels = get(r)?;
             let nb = r.u32()? as usize;
-            let mut block_levels = Vec::with_capacity(r.capacity::<Vec<crate::grid::LevelStats>>(nb));
+            // A table per block (`check::grid`), as many as the cell sizes above, which the rest
+            // holds a tile each for: reserved whole.
+            if nb != cell_size.len() {
+                return Err(r.err(format!("object {id}: {nb} grid block tables for {} blocks", cell_size.len())));
+            }
+            let mut block_levels = Vec::with_capacity(nb);
             for _ in 0..nb {
                 block_levels.push(get(r)?);
             }
@@ -443,7 +495,7 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
 }
 
 /// An object's colouring by data (None: flat), its colour map and range checked as when set.
-fn read_color_by(r: &mut Reader, version: u32, id: u32) -> Result<Option<ColorBy>> {
+fn read_color_by(r: &mut Reader, version: u32, id: u32) -> Result<Option<Box<ColorBy>>> {
     Ok(if version >= 4 {
         let source = match r.u8()? {
             0 => None,
@@ -465,7 +517,7 @@ fn read_color_by(r: &mut Reader, version: u32, id: u32) -> Result<Option<ColorBy
                     .map_err(|_| r.err(format!("object {id}: its colour range is not finite lo < hi")))?;
                 let nan_color = r.f32x3()?;
                 check::rgb(nan_color, "nan_color").map_err(|e| r.err(format!("object {id}: {e}")))?;
-                Some(ColorBy { source, cmap, lut, clim, nan_color })
+                Some(Box::new(ColorBy { source, cmap, lut, clim, nan_color }))
             }
         }
     } else {
@@ -488,19 +540,19 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         (len != 0 && len != positions.len())
             .then(|| format!("object {id}: a tile has {len} {what} for {} vertices", positions.len()))
     };
-    let values = if version >= 4 { r.f32s()? } else { Vec::new() };
+    let values: PerVertex<f32> = if version >= 4 { r.f32s()?.into() } else { PerVertex::new() };
     if let Some(msg) = per_vertex("values", values.len()) {
         return Err(r.err(msg));
     }
-    let normals = if version >= 5 { r.u32s()? } else { Vec::new() };
+    let normals: PerVertex<u32> = if version >= 5 { r.u32s()?.into() } else { PerVertex::new() };
     if let Some(msg) = per_vertex("normals", normals.len()) {
         return Err(r.err(msg));
     }
-    let grid_uv = if version >= 6 { r.u32s()? } else { Vec::new() };
+    let grid_uv: PerVertex<u32> = if version >= 6 { r.u32s()?.into() } else { PerVertex::new() };
     if let Some(msg) = per_vertex("grid coordinates", grid_uv.len()) {
         return Err(r.err(msg));
     }
-    let (fine, coarse): (crate::lod::Indices, crate::lod::Indices) = (r.u32s()?.into(), r.u32s()?.into());
+    let (fine, coarse) = (indices(r.u32s()?), indices(r.u32s()?));
     let proxy_error = r.f32()?;
     let nl = r.u32()? as usize;
     if nl > crate::lod::levels::MAX_LEVELS {
@@ -513,7 +565,7 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         let error = r.f32()?;
         let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
         let error_z = if version >= 8 { r.f32()? } else { error };
-        levels.push(crate::lod::levels::Level { error, error_z, shading_error, indices: r.u32s()?.into() });
+        levels.push(crate::lod::levels::Level { error, error_z, shading_error, indices: indices(r.u32s()?) });
     }
     for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
         if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
@@ -535,22 +587,17 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     if levels.iter().any(|l| l.shading_error < 0.0) {
         return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
     }
-    Ok(TileMesh {
-        ix,
-        iy,
-        positions,
-        values,
-        normals,
-        grid_uv,
-        fine,
-        coarse,
-        bbox_min,
-        bbox_max,
-        proxy_error,
-        levels,
-        // Not stored: rebuilt by `Object::rebuild_slabs`.
-        slab: None,
-    })
+    Ok(TileMesh { ix, iy, positions, values, normals, grid_uv, fine, coarse, bbox_min, bbox_max, proxy_error, levels })
+}
+
+/// A triangle list as tiles hold it; an empty one allocates nothing (`Arc::default`), where
+/// `Arc::from` an empty vector takes a 16-byte block: an empty tile read stays small (issue 39).
+fn indices(v: Vec<u32>) -> crate::lod::Indices {
+    if v.is_empty() {
+        crate::lod::Indices::default()
+    } else {
+        v.into()
+    }
 }
 
 #[cfg(test)]

@@ -9,12 +9,11 @@
 use super::super::color::check_rgb;
 use super::super::grid::GridInfo;
 use super::super::heightfield::{GridAxes, GridFrame};
-use super::super::ObjectKind;
+use super::super::{HeightfieldInfo, ObjectKind};
 use crate::camera::MAX_COORD;
 use crate::error::num;
 use crate::lod::{tile_bounds, TileMesh};
 use glam::DVec3;
-use std::collections::HashMap;
 
 /// Ok, or what is wrong (the reader prefixes `data` and where).
 pub(super) type Check = std::result::Result<(), String>;
@@ -82,7 +81,7 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
 /// object's size in the buffer.
 pub(super) fn object(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usize) -> Check {
     match kind {
-        ObjectKind::Heightfield { .. } => heightfield(kind, tiles, origin, bytes)?,
+        ObjectKind::Heightfield(_) => heightfield(kind, tiles, origin, bytes)?,
         ObjectKind::Grid(g) => return grid(g, tiles).and_then(|_| cells(g, tiles)),
         ObjectKind::Mesh { .. } => {}
     }
@@ -111,9 +110,8 @@ fn cells(g: &GridInfo, tiles: &[TileMesh]) -> Check {
 /// tiles at one height in each tile that has it: horizon culling rebuilds the grid from the
 /// frame and the vertices, so they must be the grid the tiles draw.
 fn heightfield(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usize) -> Check {
-    let ObjectKind::Heightfield { nx, ny, x0, y0, dx, dy, rotation, tiles: (tx, ty) } = *kind else {
-        return Ok(());
-    };
+    let ObjectKind::Heightfield(hf) = kind else { return Ok(()) };
+    let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles: (tx, ty), .. } = **hf;
     let frame =
         GridFrame { origin: [x0 + origin.x, y0 + origin.y], spacing: [dx, dy.abs()], rotation, yflip: dy < 0.0 };
     frame.check(nx, ny, (tx, ty)).map_err(|e| e.to_string())?;
@@ -132,7 +130,14 @@ fn heightfield(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usiz
     // Rounding: the f32 position (relative to the object's origin) and the f64 grid arithmetic.
     let world = x0.abs().max(y0.abs()) + origin.x.abs().max(origin.y.abs()) + nx as f64 * dx + ny as f64 * dy.abs();
     let slack = 1e-3 * dx.min(dy.abs()) + world * f64::EPSILON * 16.0;
-    let mut border: HashMap<(usize, usize), u32> = HashMap::new();
+    // Per vertex on its tile's border: its sample (as two u32) and its height's bits, sorted
+    // afterwards so that the tiles' copies of a sample meet. Reserved whole: per tile at most its
+    // vertices and its border's samples, 2 (w - 1 + h - 1) for w x h (12 bytes each, against a
+    // vertex's 12 of position); a map grown sample by sample held twice that and more at its
+    // peak, beyond twice the bytes of a height field of small tiles (issue 39).
+    let perimeter = |t: usize| 2 * (bx[t % tx + 1] - bx[t % tx] + by[t / tx + 1] - by[t / tx]);
+    let most = tiles.iter().enumerate().map(|(t, tile)| tile.positions.len().min(perimeter(t))).sum();
+    let mut border: Vec<[u32; 3]> = Vec::with_capacity(most);
     for (t, tile) in tiles.iter().enumerate() {
         let (ix, iy) = (t % tx, t / tx);
         if (tile.ix as usize, tile.iy as usize) != (ix, iy) {
@@ -140,6 +145,7 @@ fn heightfield(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usiz
         }
         let (cols, rows) = (bx[ix]..=bx[ix + 1], by[iy]..=by[iy + 1]);
         let mut samples = Vec::with_capacity(tile.positions.len());
+        let on_borders = border.len() + perimeter(t);
         for (k, p) in tile.positions.iter().enumerate() {
             let (x, y) = (p[0] as f64, p[1] as f64);
             let tol = slack + x.abs().max(y.abs()) * (f32::EPSILON as f64);
@@ -155,14 +161,25 @@ fn heightfield(kind: &ObjectKind, tiles: &[TileMesh], origin: DVec3, bytes: usiz
             };
             samples.push(j * nx + i);
             let on_border = i == *cols.start() || i == *cols.end() || j == *rows.start() || j == *rows.end();
-            if on_border && *border.entry((i, j)).or_insert(p[2].to_bits()) != p[2].to_bits() {
-                return Err(format!("tiles give sample ({i}, {j}) of the grid two heights"));
+            if on_border {
+                // More than its border's samples: two at one (and `border` would outgrow its
+                // reservation).
+                if border.len() == on_borders {
+                    return Err(format!("tile {t} has two vertices at one sample of the grid"));
+                }
+                let s = (j * nx + i) as u64;
+                border.push([(s >> 32) as u32, s as u32, p[2].to_bits()]);
             }
         }
         samples.sort_unstable();
         if samples.windows(2).any(|w| w[0] == w[1]) {
             return Err(format!("tile {t} has two vertices at one sample of the grid"));
         }
+    }
+    border.sort_unstable();
+    if let Some(w) = border.windows(2).find(|w| w[0][..2] == w[1][..2] && w[0][2] != w[1][2]) {
+        let s = ((w[0][0] as u64) << 32 | w[0][1] as u64) as usize;
+        return Err(format!("tiles give sample ({}, {}) of the grid two heights", s % nx, s / nx));
     }
     Ok(())
 }

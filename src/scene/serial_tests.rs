@@ -37,9 +37,13 @@ fn slabs_are_rebuilt_as_they_were_built() {
     let t = Scene::from_bytes(&s.to_bytes()).unwrap();
     let mut n = 0;
     for (a, b) in s.objects().iter().zip(t.objects()) {
-        for (ta, tb) in a.tiles.iter().zip(&b.tiles) {
-            assert_eq!(ta.slab, tb.slab, "object {} tile {} {}", a.id, ta.ix, ta.iy);
-            n += ta.slab.is_some() as usize;
+        // Loading builds none: they are built on first use.
+        if let ObjectKind::Heightfield(hf) = &b.kind {
+            assert!(hf.slabs.get().is_none(), "object {}", b.id);
+        }
+        for (k, ta) in a.tiles.iter().enumerate() {
+            assert_eq!(a.slab(k), b.slab(k), "object {} tile {} {}", a.id, ta.ix, ta.iy);
+            n += a.slab(k).is_some() as usize;
         }
     }
     assert!(n >= 5, "{n}");
@@ -47,8 +51,7 @@ fn slabs_are_rebuilt_as_they_were_built() {
     let mut u = Scene::from_bytes(&s.to_bytes()).unwrap();
     let o = u.objects.iter_mut().find(|o| o.name == "turned").unwrap();
     o.tiles[0].positions[0][0] += 3.0;
-    o.rebuild_slabs();
-    assert!(o.tiles[0].slab.is_none() && o.tiles[1].slab.is_some());
+    assert!(o.slab(0).is_none() && o.slab(1).is_some());
 }
 
 #[test]
@@ -220,19 +223,43 @@ fn priorities_round_trip_and_a_bad_one_is_refused() {
 }
 
 #[test]
-fn a_count_reserves_no_more_than_the_bytes_left() {
+fn a_count_reserves_only_records_the_unclaimed_bytes_hold() {
     // n_objects, n_tiles and a grid's table counts reserved up to 2^16 records each (some 19 MB
-    // for u32::MAX objects in a 45-byte buffer): now at most a quarter of the bytes left to read.
+    // for u32::MAX objects in a 45-byte buffer): now a count is refused unless the bytes no
+    // record claims hold that many of its smallest records, which then claim them.
     let mut r = Reader::new(&[0; 1000], "data");
-    assert_eq!(r.capacity::<u64>(usize::MAX), 31);
-    assert_eq!(r.capacity::<Object>(u32::MAX as usize), 1000 / (4 * std::mem::size_of::<Object>()));
-    assert_eq!(r.capacity::<u8>(2), 2);
-    assert_eq!(r.capacity::<()>(5), 5);
-    r.take(990).unwrap();
-    assert_eq!((r.remaining(), r.capacity::<u16>(9)), (10, 1));
+    assert!(r.records(usize::MAX, 2, "objects").unwrap_err().to_string().contains("truncated"));
+    assert!(r.records(12, 84, "objects").is_err());
+    r.records(11, 84, "objects").unwrap();
+    assert_eq!(r.unclaimed(), 1000 - 11 * 84);
+    assert!(r.records(2, 40, "tiles").is_err());
+    // An array takes unclaimed bytes only.
+    let mut a = Reader::new(&[0; 1000], "data");
+    a.records(1, 960, "tiles").unwrap();
+    a.take(4).unwrap();
+    assert_eq!(a.unclaimed(), 36);
+    let nine = [&9u64.to_le_bytes()[..], &[0; 992]].concat();
+    let mut b = Reader::new(&nine, "data");
+    b.records(1, 960, "tiles").unwrap();
+    assert!(b.f32s().unwrap_err().to_string().contains("does not fit"));
+    // A record started no longer claims its bytes.
+    b.record(960);
+    assert_eq!(b.unclaimed(), 992);
     // Such counts are refused when the records run out.
     let b = Scene::new().to_bytes();
     let mut v = b.clone();
     v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
+    for version in 1..=VERSION {
+        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84][version as usize - 1]);
+        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88][version as usize - 1]);
+    }
+}
+
+#[test]
+fn the_smallest_records_take_at_most_twice_their_bytes_in_memory() {
+    // An object with no name nor tiles and an empty tile (tests/alloc_bound.rs, issue 39): the
+    // structs they are read into, reserved whole (`Reader::records`), within twice their bytes.
+    assert!(std::mem::size_of::<Object>() <= 2 * min_object_bytes(VERSION), "{}", std::mem::size_of::<Object>());
+    assert!(std::mem::size_of::<TileMesh>() <= 2 * min_tile_bytes(VERSION), "{}", std::mem::size_of::<TileMesh>());
 }

@@ -35,7 +35,7 @@ fn upload_shading(
         .enumerate()
         .map(|(oi, o)| {
             let (n, normals) = match o.kind {
-                ObjectKind::Heightfield { nx, ny, .. } => ((nx * ny) as u64, None),
+                ObjectKind::Heightfield(ref hf) => ((hf.nx * hf.ny) as u64, None),
                 _ => {
                     let (nu, nv, normals) = o.grid_normals()?;
                     dims[oi] = Some((nu as u32, nv as u32));
@@ -132,19 +132,20 @@ fn upload_values(
     (buf, base, cells)
 }
 
-/// The slabs of `tiles` in one vertex and one index buffer, and per tile its slab's draw with
-/// whether its levels are lattice levels (`SceneGeometry::slab_draws`).
+/// The slabs of `scene`'s tiles (`Object::slabs`: built here for a scene read from bytes) in one
+/// vertex and one index buffer, and per tile its slab's draw with whether its levels are lattice
+/// levels (`SceneGeometry::slab_draws`).
 #[allow(clippy::type_complexity)]
 fn upload_slabs(
     d: &wgpu::Device,
-    tiles: &[&crate::lod::TileMesh],
+    scene: &Scene,
 ) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<(DrawArgs, bool)>>) {
     let (mut verts, mut idx): (Vec<[f32; 4]>, Vec<u32>) = (Vec::new(), Vec::new());
-    let draws: Vec<Option<(DrawArgs, bool)>> = tiles
-        .iter()
+    let slabs = scene.objects().iter().flat_map(|o| (0..o.tiles.len()).map(|t| o.slab(t)));
+    let draws: Vec<Option<(DrawArgs, bool)>> = slabs
         .enumerate()
-        .map(|(i, t)| {
-            let s = t.slab.as_ref()?;
+        .map(|(i, s)| {
+            let s = s?;
             let (v, ix) = (&s.vertices, &s.indices);
             let args = DrawArgs {
                 index_count: ix.len() as u32,
@@ -231,7 +232,7 @@ impl SceneGeometry {
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
         let sub_boxes = tiles.par_iter().map(|t| tile_sub_boxes(t)).collect();
         let height_blocks = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
-        let (slabs, slab_draws) = upload_slabs(d, &tiles);
+        let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
         let bytes = bytes + slab_bytes;
