@@ -24,3 +24,35 @@ fn height_fields_with_a_normal_map_draw_as_fields() {
     let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
     assert_eq!(got, [(0..2, true, false), (2..3, false, true), (3..5, true, false)]);
 }
+
+#[test]
+fn coarse_height_field_tiles_draw_with_the_fine_depth() {
+    let run = |tiles: std::ops::Range<usize>, field: bool| DrawRun {
+        tiles,
+        grid_mesh: false,
+        field,
+        closed: None,
+        cells: false,
+        fine_depth: false,
+    };
+    let runs = [run(0..4, true), run(4..6, false), run(6..8, true)];
+    // Every height-field tile fine (lod = full, or only meshes coarse): the scene's runs as they are.
+    assert!(split_coarse_fields(&runs, |_| false).is_none());
+    assert!(split_coarse_fields(&runs, |k| k == 4).is_none());
+    let got: Vec<_> = split_coarse_fields(&runs, |k| matches!(k, 1 | 2 | 5 | 7))
+        .unwrap()
+        .iter()
+        .map(|r| (r.tiles.clone(), r.field, r.fine_depth))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (0..1, true, false),
+            (1..3, true, true),
+            (3..4, true, false),
+            (4..6, false, false),
+            (6..7, true, false),
+            (7..8, true, true)
+        ]
+    );
+}
