@@ -131,7 +131,34 @@ impl Plan {
             plan.nv += verts.len() as u64;
             plan.ni += idx.len() as u64;
         }
+        plan.tile_domains(scene);
         plan
+    }
+
+    /// Writes each height-field tile's samples (columns i0..=i1, rows j0..=j1) into the last two
+    /// words of its third `tile_grid` vec4, as `i0 | i1 << 16` and `j0 | j1 << 16` (draw.wgsl
+    /// `fine_depth` keeps its meeting points inside the tile); `u32::MAX` where they are not known
+    /// or do not fit 16 bits.
+    fn tile_domains(&mut self, scene: &Scene) {
+        let none = f32::from_bits(u32::MAX);
+        let mut t = 0;
+        for o in scene.objects() {
+            let bounds = o.tile_sample_bounds();
+            for tile in &o.tiles {
+                let pack = |a: usize, b: usize| if b <= 0xffff { f32::from_bits((a | b << 16) as u32) } else { none };
+                let (ix, iy) = (tile.ix as usize, tile.iy as usize);
+                let dom = bounds
+                    .as_ref()
+                    .filter(|(bx, by)| ix + 1 < bx.len() && iy + 1 < by.len())
+                    .map(|(bx, by)| (pack(bx[ix], bx[ix + 1]), pack(by[iy], by[iy + 1])));
+                let (z, w) = dom.unwrap_or((none, none));
+                if let Some(v) = self.tile_grid.get_mut(3 * t + 2) {
+                    v[2] = z;
+                    v[3] = w;
+                }
+                t += 1;
+            }
+        }
     }
 }
 

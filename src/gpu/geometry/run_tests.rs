@@ -56,3 +56,18 @@ fn coarse_height_field_tiles_draw_with_the_fine_depth() {
         ]
     );
 }
+
+#[test]
+fn height_field_tiles_carry_their_samples_for_the_fine_depth() {
+    let mut s = Scene::new();
+    let z: Vec<f64> = (0..81).map(|k| (k % 9) as f64 * 0.1).collect();
+    s.add_heightfield(&z, 9, 9, GridFrame::new([0.0, 0.0], [10.0, 10.0]), (2, 1), None, AddOptions::new(1.0)).unwrap();
+    let v = [[0.0, 0.0, -5.0], [10.0, 0.0, -5.0], [0.0, 10.0, 5.0]];
+    s.add_mesh(&v, &[[0, 1, 2]], "fault", None, AddOptions::new(1.0)).unwrap();
+    let plan = plan::Plan::new(&s, &[Some(0), None], &[None, None]);
+    let words = |t: usize| (plan.tile_grid[3 * t + 2][2].to_bits(), plan.tile_grid[3 * t + 2][3].to_bits());
+    // Columns 0..=4 and 4..=8 (tiles share their border samples), rows 0..=8: i0 | i1 << 16.
+    assert_eq!(words(0), (4 << 16, 8 << 16));
+    assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
+    assert_eq!(words(2), (u32::MAX, u32::MAX), "a mesh has none");
+}

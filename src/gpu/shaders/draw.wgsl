@@ -283,9 +283,12 @@ fn fs_field(v: VOutField) -> FOut {
 // coincide (a grid's top built from a horizon) cross each other along lines that any vertical
 // change moves by far more than that error on screen; with the fine depth they hide each other
 // as at level 0, and only the level's outline moves (gpu::geometry::DrawRun::fine_depth). The
-// move along the ray is bounded by 4 x the vertical gap at `w` over the ray's vertical slope (a
-// ray grazing the surface, where the plane's meeting point says little).
-fn fine_depth(o: Object, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f32>) -> f32 {
+// meeting point is kept only where it lies on the fine triangle whose plane gave it and inside
+// `tile`'s samples (`tile_grid`, gpu::geometry::plan), so that every depth written is a point of
+// the tile's own fine surface or, else, of its drawn level (`w`: a ray grazing the surface, an
+// outline the fine surface does not reach): both lie in the slab grown by the level's error that
+// the culling tests (cull::phases, cull::hidden) take the tile to lie in.
+fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f32>) -> f32 {
     let r = select(g.eye.xyz, w - g.eye.xyz, g.eye.w > 0.5);
     let zs = g.z_scale;
     let qr = vec2<f32>(dot(o.grid.zw, r.xy), dot(o.grid_rows.xy, r.xy));
@@ -294,9 +297,9 @@ fn fine_depth(o: Object, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f3
     var f = clamp(q0, vec2<f32>(0.0), o.grid_rows.zw - 1.0) - c0;
     var a = select(vec2<f32>(z0.w - z0.z, z0.z - z0.x), vec2<f32>(z0.y - z0.x, z0.w - z0.y), f.x >= f.y);
     var gap = zs * (o.offset.z + z0.x + dot(a, q0 - c0)) - w.z;
-    let tmax = 4.0 * abs(gap) / max(abs(r.z), 1e-3 * length(r));
     var den = r.z - zs * dot(a, qr);
-    var t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -tmax, tmax);
+    // (Bounded, so that no product below is infinite times zero.)
+    var t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -1e9, 1e9);
     // Once more with the triangle under that meeting point.
     let n = o.grid_rows.zw;
     let q = clamp(q0 + t * qr, vec2<f32>(0.0), n - 1.0);
@@ -310,8 +313,18 @@ fn fine_depth(o: Object, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f3
     a = select(vec2<f32>(z11 - zo, zo - z00), vec2<f32>(zo - z00, z11 - zo), f.x >= f.y);
     gap = zs * (o.offset.z + z00 + dot(a, q0 - c)) - w.z;
     den = r.z - zs * dot(a, qr);
-    t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -tmax, tmax);
-    let clip = priority_clip(g.view_proj * vec4<f32>(w + t * r, 1.0), o);
+    t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -1e9, 1e9);
+    // On that triangle (up to round-off) and inside the tile, else the level's own point.
+    let fx = q0 + t * qr - c;
+    let e = 1e-3;
+    let side = select(fx.y - fx.x, fx.x - fx.y, f.x >= f.y);
+    var on = all(fx >= vec2<f32>(-e)) && all(fx <= vec2<f32>(1.0 + e)) && side >= -e;
+    let dom = vec2<u32>(bitcast<u32>(tile_grid[3u * tile + 2u].z), bitcast<u32>(tile_grid[3u * tile + 2u].w));
+    let lo = vec2<f32>(vec2<u32>(dom.x & 0xffffu, dom.y & 0xffffu));
+    let hi = vec2<f32>(vec2<u32>(dom.x >> 16u, dom.y >> 16u));
+    let qx = c + fx;
+    on = on && dom.x != 0xffffffffu && dom.y != 0xffffffffu && all(qx >= lo - e) && all(qx <= hi + e);
+    let clip = priority_clip(g.view_proj * vec4<f32>(w + select(0.0, t, on) * r, 1.0), o);
     return clip.z / clip.w;
 }
 
@@ -322,7 +335,7 @@ struct FieldFine {
     depth: f32,
 }
 
-fn field_fine(o: Object, w: vec3<f32>, s: f32) -> FieldFine {
+fn field_fine(o: Object, tile: u32, w: vec3<f32>, s: f32) -> FieldFine {
     let d = w.xy - o.offset.xy - o.grid.xy;
     let n = o.grid_rows.zw;
     let q0 = vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d));
@@ -341,7 +354,7 @@ fn field_fine(o: Object, w: vec3<f32>, s: f32) -> FieldFine {
     let h = vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y));
     let fs = mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
     let ns = vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
-    return FieldFine(ns, fine_depth(o, w, q0, c, vec4<f32>(a.z, b.z, e.z, h.z)));
+    return FieldFine(ns, fine_depth(o, tile, w, q0, c, vec4<f32>(a.z, b.z, e.z, h.z)));
 }
 
 struct FOutDepth {
@@ -355,7 +368,7 @@ struct FOutDepth {
 @fragment
 fn fs_field_fine(v: VOutField) -> FOutDepth {
     let o = objects[tile_object[v.tile]];
-    let ff = field_fine(o, v.world_s.xyz, v.world_s.w);
+    let ff = field_fine(o, v.tile, v.world_s.xyz, v.world_s.w);
     return FOutDepth(lit_color(o, ff.ns), v.tile + 1u, ff.depth);
 }
 
@@ -449,6 +462,6 @@ fn fs_field_gl(v: VOutFieldGl) -> FOutGl {
 @fragment
 fn fs_field_fine_gl(v: VOutFieldGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let ff = field_fine(o, v.world_s.xyz, v.world_s.w);
+    let ff = field_fine(o, v.tile, v.world_s.xyz, v.world_s.w);
     return FOutGl(lit_color(o, ff.ns), v.tile + 1u, ff.depth);
 }
