@@ -70,4 +70,13 @@ fn height_field_tiles_carry_their_samples_for_the_fine_depth() {
     assert_eq!(words(0), (4 << 16, 8 << 16));
     assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
     assert_eq!(words(2), (u32::MAX, u32::MAX), "a mesh has none");
+    // A tile with holes says so in the top bit of its columns' word.
+    let mut z = z.clone();
+    z[9 + 2] = f64::NAN;
+    let mut s = Scene::new();
+    s.add_heightfield(&z, 9, 9, GridFrame::new([0.0, 0.0], [10.0, 10.0]), (2, 1), None, AddOptions::new(1.0)).unwrap();
+    let plan = plan::Plan::new(&s, &[Some(0)], &[None]);
+    let words = |t: usize| (plan.tile_grid[3 * t + 2][2].to_bits(), plan.tile_grid[3 * t + 2][3].to_bits());
+    assert_eq!(words(0), (4 << 16 | 1 << 31, 8 << 16));
+    assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
 }

@@ -284,10 +284,11 @@ fn fs_field(v: VOutField) -> FOut {
 // change moves by far more than that error on screen; with the fine depth they hide each other
 // as at level 0, and only the level's outline moves (gpu::geometry::DrawRun::fine_depth). The
 // meeting point is kept only where it lies on the fine triangle whose plane gave it and inside
-// `tile`'s samples (`tile_grid`, gpu::geometry::plan), so that every depth written is a point of
-// the tile's own fine surface or, else, of its drawn level (`w`: a ray grazing the surface, an
-// outline the fine surface does not reach): both lie in the slab grown by the level's error that
-// the culling tests (cull::phases, cull::hidden) take the tile to lie in.
+// `tile`'s samples (`tile_grid`, gpu::geometry::plan), in a tile with holes on the fine triangle
+// under `w` itself, so that every depth written is a point of the tile's own fine surface or,
+// else, of its drawn level (`w`: a ray grazing the surface, an outline the fine surface does not
+// reach): both lie where the culling tests (cull::phases, cull::hidden) take the tile to lie, the
+// slab grown by a lattice level's error or the tile's box.
 fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f32>) -> f32 {
     let r = select(g.eye.xyz, w - g.eye.xyz, g.eye.w > 0.5);
     let zs = g.z_scale;
@@ -314,16 +315,21 @@ fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, 
     gap = zs * (o.offset.z + z00 + dot(a, q0 - c)) - w.z;
     den = r.z - zs * dot(a, qr);
     t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -1e9, 1e9);
-    // On that triangle (up to round-off) and inside the tile, else the level's own point.
+    // On that triangle (up to round-off) and inside the tile, else the level's own point; in a
+    // tile with holes (top bit of its columns' word) on the triangle under `w` itself, as the
+    // cells under a hole hold no fine triangle, only the normal map's filled heights.
     let fx = q0 + t * qr - c;
     let e = 1e-3;
     let side = select(fx.y - fx.x, fx.x - fx.y, f.x >= f.y);
     var on = all(fx >= vec2<f32>(-e)) && all(fx <= vec2<f32>(1.0 + e)) && side >= -e;
     let dom = vec2<u32>(bitcast<u32>(tile_grid[3u * tile + 2u].z), bitcast<u32>(tile_grid[3u * tile + 2u].w));
     let lo = vec2<f32>(vec2<u32>(dom.x & 0xffffu, dom.y & 0xffffu));
-    let hi = vec2<f32>(vec2<u32>(dom.x >> 16u, dom.y >> 16u));
+    let hi = vec2<f32>(vec2<u32>((dom.x >> 16u) & 0x7fffu, dom.y >> 16u));
     let qx = c + fx;
     on = on && dom.x != 0xffffffffu && dom.y != 0xffffffffu && all(qx >= lo - e) && all(qx <= hi + e);
+    let f0 = clamp(q0, vec2<f32>(0.0), n - 1.0) - c0;
+    let same = all(c == c0) && ((f0.x >= f0.y) == (f.x >= f.y));
+    on = on && (dom.x < 0x80000000u || same);
     let clip = priority_clip(g.view_proj * vec4<f32>(w + select(0.0, t, on) * r, 1.0), o);
     return clip.z / clip.w;
 }
