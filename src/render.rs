@@ -221,6 +221,7 @@ impl Renderer {
             a.index_count -= n.min(a.index_count);
         }
         let pass_breaks = passes::pass_breaks(draw_args.iter().map(|a| a.index_count), *pass_triangles);
+        let draw_runs = geometry.frame_runs(&draw_args);
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -234,6 +235,7 @@ impl Renderer {
             scene_bg: &scene_bg,
             object_visible: &object_visible,
             outside: &outside,
+            draw_runs: &draw_runs,
             pass_breaks: &pass_breaks,
             width: *width,
             height: *height,
@@ -519,6 +521,12 @@ fn frame_state(
             crate::camera::Projection::Perspective => -1.0,
         },
         _pad: [0.0; 2],
+        eye: match fc.projection {
+            crate::camera::Projection::Orthographic => {
+                [fc.forward.x as f32, fc.forward.y as f32, fc.forward.z as f32, 0.0]
+            }
+            crate::camera::Projection::Perspective => [fc.eye.x as f32, fc.eye.y as f32, fc.eye.z as f32, 1.0],
+        },
     };
     // Translucent objects (lenses) are no occluders: strategies see them as hidden; draw_lenses
     // draws them after the opaque image.
@@ -546,6 +554,7 @@ fn draw(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, visible: &Visible) 
         f.geometry,
         &args,
         load,
+        f.draw_runs,
         f.outside,
         f.pass_breaks,
         f.timestamps,

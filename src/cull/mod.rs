@@ -119,6 +119,9 @@ pub struct FrameInputs<'a> {
     /// Per object: this frame sees it from outside (`Scene::seen_from_outside`): its interior
     /// faces are left out of `draw_args` and the lit pass culls its back faces.
     pub outside: &'a [bool],
+    /// The runs of tiles of this frame's lit draws (`SceneGeometry::frame_runs` over
+    /// `draw_args`): pass it to every `record_draw`.
+    pub draw_runs: &'a [crate::gpu::geometry::DrawRun],
     /// Where the lit draws of this frame break into render passes (`gpu::passes::pass_breaks`
     /// over `draw_args`, `Renderer::set_pass_triangles`): pass it to every `record_draw`.
     pub pass_breaks: &'a [usize],

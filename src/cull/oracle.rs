@@ -35,6 +35,7 @@ impl CullStrategy for Oracle {
             f.geometry,
             &all,
             false,
+            f.draw_runs,
             f.outside,
             f.pass_breaks,
             None,

@@ -289,6 +289,7 @@ pub fn draw_and_test_the_rest(
         f.geometry,
         first,
         false,
+        f.draw_runs,
         f.outside,
         f.pass_breaks,
         f.timestamps,

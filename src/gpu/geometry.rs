@@ -103,6 +103,11 @@ pub struct DrawRun {
     pub closed: Option<usize>,
     /// Tiles of a grid coloured per cell (`SceneGeometry::cell_colors`): `fs_cells`.
     pub cells: bool,
+    /// Height-field tiles (`field`) that this frame draws at a coarser level than their fine one
+    /// (`SceneGeometry::frame_runs`): their fragments write the fine surface's depth on their
+    /// pixel's ray (draw.wgsl `fine_depth`), so that they hide and are hidden by other surfaces
+    /// as the fine tile is. Never set in `SceneGeometry::draw_runs`.
+    pub fine_depth: bool,
 }
 
 /// The draw of one LOD level of a tile and its errors (`lod::levels::Level`).
@@ -322,6 +327,44 @@ impl SceneGeometry {
     }
 }
 
+impl SceneGeometry {
+    /// The runs of this frame's lit draws: `draw_runs`, with the runs of height fields split where
+    /// a tile's draw (`draw_args`, one per tile) is not its fine one, those parts `fine_depth`
+    /// ([`split_coarse_fields`]). `draw_runs` itself where every height-field tile is drawn fine
+    /// (every exact frame: its image is what it was).
+    pub fn frame_runs(&self, draw_args: &[DrawArgs]) -> std::borrow::Cow<'_, [DrawRun]> {
+        match split_coarse_fields(&self.draw_runs, |k| draw_args.get(k).is_some_and(|a| *a != self.fine[k])) {
+            Some(runs) => std::borrow::Cow::Owned(runs),
+            None => std::borrow::Cow::Borrowed(&self.draw_runs),
+        }
+    }
+}
+
+/// `runs` with each run of height-field tiles split where `coarse(tile)` changes, the coarse parts
+/// `fine_depth`; None where no height-field tile is coarse.
+fn split_coarse_fields(runs: &[DrawRun], coarse: impl Fn(usize) -> bool) -> Option<Vec<DrawRun>> {
+    if !runs.iter().any(|r| r.field && r.tiles.clone().any(&coarse)) {
+        return None;
+    }
+    let mut out: Vec<DrawRun> = Vec::with_capacity(runs.len() + 2);
+    for r in runs {
+        if !r.field {
+            out.push(r.clone());
+            continue;
+        }
+        let first = out.len();
+        for k in r.tiles.clone() {
+            let fine_depth = coarse(k);
+            if out.len() > first && out[out.len() - 1].fine_depth == fine_depth {
+                out.last_mut().expect("a run of this field").tiles.end = k + 1;
+            } else {
+                out.push(DrawRun { tiles: k..k + 1, fine_depth, ..r.clone() });
+            }
+        }
+    }
+    Some(out)
+}
+
 /// The lit pass's runs of tiles (`tile_object`: each tile's object, in draw order), each drawn
 /// with one pipeline: consecutive tiles of the same kind (grid mesh, height field with a normal
 /// map, reservoir grid object, other) in one run.
@@ -340,7 +383,7 @@ fn draw_runs(
             !grid_mesh && shading_base[o].is_some() && matches!(scene.objects()[o].kind, ObjectKind::Heightfield(_));
         let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
         let cells = cell_colors.get(o).copied().unwrap_or(false);
-        let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells };
+        let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells, fine_depth: false };
         match runs.last_mut() {
             Some(r) if (r.grid_mesh, r.field, r.closed, r.cells) == (grid_mesh, field, closed, cells) => {
                 r.tiles.end = k + 1

@@ -42,6 +42,9 @@ pub struct Globals {
     /// depth-tie priorities (common.wgsl `priority_clip`); -1 for perspective views.
     pub ortho_near: f32,
     pub _pad: [f32; 2],
+    /// The pixel rays of the lit pass's fine depth (draw.wgsl `fine_depth`): perspective, the
+    /// eye in render space and w = 1; orthographic, the unit view direction and w = 0.
+    pub eye: [f32; 4],
 }
 
 /// Per-object state read every frame (`Object` in common.wgsl): translation (world units,
@@ -95,6 +98,6 @@ pub struct BoxInstance {
 
 const _: () = assert!(std::mem::size_of::<DrawArgs>() == 20);
 const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
-const _: () = assert!(std::mem::size_of::<Globals>() == 96);
+const _: () = assert!(std::mem::size_of::<Globals>() == 112);
 const _: () = assert!(std::mem::size_of::<GpuObject>() == 96);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);

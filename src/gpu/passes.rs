@@ -105,6 +105,9 @@ pub struct Passes {
     draw_grid: wgpu::RenderPipeline,
     /// The lit pass for the tiles of height fields with a normal map (`geometry::DrawRun::field`).
     draw_field: wgpu::RenderPipeline,
+    /// `draw_field` for such tiles drawn at a coarser level: the fine surface's depth
+    /// (`geometry::DrawRun::fine_depth`).
+    draw_field_fine: wgpu::RenderPipeline,
     /// The lit pass with back faces culled, for closed surfaces seen from outside
     /// (`geometry::DrawRun::closed`).
     draw_closed: wgpu::RenderPipeline,
@@ -238,8 +241,9 @@ impl Passes {
 
     /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
     /// clearing them first unless `load` (then it adds to what an earlier pass drew).
-    /// `outside`: per object, whether this frame sees it from outside
-    /// (`Scene::seen_from_outside`), so that the back faces of its closed runs are culled.
+    /// `runs`: the frame's runs of tiles (`SceneGeometry::frame_runs`). `outside`: per object,
+    /// whether this frame sees it from outside (`Scene::seen_from_outside`), so that the back
+    /// faces of its closed runs are culled.
     /// `breaks`: ascending tile indices where one render pass ends and the next begins (loading
     /// what the earlier drew): the same image as one pass, drawn in several (see
     /// [`pass_breaks`]). Timed as one pass (`draw_ms`: first pass's start to last pass's end).
@@ -252,6 +256,7 @@ impl Passes {
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
         load: bool,
+        runs: &[super::geometry::DrawRun],
         outside: &[bool],
         breaks: &[usize],
         ts: Option<&Timestamps>,
@@ -275,9 +280,10 @@ impl Passes {
             // on lavapipe: the reservoir grid's near frame took 40.4-40.9 ms against 37.6-39.5.
             // Closed surfaces seen from outside skip their back faces: the reservoir grid bench's
             // frames took about a quarter less (level 0, near 38.8 -> 28.4 ms, distant 25.1 -> 18.4).
-            for run in &geom.draw_runs {
+            for run in runs {
                 let pipeline = match run.closed {
                     _ if run.grid_mesh => &self.draw_grid,
+                    _ if run.field && run.fine_depth => &self.draw_field_fine,
                     _ if run.field => &self.draw_field,
                     Some(o) if outside.get(o).copied().unwrap_or(false) && run.cells => &self.draw_cells_closed,
                     _ if run.cells => &self.draw_cells,

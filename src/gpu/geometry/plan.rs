@@ -131,7 +131,39 @@ impl Plan {
             plan.nv += verts.len() as u64;
             plan.ni += idx.len() as u64;
         }
+        plan.tile_domains(scene);
         plan
+    }
+
+    /// Writes each height-field tile's samples (columns i0..=i1, rows j0..=j1) into the last two
+    /// words of its third `tile_grid` vec4, as `i0 | i1 << 16` and `j0 | j1 << 16` (draw.wgsl
+    /// `fine_depth` keeps its meeting points inside the tile), the first word's top bit set where
+    /// the tile has holes (cells without their two fine triangles); `u32::MAX` where they are not
+    /// known or do not fit 15 bits.
+    fn tile_domains(&mut self, scene: &Scene) {
+        let none = f32::from_bits(u32::MAX);
+        let mut t = 0;
+        for o in scene.objects() {
+            let bounds = o.tile_sample_bounds();
+            for tile in &o.tiles {
+                let (ix, iy) = (tile.ix as usize, tile.iy as usize);
+                let dom =
+                    bounds.as_ref().filter(|(bx, by)| ix + 1 < bx.len() && iy + 1 < by.len()).and_then(|(bx, by)| {
+                        let ((i0, i1), (j0, j1)) = ((bx[ix], bx[ix + 1]), (by[iy], by[iy + 1]));
+                        let holes = tile.fine_triangles() != 2 * (i1 - i0) * (j1 - j0);
+                        (i1 < 1 << 15 && j1 < 1 << 15).then(|| {
+                            let word = |a: usize, b: usize| (a | b << 16) as u32;
+                            (f32::from_bits(word(i0, i1) | u32::from(holes) << 31), f32::from_bits(word(j0, j1)))
+                        })
+                    });
+                let (z, w) = dom.unwrap_or((none, none));
+                if let Some(v) = self.tile_grid.get_mut(3 * t + 2) {
+                    v[2] = z;
+                    v[3] = w;
+                }
+                t += 1;
+            }
+        }
     }
 }
 

@@ -24,3 +24,59 @@ fn height_fields_with_a_normal_map_draw_as_fields() {
     let got: Vec<_> = runs.iter().map(|r| (r.tiles.clone(), r.field, r.grid_mesh)).collect();
     assert_eq!(got, [(0..2, true, false), (2..3, false, true), (3..5, true, false)]);
 }
+
+#[test]
+fn coarse_height_field_tiles_draw_with_the_fine_depth() {
+    let run = |tiles: std::ops::Range<usize>, field: bool| DrawRun {
+        tiles,
+        grid_mesh: false,
+        field,
+        closed: None,
+        cells: false,
+        fine_depth: false,
+    };
+    let runs = [run(0..4, true), run(4..6, false), run(6..8, true)];
+    // Every height-field tile fine (lod = full, or only meshes coarse): the scene's runs as they are.
+    assert!(split_coarse_fields(&runs, |_| false).is_none());
+    assert!(split_coarse_fields(&runs, |k| k == 4).is_none());
+    let got: Vec<_> = split_coarse_fields(&runs, |k| matches!(k, 1 | 2 | 5 | 7))
+        .unwrap()
+        .iter()
+        .map(|r| (r.tiles.clone(), r.field, r.fine_depth))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (0..1, true, false),
+            (1..3, true, true),
+            (3..4, true, false),
+            (4..6, false, false),
+            (6..7, true, false),
+            (7..8, true, true)
+        ]
+    );
+}
+
+#[test]
+fn height_field_tiles_carry_their_samples_for_the_fine_depth() {
+    let mut s = Scene::new();
+    let z: Vec<f64> = (0..81).map(|k| (k % 9) as f64 * 0.1).collect();
+    s.add_heightfield(&z, 9, 9, GridFrame::new([0.0, 0.0], [10.0, 10.0]), (2, 1), None, AddOptions::new(1.0)).unwrap();
+    let v = [[0.0, 0.0, -5.0], [10.0, 0.0, -5.0], [0.0, 10.0, 5.0]];
+    s.add_mesh(&v, &[[0, 1, 2]], "fault", None, AddOptions::new(1.0)).unwrap();
+    let plan = plan::Plan::new(&s, &[Some(0), None], &[None, None]);
+    let words = |t: usize| (plan.tile_grid[3 * t + 2][2].to_bits(), plan.tile_grid[3 * t + 2][3].to_bits());
+    // Columns 0..=4 and 4..=8 (tiles share their border samples), rows 0..=8: i0 | i1 << 16.
+    assert_eq!(words(0), (4 << 16, 8 << 16));
+    assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
+    assert_eq!(words(2), (u32::MAX, u32::MAX), "a mesh has none");
+    // A tile with holes says so in the top bit of its columns' word.
+    let mut z = z.clone();
+    z[9 + 2] = f64::NAN;
+    let mut s = Scene::new();
+    s.add_heightfield(&z, 9, 9, GridFrame::new([0.0, 0.0], [10.0, 10.0]), (2, 1), None, AddOptions::new(1.0)).unwrap();
+    let plan = plan::Plan::new(&s, &[Some(0)], &[None]);
+    let words = |t: usize| (plan.tile_grid[3 * t + 2][2].to_bits(), plan.tile_grid[3 * t + 2][3].to_bits());
+    assert_eq!(words(0), (4 << 16 | 1 << 31, 8 << 16));
+    assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
+}

@@ -21,6 +21,7 @@ struct ScenePipelines {
     draw: wgpu::RenderPipeline,
     draw_grid: wgpu::RenderPipeline,
     draw_field: wgpu::RenderPipeline,
+    draw_field_fine: wgpu::RenderPipeline,
     draw_closed: wgpu::RenderPipeline,
     draw_cells: wgpu::RenderPipeline,
     draw_cells_closed: wgpu::RenderPipeline,
@@ -54,6 +55,7 @@ impl Passes {
             draw,
             draw_grid,
             draw_field,
+            draw_field_fine,
             draw_closed,
             draw_cells,
             draw_cells_closed,
@@ -72,6 +74,7 @@ impl Passes {
             draw,
             draw_grid,
             draw_field,
+            draw_field_fine,
             draw_closed,
             draw_cells,
             draw_cells_closed,
@@ -220,6 +223,8 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
     // only serves blended ones).
     let (draw, draw_grid) = (lit("fs_mesh", None), lit("fs_grid", None));
     let draw_field = lit_vs(("vs_field", "vs_field_gl"), "fs_field", None);
+    // Their tiles drawn at a coarser level: the fine surface's depth (draw.wgsl `fine_depth`).
+    let draw_field_fine = lit_vs(("vs_field", "vs_field_gl"), "fs_field_fine", None);
     let draw_closed = lit("fs_mesh", Some(wgpu::Face::Back));
     let (draw_cells, draw_cells_closed) = (lit("fs_cells", None), lit("fs_cells", Some(wgpu::Face::Back)));
     // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
@@ -251,7 +256,17 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
         &depth_state,
         None,
     );
-    ScenePipelines { draw, draw_grid, draw_field, draw_closed, draw_cells, draw_cells_closed, draw_blend, prepass }
+    ScenePipelines {
+        draw,
+        draw_grid,
+        draw_field,
+        draw_field_fine,
+        draw_closed,
+        draw_cells,
+        draw_cells_closed,
+        draw_blend,
+        prepass,
+    }
 }
 
 /// The histogram, select and select_rest compute pipelines.

@@ -13,6 +13,9 @@ struct Globals {
     ortho_near: f32,
     _pad1: f32,
     _pad2: f32,
+    // The pixel rays (draw.wgsl `fine_depth`): perspective, the eye in render space and w = 1;
+    // orthographic, the unit view direction and w = 0.
+    eye: vec4<f32>,
 }
 
 struct Object {

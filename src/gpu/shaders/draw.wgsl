@@ -274,6 +274,110 @@ fn fs_field(v: VOutField) -> FOut {
     return FOut(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u);
 }
 
+// The depth of the fine surface of height field `o` (with a normal map) on the pixel ray through
+// render-space point `w`, a fragment of one of its coarser levels: the fine level's two triangles
+// per cell (split from sample (i, j) to (i + 1, j + 1), lod::tile_heightfield) with the heights
+// of the normal map, the ray meeting the plane of the fine triangle under `w` (cell `c`, heights
+// `z` = (z00, z10, z01, z11), as `fine_surface` loaded them), then of the one under that meeting
+// point. A coarser level lies within its error of the fine surface, but two surfaces that nearly
+// coincide (a grid's top built from a horizon) cross each other along lines that any vertical
+// change moves by far more than that error on screen; with the fine depth they hide each other
+// as at level 0, and only the level's outline moves (gpu::geometry::DrawRun::fine_depth). The
+// meeting point is kept only where it lies on the fine triangle whose plane gave it and inside
+// `tile`'s samples (`tile_grid`, gpu::geometry::plan), in a tile with holes on the fine triangle
+// under `w` itself, so that every depth written is a point of the tile's own fine surface or,
+// else, of its drawn level (`w`: a ray grazing the surface, an outline the fine surface does not
+// reach): both lie where the culling tests (cull::phases, cull::hidden) take the tile to lie, the
+// slab grown by a lattice level's error or the tile's box.
+fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, z0: vec4<f32>) -> f32 {
+    let r = select(g.eye.xyz, w - g.eye.xyz, g.eye.w > 0.5);
+    let zs = g.z_scale;
+    let qr = vec2<f32>(dot(o.grid.zw, r.xy), dot(o.grid_rows.xy, r.xy));
+    // The plane of the fine triangle of cell c with heights z over (column, row) meets the ray
+    // w + s r where w.z + s r.z = zs (offset.z + z00 + a.(q0 + s qr - c)).
+    var f = clamp(q0, vec2<f32>(0.0), o.grid_rows.zw - 1.0) - c0;
+    var a = select(vec2<f32>(z0.w - z0.z, z0.z - z0.x), vec2<f32>(z0.y - z0.x, z0.w - z0.y), f.x >= f.y);
+    var gap = zs * (o.offset.z + z0.x + dot(a, q0 - c0)) - w.z;
+    var den = r.z - zs * dot(a, qr);
+    // (Bounded, so that no product below is infinite times zero.)
+    var t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -1e9, 1e9);
+    // Once more with the triangle under that meeting point.
+    let n = o.grid_rows.zw;
+    let q = clamp(q0 + t * qr, vec2<f32>(0.0), n - 1.0);
+    let c = min(floor(q), n - 2.0);
+    f = q - c;
+    let nx = u32(n.x);
+    let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
+    let z00 = bitcast<f32>(surface[k].y);
+    let z11 = bitcast<f32>(surface[k + nx + 1u].y);
+    let zo = bitcast<f32>(surface[select(k + nx, k + 1u, f.x >= f.y)].y);
+    a = select(vec2<f32>(z11 - zo, zo - z00), vec2<f32>(zo - z00, z11 - zo), f.x >= f.y);
+    gap = zs * (o.offset.z + z00 + dot(a, q0 - c)) - w.z;
+    den = r.z - zs * dot(a, qr);
+    t = clamp(select(0.0, gap / den, abs(den) > 1e-30), -1e9, 1e9);
+    // On that triangle (up to round-off) and inside the tile, else the level's own point; in a
+    // tile with holes (top bit of its columns' word) on the triangle under `w` itself, as the
+    // cells under a hole hold no fine triangle, only the normal map's filled heights.
+    let fx = q0 + t * qr - c;
+    let e = 1e-3;
+    let side = select(fx.y - fx.x, fx.x - fx.y, f.x >= f.y);
+    var on = all(fx >= vec2<f32>(-e)) && all(fx <= vec2<f32>(1.0 + e)) && side >= -e;
+    let dom = vec2<u32>(bitcast<u32>(tile_grid[3u * tile + 2u].z), bitcast<u32>(tile_grid[3u * tile + 2u].w));
+    let lo = vec2<f32>(vec2<u32>(dom.x & 0xffffu, dom.y & 0xffffu));
+    let hi = vec2<f32>(vec2<u32>((dom.x >> 16u) & 0x7fffu, dom.y >> 16u));
+    let qx = c + fx;
+    on = on && dom.x != 0xffffffffu && dom.y != 0xffffffffu && all(qx >= lo - e) && all(qx <= hi + e);
+    let f0 = clamp(q0, vec2<f32>(0.0), n - 1.0) - c0;
+    let same = all(c == c0) && ((f0.x >= f0.y) == (f.x >= f.y));
+    on = on && (dom.x < 0x80000000u || same);
+    let clip = priority_clip(g.view_proj * vec4<f32>(w + select(0.0, t, on) * r, 1.0), o);
+    return clip.z / clip.w;
+}
+
+// `field_shading` and `fine_depth` at render-space point `w` of a coarser level, from one load of
+// the four samples around it.
+struct FieldFine {
+    ns: vec4<f32>,
+    depth: f32,
+}
+
+fn field_fine(o: Object, tile: u32, w: vec3<f32>, s: f32) -> FieldFine {
+    let d = w.xy - o.offset.xy - o.grid.xy;
+    let n = o.grid_rows.zw;
+    let q0 = vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d));
+    let q = clamp(q0, vec2<f32>(0.0), n - 1.0);
+    let c = min(floor(q), n - 2.0);
+    let f = q - c;
+    let nx = u32(n.x);
+    let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
+    let s00 = surface[k];
+    let s10 = surface[k + 1u];
+    let s01 = surface[k + nx];
+    let s11 = surface[k + nx + 1u];
+    let a = vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y));
+    let b = vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y));
+    let e = vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y));
+    let h = vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y));
+    let fs = mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
+    let ns = vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
+    return FieldFine(ns, fine_depth(o, tile, w, q0, c, vec4<f32>(a.z, b.z, e.z, h.z)));
+}
+
+struct FOutDepth {
+    @location(0) color: vec4<f32>,
+    @location(1) id: u32,
+    @builtin(frag_depth) depth: f32,
+}
+
+// fs_field for the tiles of height fields drawn at a coarser level than their fine one: the fine
+// surface's depth written (`fine_depth`).
+@fragment
+fn fs_field_fine(v: VOutField) -> FOutDepth {
+    let o = objects[tile_object[v.tile]];
+    let ff = field_fine(o, v.tile, v.world_s.xyz, v.world_s.w);
+    return FOutDepth(lit_color(o, ff.ns), v.tile + 1u, ff.depth);
+}
+
 // GL: vs_draw's transform with clip z and w carried to the fragment (see VOutGl in common.wgsl).
 struct VOutDrawGl {
     @builtin(position) @invariant clip: vec4<f32>,
@@ -358,4 +462,12 @@ fn vs_field_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32,
 fn fs_field_gl(v: VOutFieldGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
     return FOutGl(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u, v.zw.x / v.zw.y);
+}
+
+// GL: fs_field_fine as it is (it writes frag_depth already).
+@fragment
+fn fs_field_fine_gl(v: VOutFieldGl) -> FOutGl {
+    let o = objects[tile_object[v.tile]];
+    let ff = field_fine(o, v.tile, v.world_s.xyz, v.world_s.w);
+    return FOutGl(lit_color(o, ff.ns), v.tile + 1u, ff.depth);
 }
