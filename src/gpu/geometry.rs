@@ -119,9 +119,6 @@ pub struct LevelDraw {
     pub error_z: f32,
     /// Shading error, a normal chord (unitless; `lod::shading`).
     pub shading_error: f32,
-    /// The largest |z| of the normals that error compares, plus the error
-    /// (`lod::shading::level_steepness`): how far vertical exaggeration may turn them.
-    pub steep: f32,
 }
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
@@ -290,7 +287,7 @@ impl SceneGeometry {
                     }
                     put(args, &cd.verts, &cd.vals, &cd.normals, &cd.idx);
                 }
-                tiles_done.push((k, t, o.kind_name() == "well"));
+                tiles_done.push((k, t));
             }
         }
         for (buffer, offset, data) in writes {
@@ -298,12 +295,11 @@ impl SceneGeometry {
                 ctx.queue.write_buffer(buffer, offset, &data);
             }
         }
-        for (k, t, tube) in tiles_done {
+        for (k, t) in tiles_done {
             self.bbox[k] = tile_bbox(t);
             self.sub_boxes[k] = tile_sub_boxes(t);
-            let steep = crate::lod::shading::level_steepness(t, !tube);
-            for ((l, new), s) in self.levels[k].iter_mut().zip(&t.levels).zip(steep) {
-                (l.error, l.error_z, l.shading_error, l.steep) = (new.error, new.error_z, new.shading_error, s);
+            for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
+                (l.error, l.error_z, l.shading_error) = (new.error, new.error_z, new.shading_error);
             }
         }
         self.key = scene.geometry_key();

@@ -23,12 +23,8 @@
 //! Conversion to colour ([`shade_levels_per_chord`], done at render time, where the colour and
 //! the vertical exaggeration are known): `| |a·x| - |b·x| | <= |a - b|` for a unit x, so the shade
 //! moves by at most `(0.45 + 0.35) × chord`, and an 8-bit channel of a base colour c by at most
-//! `255 c × 0.8 × chord` levels. Vertical exaggeration s > 1 maps a unit normal n to
-//! `M n / |M n|`, M = diag(1, 1, 1/s); at a normal whose z part is sin a it stretches arcs along
-//! the meridian by `1 / (s |M n|²)` and across it by `1 / |M n|`, `|M n|² = cos² a + sin² a / s²`,
-//! both growing with |a|: over normals with `|z| <= m` ([`steepest_normal`]) by at most
-//! [`exaggeration_turn`]`(s, m)`, which is s only for m = 1 (a horizontal facet) and 1 for m = 0
-//! (a vertical well's radial normals). s < 1 turns them by at most 1/s.
+//! `255 c × 0.8 × chord` levels. Vertical exaggeration s turns normals by a factor of at most
+//! `max(s, 1/s)`.
 
 use super::normals;
 use glam::DVec3;
@@ -39,113 +35,11 @@ use rayon::prelude::*;
 pub const SHADE_PER_CHORD: f64 = 0.45 + 0.35;
 
 /// 8-bit colour levels per unit of normal chord for an object whose brightest base colour
-/// channel is `max_channel` (0..=1), drawn with vertical exaggeration `z_scale`, where the normals
-/// compared have a z part of at most `steep` (0..=1; see the module docs).
-pub fn shade_levels_per_chord(max_channel: f64, z_scale: f64, steep: f64) -> f64 {
-    255.0 * max_channel.clamp(0.0, 1.0) * SHADE_PER_CHORD * exaggeration_turn(z_scale, steep)
-}
-
-/// The most vertical exaggeration `z_scale` stretches arcs between unit normals whose z part is
-/// at most `steep` in absolute value (see the module docs): `max(1 / |M n|, 1 / (s |M n|²))` at
-/// `|n_z| = steep`; `1 / z_scale` below 1; 1 for a non-positive or non-finite z_scale.
-pub fn exaggeration_turn(z_scale: f64, steep: f64) -> f64 {
-    if !(z_scale.is_finite() && z_scale > 0.0) {
-        return 1.0;
-    }
-    if z_scale < 1.0 {
-        return 1.0 / z_scale;
-    }
-    let m2 = steep.clamp(0.0, 1.0).powi(2);
-    let mn2 = (1.0 - m2) + m2 / (z_scale * z_scale);
-    (1.0 / mn2.sqrt()).max(1.0 / (z_scale * mn2))
-}
-
-/// The largest |z| of the unit normals the lit pass may use on the triangles `tris` (indices into
-/// `positions`): the normalised interpolation of their smooth vertex normals (`normals`, packed,
-/// one per position) or, where a triangle has a vertex without one (`normals::NONE`) or the tile
-/// none at all, its facet normal. Over a triangle, `|Σ w_i n_i|` is at least the distance from the
-/// origin to the triangle (n_1, n_2, n_3), so the normalised interpolation's z part is at most the
-/// corners' largest over that distance; 1 where the distance is 0. Sides of a tube's flat caps
-/// (vertices without a normal) do not count when the tile's shading error leaves them out: `caps`
-/// false skips triangles with any such vertex.
-pub fn steepest_normal(positions: &[[f32; 3]], normals: &[u32], tris: &[u32], caps: bool) -> f64 {
-    let mut steep = 0.0f64;
-    for t in tris.chunks_exact(3) {
-        let ns = if normals.len() == positions.len() {
-            [0, 1, 2].map(|k| super::normals::unpack(normals[t[k] as usize]))
-        } else {
-            [None; 3]
-        };
-        let m = match ns {
-            [Some(a), Some(b), Some(c)] => {
-                let near = closest_to_origin(a, b, c);
-                let top = a.z.abs().max(b.z.abs()).max(c.z.abs());
-                if near > 1e-9 {
-                    (top / near).min(1.0)
-                } else {
-                    1.0
-                }
-            }
-            _ if !caps && !normals.is_empty() => continue,
-            _ => {
-                let p = [t[0], t[1], t[2]].map(|k| DVec3::from_array(positions[k as usize].map(f64::from)));
-                let n = (p[1] - p[0]).cross(p[2] - p[0]);
-                if n.length_squared() > 0.0 {
-                    n.normalize().z.abs()
-                } else {
-                    0.0
-                }
-            }
-        };
-        steep = steep.max(m);
-        if steep >= 1.0 {
-            return 1.0;
-        }
-    }
-    steep
-}
-
-/// Per level 1.. of `tile`, the largest |z| of the normals its shading error compares (level 0's
-/// and the level's, [`steepest_normal`]) plus that error (the arc between two of them stays
-/// within it of both), at most 1; 1 for levels without a shading error (nothing to convert).
-/// `caps`: as [`steepest_normal`] (false for a well's tube).
-pub fn level_steepness(tile: &super::TileMesh, caps: bool) -> Vec<f32> {
-    if tile.levels.iter().all(|l| l.shading_error == 0.0) {
-        return vec![1.0; tile.levels.len()];
-    }
-    let (pos, nrm) = (&tile.positions[..], &tile.normals[..]);
-    let fine = steepest_normal(pos, nrm, &tile.fine, caps);
-    tile.levels
-        .iter()
-        .map(|l| {
-            if l.shading_error == 0.0 || fine >= 1.0 {
-                return 1.0;
-            }
-            let steep = fine.max(steepest_normal(pos, nrm, &l.indices, caps)) + l.shading_error as f64;
-            steep.min(1.0) as f32
-        })
-        .collect()
-}
-
-/// The distance from the origin to the triangle a, b, c (its closest point: a vertex, a point of
-/// an edge or of the inside).
-fn closest_to_origin(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let n = (b - a).cross(c - a);
-    let mut best = a.length().min(b.length()).min(c.length());
-    for (p, q) in [(a, b), (b, c), (c, a)] {
-        let d = q - p;
-        let t = if d.length_squared() > 0.0 { (-p.dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-        best = best.min((p + t * d).length());
-    }
-    if n.length_squared() > 0.0 {
-        // The origin's projection onto the plane, when it falls inside the triangle.
-        let q = n * (a.dot(n) / n.length_squared());
-        let inside = [(a, b), (b, c), (c, a)].iter().all(|&(p, r)| (r - p).cross(q - p).dot(n) >= 0.0);
-        if inside {
-            best = best.min(q.length());
-        }
-    }
-    best
+/// channel is `max_channel` (0..=1), drawn with vertical exaggeration `z_scale` (see the module
+/// docs).
+pub fn shade_levels_per_chord(max_channel: f64, z_scale: f64) -> f64 {
+    let turn = if z_scale > 0.0 { z_scale.max(1.0 / z_scale) } else { 1.0 };
+    255.0 * max_channel.clamp(0.0, 1.0) * SHADE_PER_CHORD * turn
 }
 
 /// How a tile is shaded: its packed smooth normals (one per position, `normals::NONE` = none;
@@ -611,70 +505,8 @@ mod tests {
 
     #[test]
     fn conversion_to_colour_levels() {
-        assert!((shade_levels_per_chord(1.0, 1.0, 1.0) - 204.0).abs() < 1e-9);
-        assert!((shade_levels_per_chord(0.5, 2.0, 1.0) - 204.0).abs() < 1e-9);
-        assert!((shade_levels_per_chord(0.5, 0.5, 1.0) - 204.0).abs() < 1e-9);
-        // Horizontal normals (a vertical well's) do not turn under exaggeration.
-        assert!((shade_levels_per_chord(1.0, 10.0, 0.0) - 204.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn exaggeration_turns_normals_by_at_most_its_bound() {
-        // Pairs of nearby unit normals with |z| <= m: the chord after exaggeration over the chord
-        // before stays within the bound, which is reached near |z| = m and is s at m = 1.
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for s in [1.5, 5.0, 10.0, 0.25] {
-            let f = |n: DVec3| DVec3::new(n.x, n.y, n.z / s).normalize();
-            for m in [0.0, 0.3, 0.87, 1.0] {
-                let bound = exaggeration_turn(s, m);
-                let mut worst = 0.0f64;
-                for _ in 0..4000 {
-                    // Near the band's edge half the time, where the bound is reached.
-                    let za = if rnd() < 0.5 { (2.0 * rnd() - 1.0) * m } else { m * (1.0 - 1e-4 * rnd()) };
-                    let az = rnd() * std::f64::consts::TAU;
-                    let at =
-                        |z: f64, a: f64| DVec3::new((1.0 - z * z).sqrt() * a.cos(), (1.0 - z * z).sqrt() * a.sin(), z);
-                    let n = at(za, az);
-                    let n2 = at((za + 1e-5 * (rnd() - 0.5)).clamp(-m, m), az + 1e-5 * (rnd() - 0.5));
-                    worst = worst.max((f(n) - f(n2)).length() / (n - n2).length());
-                }
-                assert!(worst <= bound * (1.0 + 1e-3), "s {s} m {m}: {worst} > {bound}");
-                if s > 1.0 {
-                    assert!(worst >= 0.9 * bound, "s {s} m {m}: the bound {bound} is loose ({worst})");
-                }
-            }
-        }
-        assert!((exaggeration_turn(5.0, 1.0) - 5.0).abs() < 1e-12 && exaggeration_turn(5.0, 0.0) == 1.0);
-    }
-
-    #[test]
-    fn the_steepest_interpolated_normal_is_bounded_by_the_corners_over_their_spread() {
-        // Three unit normals; the normalised interpolation's |z| over the triangle never exceeds
-        // the bound, which is exact at the corners when they agree.
-        let pos = [[0.0f32; 3]; 3];
-        let pack = |v: DVec3| super::super::normals::pack(v.normalize());
-        for (a, b, c) in [
-            (DVec3::new(1.0, 0.0, 0.1), DVec3::new(0.0, 1.0, -0.1), DVec3::new(-1.0, 0.2, 0.05)),
-            (DVec3::new(1.0, 0.0, 0.5), DVec3::new(1.0, 0.1, 0.5), DVec3::new(0.9, 0.0, 0.6)),
-        ] {
-            let normals = [pack(a), pack(b), pack(c)];
-            let bound = steepest_normal(&pos, &normals, &[0, 1, 2], true);
-            let un = normals.map(|p| super::super::normals::unpack(p).unwrap());
-            for i in 0..=20 {
-                for j in 0..=20 - i {
-                    let (u, v) = (i as f64 / 20.0, j as f64 / 20.0);
-                    let n = (un[0] * u + un[1] * v + un[2] * (1.0 - u - v)).normalize();
-                    assert!(n.z.abs() <= bound + 1e-9, "{} > {bound}", n.z.abs());
-                }
-            }
-            assert!(bound >= un.iter().map(|n| n.z.abs()).fold(0.0, f64::max));
-        }
-        // Facets where there are no smooth normals.
-        let flat = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        assert!((steepest_normal(&flat, &[], &[0, 1, 2], true) - 1.0).abs() < 1e-12);
+        assert!((shade_levels_per_chord(1.0, 1.0) - 204.0).abs() < 1e-9);
+        assert!((shade_levels_per_chord(0.5, 2.0) - 204.0).abs() < 1e-9);
+        assert!((shade_levels_per_chord(0.5, 0.5) - 204.0).abs() < 1e-9);
     }
 }

@@ -55,9 +55,11 @@ pub(super) fn choose_levels(
     let perspective = fc.projection == crate::camera::Projection::Perspective;
     let zv = DVec3::new(1.0, 1.0, camera.z_scale);
     let objects = scene.objects();
-    // Per object, its brightest colour channel: 8-bit colour levels per unit of shading error
-    // with the exaggeration's turn of each level's normals (`LevelDraw::steep`).
-    let channel: Vec<f64> = objects.iter().map(|o| o.max_color_channel() as f64).collect();
+    // Per object, 8-bit colour levels per unit of shading error.
+    let shade_levels: Vec<f64> = objects
+        .iter()
+        .map(|o| crate::lod::shading::shade_levels_per_chord(o.max_color_channel() as f64, camera.z_scale))
+        .collect();
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     for (i, &d2) in dist2.iter().enumerate() {
@@ -78,15 +80,12 @@ pub(super) fn choose_levels(
                 e * scale
             }
         };
-        let c = channel[g.tile_object_cpu[i] as usize];
-        let per_chord = |l: &crate::gpu::geometry::LevelDraw| {
-            crate::lod::shading::shade_levels_per_chord(c, camera.z_scale, l.steep as f64)
-        };
+        let per_chord = shade_levels[g.tile_object_cpu[i] as usize];
         // The coarsest level within `max_px` pixels of error and MAX_SHADING_LEVELS of colour.
         let screen = |max_px: f64| {
             let mut l = 0usize;
             for (k, lv) in g.levels[i].iter().enumerate() {
-                if px_of(lv) > max_px || lv.shading_error as f64 * per_chord(lv) > MAX_SHADING_LEVELS {
+                if px_of(lv) > max_px || lv.shading_error as f64 * per_chord > MAX_SHADING_LEVELS {
                     break;
                 }
                 l = k + 1;

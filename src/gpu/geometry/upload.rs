@@ -205,17 +205,7 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
-        let TileDraws { fine, coarse, occluder, mut levels, tile_object, bbox, own_vertices } = draws;
-        // How far exaggeration may turn each level's normals, tiles in parallel.
-        let owned: Vec<(bool, &crate::lod::TileMesh)> =
-            scene.objects().iter().flat_map(|o| o.tiles.iter().map(move |t| (o.kind_name() != "well", t))).collect();
-        let steep: Vec<Vec<f32>> =
-            owned.par_iter().map(|&(caps, t)| crate::lod::shading::level_steepness(t, caps)).collect();
-        for (lv, s) in levels.iter_mut().zip(steep) {
-            for (l, s) in lv.iter_mut().zip(s) {
-                l.steep = s;
-            }
-        }
+        let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -370,7 +360,6 @@ fn write_tiles(
                             error: l.error,
                             error_z: l.error_z,
                             shading_error: l.shading_error,
-                            steep: 1.0,
                         })
                         .collect(),
                 );
@@ -415,7 +404,6 @@ fn write_tiles(
                         error: l.error,
                         error_z: l.error_z,
                         shading_error: l.shading_error,
-                        steep: 1.0,
                     })
                     .collect(),
             );
