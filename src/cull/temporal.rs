@@ -85,8 +85,6 @@ impl CullStrategy for Temporal {
             Some((k, m)) if *k == key && m.len() == n => Some(m.as_slice()),
             _ => None,
         };
-        // The tiles proven hidden by height fields (`hidden`) are left out of every pass; those
-        // seen in the last frame are drawn first whatever the proof says, so it skips them.
         // A repeated exact frame: the last frame's visible tiles, untested (module docs).
         let print = (f.options.pixel_threshold == 0.0).then(|| fingerprint(f));
         let repeated = print.is_some() && print == self.last_print;
@@ -101,6 +99,8 @@ impl CullStrategy for Temporal {
             }
             return Ok(v);
         }
+        // The tiles proven hidden by height fields (`hidden`) are left out of every pass; those
+        // seen in the last frame are drawn first whatever the proof says, so it skips them.
         let (mask, proven_hidden) = super::hidden::visible_without_hidden(f, &|i| seen.is_none_or(|s| !s[i]));
         let f = &FrameInputs { object_visible: &mask, ..*f };
         let d = &f.ctx.device;
