@@ -380,7 +380,7 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
                 let indices: Vec<u32> = sides_tris.into_iter().chain(caps).collect();
                 let error = (dev + polygon) as f32;
                 // The polygons' gap lies in the rings' planes, tilted from the horizontal by at
-                // most `ring_tilt`; f32 rounding up, never past the error.
+                // most `ring_tilt`; to f32 as the error is, and never past it.
                 let error_z = ((dev_z + polygon * ring_tilt(spec.path, a, b, &kept)) as f32).min(error);
                 let level = Level { indices: indices.into(), error, error_z, shading_error: chord as f32 };
                 tile.levels.push(level);

@@ -25,8 +25,8 @@ pub(super) type ChosenLevels = (Vec<u8>, Vec<f32>);
 /// tile's chosen level and its error in pixels. The error of a level (world units) is exaggerated
 /// where that enlarges it ([`exaggerated`]: only its vertical part stretches) and projected at the
 /// tile box's nearest point (perspective) or with the orthographic scale; a box that contains the
-/// eye gets level 0. Cheap on the CPU (one
-/// pass over the tiles), so it runs there, before the strategy, with no read-back.
+/// eye gets level 0. Cheap on the CPU (one pass over the tiles), so it runs there, before the
+/// strategy, with no read-back.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn choose_levels(
     g: &SceneGeometry,
@@ -190,5 +190,24 @@ pub(super) fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[
             out.stats.extra.push((names[1], Stat::Count(v[1])));
         }
         out.stats.extra.push(("grid_interior_triangles_skipped", Stat::Count(skipped)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::exaggerated;
+
+    #[test]
+    fn exaggeration_stretches_only_the_vertical_part_of_an_error() {
+        // A vertical error grows by the exaggeration, a horizontal one not at all, and flattening
+        // shrinks nothing; between, the length of (e_xy, s e_z) at its largest.
+        assert!((exaggerated(2.0, 2.0, 5.0) - 10.0).abs() < 1e-12);
+        assert_eq!(exaggerated(2.0, 0.0, 10.0), 2.0);
+        assert_eq!(exaggerated(2.0, 2.0, 0.5), 2.0);
+        let (e, ez, s) = (5.0f32, 3.0f32, 4.0f64);
+        let want = (4.0f64 * 4.0 + (s * 3.0).powi(2)).sqrt(); // e_xy = 4 when e_z = 3 takes the rest
+        assert!((exaggerated(e, ez, s) - want).abs() < 1e-9);
+        // An error_z above the error (damaged) counts as the error.
+        assert!((exaggerated(1.0, 7.0, 3.0) - 3.0).abs() < 1e-12);
     }
 }
