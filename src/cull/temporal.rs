@@ -25,7 +25,7 @@
 //! exactly, [`fingerprint`]) draws the last frame's visible tiles and nothing else, untested: the
 //! last image was `none`'s, every pixel of it won by one of those tiles, and drawing a subset
 //! that holds every winner, in the same order, leaves every winner and so every pixel as it was
-//! (the oracle's argument). A re-render of one view (a new colour map, a lens moved, a notebook
+//! (the oracle's argument). A re-render of one view (a new colour map, a notebook
 //! cell run again) then costs what the oracle costs. Stats: `tiles_reused` (the first set when it
 //! came from the history), `frame_repeated` (1 for such a frame), `tiles_box_tested`,
 //! `triangles_prepass` (frames without history); per-tile counts `box_pixels`.
