@@ -19,26 +19,54 @@ fn tile_value(vpos: vec3<f32>, tile: u32, value: f32) -> f32 {
     return sample_values[v0 + u32(vpos.y) * bitcast<u32>(tile_grid[3u * tile + 1u].w) + u32(vpos.x)];
 }
 
-// The fine surface under render-space point `w` of a height field with a normal map:
-// (dz/dx, dz/dy, z) interpolated bilinearly at the point's (x, y), so that every level of detail
-// of a tile shades and colours by z as the fine surface does.
-fn fine_surface(o: Object, w: vec3<f32>) -> vec3<f32> {
+// The four fine samples of a height field with a normal map about render-space point `w`, each
+// (dz/dx, dz/dy, z): a (c), b (c + x), e (c + y), h (c + x + y); q0 the point's grid coordinates,
+// c the cell (clamped to the grid) and f the fraction of the clamped point within it.
+struct SurfaceCell {
+    q0: vec2<f32>,
+    c: vec2<f32>,
+    f: vec2<f32>,
+    a: vec3<f32>,
+    b: vec3<f32>,
+    e: vec3<f32>,
+    h: vec3<f32>,
+}
+
+fn surface_cell(o: Object, w: vec3<f32>) -> SurfaceCell {
     let d = w.xy - o.offset.xy - o.grid.xy;
     let n = o.grid_rows.zw;
-    let q = clamp(vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d)), vec2<f32>(0.0), n - 1.0);
+    let q0 = vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d));
+    let q = clamp(q0, vec2<f32>(0.0), n - 1.0);
     let c = min(floor(q), n - 2.0);
-    let f = q - c;
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
     let s00 = surface[k];
     let s10 = surface[k + 1u];
     let s01 = surface[k + nx];
     let s11 = surface[k + nx + 1u];
-    let a = vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y));
-    let b = vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y));
-    let e = vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y));
-    let h = vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y));
-    return mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
+    return SurfaceCell(q0, c, q - c,
+                       vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y)),
+                       vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y)),
+                       vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y)),
+                       vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y)));
+}
+
+// The fine surface under render-space point `w` of a height field with a normal map:
+// (dz/dx, dz/dy, z) interpolated bilinearly at the point's (x, y), so that every level of detail
+// of a tile shades and colours by z as the fine surface does.
+fn fine_surface(o: Object, w: vec3<f32>) -> vec3<f32> {
+    return cell_surface(surface_cell(o, w));
+}
+
+// The bilinear interpolation of a cell's samples at its fraction f.
+fn cell_surface(sc: SurfaceCell) -> vec3<f32> {
+    return mix(mix(sc.a, sc.b, sc.f.x), mix(sc.e, sc.h, sc.f.x), sc.f.y);
+}
+
+// The shading normal and colouring scalar of a height field from its fine surface `fs` there
+// (`fine_surface`), with the vertex scalar `s` (replaced when colouring by z).
+fn surface_shading(o: Object, fs: vec3<f32>, s: f32) -> vec4<f32> {
+    return vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
 }
 
 // A structured grid mesh's fine normal at grid coordinates `uv` (column, row), as its fine level
@@ -92,8 +120,7 @@ fn mesh_shading(o: Object, facet: vec3<f32>, vn: vec3<f32>, s: f32) -> vec4<f32>
 
 // `shading` for a height field with a normal map: from its fine surface alone.
 fn field_shading(o: Object, w: vec3<f32>, s: f32) -> vec4<f32> {
-    let fs = fine_surface(o, w);
-    return vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
+    return surface_shading(o, fine_surface(o, w), s);
 }
 
 // `shading` for a grid mesh: the fine grid's normal at the interpolated grid coordinates.
@@ -342,25 +369,10 @@ struct FieldFine {
 }
 
 fn field_fine(o: Object, tile: u32, w: vec3<f32>, s: f32) -> FieldFine {
-    let d = w.xy - o.offset.xy - o.grid.xy;
-    let n = o.grid_rows.zw;
-    let q0 = vec2<f32>(dot(o.grid.zw, d), dot(o.grid_rows.xy, d));
-    let q = clamp(q0, vec2<f32>(0.0), n - 1.0);
-    let c = min(floor(q), n - 2.0);
-    let f = q - c;
-    let nx = u32(n.x);
-    let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let s00 = surface[k];
-    let s10 = surface[k + 1u];
-    let s01 = surface[k + nx];
-    let s11 = surface[k + nx + 1u];
-    let a = vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y));
-    let b = vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y));
-    let e = vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y));
-    let h = vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y));
-    let fs = mix(mix(a, b, f.x), mix(e, h, f.x), f.y);
-    let ns = vec4<f32>(normalize(vec3<f32>(-fs.xy * g.z_scale, 1.0)), select(s, fs.z, o.cmap.z > 1.5));
-    return FieldFine(ns, fine_depth(o, tile, w, q0, c, vec4<f32>(a.z, b.z, e.z, h.z)));
+    let sc = surface_cell(o, w);
+    let fs = cell_surface(sc);
+    let depth = fine_depth(o, tile, w, sc.q0, sc.c, vec4<f32>(sc.a.z, sc.b.z, sc.e.z, sc.h.z));
+    return FieldFine(surface_shading(o, fs, s), depth);
 }
 
 struct FOutDepth {
