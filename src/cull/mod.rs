@@ -153,8 +153,9 @@ impl FrameInputs<'_> {
 
     /// The bound (world units, not exaggerated) on the vertical distance between what tile `i`
     /// draws this frame and its fine surface, everywhere: 0 at level 0, a level's error where its
-    /// levels are lattice levels (`SceneGeometry::slab_draws`' flag, `lod::levels`); None for other
-    /// levels, whose error is not a bound everywhere.
+    /// levels' errors are such bounds (`SceneGeometry::slab_draws`' flag, `lod::slab::Slab::
+    /// levels_exact`: lattice levels, measured levels of tiles with holes); None for other levels,
+    /// whose error is not a bound everywhere.
     pub fn exact_level_error(&self, i: usize) -> Option<f64> {
         let g = self.geometry;
         let d = self.draw_args[i];

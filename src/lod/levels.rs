@@ -15,7 +15,11 @@
 //! * Every other tile ([`simplified_levels`]): meshoptimizer's quadric simplification of the
 //!   previous level to a quarter of its triangles with the border (and hole outlines) locked.
 //!   Error: the sum of meshoptimizer's estimates of each step (relative to the tile's extent, times
-//!   that extent), which bounds the distance to level 0 as far as those estimates are right.
+//!   that extent), which bounds the distance to level 0 as far as those estimates are right. A
+//!   height-field tile with holes then has each level's error measured exactly, as the largest
+//!   vertical distance to its fine triangles ([`grid_level_error`], `lod::tile_heightfield`),
+//!   where every level triangle lies over fine triangles and the level covers their area: its
+//!   levels then bound their distance everywhere as lattice levels do (`Slab::levels_exact`).
 //!
 //! Every level also records its shading error ([`super::shading`]): how far the lit pass's normals
 //! on it may turn from the fine level's (a normal chord, unitless). Height-field levels record 0,
@@ -187,6 +191,176 @@ fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64)
     err
 }
 
+/// The largest vertical distance between the triangles `level` and the fine surface of a
+/// height-field tile with holes, or None where that is no bound everywhere: a level triangle
+/// turned over or flat, a level triangle over a cell's fine triangle that is missing (a hole), or
+/// levels' triangles that do not cover the fine ones' area. `at[k]`, `zk[k]`: vertex k's local
+/// sample (column, row) and height; `z(i, j)`: the height of local sample (i, j), NaN where no
+/// triangle uses it; the fine surface is two triangles per cell of `w` x `h` samples, split from
+/// (i, j) to (i + 1, j + 1), where their corners are defined. Both surfaces are linear over each
+/// piece where a level triangle meets a fine one (a convex polygon), so the distance is largest at
+/// a corner of such a piece.
+pub fn grid_level_error(
+    (w, h): (usize, usize),
+    z: impl Fn(usize, usize) -> f64,
+    (at, zk): (&[[u32; 2]], &[f64]),
+    level: &[u32],
+) -> Option<f64> {
+    type P = (f64, f64);
+    let cross = |a: P, b: P, c: P| (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+    let area = |poly: &[P]| {
+        (0..poly.len())
+            .map(|i| poly[i].0 * poly[(i + 1) % poly.len()].1 - poly[(i + 1) % poly.len()].0 * poly[i].1)
+            .sum::<f64>()
+            / 2.0
+    };
+    // The plane through three (x, y, z) points, as z(x, y).
+    let plane = |p: [(f64, f64, f64); 3]| {
+        let d = cross((p[0].0, p[0].1), (p[1].0, p[1].1), (p[2].0, p[2].1));
+        move |x: f64, y: f64| {
+            let l1 = cross((p[0].0, p[0].1), (x, y), (p[2].0, p[2].1)) / d;
+            let l2 = cross((p[0].0, p[0].1), (p[1].0, p[1].1), (x, y)) / d;
+            (1.0 - l1 - l2) * p[0].2 + l1 * p[1].2 + l2 * p[2].2
+        }
+    };
+    let mut fine_area = 0.0;
+    for j in 0..h - 1 {
+        for i in 0..w - 1 {
+            let (z00, z10, z11, z01) = (z(i, j), z(i + 1, j), z(i + 1, j + 1), z(i, j + 1));
+            fine_area += 0.5
+                * (f64::from(u8::from(z00.is_finite() && z10.is_finite() && z11.is_finite()))
+                    + f64::from(u8::from(z00.is_finite() && z11.is_finite() && z01.is_finite())));
+        }
+    }
+    let (mut err, mut level_area) = (0.0f64, 0.0f64);
+    for t in level.chunks_exact(3) {
+        let v = |k: u32| (at[k as usize][0] as f64, at[k as usize][1] as f64, zk[k as usize]);
+        let c = [v(t[0]), v(t[1]), v(t[2])];
+        let tri = [(c[0].0, c[0].1), (c[1].0, c[1].1), (c[2].0, c[2].1)];
+        let a2 = cross(tri[0], tri[1], tri[2]);
+        if a2 == 0.0 {
+            // Flat in (x, y): a vertical sliver (or nothing) over a segment, checked along it.
+            err = err.max(sliver_error((w, h), &z, c)?);
+            continue;
+        }
+        if a2 < 0.0 {
+            return None;
+        }
+        level_area += a2 / 2.0;
+        let coarse = plane(c);
+        let (x0, x1) =
+            (tri.iter().map(|p| p.0).fold(f64::MAX, f64::min), tri.iter().map(|p| p.0).fold(f64::MIN, f64::max));
+        let (y0, y1) =
+            (tri.iter().map(|p| p.1).fold(f64::MAX, f64::min), tri.iter().map(|p| p.1).fold(f64::MIN, f64::max));
+        for j in (y0 as usize)..(y1 as usize).min(h - 1) {
+            for i in (x0 as usize)..(x1 as usize).min(w - 1) {
+                let s = |a: usize, b: usize| (a as f64, b as f64, z(a, b));
+                for f in [[s(i, j), s(i + 1, j), s(i + 1, j + 1)], [s(i, j), s(i + 1, j + 1), s(i, j + 1)]] {
+                    // The fine triangle clipped by the level triangle's three sides.
+                    let mut poly: Vec<P> = f.iter().map(|p| (p.0, p.1)).collect();
+                    for e in 0..3 {
+                        let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                        let side = |p: P| cross(a, b, p);
+                        let mut out = Vec::with_capacity(poly.len() + 1);
+                        for k in 0..poly.len() {
+                            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+                            let (sp, sq) = (side(p), side(q));
+                            if sp >= 0.0 {
+                                out.push(p);
+                            }
+                            if (sp >= 0.0) != (sq >= 0.0) {
+                                let u = sp / (sp - sq);
+                                out.push((p.0 + u * (q.0 - p.0), p.1 + u * (q.1 - p.1)));
+                            }
+                        }
+                        poly = out;
+                        if poly.len() < 3 {
+                            break;
+                        }
+                    }
+                    if poly.len() < 3 || area(&poly) <= 1e-9 {
+                        continue;
+                    }
+                    if !f.iter().all(|p| p.2.is_finite()) {
+                        return None;
+                    }
+                    let fine = plane(f);
+                    for &(x, y) in &poly {
+                        err = err.max((coarse(x, y) - fine(x, y)).abs());
+                    }
+                }
+            }
+        }
+    }
+    ((level_area - fine_area).abs() <= 1e-6 * fine_area.max(1.0)).then_some(err)
+}
+
+/// The largest vertical distance between the fine surface (as in [`grid_level_error`]) and a
+/// level triangle `c` ((column, row, height) corners) whose corners lie on one line in (x, y): at
+/// every point of that segment the triangle spans the heights its edges take there, and both
+/// are linear between the corners and the segment's crossings of the fine cells' sides and
+/// diagonals. None where the segment runs over no fine triangle.
+fn sliver_error((w, h): (usize, usize), z: &impl Fn(usize, usize) -> f64, c: [(f64, f64, f64); 3]) -> Option<f64> {
+    // Along the segment from the first corner: p(s) = c0 + s d, the corners at s = 0, s1, s2.
+    let d = [(c[1].0 - c[0].0, c[1].1 - c[0].1), (c[2].0 - c[0].0, c[2].1 - c[0].1)];
+    let dir = if d[0].0.abs() + d[0].1.abs() >= d[1].0.abs() + d[1].1.abs() { d[0] } else { d[1] };
+    let len2 = dir.0 * dir.0 + dir.1 * dir.1;
+    if len2 == 0.0 {
+        return Some(0.0); // a point: nothing drawn
+    }
+    let param = |p: (f64, f64, f64)| ((p.0 - c[0].0) * dir.0 + (p.1 - c[0].1) * dir.1) / len2;
+    let s: Vec<f64> = c.iter().map(|&p| param(p)).collect();
+    let (lo, hi) = (s.iter().copied().fold(f64::MAX, f64::min), s.iter().copied().fold(f64::MIN, f64::max));
+    let mut at: Vec<f64> = s.clone();
+    // Crossings of x = i, y = j and y - x = k.
+    let mut cross_at = |a: f64, da: f64| {
+        if da != 0.0 {
+            let (u, v) = ((a + lo * da).min(a + hi * da), (a + lo * da).max(a + hi * da));
+            for g in (u.ceil() as i64)..=(v.floor() as i64) {
+                at.push((g as f64 - a) / da);
+            }
+        }
+    };
+    cross_at(c[0].0, dir.0);
+    cross_at(c[0].1, dir.1);
+    cross_at(c[0].1 - c[0].0, dir.1 - dir.0);
+    let mut err = 0.0f64;
+    for &t in &at {
+        let (x, y) = (c[0].0 + t * dir.0, c[0].1 + t * dir.1);
+        // The fine height there, from a fine triangle holding (x, y) whose corners are defined.
+        let (i, j) = ((x.floor().max(0.0) as usize).min(w - 2), (y.floor().max(0.0) as usize).min(h - 2));
+        let mut fine = None;
+        for (di, dj) in [(0usize, 0usize), (1, 0), (0, 1), (1, 1)] {
+            let (ci, cj) = (i.wrapping_sub(di), j.wrapping_sub(dj));
+            if ci >= w - 1 || cj >= h - 1 || fine.is_some() {
+                continue;
+            }
+            let (u, v) = (x - ci as f64, y - cj as f64);
+            if !(-1e-9..=1.0 + 1e-9).contains(&u) || !(-1e-9..=1.0 + 1e-9).contains(&v) {
+                continue;
+            }
+            let (z00, z10, z11, z01) = (z(ci, cj), z(ci + 1, cj), z(ci + 1, cj + 1), z(ci, cj + 1));
+            if u >= v - 1e-9 && z00.is_finite() && z10.is_finite() && z11.is_finite() {
+                fine = Some(z00 + u * (z10 - z00) + v * (z11 - z10));
+            } else if v >= u - 1e-9 && z00.is_finite() && z11.is_finite() && z01.is_finite() {
+                fine = Some(z00 + u * (z11 - z01) + v * (z01 - z00));
+            }
+        }
+        let fine = fine?;
+        // The triangle's heights at parameter t: on each edge whose span holds it.
+        for e in 0..3 {
+            let (sa, sb) = (s[e], s[(e + 1) % 3]);
+            let (za, zb) = (c[e].2, c[(e + 1) % 3].2);
+            if t >= sa.min(sb) - 1e-12 && t <= sa.max(sb) + 1e-12 {
+                let zt = if sa == sb { za.max(zb) } else { za + (t - sa) / (sb - sa) * (zb - za) };
+                let zt2 = if sa == sb { za.min(zb) } else { zt };
+                err = err.max((zt - fine).abs()).max((zt2 - fine).abs());
+            }
+        }
+    }
+    Some(err)
+}
+
 /// Levels of any tile by quadric simplification: each level a quarter of the previous one's
 /// triangles, border and hole outlines locked (see the module docs for the errors). `shading`:
 /// how the tile is shaded, to measure the shading error; None for a height-field tile shaded
@@ -331,6 +505,54 @@ mod tests {
             "{:?}",
             levels.iter().map(|l| l.shading_error).collect::<Vec<_>>()
         );
+    }
+
+    #[test]
+    fn grid_level_error_is_exact_and_refuses_triangles_over_holes() {
+        // 5 x 5 samples, the sample (3, 3) undefined (its four cells lose one or two triangles).
+        let (w, h) = (5usize, 5usize);
+        let hole = |i: usize, j: usize| (i, j) == (3, 3);
+        let bump = |i: usize, j: usize| if (i, j) == (1, 1) { 2.0 } else { 0.5 * i as f64 };
+        let at: Vec<[u32; 2]> = (0..w * h).map(|k| [(k % w) as u32, (k / w) as u32]).collect();
+        let zk: Vec<f64> = (0..w * h).map(|k| bump(k % w, k / w)).collect();
+        let z = |i: usize, j: usize| if hole(i, j) { f64::NAN } else { bump(i, j) };
+        let id = |i: usize, j: usize| (j * w + i) as u32;
+        // The fine triangles themselves: no error.
+        let mut fine = Vec::new();
+        for j in 0..h - 1 {
+            for i in 0..w - 1 {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                if ![(i, j), (i + 1, j), (i + 1, j + 1)].iter().any(|&(x, y)| hole(x, y)) {
+                    fine.extend([a, b, c]);
+                }
+                if ![(i, j), (i + 1, j + 1), (i, j + 1)].iter().any(|&(x, y)| hole(x, y)) {
+                    fine.extend([a, c, d]);
+                }
+            }
+        }
+        assert_eq!(grid_level_error((w, h), z, (&at, &zk), &fine), Some(0.0));
+        // The lower-left 2 x 2 cells as two triangles miss the bump at (1, 1) by its height over the
+        // plane z = 0.5 i there (2 - 0.5); the rest of the fine triangles as they are.
+        let mut level: Vec<u32> = vec![id(0, 0), id(2, 0), id(2, 2), id(0, 0), id(2, 2), id(0, 2)];
+        let corner = |t: &[u32]| t.iter().all(|&k| (k as usize % w) <= 2 && (k as usize / w) <= 2);
+        level.extend(fine.chunks_exact(3).filter(|t| !corner(t)).flatten());
+        let e = grid_level_error((w, h), z, (&at, &zk), &level).unwrap();
+        assert!((e - 1.5).abs() < 1e-12, "{e}");
+        // A vertical sliver over the first row, its middle corner 4.5 above the fine surface there.
+        let mut zk2 = zk.clone();
+        let top = zk2.len() as u32;
+        let mut at2 = at.clone();
+        at2.push([1, 0]);
+        zk2.push(5.0);
+        let mut sliver = fine.clone();
+        sliver.extend([id(0, 0), top, id(2, 0)]);
+        let e = grid_level_error((w, h), z, (&at2, &zk2), &sliver).unwrap();
+        assert!((e - 4.5).abs() < 1e-12, "{e}");
+        // A level triangle over the hole, or one missing (a gap): no bound.
+        let mut over = fine.clone();
+        over.extend([id(2, 2), id(4, 2), id(4, 4)]);
+        assert_eq!(grid_level_error((w, h), z, (&at, &zk), &over), None);
+        assert_eq!(grid_level_error((w, h), z, (&at, &zk), &fine[3..]), None);
     }
 
     #[test]

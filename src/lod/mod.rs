@@ -400,10 +400,52 @@ pub fn tile_heightfield(
             };
             let slab = slab::tile_slab(&tile, (w, h), |li, lj| map[lj * w + li], grid_xy)
                 .map(|s| slab::Slab { levels_exact: !holes, ..s });
-            (tile.finish(coarse_factor, lattice, true), slab)
+            let mut tile = tile.finish(coarse_factor, lattice, true);
+            let slab = match slab {
+                Some(s) if holes && !tile.levels.is_empty() => {
+                    Some(slab::Slab { levels_exact: exact_hole_levels(&mut tile, (w, h), &map), ..s })
+                }
+                s => s,
+            };
+            (tile, slab)
         })
         .inspect(|_| stop.item_done())
         .unzip()
+}
+
+/// A height-field tile with holes: its simplified levels' errors measured exactly as vertical
+/// distances to its fine triangles ([`hole_level_bounds`]), in place of the simplifier's
+/// estimates; true when they then bound every level (its slab's `Slab::levels_exact`, so that
+/// the culling tests grow the slab by them as for lattice levels), false with the levels left as
+/// they were when a level is no such bound (a triangle over a hole).
+fn exact_hole_levels(tile: &mut TileMesh, size: (usize, usize), map: &[u32]) -> bool {
+    let Some(bounds) = hole_level_bounds(tile, size, map) else { return false };
+    for (l, e) in tile.levels.iter_mut().zip(bounds) {
+        // Rounded up to an f32 at or above the bound.
+        let f = e as f32;
+        l.error = if (f as f64) < e { f.next_up() } else { f };
+        // A vertical bound: all of it is vertical.
+        l.error_z = l.error;
+    }
+    true
+}
+
+/// Per level of a height-field tile of `w` x `h` samples (`map`: local sample -> vertex,
+/// u32::MAX: none), the largest vertical distance between it and the tile's fine triangles
+/// ([`levels::grid_level_error`]); None where some level has no such bound.
+pub fn hole_level_bounds(tile: &TileMesh, (w, h): (usize, usize), map: &[u32]) -> Option<Vec<f64>> {
+    let mut at = vec![[0u32; 2]; tile.positions.len()];
+    for (k, &v) in map.iter().enumerate() {
+        if let Some(a) = at.get_mut(v as usize) {
+            *a = [(k % w) as u32, (k / w) as u32];
+        }
+    }
+    let zk: Vec<f64> = tile.positions.iter().map(|p| p[2] as f64).collect();
+    let z = |i: usize, j: usize| match map[j * w + i] {
+        u32::MAX => f64::NAN,
+        v => zk[v as usize],
+    };
+    tile.levels.iter().map(|l| levels::grid_level_error((w, h), z, (&at, &zk), &l.indices)).collect()
 }
 
 /// Optional per-vertex attributes of a mesh, one per vertex each.

@@ -45,9 +45,11 @@ pub const TOLERANCE: f64 = 0.25;
 pub struct Slab {
     pub vertices: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
-    /// Whether the tile's levels of detail are lattice levels, whose error bounds their vertical
-    /// distance to the fine surface everywhere (`super::levels::lattice_levels`): then the slab
-    /// grown by a level's error holds that level. Set by the tile's builder.
+    /// Whether the errors of the tile's levels of detail bound their vertical distance to the
+    /// fine surface everywhere: lattice levels (`super::levels::lattice_levels`), or a tile with
+    /// holes whose simplified levels were measured over its fine triangles
+    /// (`super::levels::grid_level_error`). Then the slab grown by a level's error holds that
+    /// level. Set by the tile's builder.
     pub levels_exact: bool,
 }
 

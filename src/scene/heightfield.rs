@@ -393,7 +393,12 @@ impl Object {
                     (q[0], q[1])
                 };
                 let slab = lod::slab::tile_slab(tile, (w, h), |li, lj| map[lj * w + li], grid_xy)?;
-                Some(Slab { levels_exact: !holes, ..slab })
+                // A tile with holes: its levels' errors (as built, measured) must bound them still.
+                let exact = !holes
+                    || lod::hole_level_bounds(tile, (w, h), &map).is_some_and(|b| {
+                        !tile.levels.is_empty() && tile.levels.iter().zip(b).all(|(l, e)| l.error as f64 >= e)
+                    });
+                Some(Slab { levels_exact: exact, ..slab })
             })
             .collect()
     }
