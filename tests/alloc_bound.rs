@@ -25,10 +25,10 @@
 //! and truncated; scenes of up to 20,000 empty objects or tiles; volumes likewise; camera
 //! arguments likewise.
 //!
-//! Bytes of the current format (version 8, what `to_bytes` writes). Older versions' smallest
-//! records are smaller (an empty object takes 54 bytes in versions 1 and 2, an empty tile 64 in
-//! versions 1 to 3) for the same structs: scenes made only of those take up to about 3 times their
-//! size.
+//! Bytes of the current format (version 8, what `to_bytes` writes), and the smallest records of
+//! every older one (an empty object takes 54 bytes in versions 1 and 2, an empty tile 64 in
+//! versions 1 to 3, for the same structs): those claim half a struct each, so that scenes made
+//! only of them are refused or held within twice their size too.
 //!
 //! Its own test binary (for the `#[global_allocator]`), one `#[test]`: the counters are global
 //! and armed only around one call at a time (any thread's allocations count while armed).
@@ -520,11 +520,13 @@ fn scenes() -> Vec<(&'static str, Vec<u8>)> {
     ]
 }
 
-/// Scene bytes of `objects` meshes with no name, label nor tiles, then one with `tiles` empty
-/// tiles: the smallest records there are (84 and 88 bytes), each held in a larger struct.
-fn tiny_records(objects: u32, tiles: u32) -> Vec<u8> {
+/// Scene bytes of format `version` of `objects` meshes with no name, label nor tiles, then one
+/// with `tiles` empty tiles: the smallest records there are (84 and 88 bytes in the current
+/// format, 54 and 64 in version 1), each held in a larger struct.
+fn tiny_records(version: u32, objects: u32, tiles: u32) -> Vec<u8> {
     let mut b = Scene::new().to_bytes();
     b.truncate(b.len() - 8);
+    b[8..12].copy_from_slice(&version.to_le_bytes());
     b.extend((objects + 1).to_le_bytes()); // next_id
     b.extend((objects + 1).to_le_bytes()); // n_objects
     for id in 0..=objects {
@@ -534,15 +536,25 @@ fn tiny_records(objects: u32, tiles: u32) -> Vec<u8> {
         b.extend([0; 4]); // label
         b.extend([0.5f32; 3].iter().flat_map(|c| c.to_le_bytes()));
         b.push(1); // visible
-        b.extend([0; 48]); // offset, origin
-        b.push(0); // flat
-        b.extend(1.0f32.to_le_bytes());
-        b.push(255); // priority by kind
+        b.extend([0; 24]); // offset
+        if version >= 3 {
+            b.extend([0; 24]); // origin
+        }
+        if version >= 4 {
+            b.push(0); // flat
+            b.extend(1.0f32.to_le_bytes());
+        }
+        if version >= 7 {
+            b.push(255); // priority by kind
+        }
         let n = if id == objects { tiles } else { 0 };
         b.extend(n.to_le_bytes());
+        // Empty arrays: positions, values (version 4), normals (5), grid coordinates (6), fine
+        // and coarse triangles.
+        let arrays = 3 + [4, 5, 6].iter().filter(|&&v| version >= v).count();
         for _ in 0..n {
-            // ix, iy, box, six empty arrays, proxy error, no levels
-            b.extend([0; 8 + 24 + 6 * 8 + 4 + 4]);
+            // ix, iy, box, the empty arrays, proxy error, no levels
+            b.extend(vec![0; 8 + 24 + arrays * 8 + 4 + 4]);
         }
     }
     b
@@ -763,15 +775,23 @@ fn untrusted_bytes_allocate_at_most_twice_their_size() {
     // The smallest records: what a struct holds beyond its bytes (not a count read unchecked).
     let mut tiny = Tally { print_all: true, ..Tally::default() };
     for (objects, tiles) in [(0, 1), (1, 0), (1000, 0), (0, 1000), (20_000, 0), (0, 20_000), (5000, 5000)] {
-        let b = tiny_records(objects, tiles);
-        let s = Scene::from_bytes(&b).unwrap();
-        assert_eq!(
-            (s.objects().len(), s.objects().last().unwrap().tiles.len()),
-            (objects as usize + 1, tiles as usize)
-        );
-        tiny.run(&format!("{objects} objects, {tiles} tiles"), b.len(), || {
-            Scene::from_bytes(&b).map_err(|e| e.to_string())
-        });
+        // The current format's load; older ones' smaller records may be refused (a writer never
+        // made them: every object it wrote had tiles, every tile vertices), never held beyond
+        // twice their bytes.
+        for version in 1..=8 {
+            let b = tiny_records(version, objects, tiles);
+            let loaded = Scene::from_bytes(&b);
+            if version == 8 || loaded.is_ok() {
+                let s = loaded.unwrap();
+                assert_eq!(
+                    (s.objects().len(), s.objects().last().unwrap().tiles.len()),
+                    (objects as usize + 1, tiles as usize)
+                );
+            }
+            tiny.run(&format!("version {version}: {objects} objects, {tiles} tiles"), b.len(), || {
+                Scene::from_bytes(&b).map_err(|e| e.to_string())
+            });
+        }
     }
     by_kind.push(("scene tiny records".into(), tiny.cases));
 

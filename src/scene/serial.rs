@@ -64,6 +64,20 @@ fn min_object_bytes(version: u32) -> usize {
     54 + later.iter().filter(|&&(v, _)| version >= v).map(|&(_, b)| b).sum::<usize>()
 }
 
+/// What a declared object record claims of the buffer in `version` ([`Reader::records`]): its
+/// fewest bytes, and at least half the struct it is read into, so that the objects, reserved
+/// whole, take at most twice their bytes in every version (version 1's empty object takes 54
+/// bytes, an [`Object`] 160). Every object a writer makes takes more than either.
+fn object_claim(version: u32) -> usize {
+    min_object_bytes(version).max(std::mem::size_of::<Object>().div_ceil(2))
+}
+
+/// A declared tile record's claim in `version`, as [`object_claim`]'s: its fewest bytes, and at
+/// least half a [`TileMesh`].
+fn tile_claim(version: u32) -> usize {
+    min_tile_bytes(version).max(std::mem::size_of::<TileMesh>().div_ceil(2))
+}
+
 /// Little-endian writer.
 #[derive(Default)]
 pub(crate) struct Writer(pub(crate) Vec<u8>);
@@ -353,7 +367,7 @@ impl Scene {
         check::point(origin, "origin").map_err(|e| r.err(e))?;
         let next_id = r.u32()?;
         let n = r.u32()? as usize;
-        let min_object = min_object_bytes(version);
+        let min_object = object_claim(version);
         r.records(n, min_object, "objects")?;
         let mut objects: Vec<Object> = Vec::with_capacity(n);
         for _ in 0..n {
@@ -383,7 +397,7 @@ impl Scene {
                 return Err(r.err(format!("object {id}: its priority {priority} is not in 0..=15")));
             }
             let nt = r.u32()? as usize;
-            let min_tile = min_tile_bytes(version);
+            let min_tile = tile_claim(version);
             r.records(nt, min_tile, "tiles")?;
             let mut tiles = Vec::with_capacity(nt);
             for t in 0..nt {
@@ -448,7 +462,7 @@ fn read_kind(r: &mut Reader, version: u32, id: u32) -> Result<ObjectKind> {
             let flat = r.f32s()?;
             // One pair per block, and a tile per block to follow (`check::grid`): no more pairs
             // than tiles fit the rest (they are stored as f64, twice the bytes read).
-            if flat.len() % 2 != 0 || flat.len() / 2 > r.unclaimed() / min_tile_bytes(version) {
+            if flat.len() % 2 != 0 || flat.len() / 2 > r.unclaimed() / tile_claim(version) {
                 return Err(r.err(format!("object {id}: its block cell sizes are not pairs, one per tile")));
             }
             let cell_size: Vec<(f64, f64)> = flat.chunks_exact(2).map(|c| (c[0] as f64, c[1] as f64)).collect();

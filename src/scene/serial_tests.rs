@@ -262,4 +262,12 @@ fn the_smallest_records_take_at_most_twice_their_bytes_in_memory() {
     // structs they are read into, reserved whole (`Reader::records`), within twice their bytes.
     assert!(std::mem::size_of::<Object>() <= 2 * min_object_bytes(VERSION), "{}", std::mem::size_of::<Object>());
     assert!(std::mem::size_of::<TileMesh>() <= 2 * min_tile_bytes(VERSION), "{}", std::mem::size_of::<TileMesh>());
+    // Older versions' smaller records claim half a struct each: the current format's claims are
+    // its records' sizes.
+    for version in 1..=VERSION {
+        assert!(std::mem::size_of::<Object>() <= 2 * object_claim(version));
+        assert!(std::mem::size_of::<TileMesh>() <= 2 * tile_claim(version));
+        assert!(object_claim(version) >= min_object_bytes(version) && tile_claim(version) >= min_tile_bytes(version));
+    }
+    assert_eq!((object_claim(VERSION), tile_claim(VERSION)), (min_object_bytes(VERSION), min_tile_bytes(VERSION)));
 }
