@@ -25,7 +25,7 @@
 //! and truncated; scenes of up to 20,000 empty objects or tiles; volumes likewise; camera
 //! arguments likewise.
 //!
-//! Bytes of the current format (version 8, what `to_bytes` writes), and the smallest records of
+//! Bytes of the current format (version 9, what `to_bytes` writes), and the smallest records of
 //! every older one (an empty object takes 54 bytes in versions 1 and 2, an empty tile 64 in
 //! versions 1 to 3, for the same structs): those claim half a struct each, so that scenes made
 //! only of them are refused or held within twice their size too.
@@ -202,12 +202,12 @@ impl Walk<'_> {
     }
 }
 
-/// The fields of scene bytes, version 8 (src/scene/serial.rs's module docs): every integer of
+/// The fields of scene bytes, version 9 (src/scene/serial.rs's module docs): every integer of
 /// every object and tile; floats and array elements of each object and its first tile.
 fn scene_fields(b: &[u8]) -> Vec<Field> {
     assert_eq!(&b[..8], b"GCSCENE\0");
     let mut p = Walk { b, pos: 8, out: Vec::new(), all: true };
-    assert_eq!(p.get("version", Ty::U32), 8, "the scene format changed: update scene_fields");
+    assert_eq!(p.get("version", Ty::U32), 9, "the scene format changed: update scene_fields");
     p.get("has_origin", Ty::U8);
     for a in "xyz".chars() {
         p.get(&format!("origin.{a}"), Ty::F64);
@@ -278,7 +278,11 @@ fn scene_fields(b: &[u8]) -> Vec<Field> {
             }
             p.arr(&format!("{q}.positions"), Ty::F32);
             p.arr(&format!("{q}.values"), Ty::F32);
-            for k in ["normals", "grid_uv", "fine", "coarse"] {
+            for k in ["normals", "grid_uv"] {
+                p.arr(&format!("{q}.{k}"), Ty::U32);
+            }
+            p.arr(&format!("{q}.ring_z"), Ty::F32);
+            for k in ["fine", "coarse"] {
                 p.arr(&format!("{q}.{k}"), Ty::U32);
             }
             p.get(&format!("{q}.proxy_error"), Ty::F32);
@@ -549,9 +553,9 @@ fn tiny_records(version: u32, objects: u32, tiles: u32) -> Vec<u8> {
         }
         let n = if id == objects { tiles } else { 0 };
         b.extend(n.to_le_bytes());
-        // Empty arrays: positions, values (version 4), normals (5), grid coordinates (6), fine
-        // and coarse triangles.
-        let arrays = 3 + [4, 5, 6].iter().filter(|&&v| version >= v).count();
+        // Empty arrays: positions, values (version 4), normals (5), grid coordinates (6), ring
+        // heights (9), fine and coarse triangles.
+        let arrays = 3 + [4, 5, 6, 9].iter().filter(|&&v| version >= v).count();
         for _ in 0..n {
             // ix, iy, box, the empty arrays, proxy error, no levels
             b.extend(vec![0; 8 + 24 + arrays * 8 + 4 + 4]);
@@ -778,10 +782,10 @@ fn untrusted_bytes_allocate_at_most_twice_their_size() {
         // The current format's load; older ones' smaller records may be refused (a writer never
         // made them: every object it wrote had tiles, every tile vertices), never held beyond
         // twice their bytes.
-        for version in 1..=8 {
+        for version in 1..=9 {
             let b = tiny_records(version, objects, tiles);
             let loaded = Scene::from_bytes(&b);
-            if version == 8 || loaded.is_ok() {
+            if version == 9 || loaded.is_ok() {
                 let s = loaded.unwrap();
                 assert_eq!(
                     (s.objects().len(), s.objects().last().unwrap().tiles.len()),

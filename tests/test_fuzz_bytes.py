@@ -89,11 +89,11 @@ class _Fields:
 
 
 def scene_fields(b: bytes) -> list[Field]:
-    """The fields of scene bytes, version 8 (layout: src/scene/serial.rs's module docs)."""
+    """The fields of scene bytes, version 9 (layout: src/scene/serial.rs's module docs)."""
     p = _Fields(b)
     assert b[:8] == b"GCSCENE\0"
     p.pos = 8
-    assert p.get("version", "<I") == 8, "the scene format changed: update scene_fields"
+    assert p.get("version", "<I") == 9, "the scene format changed: update scene_fields"
     p.get("has_origin", "<B")
     for a in "xyz":
         p.get(f"origin.{a}", "<d")
@@ -156,7 +156,10 @@ def scene_fields(b: bytes) -> list[Field]:
                     q.get(f"{k}.{a}", "<f")
             q.arr("positions", "<f")
             q.arr("values", "<f")
-            for k in ("normals", "grid_uv", "fine", "coarse"):
+            for k in ("normals", "grid_uv"):
+                q.arr(k, "<I")
+            q.arr("ring_z", "<f")
+            for k in ("fine", "coarse"):
                 q.arr(k, "<I")
             q.get("proxy_error", "<f")
             for v in range(q.get("n_levels", "<I")):

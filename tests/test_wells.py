@@ -57,14 +57,18 @@ def test_levels_cut_a_straight_well_to_a_few_triangles():
     assert (lt[:, 0] == 2 * 128 * 8 + np.array([6] + [0] * 14 + [6])).all()
     # A straight piece: its end stations only, 6 then 4 sides, capped.
     assert (lt[:, 1] == 2 * 6 + 2 * 4).all() and (lt[:, 2] == 2 * 4 + 2 * 2).all()
-    # The error: how far the level's polygon (of the octagon's perimeter) lies from the octagon.
+    # The error: how far the level's polygon (of the octagon's perimeter) lies from the octagon,
+    # grown to bound it drawn exaggerated (lod::tube::level_errors: sqrt(gap^2 + gap^2 / 8) with
+    # no station off the axis), of which nothing vertical (rings are not exaggerated).
     def gap(sides: int) -> float:
         r = 10.0 * 8 * np.sin(np.pi / 8) / (sides * np.sin(np.pi / sides))
-        return max(r - 10.0 * np.cos(np.pi / 8), 10.0 - r * np.cos(np.pi / sides))
+        g = max(r - 10.0 * np.cos(np.pi / 8), 10.0 - r * np.cos(np.pi / sides))
+        return g * np.sqrt(1.0 + 1.0 / 8.0)
 
     err = t["level_error"]
     assert err[:, 1] == pytest.approx(gap(6), rel=1e-5)
     assert err[:, 2] == pytest.approx(gap(4), rel=1e-5)
+    assert (t["level_error_z"][:, 1:3] == 0.0).all()
     assert (t["level_shading_error"][:, 1:3] < 1e-6).all()
     # The prepass proxy is a level, not the fine tube.
     assert (t["tris_coarse"] <= 20).all()
@@ -137,3 +141,59 @@ def test_a_log_keeps_its_stations_at_every_level():
             assert (n[n > 0] >= 0.9 * 2 * 128 * 3).all(), n
         elif not seg.any() and (row["level_triangles"] > 0).sum() > 1:
             assert n[n > 0].min() < 0.05 * n[0]
+
+
+def _rows_and_cols(res) -> tuple[int, int]:
+    """Rows and columns of the image that the well covers (finite depth)."""
+    lit = np.isfinite(res.depth)
+    return int(lit.any(axis=1).sum()), int(lit.any(axis=0).sum())
+
+
+@pytest.mark.parametrize("z_scale", [5.0, 10.0])
+def test_exaggeration_stretches_the_path_not_the_tube(renderer_small, z_scale):
+    """A level well of radius 10 m seen from the side: exaggerated, it stays a tube as thick on
+    screen as at z_scale 1 (its rings are not exaggerated), where stretching it whole would make
+    it z_scale times as tall; a vertical well's length grows z_scale times, its width not."""
+    r = renderer_small(200, 200)
+
+    def side(s: gc.Scene, zs: float) -> tuple[int, int]:
+        # Orthographic from the south, 400 m of view: 2 m a pixel, whatever the exaggeration.
+        cam = gc.Camera.look_at((500.0, -3000.0, -1500.0), (500.0, 0.0, -1500.0), projection="orthographic",
+                                ortho_height=400.0, z_scale=zs)
+        return _rows_and_cols(r.render(s, cam, culling="none"))
+
+    x = np.linspace(300.0, 700.0, 201)
+    level = gc.Scene()
+    level.add_well(np.column_stack([x, np.zeros_like(x), np.full_like(x, -1500.0)]), radius=10.0)
+    flat, tall = side(level, 1.0), side(level, z_scale)
+    assert 8 <= flat[0] <= 12 and abs(tall[0] - flat[0]) <= 1, (flat, tall)
+    assert abs(tall[1] - flat[1]) <= 1
+    # Vertical, 30 m long about the view's centre (flat caps: 15 pixels): z_scale times as long
+    # on screen, as wide.
+    z = np.linspace(-1485.0, -1515.0, 61)
+    vertical = gc.Scene()
+    vertical.add_well(np.column_stack([np.full_like(z, 500.0), np.zeros_like(z), z]), radius=10.0)
+    one, ex = side(vertical, 1.0), side(vertical, z_scale)
+    assert abs(ex[1] - one[1]) <= 1, (one, ex)
+    assert abs(one[0] - 15) <= 1 and abs(ex[0] - min(15 * z_scale, 200)) <= 2, (one, ex)
+
+
+def test_an_exaggerated_deviated_well_renders_the_same_in_every_exact_mode(renderer_small):
+    """Tubes drawn with unexaggerated rings stay within their tiles' boxes: every exact mode gives
+    `none`'s image, with a horizon in front hiding part of the well, at z_scale 1, 5 and 10 and
+    with flattening."""
+    path, log = deviated_with_log()
+    s = gc.Scene()
+    s.add_well(path, radius=20.0, values=log, cmap="viridis")
+    lo, hi = np.asarray(s.bounds[0]), np.asarray(s.bounds[1])
+    z = np.full((21, 21), 0.5 * (lo[2] + hi[2]))
+    s.add_heightfield(z, origin=(lo[0], lo[1]), spacing=((hi[0] - lo[0]) / 20, (hi[1] - lo[1]) / 20), tiles=(2, 2))
+    r = renderer_small(160, 120)
+    for z_scale in (0.5, 1.0, 5.0, 10.0):
+        for az, el in ((30.0, 10.0), (200.0, 35.0)):
+            cam = gc.Camera.fit(s, azimuth=az, elevation=el, z_scale=z_scale)
+            ref = r.render(s, cam, culling="none")
+            for mode in EXACT:
+                got = r.render(s, cam, culling=mode, pixel_threshold=0)
+                assert np.array_equal(got.image, ref.image), (z_scale, az, mode)
+                assert np.array_equal(got.depth, ref.depth), (z_scale, az, mode)

@@ -289,7 +289,9 @@ class Scene(SceneColorings):
         """Add a well: ``path`` (n, 3) world stations (x, y, z metres, z up: pass z = -depth for
         depths) along a deviated well, drawn as a closed tube of ``radius`` metres with ``sides``
         (3..64) flat sides and flat end caps: an occluder like any mesh (object kind "well"), cut
-        into tiles of 128 segments so that culling drops hidden or off-screen parts. Stations that
+        into tiles of 128 segments so that culling drops hidden or off-screen parts. Vertical
+        exaggeration (``z_scale`` > 1) stretches the path, not the tube: its rings keep their
+        ``radius`` (flattening, ``z_scale`` < 1, flattens the tube whole). Stations that
         repeat the previous one are dropped. ``values`` (n,): a log, one value per station,
         interpolated along the tube and coloured through ``cmap`` / ``clim`` / ``nan_color`` (as for
         :meth:`add_heightfield`); without values and ``color`` the well gets the palette colour.

@@ -162,12 +162,14 @@ fn tile_sub_boxes(t: &crate::lod::TileMesh) -> Vec<(DVec3, DVec3)> {
 }
 
 /// The second vertex stream's words of `n` vertices (`SceneGeometry::values`): the scalar (0
-/// without values, no data as [`NO_DATA`]) and the packed normal (none without), into `out`.
-fn vertex_words(n: usize, vals: &[f32], normals: &[u32], out: &mut Vec<[u32; 2]>) {
+/// without values, no data as [`NO_DATA`]), the packed normal (none without) and the ring height
+/// (`TileMesh::ring_z`, 0 without), into `out`.
+fn vertex_words(n: usize, vals: &[f32], normals: &[u32], ring_z: &[f32], out: &mut Vec<[u32; 3]>) {
     out.clear();
     out.extend((0..n).map(|k| {
         let x = vals.get(k).map_or(0.0, |&x| scalar_word(x));
-        [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE)]
+        let r = ring_z.get(k).copied().unwrap_or(0.0);
+        [x.to_bits(), normals.get(k).copied().unwrap_or(crate::lod::normals::NONE), r.to_bits()]
     }));
 }
 
@@ -181,6 +183,7 @@ struct CompactDraw {
     verts: Vec<[f32; 3]>,
     vals: Vec<f32>,
     normals: Vec<u32>,
+    ring_z: Vec<f32>,
 }
 
 impl CompactDraw {
@@ -194,6 +197,8 @@ impl CompactDraw {
         self.vals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
         self.normals.clear();
         self.normals.extend(used.iter().filter_map(|&k| nrm.get(k as usize)));
+        self.ring_z.clear();
+        self.ring_z.extend(used.iter().filter_map(|&k| t.ring_z.get(k as usize)));
     }
 }
 
@@ -272,20 +277,20 @@ impl SceneGeometry {
                     return Ok(false);
                 }
                 let nrm = normal_slot(self.grid_dims[oi].is_some(), t);
-                let mut put = |args: &DrawArgs, verts: &[[f32; 3]], vals: &[f32], normals: &[u32], idx: &[u32]| {
-                    vertex_words(verts.len(), vals, normals, &mut words);
+                let mut put = |args: &DrawArgs, verts: &[[f32; 3]], words_of: (&[f32], &[u32], &[f32]), idx: &[u32]| {
+                    vertex_words(verts.len(), words_of.0, words_of.1, words_of.2, &mut words);
                     let v = args.base_vertex as u64;
                     writes.push((vb, v * 12, bytemuck::cast_slice(verts).to_vec()));
-                    writes.push((sb, v * 8, bytemuck::cast_slice(&words).to_vec()));
+                    writes.push((sb, v * 12, bytemuck::cast_slice(&words).to_vec()));
                     writes.push((ib, args.first_index as u64 * 4, bytemuck::cast_slice(idx).to_vec()));
                 };
-                put(&self.fine[k], &t.positions, &t.values, nrm, &t.fine);
+                put(&self.fine[k], &t.positions, (&t.values, nrm, &t.ring_z), &t.fine);
                 for ((args, indices), &count) in draws.into_iter().zip(&counts[1..]) {
                     cd.build(t, nrm, indices);
                     if cd.verts.len() != count as usize || cd.idx.len() != args.index_count as usize {
                         return Ok(false);
                     }
-                    put(args, &cd.verts, &cd.vals, &cd.normals, &cd.idx);
+                    put(args, &cd.verts, (&cd.vals, &cd.normals, &cd.ring_z), &cd.idx);
                 }
                 tiles_done.push((k, t));
             }

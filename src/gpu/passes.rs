@@ -236,7 +236,7 @@ impl Passes {
         ts: Option<&Timestamps>,
     ) {
         let mut pass = begin(enc, "prepass", targets, false, false, false, ts.and_then(|t| t.render("prepass_ms")));
-        self.draw_range(&mut pass, &self.prepass, false, scene_bg, geom, args, 0..count);
+        self.draw_range(&mut pass, &self.prepass, scene_bg, geom, args, 0..count);
     }
 
     /// Pass: the lit draw of `args` into `targets` (colour, tile id, depth kept for read-back),
@@ -291,7 +291,7 @@ impl Passes {
                     _ => &self.draw,
                 };
                 let tiles = run.tiles.start.max(lo)..run.tiles.end.min(hi);
-                self.draw_range(&mut pass, pipeline, true, scene_bg, geom, args, tiles);
+                self.draw_range(&mut pass, pipeline, scene_bg, geom, args, tiles);
             }
         }
     }
@@ -309,16 +309,15 @@ impl Passes {
         n: usize,
     ) {
         let mut pass = begin(enc, "draw_blend", targets, true, true, true, None);
-        self.draw_range(&mut pass, &self.draw_blend, true, scene_bg, geom, args, 0..n);
+        self.draw_range(&mut pass, &self.draw_blend, scene_bg, geom, args, 0..n);
     }
 
-    /// Draws `range` of `args` with `pipeline`; the scalar stream bound when `with_values`.
+    /// Draws `range` of `args` with `pipeline`, the vertex and value streams bound.
     #[allow(clippy::too_many_arguments)]
     fn draw_range(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         pipeline: &wgpu::RenderPipeline,
-        with_values: bool,
         scene_bg: &wgpu::BindGroup,
         geom: &SceneGeometry,
         args: &wgpu::Buffer,
@@ -331,9 +330,7 @@ impl Passes {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, scene_bg, &[]);
             pass.set_vertex_buffer(0, vb.slice(..));
-            if with_values {
-                pass.set_vertex_buffer(1, sb.slice(..));
-            }
+            pass.set_vertex_buffer(1, sb.slice(..));
             pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
             let stride = std::mem::size_of::<super::layout::DrawArgs>() as u64;
             pass.multi_draw_indexed_indirect(args, range.start as u64 * stride, range.len() as u32);

@@ -78,6 +78,13 @@ pub struct TileMesh {
     /// height fields do from their fine surface. Empty otherwise, else one per entry of
     /// `positions`.
     pub grid_uv: PerVertex<u32>,
+    /// Per-vertex height of a well tube's vertex above the centre of its ring (world units,
+    /// [`tube`]): vertical exaggeration stretches the well's path, not its rings (the lit pass
+    /// lowers the vertex by `(1 - 1 / z_scale)` times this), so that a tube keeps its radius on
+    /// screen however much z is exaggerated. Each vertex minus this lies within the tile's box
+    /// in z. Empty for other tiles (and for tubes read from bytes older than version 9, drawn
+    /// exaggerated whole), else one per entry of `positions`.
+    pub ring_z: PerVertex<f32>,
     /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
     /// [`share_indices`]).
     pub fine: Indices,

@@ -175,8 +175,11 @@ fn piece(
     let local = |p: DVec3| (p - origin).as_vec3().to_array();
     for (&k, &(d, u)) in stations.iter().zip(frames) {
         let c = spec.path[k];
+        let cz = (c - origin).z;
         for q in ring(c, d, u, radius, sides) {
-            tile.positions.push(local(q));
+            let p = local(q);
+            tile.positions.push(p);
+            tile.ring_z.push((p[2] as f64 - cz) as f32);
             tile.normals.push(normals::pack((q - c) / radius));
             if let Some(v) = spec.values {
                 tile.values.push(v[k] as f32);
@@ -195,6 +198,7 @@ fn piece(
         let ring0 = base as usize + end * sides;
         for s in 0..sides {
             tile.positions.push(tile.positions[ring0 + s]);
+            tile.ring_z.push(tile.ring_z[ring0 + s]);
             tile.normals.push(normals::NONE);
             if let Some(v) = spec.values {
                 tile.values.push(v[stations[end]] as f32);
@@ -315,16 +319,6 @@ fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> De
     Decimated { kept, dev: max_dev, dev_z: max_dev_z, chord: max_chord }
 }
 
-/// The largest horizontal length of a unit direction of the path's stations `a..=b` and of the
-/// level's segments between `kept` stations: a vector normal to a direction d has a vertical part
-/// of at most |d_xy| of its length (a ring of a vertical well lies flat).
-fn ring_tilt(path: &[DVec3], a: usize, b: usize, kept: &[usize]) -> f64 {
-    let flat = |d: DVec3| d.truncate().length().min(1.0);
-    let fine = (a..=b).map(|k| flat(direction(path, k)));
-    let level = kept.windows(2).map(|w| flat((path[w[1]] - path[w[0]]).normalize_or_zero()));
-    fine.chain(level).fold(0.0, f64::max)
-}
-
 /// Frames of a level's kept stations: level 0's at both ends, parallel transport between with
 /// the twist that leaves at the last station spread evenly over the stations.
 fn level_frames(path: &[DVec3], kept: &[usize], fine: &[(DVec3, DVec3)], a: usize) -> Vec<(DVec3, DVec3)> {
@@ -378,10 +372,7 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
                 let (r, polygon) = level_polygon(spec.radius, spec.sides, sides);
                 let (sides_tris, caps) = piece(spec, origin, &kept, &lf, (sides, r), (true, true), &mut tile);
                 let indices: Vec<u32> = sides_tris.into_iter().chain(caps).collect();
-                let error = (dev + polygon) as f32;
-                // The polygons' gap lies in the rings' planes, tilted from the horizontal by at
-                // most `ring_tilt`; to f32 as the error is, and never past it.
-                let error_z = ((dev_z + polygon * ring_tilt(spec.path, a, b, &kept)) as f32).min(error);
+                let (error, error_z) = level_errors(dev, dev_z, polygon);
                 let level = Level { indices: indices.into(), error, error_z, shading_error: chord as f32 };
                 tile.levels.push(level);
             }
@@ -392,9 +383,61 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
                 None => (tile.fine.clone(), 0.0),
             };
             tile.compute_bbox();
+            fit_ring_z(&mut tile);
             tile
         })
         .collect()
+}
+
+/// A level's `(error, error_z)` ([`Level`]) from its path's deviation `dev` (of which `dev_z`
+/// vertical) and its polygon's gap to the fine one. Drawn with exaggeration `s >= 1` the level's
+/// path moves by `sqrt(dh^2 + s^2 dz^2) <= sqrt(dev^2 + (s^2 - 1) dev_z^2)` and its rings (not
+/// exaggerated) by at most the gap, in all by at most `sqrt(e^2 + (s^2 - 1) ez^2)` (what the
+/// level choice takes, `render::levels::exaggerated`) for `e^2 = (dev + gap)^2 + gap^2 / 8` and
+/// `ez = 3 dev_z`: with `X^2 = (s^2 - 1) dev_z^2`, `(sqrt(dev^2 + X^2) + gap)^2 <= (dev + gap)^2 +
+/// X^2 + 2 gap X` and `2 gap X <= gap^2 / 8 + 8 X^2`. Both rounded up to f32, `error_z <= error`.
+fn level_errors(dev: f64, dev_z: f64, gap: f64) -> (f32, f32) {
+    let ez = 3.0 * dev_z;
+    let e = ((dev + gap).powi(2) + gap * gap / 8.0).sqrt().max(ez);
+    let up = |x: f64| {
+        let f = x as f32;
+        if (f as f64) < x {
+            f.next_up()
+        } else {
+            f
+        }
+    };
+    let (e, ez) = (up(e), up(ez));
+    (e, ez.min(e))
+}
+
+/// Keeps every vertex's ring centre height, `z - ring_z` in f32 as the lit pass computes it,
+/// within the tile's box (`TileMesh::ring_z`'s contract; a centre lies within its ring's heights,
+/// and an f32 rounding past the box is taken back towards 0).
+fn fit_ring_z(tile: &mut TileMesh) {
+    let (lo, hi) = (tile.bbox_min[2], tile.bbox_max[2]);
+    let positions = &tile.positions;
+    let fitted: Vec<f32> = tile
+        .ring_z
+        .iter()
+        .zip(positions)
+        .map(|(&r, p)| {
+            let inside = |r: f32| (lo..=hi).contains(&(p[2] - r));
+            let mut r = r;
+            for _ in 0..8 {
+                if inside(r) {
+                    return r;
+                }
+                r = if r > 0.0 { r.next_down() } else { r.next_up() };
+            }
+            if inside(r) {
+                r
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    tile.ring_z = fitted.into();
 }
 
 #[cfg(test)]

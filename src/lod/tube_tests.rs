@@ -37,7 +37,8 @@ fn a_straight_well_keeps_its_ends_and_drops_the_rest() {
         // axis): the hexagon of the octagon's perimeter reaches 5 * 8 sin(pi/8) / (6 sin(pi/6)).
         let r6 = 5.0 * 8.0 * (PI / 8.0).sin() / (6.0 * (PI / 6.0).sin());
         let gap = (r6 - 5.0 * (PI / 8.0).cos()).max(5.0 - r6 * (PI / 6.0).cos());
-        assert!((l1.error as f64 - gap).abs() < 1e-5, "{} vs {gap}", l1.error);
+        let bound = (gap * gap + gap * gap / 8.0).sqrt(); // tube::level_errors with dev = 0
+        assert!((l1.error as f64 - bound).abs() < 1e-5 && l1.error_z == 0.0, "{} vs {bound}", l1.error);
         // Radial normals on a straight path: the same shading at every level.
         assert!(t.levels.iter().all(|l| l.shading_error < 1e-9), "{:?}", t.levels);
         // The proxy is the first level with at most 1/25 of the fine triangles.
@@ -75,9 +76,10 @@ fn every_dropped_station_lies_within_the_level_error_of_the_kept_path() {
         // A tile's level with these sides has this error.
         let polygon = level_polygon(radius, 8, sides).1;
         if let Some(lv) = tiles[0].levels.get(l) {
-            assert!((lv.error as f64 - (dev + polygon)).abs() < 1e-4, "level {l}: {} vs {}", lv.error, dev + polygon);
+            let want = ((dev + polygon).powi(2) + polygon * polygon / 8.0).sqrt().max(3.0 * dev_z);
+            assert!((lv.error as f64 - want).abs() < 1e-4, "level {l}: {} vs {want}", lv.error);
             assert!((lv.shading_error as f64 - chord).abs() < 1e-6);
-            assert!(lv.error_z >= (dev_z as f32) * (1.0 - 1e-6) && lv.error_z <= lv.error, "level {l}");
+            assert!(lv.error_z >= (3.0 * dev_z as f32) * (1.0 - 1e-6) && lv.error_z <= lv.error, "level {l}");
         }
     }
     // Every vertex of every level within its error + radius of the fine path's nearest segment.
@@ -243,10 +245,9 @@ fn level_polygons_keep_the_perimeter_and_bound_the_gap() {
 const TAU_STEP: f64 = std::f64::consts::TAU / 3600.0;
 
 #[test]
-fn a_vertical_well_has_horizontal_level_errors() {
-    // Straight down 0.5 m a station, wiggling sideways by up to 3 m: the path leans at most
-    // 0.06 / hypot(0.06, 0.5) = 0.119 from the vertical, so a level's polygons lie nearly flat and
-    // its dropped stations move sideways: exaggeration must stretch at most that part of its error.
+fn exaggeration_stretches_only_the_path_deviation() {
+    // Straight down 0.5 m a station, wiggling sideways by up to 3 m: its dropped stations move
+    // sideways, so its levels' errors are horizontal (error_z well below error).
     let path: Vec<DVec3> = (0..600).map(|k| DVec3::new(3.0 * (k as f64 * 0.02).sin(), 0.0, -0.5 * k as f64)).collect();
     let tiles = tube_tiles(&spec(&path, None, 2.0, 0.0), DVec3::ZERO, 25.0);
     let levels: Vec<&Level> = tiles.iter().flat_map(|t| &t.levels).collect();
@@ -254,14 +255,30 @@ fn a_vertical_well_has_horizontal_level_errors() {
     for l in levels {
         assert!(l.error > 0.05 && l.error_z <= 0.125 * l.error, "{} vs {}", l.error_z, l.error);
     }
-    // A well along the horizontal: its polygons stand upright, so their whole gap is vertical
-    // (at least the 6-sided polygon's, the smallest of the levels').
+    // A well along the horizontal, wiggling sideways: its polygons stand upright, but rings are
+    // not exaggerated (TileMesh::ring_z) and its path stays level, so no part of its error grows.
     let flat: Vec<DVec3> = (0..300).map(|k| DVec3::new(0.5 * k as f64, 3.0 * (k as f64 * 0.02).sin(), 0.0)).collect();
-    let least_gap = level_polygon(2.0, 8, 6).1 as f32;
     for t in tube_tiles(&spec(&flat, None, 2.0, 0.0), DVec3::ZERO, 25.0) {
         assert!(!t.levels.is_empty());
-        for l in &t.levels {
-            assert!(l.error_z >= 0.99 * least_gap && l.error_z <= l.error, "{} vs {}", l.error_z, l.error);
+        assert!(t.levels.iter().all(|l| l.error > 0.05 && l.error_z == 0.0), "{:?}", t.levels);
+    }
+}
+
+#[test]
+fn ring_heights_are_the_vertices_height_above_their_station() {
+    // A well dipping at 45 degrees: every ring vertex minus its ring height is its station's
+    // height (f32), within the tile's box; caps repeat their ring's.
+    let path: Vec<DVec3> =
+        (0..=300).map(|k| DVec3::new(0.4 * k as f64, 0.1 * k as f64, -0.4 * k as f64 - 1000.0)).collect();
+    let origin = DVec3::new(0.0, 0.0, -1000.0);
+    for t in tube_tiles(&spec(&path, None, 5.0, 0.0), origin, 25.0) {
+        assert_eq!(t.ring_z.len(), t.positions.len());
+        for (p, &r) in t.positions.iter().zip(t.ring_z.iter()) {
+            let centre = p[2] - r;
+            assert!((t.bbox_min[2]..=t.bbox_max[2]).contains(&centre));
+            let near = path.iter().any(|s| (s.z - origin.z - centre as f64).abs() < 1e-3);
+            assert!(near && r.abs() <= 5.0 * 1.2, "{r} {centre}");
         }
+        assert!(t.ring_z.iter().any(|&r| r.abs() > 3.0), "tilted rings reach up and down");
     }
 }

@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 8 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 9 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -23,6 +23,7 @@
 //!             positions [f32 x 3], values [f32] (version 4: empty or one per position),
 //!             normals [u32] (version 5: packed smooth normals, empty or one per position),
 //!             grid_uv [u32] (version 6: packed grid coordinates, empty or one per position),
+//!             ring_z [f32] (version 9: a tube's ring heights, empty or one per position),
 //!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
 //!             measured again on reading: `lod::shading`, 0 for height fields and grids),
@@ -44,16 +45,17 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 8;
+const VERSION: u32 = 9;
 
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
 const MIN_TILE_BYTES: usize = 8 + 24 + 8 + 8 + 8 + 4 + 4;
 
 /// The fewest bytes a tile takes in `version`: [`MIN_TILE_BYTES`] and the counts of its empty
-/// values (version 4), normals (5) and grid coordinates (6): 88 bytes from version 6.
+/// values (version 4), normals (5), grid coordinates (6) and ring heights (9): 96 bytes from
+/// version 9.
 fn min_tile_bytes(version: u32) -> usize {
-    MIN_TILE_BYTES + 8 * [4, 5, 6].iter().filter(|&&v| version >= v).count()
+    MIN_TILE_BYTES + 8 * [4, 5, 6, 9].iter().filter(|&&v| version >= v).count()
 }
 
 /// The fewest bytes an object takes in `version`: a mesh (the smallest kind: its label's length)
@@ -253,9 +255,20 @@ impl<'a> Reader<'a> {
 impl Scene {
     /// The scene as bytes (see the module docs for the layout); [`Scene::from_bytes`] reads them.
     pub fn to_bytes(&self) -> Vec<u8> {
+        self.write(VERSION)
+    }
+
+    /// The bytes of format `version` 8 or 9 (8: no ring heights), for tests of older formats.
+    #[cfg(test)]
+    pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
+        assert!((8..=VERSION).contains(&version));
+        self.write(version)
+    }
+
+    fn write(&self, version: u32) -> Vec<u8> {
         let mut w = Writer::default();
         w.bytes(MAGIC);
-        w.u32(VERSION);
+        w.u32(version);
         w.u8(self.origin.is_some() as u8);
         for a in self.origin().to_array() {
             w.f64(a);
@@ -341,6 +354,9 @@ impl Scene {
                 w.f32s(&t.values);
                 w.u32s(&t.normals);
                 w.u32s(&t.grid_uv);
+                if version >= 9 {
+                    w.f32s(&t.ring_z);
+                }
                 w.u32s(&t.fine);
                 w.u32s(&t.coarse);
                 w.f32(t.proxy_error);
@@ -566,6 +582,10 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     if let Some(msg) = per_vertex("grid coordinates", grid_uv.len()) {
         return Err(r.err(msg));
     }
+    let ring_z: PerVertex<f32> = if version >= 9 { r.f32s()?.into() } else { PerVertex::new() };
+    if let Some(msg) = per_vertex("ring heights", ring_z.len()) {
+        return Err(r.err(msg));
+    }
     let (fine, coarse) = (indices(r.u32s()?), indices(r.u32s()?));
     let proxy_error = r.f32()?;
     let nl = r.u32()? as usize;
@@ -601,7 +621,21 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     if levels.iter().any(|l| l.shading_error < 0.0) {
         return Err(r.err(format!("object {id}: a tile's level has a negative shading error")));
     }
-    Ok(TileMesh { ix, iy, positions, values, normals, grid_uv, fine, coarse, bbox_min, bbox_max, proxy_error, levels })
+    Ok(TileMesh {
+        ix,
+        iy,
+        positions,
+        values,
+        normals,
+        grid_uv,
+        ring_z,
+        fine,
+        coarse,
+        bbox_min,
+        bbox_max,
+        proxy_error,
+        levels,
+    })
 }
 
 /// A triangle list as tiles hold it; an empty one allocates nothing (`Arc::default`), where

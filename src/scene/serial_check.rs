@@ -73,6 +73,17 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
     if let Some(l) = t.levels.iter().find(|l| l.error_z > l.error) {
         return Err(format!("a level's vertical error {} exceeds its error {}", l.error_z, l.error));
     }
+    // The lit pass draws a tube's vertex between its position and its ring's centre (`z -
+    // ring_z`, TileMesh::ring_z): within the box as long as that centre is.
+    if let Some((k, r)) = t
+        .ring_z
+        .iter()
+        .zip(&t.positions)
+        .enumerate()
+        .find_map(|(k, (&r, p))| (!(lo[2]..=hi[2]).contains(&(p[2] - r))).then_some((k, r)))
+    {
+        return Err(format!("vertex {k}'s ring height {r} puts its ring's centre outside the tile's box"));
+    }
     Ok(())
 }
 

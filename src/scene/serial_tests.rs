@@ -85,7 +85,7 @@ fn version_1_height_fields_read_as_unrotated() {
     let mut s = Scene::new();
     let o = AddOptions { name: Some("a".into()), color: Some([0.5; 3]), ..AddOptions::new(1.0) };
     s.add_heightfield(&[0.0, 1.0, 2.0, 3.0], 2, 2, GridFrame::new([5.0, 6.0], [1.0, 2.0]), (1, 1), None, o).unwrap();
-    let v2 = s.to_bytes();
+    let v2 = s.to_bytes_version(8);
     // version 1: no rotation after dy (magic 8, version 4, origin 1 + 24, next_id 4, count 4,
     // id 4, name 4 + 1, kind 1, nx ny 16, x0 y0 dx dy 32), no object origin (after rotation 8,
     // tx ty 16, color 12, visible 1, offset 24; read as the scene's, which it is), no colouring
@@ -98,7 +98,7 @@ fn version_1_height_fields_read_as_unrotated() {
     let mut v1 = [&v2[..at], &v2[at + 8..origin_at], &v2[origin_at + 30..values_at], &v2[values_at + 24..]].concat();
     v1[8..12].copy_from_slice(&1u32.to_le_bytes());
     let t = Scene::from_bytes(&v1).unwrap();
-    assert_eq!(t.to_bytes(), v2);
+    assert_eq!(t.to_bytes_version(8), v2);
 }
 
 #[test]
@@ -124,7 +124,7 @@ fn version_5_meshes_measure_their_shading_error_again() {
     s.add_mesh(&v, &f, "fault", None, AddOptions::new(4.0)).unwrap();
     let t = &s.objects()[0].tiles[0];
     assert!(!t.levels.is_empty() && t.levels.iter().all(|l| l.shading_error > 0.0));
-    let v8 = s.to_bytes();
+    let v8 = s.to_bytes_version(8);
     // Version 5: the same bytes without the object's priority byte (by kind, after its opacity),
     let mut pri = 1.0f32.to_le_bytes().to_vec();
     pri.extend([u8::MAX]);
@@ -157,7 +157,7 @@ fn version_5_meshes_measure_their_shading_error_again() {
     v5.extend(&w[at..]);
     v5[8..12].copy_from_slice(&5u32.to_le_bytes());
     let back = Scene::from_bytes(&v5).unwrap();
-    assert_eq!(back.to_bytes(), v8);
+    assert_eq!(back.to_bytes_version(8), v8);
 }
 
 #[test]
@@ -168,8 +168,8 @@ fn version_7_levels_take_their_whole_error_as_vertical() {
     s.add_well(&path, 2.0, 8, AddOptions::new(4.0)).unwrap();
     let levels: Vec<_> = s.objects()[0].tiles.iter().flat_map(|t| t.levels.clone()).collect();
     assert!(!levels.is_empty() && levels.iter().all(|l| l.error_z < 0.5 * l.error));
-    let v8 = s.to_bytes();
-    assert_eq!(Scene::from_bytes(&v8).unwrap().to_bytes(), v8);
+    let v8 = s.to_bytes_version(8);
+    assert_eq!(Scene::from_bytes(&v8).unwrap().to_bytes_version(8), v8);
     // Version 7: the same bytes without each level's error_z (the f32 after its shading error).
     let mut v7 = v8.clone();
     for l in levels.iter().rev() {
@@ -196,8 +196,8 @@ fn damaged_bytes_are_input_errors() {
         assert!(e.starts_with("data"), "{e}");
     }
     let mut v = b.clone();
-    v[8] = 9; // version 9
-    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 9"));
+    v[8] = 10; // version 10
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 10"));
     let mut extra = b.clone();
     extra.push(0);
     assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
@@ -251,8 +251,8 @@ fn a_count_reserves_only_records_the_unclaimed_bytes_hold() {
     v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
     for version in 1..=VERSION {
-        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84][version as usize - 1]);
-        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88][version as usize - 1]);
+        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84][version as usize - 1]);
+        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96][version as usize - 1]);
     }
 }
 
@@ -270,4 +270,28 @@ fn the_smallest_records_take_at_most_twice_their_bytes_in_memory() {
         assert!(object_claim(version) >= min_object_bytes(version) && tile_claim(version) >= min_tile_bytes(version));
     }
     assert_eq!((object_claim(VERSION), tile_claim(VERSION)), (min_object_bytes(VERSION), min_tile_bytes(VERSION)));
+}
+
+#[test]
+fn ring_heights_round_trip_and_a_centre_out_of_the_box_is_refused() {
+    let path: Vec<[f64; 3]> = (0..300).map(|k| [0.5 * k as f64, 0.2 * k as f64, -0.4 * k as f64]).collect();
+    let mut s = Scene::new();
+    s.add_well(&path, 5.0, 8, AddOptions::new(25.0)).unwrap();
+    let t = &s.objects()[0].tiles[0];
+    assert_eq!(t.ring_z.len(), t.positions.len());
+    let b = s.to_bytes();
+    let back = Scene::from_bytes(&b).unwrap();
+    assert_eq!(back.objects()[0].tiles[0].ring_z[..], t.ring_z[..]);
+    // Version 8 has none: the tube is drawn exaggerated whole, as it was then.
+    let v8 = Scene::from_bytes(&s.to_bytes_version(8)).unwrap();
+    assert!(v8.objects()[0].tiles.iter().all(|t| t.ring_z.is_empty()));
+    // A ring height taking its vertex's ring centre below the tile's box.
+    let depth = t.positions[0][2] - t.bbox_min[2];
+    let mut word = (t.ring_z.len() as u64).to_le_bytes().to_vec();
+    word.extend(t.ring_z[0].to_le_bytes());
+    let at = b.windows(word.len()).position(|w| w == word).unwrap() + 8;
+    let mut bad = b.clone();
+    bad[at..at + 4].copy_from_slice(&(depth + 1.0).to_le_bytes());
+    let e = Scene::from_bytes(&bad).unwrap_err().to_string();
+    assert!(e.starts_with("data") && e.contains("ring height"), "{e}");
 }

@@ -224,7 +224,7 @@ impl SceneGeometry {
         let height_blocks = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
-        let bytes = nv * 20 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
+        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
         let bytes = bytes + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
@@ -290,7 +290,7 @@ fn mapped_buffers(
     // COPY_DST: an object whose geometry is replaced in place is written by `patch`.
     let dst = wgpu::BufferUsages::COPY_DST;
     let vb = mapped("vertices", nv * 12, wgpu::BufferUsages::VERTEX | dst | direct);
-    let sb = mapped("values", nv * 8, wgpu::BufferUsages::VERTEX | dst | direct);
+    let sb = mapped("values", nv * 12, wgpu::BufferUsages::VERTEX | dst | direct);
     let ib = mapped("indices", ni * 4, wgpu::BufferUsages::INDEX | dst | direct);
     (vb, sb, ib)
 }
@@ -311,11 +311,11 @@ fn write_tiles(
     // Mapped memory is write-only: append whole runs, counting in vertices and indices.
     let (mut v, mut i) = (0usize, 0usize);
     // Positions and their (scalar, normal) pairs (zeros when the tile has none), run for run.
-    let mut scratch: Vec<[u32; 2]> = Vec::new();
-    let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32], normals: &[u32]| {
+    let mut scratch: Vec<[u32; 3]> = Vec::new();
+    let mut put_v = |v: &mut usize, data: &[[f32; 3]], vals: &[f32], normals: &[u32], ring_z: &[f32]| {
         vmap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(data));
-        vertex_words(data.len(), vals, normals, &mut scratch);
-        smap.slice(*v * 8..(*v + data.len()) * 8).copy_from_slice(bytemuck::cast_slice(&scratch));
+        vertex_words(data.len(), vals, normals, ring_z, &mut scratch);
+        smap.slice(*v * 12..(*v + data.len()) * 12).copy_from_slice(bytemuck::cast_slice(&scratch));
         *v += data.len();
     };
     let mut put_i = |i: &mut usize, data: &[u32]| {
@@ -335,7 +335,7 @@ fn write_tiles(
         });
         cverts.clear();
         cverts.extend(verts.iter().map(|&[a, b]| [a as f32, b as f32, 0.0]));
-        put_v(&mut v, &cverts, &[], &[]);
+        put_v(&mut v, &cverts, &[], &[], &[]);
         put_i(&mut i, idx);
     }
     let mut cd = CompactDraw::default();
@@ -374,7 +374,7 @@ fn write_tiles(
                 base_vertex: v as i32,
                 first_instance: tile,
             });
-            put_v(&mut v, &t.positions, &t.values, nrm);
+            put_v(&mut v, &t.positions, &t.values, nrm, &t.ring_z);
             put_i(&mut i, &t.fine);
             // The coarse proxy and each LOD level get their own compact copy of the
             // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -391,7 +391,7 @@ fn write_tiles(
                     base_vertex: *v as i32,
                     first_instance: tile,
                 };
-                put_v(v, &cd.verts, &cd.vals, &cd.normals);
+                put_v(v, &cd.verts, &cd.vals, &cd.normals, &cd.ring_z);
                 put_i(i, &cd.idx);
                 args
             };

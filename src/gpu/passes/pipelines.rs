@@ -158,13 +158,21 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
     };
     // The lit pass's second vertex stream: per vertex an f32 scalar (colour by data) and a
     // packed smooth normal (`lod::normals`).
+    // Per vertex: its scalar, packed normal and ring height (`gpu::geometry::vertex_words`).
     let value_layout = wgpu::VertexBufferLayout {
-        array_stride: 8,
+        array_stride: 12,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &[
             wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 0, shader_location: 1 },
             wgpu::VertexAttribute { format: wgpu::VertexFormat::Uint32, offset: 4, shader_location: 2 },
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 8, shader_location: 3 },
         ],
+    };
+    // The prepass reads the ring height only.
+    let ring_layout = wgpu::VertexBufferLayout {
+        array_stride: 12,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32, offset: 8, shader_location: 3 }],
     };
     let scene_pipeline = |label: &str,
                           file: &str,
@@ -251,7 +259,7 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
         include_str!("../shaders/prepass.wgsl"),
         ("vs_main", "vs_gl"),
         "fs_id",
-        &[Some(vertex_layout.clone())],
+        &[Some(vertex_layout.clone()), Some(ring_layout)],
         &[Some(ID_FORMAT.into())],
         &depth_state,
         None,

@@ -79,10 +79,19 @@ struct VOut {
     @location(1) @interpolate(flat) tile: u32,
 }
 
+// How far a well tube's vertex is lowered before exaggeration (`rz`: its height above its ring's
+// centre, lod::TileMesh::ring_z; 0 for every other vertex): by (1 - 1 / z_scale) rz, so that
+// its ring's centre is exaggerated and its offset from it is not, and the tube keeps its radius
+// however much z is exaggerated. Flattening (z_scale < 1) flattens tubes whole. Between the
+// vertex and its ring's centre, so within its tile's box.
+fn ring_lift(rz: f32) -> vec3<f32> {
+    return vec3<f32>(0.0, 0.0, select(0.0, (1.0 - 1.0 / g.z_scale) * rz, g.z_scale > 1.0));
+}
+
 @vertex
-fn vs_main(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOut {
+fn vs_main(@location(0) vpos: vec3<f32>, @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOut {
     let o = objects[tile_object[tile]];
-    let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (tile_position(vpos, tile) - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOut;
     out.clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     out.world = p;
@@ -109,9 +118,9 @@ struct VOutGl {
 
 // The same transform as vs_main (kept apart so that vs_main's code is what it always was).
 @vertex
-fn vs_gl(@location(0) vpos: vec3<f32>, @builtin(instance_index) tile: u32) -> VOutGl {
+fn vs_gl(@location(0) vpos: vec3<f32>, @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutGl {
     let o = objects[tile_object[tile]];
-    let p = (tile_position(vpos, tile) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (tile_position(vpos, tile) - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     return VOutGl(clip, p, tile, clip.zw);
 }

@@ -151,26 +151,44 @@ fn vertex_normal(p: u32) -> vec3<f32> {
     if (p == 0u) {
         return vec3<f32>(0.0);
     }
+    let n = octahedral(p);
+    return normalize(vec3<f32>(n.xy, n.z / g.z_scale));
+}
+
+// A packed smooth normal's octahedral decoding (not normalised).
+fn octahedral(p: u32) -> vec3<f32> {
     let e = unpack2x16snorm(p);
     var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
     if (n.z < 0.0) {
         n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
     }
-    return normalize(vec3<f32>(n.xy, n.z / g.z_scale));
+    return n;
+}
+
+
+// The normal a vertex carries to the fragment (`normal_slot`), where a well tube's ring is not
+// exaggerated (ring height `rz` not 0 and z_scale > 1, common.wgsl `ring_lift`): its radial
+// normal as is. (A ring vertex's radial normal has a vertical part exactly where its ring height
+// is not 0.)
+fn drawn_normal(o: Object, nrm: u32, rz: f32) -> vec3<f32> {
+    if (rz != 0.0 && g.z_scale > 1.0 && nrm != 0u) {
+        return normalize(octahedral(nrm));
+    }
+    return normal_slot(o, nrm);
 }
 
 @vertex
 fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
-           @builtin(instance_index) tile: u32) -> VOutDraw {
+           @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutDraw {
     let o = objects[tile_object[tile]];
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
-    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (pos - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOutDraw;
     out.clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     out.world_s = vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5));
     out.tile = tile;
-    out.n = normal_slot(o, nrm);
+    out.n = drawn_normal(o, nrm, rz);
     return out;
 }
 
@@ -401,13 +419,13 @@ struct VOutDrawGl {
 
 @vertex
 fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
-              @builtin(instance_index) tile: u32) -> VOutDrawGl {
+              @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutDrawGl {
     let o = objects[tile_object[tile]];
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
-    let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    let p = (pos - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
-    let n = normal_slot(o, nrm);
+    let n = drawn_normal(o, nrm, rz);
     return VOutDrawGl(clip, vec4<f32>(p, select(value, pos.z, o.cmap.z > 1.5)), tile, clip.zw, n);
 }
 
