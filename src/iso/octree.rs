@@ -24,6 +24,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use super::store::{slab_layers, BrickCache};
 use super::Volume;
 
 /// Depths below the finest stored level, answered by scanning samples: bricks of 2^3 = 8 cells.
@@ -139,6 +140,8 @@ pub struct MinMaxOctree {
     levels: Vec<Level>,
     /// The volume's samples (shared), for the depths finer than the stored ones.
     values: Arc<[f32]>,
+    /// A lazy volume's store (`values` is then empty), read through its cache for those depths.
+    store: Option<Arc<BrickCache>>,
     /// Samples per axis.
     samples: [usize; 3],
 }
@@ -191,6 +194,70 @@ fn scan(v: &[f32], samples: [usize; 3], lo: [usize; 3], hi: [usize; 3]) -> (f32,
     (mn, mx, nan)
 }
 
+/// Min/max/NaN of the bricks (`s`³ cells, `level`'s cells) whose samples lie in `v`, sample layers
+/// `k0 ..` of a grid of `samples` (x, y, z), for brick rows `bz0 ..` (`level`'s rows from `bz0`
+/// whose last sample layer is in `v`), in parallel over the rows.
+fn brick_rows(level: &mut Level, v: &[f32], k0: usize, bz0: usize, samples: [usize; 3], s: usize) {
+    let [nx, ny, nz] = samples;
+    let cells = [nx - 1, ny - 1, nz - 1];
+    let (bx, by) = (level.dims[0] as usize, level.dims[1] as usize);
+    let slab = bx * by;
+    let layers = v.len() / (nx * ny);
+    // Cells b*s .. (b+1)*s of axis a (clamped), i.e. samples b*s ..= that end.
+    let span = |b: usize, a: usize| (b * s, ((b + 1) * s).min(cells[a]));
+    let rows = (bz0..level.dims[2] as usize).take_while(|&bz| span(bz, 2).1 < k0 + layers).count();
+    let r = bz0 * slab..(bz0 + rows) * slab;
+    let (min, max, nan) = (&mut level.min[r.clone()], &mut level.max[r.clone()], &mut level.nan[r]);
+    min.par_chunks_mut(slab).zip(max.par_chunks_mut(slab)).zip(nan.par_chunks_mut(slab)).enumerate().for_each(
+        |(row, ((mn, mx), na))| {
+            let (z0, z1) = span(bz0 + row, 2);
+            for byi in 0..by {
+                let (y0, y1) = span(byi, 1);
+                let r = byi * bx..(byi + 1) * bx;
+                let (mn, mx, na) = (&mut mn[r.clone()], &mut mx[r.clone()], &mut na[r]);
+                for k in z0..=z1 {
+                    for j in y0..=y1 {
+                        let row = &v[((k - k0) * ny + j) * nx..((k - k0) * ny + j + 1) * nx];
+                        for bxi in 0..bx {
+                            let (x0, x1) = span(bxi, 0);
+                            let (mut lo, mut hi, mut n) = (mn[bxi], mx[bxi], na[bxi]);
+                            for &x in &row[x0..=x1] {
+                                lo = nan_min(lo, x);
+                                hi = nan_max(hi, x);
+                                n |= x.is_nan();
+                            }
+                            (mn[bxi], mx[bxi], na[bxi]) = (lo, hi, n);
+                        }
+                    }
+                }
+            }
+        },
+    );
+}
+
+/// [`brick_rows`] over a lazy volume's store: one streaming pass over slabs of whole brick rows
+/// (a multiple of `s` cells, sharing their boundary layer), about 32 MiB each, not cached. An
+/// infinite sample is an error kept in the store (as a read error).
+fn build_streaming(level: &mut Level, store: &BrickCache, samples: [usize; 3], s: usize) {
+    let layers = (slab_layers(samples[0] * samples[1]).saturating_sub(1) / s).max(1) * s + 1;
+    let mut inf = None;
+    store.for_each_slab(layers, 1, |k0, slab| {
+        if inf.is_none() {
+            if let Some(p) = slab.par_iter().position_first(|v| v.is_infinite()) {
+                let layer = samples[0] * samples[1];
+                inf = Some([p % samples[0], p % layer / samples[0], k0 + p / layer]);
+            }
+        }
+        brick_rows(level, slab, k0, k0 / s, samples, s);
+    });
+    if let Some([i, j, k]) = inf {
+        store.fail(crate::error::input_err(
+            "values",
+            format!("the stored sample [{k}, {j}, {i}] (z up, zyx) is infinite; use NaN for no data"),
+        ));
+    }
+}
+
 impl MinMaxOctree {
     /// Builds the octree in parallel (rayon): the finest stored level (bricks of 8³ cells) by
     /// scanning the samples, the coarser ones by 2×2×2 reduction.
@@ -205,42 +272,14 @@ impl MinMaxOctree {
         let bricks = {
             let s = 1usize << (depth - finest);
             let dims = [0, 1, 2].map(|a| (cells[a] as usize).div_ceil(s).max(1) as u32);
-            let (bx, by) = (dims[0] as usize, dims[1] as usize);
-            let n = bx * by * dims[2] as usize;
-            let mut min = vec![f32::INFINITY; n];
-            let mut max = vec![f32::NEG_INFINITY; n];
-            let mut nan = vec![false; n];
-            let v = &vol.values[..];
-            let (nx, ny) = (vol.nx, vol.ny);
-            // Cells b*s .. (b+1)*s of axis a (clamped), i.e. samples b*s ..= that end.
-            let span = |b: usize, a: usize| (b * s, ((b + 1) * s).min(cells[a] as usize));
-            let slab = bx * by;
-            min.par_chunks_mut(slab).zip(max.par_chunks_mut(slab)).zip(nan.par_chunks_mut(slab)).enumerate().for_each(
-                |(bz, ((mn, mx), na))| {
-                    let (z0, z1) = span(bz, 2);
-                    for byi in 0..by {
-                        let (y0, y1) = span(byi, 1);
-                        let r = byi * bx..(byi + 1) * bx;
-                        let (mn, mx, na) = (&mut mn[r.clone()], &mut mx[r.clone()], &mut na[r]);
-                        for k in z0..=z1 {
-                            for j in y0..=y1 {
-                                let row = &v[(k * ny + j) * nx..(k * ny + j + 1) * nx];
-                                for bxi in 0..bx {
-                                    let (x0, x1) = span(bxi, 0);
-                                    let (mut lo, mut hi, mut n) = (mn[bxi], mx[bxi], na[bxi]);
-                                    for &x in &row[x0..=x1] {
-                                        lo = nan_min(lo, x);
-                                        hi = nan_max(hi, x);
-                                        n |= x.is_nan();
-                                    }
-                                    (mn[bxi], mx[bxi], na[bxi]) = (lo, hi, n);
-                                }
-                            }
-                        }
-                    }
-                },
-            );
-            Level { dims, min, max, nan }
+            let n = dims.iter().map(|&d| d as usize).product();
+            let mut level =
+                Level { dims, min: vec![f32::INFINITY; n], max: vec![f32::NEG_INFINITY; n], nan: vec![false; n] };
+            match vol.store() {
+                None => brick_rows(&mut level, &vol.values, 0, 0, samples, s),
+                Some(store) => build_streaming(&mut level, store, samples, s),
+            }
+            level
         };
 
         let mut levels = vec![bricks];
@@ -281,14 +320,39 @@ impl MinMaxOctree {
         }
         levels.reverse();
 
-        MinMaxOctree {
+        let tree = MinMaxOctree {
             depth,
             cells,
             origin: vol.origin,
             spacing: vol.spacing,
             levels,
             values: vol.values.clone(),
+            store: vol.store().cloned(),
             samples,
+        };
+        if vol.is_lazy() {
+            let r = tree.root();
+            vol.set_range(r.min, r.max);
+        }
+        tree
+    }
+
+    /// [`Self::build`], with a lazy volume's read errors (and infinite samples) as an error naming
+    /// `values`.
+    pub fn try_build(vol: &Volume) -> crate::Result<Self> {
+        let t = Self::build(vol);
+        vol.take_error()?;
+        Ok(t)
+    }
+
+    /// Min/max and NaN of the samples `lo..=hi`: the shared samples, or a lazy volume's cache.
+    fn scan(&self, lo: [usize; 3], hi: [usize; 3]) -> (f32, f32, bool) {
+        match &self.store {
+            None => scan(&self.values, self.samples, lo, hi),
+            Some(s) => {
+                let w = s.window(lo, hi);
+                scan(&w.data, w.dims, [0; 3], [0, 1, 2].map(|a| hi[a] - lo[a]))
+            }
         }
     }
 
@@ -336,7 +400,7 @@ impl MinMaxOctree {
                 (l.min[i], l.max[i], l.nan[i])
             }
             // Finer than the stored bricks: at most 5³ samples (cells lo..hi span samples lo..=hi).
-            None => scan(&self.values, self.samples, cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
+            None => self.scan(cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
         };
         let pos = |p: [u32; 3]| [0, 1, 2].map(|a| self.origin[a] + p[a] as f64 * self.spacing[a]);
         NodeInfo {
@@ -380,7 +444,9 @@ impl MinMaxOctree {
     /// ([`super::bricks::leaf_nodes`]), straight from the samples; `None` when the leaves are
     /// stored levels (then use [`Self::map_at_depth`]).
     pub fn leaf_nodes(&self, w: f32) -> Option<Vec<u8>> {
-        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
+        // (A lazy volume's classes come from the stored levels: this would read every sample.)
+        (self.levels.len() as u32 <= self.depth && self.store.is_none())
+            .then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
     }
 
     /// The walk's contour bricks ([`super::bricks::contour_bricks`]) with a block for each of
@@ -389,7 +455,15 @@ impl MinMaxOctree {
     /// cells per axis: the root, brick 0.)
     pub fn contour_bricks(&self, bricks: &[NodeInfo]) -> (Vec<u32>, usize) {
         let blocks: Vec<[u32; 3]> = bricks.iter().map(|n| [n.ix, n.iy, n.iz]).collect();
-        super::bricks::contour_bricks(&self.values, self.samples, &blocks)
+        match &self.store {
+            None => super::bricks::contour_bricks(&self.values, self.samples, &blocks),
+            // (Not reached: a lazy volume has no leaf classes, so no contours. Correct, but reads all.)
+            Some(s) => super::bricks::contour_bricks(
+                &s.window([0; 3], self.samples.map(|n| n - 1)).data,
+                self.samples,
+                &blocks,
+            ),
+        }
     }
 
     /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
@@ -416,7 +490,7 @@ impl MinMaxOctree {
                             let c = [x, y, z];
                             let lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as usize);
                             let hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as usize);
-                            let (mn, mx, nan) = scan(&self.values, self.samples, lo, hi);
+                            let (mn, mx, nan) = self.scan(lo, hi);
                             f(mn, mx, nan)
                         }
                     }
