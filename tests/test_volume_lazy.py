@@ -189,3 +189,16 @@ def test_read_errors_are_input_errors(tmp_path):
     lz = gc.Volume(Broken(), lazy=True)
     with pytest.raises(gc.InputError, match="^values: reading the volume's samples failed.*disk on fire"):
         lz.max_depth()
+
+
+def test_bench_big_volume_tiny():
+    from geocull.bench import big_volume, cli
+
+    cfg = cli.config(cli.parser().parse_args(["--scene", "big-volume", "--tiny"]))
+    assert (cfg["big_n"], cfg["cache_mib"]) == (48, 16)
+    res = big_volume.run(dict(cfg, width=48, height=48))
+    assert res["slice_move_read"] == 4 * 48 * 48, "a move reads one plane"
+    assert res["cache_peak"] <= 16 << 20 and res["peak_rss"] > 0
+    assert [v["equal"] for v in res["views"]] == [True] * 3
+    assert all(0 < v["bytes_read"] <= res["cube_bytes"] for v in res["views"])
+    assert "peak RSS" in big_volume.format_table(res)

@@ -293,7 +293,7 @@ class Volume:
 
     def __init__(
         self,
-        values: ArrayLike,
+        values: ArrayLike | Any,  # also zarr / dask arrays, DataArrays, xtgeo cubes
         origin: ArrayLike | None = None,
         spacing: ArrayLike | None = None,
         order: VolumeOrder | None = None,
@@ -534,6 +534,11 @@ class Volume:
         """A lazy volume's brick cache in bytes: (budget, held now, most ever held, never above the
         budget); None for a volume in memory."""
         return self._v.cache_info
+
+    def clear_cache(self) -> None:
+        """Drops a lazy volume's cached bricks (its next reads go to the source, e.g. to measure a
+        cold frame's ``stats["bytes_read"]``); does nothing for a volume in memory."""
+        self._v.clear_cache()
 
     @property
     def offset(self) -> float:

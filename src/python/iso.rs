@@ -126,6 +126,13 @@ impl PyVolume {
         self.inner.store().map(|s| (s.budget(), s.held_bytes(), s.peak_bytes()))
     }
 
+    /// Drops a lazy volume's cached bricks (the next reads go to its source); nothing in memory.
+    fn clear_cache(&self) {
+        if let Some(s) = self.inner.store() {
+            s.clear();
+        }
+    }
+
     /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, rotation, residuals).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let v = &self.inner;
