@@ -202,3 +202,26 @@ def test_bench_big_volume_tiny():
     assert [v["equal"] for v in res["views"]] == [True] * 3
     assert all(0 < v["bytes_read"] <= res["cube_bytes"] for v in res["views"])
     assert "peak RSS" in big_volume.format_table(res)
+
+
+@pytest.mark.parametrize("kind", ["inline", "crossline", "missing_and_dead"])
+def test_a_segy_file_opened_lazily_reads_nothing_and_equals_the_loaded_one(tmp_path, kind):
+    pytest.importorskip("segyio")
+    from test_io_segy import write_cube
+
+    kw: dict = {"sorting": "crossline"} if kind == "crossline" else {}
+    if kind == "missing_and_dead":
+        kw = {"skip": {(1, 2), (3, 3)}, "dead": {(0, 0), (2, 5)}}
+    path = write_cube(tmp_path / "c.sgy", rotation=-30.0, handed=-1.0, **kw)
+    v = gc.Volume.from_segy(path)
+    lz = gc.Volume.from_segy(path, lazy=True, cache_bytes=1 << 20)
+    assert lz.is_lazy and lz.bytes_read == 0
+    assert (lz.shape, lz.origin, lz.spacing, lz.rotation) == (v.shape, v.origin, v.spacing, v.rotation)
+    np.testing.assert_array_equal(lz.inlines, v.inlines)
+    w = float(np.nanmedian(v.nodes(0)["min"]) + np.nanmedian(v.nodes(0)["max"])) / 2
+    for a, b in zip(gc.extract_isosurface(lz, w), gc.extract_isosurface(v, w), strict=True):
+        np.testing.assert_array_equal(a, b)
+    scenes = [gc.Scene() for _ in range(2)]
+    for s, vol in zip(scenes, (v, lz), strict=True):
+        s.add_slice(vol, "crossline", 3)
+    np.testing.assert_array_equal(scenes[0].to_bytes(), scenes[1].to_bytes())

@@ -128,10 +128,14 @@ class SegyCube:
     ``traces[a, b]`` is the trace index of inline index a, crossline index b (-1: missing or dead,
     read as NaN). The file stays open while the cube lives (:meth:`close` closes it)."""
 
-    def __init__(self, f: Any, traces: np.ndarray, ns: int, dtype: np.dtype[Any], owned: bool) -> None:
+    def __init__(self, f: Any, ta: np.ndarray, tb: np.ndarray, shape: tuple[int, int, int], owned: bool) -> None:
+        """``f``: the open file; trace t (file order) lies at inline index ``ta[t]``, crossline index
+        ``tb[t]``; ``owned``: close ``f`` with the cube."""
         self.f = f
-        self.traces = traces
-        self.shape = (traces.shape[0], traces.shape[1], ns)
+        self.traces = np.full(shape[:2], -1, dtype=np.int64)
+        self.traces[ta, tb] = np.arange(len(ta))
+        self.shape = shape
+        dtype = np.dtype(getattr(f, "dtype", np.float32))
         self.dtype = np.dtype(np.float32) if dtype.kind == "f" and dtype.itemsize <= 4 else np.dtype(np.float64)
         self.ndim = 3
         self._owned = owned

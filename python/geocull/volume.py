@@ -408,6 +408,8 @@ class Volume:
         xline: int = 193,
         z_positive: ZPositive = "down",
         tolerance: float | None = None,
+        lazy: bool = False,
+        cache_bytes: int | None = None,
     ) -> Volume:
         """A post-stack 3-D SEG-Y cube (needs segyio): ``source`` is a path or an open
         ``segyio.SegyFile``; iline / xline: the trace header bytes of the inline and crossline numbers
@@ -420,10 +422,19 @@ class Volume:
         perpendicular (either handedness); dead and missing traces are NaN; skewed, irregular,
         unstructured and pre-stack files, and every reader failure (truncated file, headers that
         contradict it), are InputErrors naming ``source`` and the path. The volume carries the
-        survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`)."""
+        survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`).
+
+        lazy=True: the file is not read (only its headers): a lazy volume (see :class:`Volume`'s
+        ``lazy``) whose reads take, for a box, only its traces and of each only the samples asked
+        for (a path stays open while the volume lives); cache_bytes: its brick cache. Infinite
+        samples are then refused when the octree's pass meets them (InputError naming ``values``)."""
         from . import io
 
-        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance)
+        use_lazy = cv.boolean(lazy, "lazy")
+        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance,
+                          lazy=use_lazy)
+        if use_lazy:
+            return cls(**kw, lazy=True, cache_bytes=cache_bytes)
         idx = cv.first_infinite(kw["values"])
         if idx is not None:  # the rule of every volume, named for the file (inline, crossline, sample)
             k = idx[2]
