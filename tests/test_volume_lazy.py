@@ -65,6 +65,10 @@ def test_a_zarr_volume_is_lazy_and_equals_the_numpy_one(tmp_path):
         vb, fb = gc.extract_isosurface(lz, w)
         np.testing.assert_array_equal(va, vb)
         np.testing.assert_array_equal(fa, fb)
+    scenes = [gc.Scene() for _ in range(2)]
+    for s, vol in zip(scenes, (v, lz), strict=True):
+        s.add_isosurface(vol, 0.02, values=vol, color_by="values")
+    assert scenes[0].to_bytes() == scenes[1].to_bytes(), "add_isosurface, coloured by a lazy volume's values"
     budget, held, peak = lz.cache_info
     assert budget == 2 * BRICK and held <= budget and peak <= budget
 
