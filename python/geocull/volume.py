@@ -269,7 +269,7 @@ class Volume:
         memory). None (default): lazily for zarr and dask arrays and xarray DataArrays backed by them
         (or by any lazily indexed file), into memory for numpy arrays and memory maps; True: lazily
         for any array that slices (an ``np.memmap`` is then never read whole); False: into memory.
-        A lazy volume holds no samples: its octree is built in one streaming pass (slabs of about 32
+        A lazy volume holds no samples: its octree is built in one streaming pass (slabs of about 128
         MiB) the first time it is needed; a slice reads its plane alone (:meth:`Scene.add_slice`,
         and each move of ``set_slice_index``); isosurfaces read, through a cache of bricks of 32³
         samples, only the nodes they extract (:meth:`Renderer.render_isosurface` extracts the

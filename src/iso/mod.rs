@@ -422,7 +422,7 @@ impl Volume {
                 let n = self.nx * self.ny * self.nz;
                 w.u64(n as u64);
                 w.0.reserve(4 * n);
-                s.for_each_slab(store::slab_layers(self.nx * self.ny), 0, |_, slab| {
+                s.for_each_slab(store::slab_layers(self.nx * self.ny, store::SLAB_BYTES), 0, |_, slab| {
                     w.0.extend(slab.iter().flat_map(|v| v.to_le_bytes()));
                 });
             }
@@ -554,7 +554,9 @@ impl Volume {
                 // One streaming pass (the octree's build sets the range without it).
                 Some(s) => {
                     let mut m = (f32::INFINITY, f32::NEG_INFINITY);
-                    s.for_each_slab(store::slab_layers(self.nx * self.ny), 0, |_, slab| m = extremes(m, of(slab)));
+                    s.for_each_slab(store::slab_layers(self.nx * self.ny, store::SLAB_BYTES), 0, |_, slab| {
+                        m = extremes(m, of(slab))
+                    });
                     m
                 }
             };

@@ -24,7 +24,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::store::{slab_layers, BrickCache};
+use super::store::{slab_layers, BrickCache, OCTREE_SLAB_BYTES};
 use super::Volume;
 
 /// Depths below the finest stored level, answered by scanning samples: bricks of 2^3 = 8 cells.
@@ -236,10 +236,10 @@ fn brick_rows(level: &mut Level, v: &[f32], k0: usize, bz0: usize, samples: [usi
 }
 
 /// [`brick_rows`] over a lazy volume's store: one streaming pass over slabs of whole brick rows
-/// (a multiple of `s` cells, sharing their boundary layer), about 32 MiB each, not cached. An
+/// (a multiple of `s` cells, sharing their boundary layer), about 128 MiB each, not cached. An
 /// infinite sample is an error kept in the store (as a read error).
 fn build_streaming(level: &mut Level, store: &BrickCache, samples: [usize; 3], s: usize) {
-    let layers = (slab_layers(samples[0] * samples[1]).saturating_sub(1) / s).max(1) * s + 1;
+    let layers = (slab_layers(samples[0] * samples[1], OCTREE_SLAB_BYTES).saturating_sub(1) / s).max(1) * s + 1;
     let mut inf = None;
     store.for_each_slab(layers, 1, |k0, slab| {
         if inf.is_none() {

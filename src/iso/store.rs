@@ -3,7 +3,7 @@
 //! in `crate::python`) through a bounded LRU cache of bricks ([`BrickCache`]).
 //!
 //! **Lazy volumes.** A volume over a source holds no samples: the octree is built in one streaming
-//! pass over slabs of sample layers ([`BrickCache::read_direct`], never cached); a slice reads its
+//! pass over slabs of sample layers (about [`OCTREE_SLAB_BYTES`]) ([`BrickCache::read_direct`], never cached); a slice reads its
 //! plane alone; the extraction reads, per node, the box of samples it needs (the node's cells and a
 //! one-sample ring for the gradients) as a [`Window`] assembled from cached bricks of [`BRICK`]³
 //! samples. The cache holds at most its budget of brick bytes (least recently used dropped first;
@@ -29,10 +29,17 @@ pub const BRICK: usize = 32;
 pub const DEFAULT_CACHE_BYTES: usize = 512 << 20;
 
 /// Sample layers per slab of a streaming pass over a grid of `layer` samples per z layer: about
-/// 32 MiB per slab, at least 2 layers.
-pub fn slab_layers(layer: usize) -> usize {
-    ((32usize << 20) / (4 * layer.max(1))).max(2)
+/// `bytes` per slab, at least 2 layers.
+pub fn slab_layers(layer: usize, bytes: usize) -> usize {
+    (bytes / (4 * layer.max(1))).max(2)
 }
+
+/// Bytes per slab of the passes that only reduce (the finite range, the bytes): 32 MiB.
+pub const SLAB_BYTES: usize = 32 << 20;
+
+/// Bytes per slab of the octree's pass: 128 MiB, so that a slab spans whole chunks of a chunked
+/// source (1024² layers: 33 layers, about two 32-layer chunk rows per read).
+pub const OCTREE_SLAB_BYTES: usize = 128 << 20;
 
 /// A store of f32 samples (residuals, see [`super::Volume`]) on a grid of `dims` (x, y, z).
 pub trait BrickSource: Send + Sync {

@@ -50,11 +50,11 @@ def salt_slab(n: int, k0: int, k1: int) -> np.ndarray:
 
 
 def write_cube(path: str, n: int) -> None:
-    """Writes the n³ salt-body cube as a zarr array at ``path`` (chunks 64³), one slab of 64 layers
-    at a time (bounded memory)."""
+    """Writes the n³ salt-body cube as a zarr array at ``path`` (chunks 32³, the lazy volume's
+    bricks), one slab of 32 layers at a time (bounded memory)."""
     import zarr
 
-    c = min(64, n)
+    c = min(32, n)
     z = zarr.open_array(path, mode="w", shape=(n, n, n), chunks=(c, c, c), dtype="f4")
     for k in range(0, n, c):
         z[k:k + c] = salt_slab(n, k, min(n, k + c))
