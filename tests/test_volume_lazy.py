@@ -134,6 +134,9 @@ def test_slices_equal_and_a_move_reads_one_plane(tmp_path, renderer):
         s.set_slice_index(sid, 40)
     assert lz.bytes_read - before == 4 * N * N, "one plane of 64 x 64 float32"
     assert np.array_equal(renderer.render(scenes[0][0], cam).image, renderer.render(scenes[1][0], cam).image)
+    # A scene pickles its slices' geometry, not their volume (lazy or not).
+    again = pickle.loads(pickle.dumps(scenes[1][0]))
+    assert np.array_equal(renderer.render(again, cam).image, renderer.render(scenes[0][0], cam).image)
 
 
 def test_implicit_frames_equal_the_numpy_ones_and_count_bytes_read(tmp_path, renderer):
