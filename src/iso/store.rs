@@ -20,7 +20,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use crate::error::{input_err, Result};
+use super::{check_grid, Volume};
+use crate::error::{ensure, input_err, Result};
 
 /// Samples per axis of a cached brick.
 pub const BRICK: usize = 32;
@@ -321,6 +322,79 @@ impl BrickCache {
             }
             k0 = k1 - overlap;
         }
+    }
+}
+
+/// A volume's access to its samples, resident or in a store.
+impl Volume {
+    /// A volume whose samples (f32 residuals about `offset`) stay in `store` and are read on
+    /// demand (see [`store`]): its `values` are empty. Checked as by [`Volume::with_offset`];
+    /// `store`'s grid must be `dims`.
+    pub fn lazy(
+        store: Arc<BrickCache>,
+        offset: f64,
+        dims: (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+    ) -> Result<Self> {
+        let (nx, ny, nz) = dims;
+        ensure(store.dims() == [nx, ny, nz], "values", || {
+            format!("the sample store holds {:?} samples; expected {nx}x{ny}x{nz}", store.dims())
+        })?;
+        check_grid(dims, origin, spacing)?;
+        ensure(offset.is_finite(), "offset", || format!("offset is {offset}; expected a finite number"))?;
+        Ok(Volume {
+            values: Arc::from(Vec::new()),
+            offset,
+            nx,
+            ny,
+            nz,
+            origin,
+            spacing,
+            rotation: 0.0,
+            range: Default::default(),
+            store: Some(store),
+        })
+    }
+
+    /// The sample store of a lazy volume ([`Volume::lazy`]); None for a resident one.
+    pub fn store(&self) -> Option<&Arc<BrickCache>> {
+        self.store.as_ref()
+    }
+
+    /// True for a volume over a sample store ([`Volume::lazy`]).
+    pub fn is_lazy(&self) -> bool {
+        self.store.is_some()
+    }
+
+    /// Bytes read from a lazy volume's store so far (0 for a resident volume).
+    pub fn bytes_read(&self) -> u64 {
+        self.store.as_ref().map_or(0, |s| s.bytes_read())
+    }
+
+    /// The first read error of a lazy volume's store since the last call (see [`store`]).
+    pub fn take_error(&self) -> Result<()> {
+        self.store.as_ref().map_or(Ok(()), |s| s.take_error())
+    }
+
+    /// The samples `lo ..= hi_incl` (inside the grid): a resident volume's whole array (borrowed),
+    /// or a lazy volume's box read through its cache.
+    pub fn window(&self, lo: [usize; 3], hi_incl: [usize; 3]) -> Window<'_> {
+        match &self.store {
+            None => Window {
+                data: std::borrow::Cow::Borrowed(&self.values[..]),
+                lo: [0; 3],
+                dims: [self.nx, self.ny, self.nz],
+            },
+            Some(s) => s.window(lo, hi_incl),
+        }
+    }
+
+    /// The samples a box of cells `lo..hi` (clamped, non-empty) and the gradients at its samples
+    /// need: its samples and a one-sample ring (clamped to the grid).
+    pub fn cell_window(&self, lo: [usize; 3], hi: [usize; 3]) -> Window<'_> {
+        let n = [self.nx, self.ny, self.nz];
+        self.window(lo.map(|v| v.saturating_sub(1)), [0, 1, 2].map(|a| (hi[a] + 1).min(n[a] - 1)))
     }
 }
 
