@@ -100,6 +100,7 @@ bench: setup
 bench-quick: setup
 	$(PY) -m geocull bench --quick --json out/bench_quick.json
 	$(PY) -m geocull bench --scene field --quick --json out/bench_field_quick.json
+	$(PY) -m geocull bench --scene big-volume --quick --json out/bench_big_volume_quick.json
 
 # Issue 41's scale benchmark: the Gullfaks-like scene at 3.9 M, 15 M and 61 M triangles, each size in its own
 # process (~15 min and ~3 GB on lavapipe); `python -m geocull bench --scene scale --quick` is the seconds-long variant.

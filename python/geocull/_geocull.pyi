@@ -7,7 +7,7 @@ The dict shapes below (``@type_check_only`` TypedDicts) exist only for type chec
 extension returns plain dicts with exactly these keys.
 """
 
-from typing import Final, Literal, NotRequired, Self, TypeAlias, TypedDict, final, type_check_only
+from typing import Any, Final, Literal, NotRequired, Self, TypeAlias, TypedDict, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
@@ -373,6 +373,24 @@ class Volume:
     def spacing(self) -> tuple[float, float, float]: ...
     @property
     def offset(self) -> float: ...
+    @staticmethod
+    def lazy(
+        reader: Any,  # .read(lo, hi) -> float32 (z, y, x) array of the stored grid's box lo..hi (x, y, z)
+        shape: tuple[int, int, int],  # (nx, ny, nz) of the stored grid
+        origin: tuple[float, float, float],
+        spacing: tuple[float, float, float],
+        z_positive: str,  # "up" | "down"
+        offset: float,
+        rotation: float,
+        cache_bytes: int,
+    ) -> Volume: ...
+    @property
+    def is_lazy(self) -> bool: ...
+    @property
+    def bytes_read(self) -> int: ...
+    @property
+    def cache_info(self) -> tuple[int, int, int] | None: ...
+    def clear_cache(self) -> None: ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
     def from_bytes(data: bytes) -> Volume: ...

@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 import numpy as np
 
+from . import _lazy
 from ._errors import InputError
 
 if TYPE_CHECKING:
@@ -476,6 +477,7 @@ def from_segy(
     xline: int = 193,
     z_positive: Literal["up", "down"] = "down",
     tolerance: float | None = None,
+    lazy: bool = False,
 ) -> VolumeKwargs:
     """A post-stack 3-D SEG-Y cube as keyword arguments of :class:`geocull.Volume` (needs segyio);
     ``Volume.from_segy(source)`` builds the volume.
@@ -508,7 +510,8 @@ def from_segy(
     Every reader failure (a missing, truncated or damaged file, headers that contradict the file
     size, an unknown sample format code) is an :class:`geocull.InputError` naming ``source``, the
     path and the cause. The samples are read once (``segyio.tools.cube`` for complete files), which
-    the Volume copies once into its buffer.
+    the Volume copies once into its buffer. ``lazy``: no sample is read; ``values`` is then a
+    ``geocull._lazy.SegyCube`` reading the traces of a box when sliced (a path stays open while it lives).
     """
     segyio = _import("segyio")
     _zsign(z_positive)
@@ -523,16 +526,23 @@ def from_segy(
         where = os.fspath(source)
         if not os.path.isfile(where):
             raise InputError(f"source: no such file {where!r}")
+        def kwargs(sparse: bool) -> VolumeKwargs:
+            f, kw = segyio.open(where, iline=iline, xline=xline, ignore_geometry=sparse), None
+            try:  # a lazy cube owns the open file
+                kw = _segy_kwargs(segyio, f, z_positive, tol, iline, xline, sparse=sparse, lazy=lazy)
+                return kw
+            finally:
+                if not (lazy and kw is not None):
+                    f.close()
+
         try:
             try:
-                with segyio.open(where, iline=iline, xline=xline) as f:
-                    return _segy_kwargs(segyio, f, z_positive, tol, iline, xline)
+                return kwargs(False)
             except ValueError as e:
                 if isinstance(e, InputError) or "should match the number of traces" not in str(e):
                     raise
             # Missing traces: segyio cannot infer the geometry; read the traces as they come.
-            with segyio.open(where, iline=iline, xline=xline, ignore_geometry=True) as f:
-                return _segy_kwargs(segyio, f, z_positive, tol, iline, xline, sparse=True)
+            return kwargs(True)
         except InputError as e:
             msg = str(e).removeprefix("source: ")
             raise InputError(f"source: {where!r}: {msg}") from None
@@ -542,7 +552,7 @@ def from_segy(
     if not hasattr(source, "trace") or not hasattr(source, "header"):
         raise InputError(f"source: {type(source).__name__} is neither a path nor an open segyio.SegyFile")
     try:
-        return _segy_kwargs(segyio, source, z_positive, tol, iline, xline, sparse=bool(source.unstructured))
+        return _segy_kwargs(segyio, source, z_positive, tol, iline, xline, bool(source.unstructured), lazy, False)
     except InputError:
         raise
     except _SEGY_ERRORS as e:
@@ -552,7 +562,7 @@ def from_segy(
 
 def _segy_kwargs(
     segyio: Any, f: Any, z_positive: Literal["up", "down"], tol: float | None, iline: int, xline: int,
-    sparse: bool = False,
+    sparse: bool = False, lazy: bool = False, owned: bool = True,
 ) -> VolumeKwargs:
     fmt = int(f.bin[segyio.BinField.Format])
     if fmt not in _SEGY_FORMATS:
@@ -574,11 +584,14 @@ def _segy_kwargs(
         if len(np.unique(pos)) != len(pos):
             raise InputError("source: several traces share an inline / crossline pair (pre-stack, or the wrong "
                              "iline=/xline= header bytes)")
-        raw = np.asarray(f.trace.raw[:])
-        if raw.shape != (f.tracecount, ns):
-            raise InputError(f"source: read {raw.shape} samples, expected {f.tracecount} traces x {ns}")
-        cube = np.full((len(il), len(xl), ns), np.nan, dtype=raw.dtype if raw.dtype.kind == "f" else np.float64)
-        cube[ta, tb] = raw
+        if lazy:
+            cube: Any = _lazy.SegyCube(f, ta, tb, (len(il), len(xl), ns), owned)
+        else:
+            raw = np.asarray(f.trace.raw[:])
+            if raw.shape != (f.tracecount, ns):
+                raise InputError(f"source: read {raw.shape} samples, expected {f.tracecount} traces x {ns}")
+            cube = np.full((len(il), len(xl), ns), np.nan, dtype=raw.dtype if raw.dtype.kind == "f" else np.float64)
+            cube[ta, tb] = raw
         ta_all, tb_all = ta, tb
     else:
         if f.unstructured:
@@ -588,15 +601,18 @@ def _segy_kwargs(
             raise InputError(f"source: a pre-stack file ({len(f.offsets)} offsets); geocull reads post-stack cubes")
         il, xl = np.asarray(f.ilines), np.asarray(f.xlines)
         inline_sorted = f.sorting == segyio.TraceSortingFormat.INLINE_SORTING
-        cube = segyio.tools.cube(f)  # (inlines, crosslines, samples) or (crosslines, inlines, samples)
-        if not inline_sorted:
-            cube = cube.transpose(1, 0, 2)
+        if not lazy:
+            cube = segyio.tools.cube(f)  # (inlines, crosslines, samples) or (crosslines, inlines, samples)
+            if not inline_sorted:
+                cube = cube.transpose(1, 0, 2)
         na_, nb_ = len(il), len(xl)
         a, b = np.meshgrid(np.arange(na_), np.arange(nb_), indexing="ij")  # (na, nb)
         if inline_sorted:
             ta_all, tb_all = a.ravel(), b.ravel()  # trace t in file order -> (a, b)
         else:
             ta_all, tb_all = a.T.ravel(), b.T.ravel()
+        if lazy:
+            cube = _lazy.SegyCube(f, ta_all, tb_all, (na_, nb_, ns), owned)
     na, nb = len(il), len(xl)
     if min(na, nb, ns) < 2:
         raise InputError(f"source: {na} inlines x {nb} crosslines x {ns} samples; a volume needs 2 of each")
@@ -609,7 +625,9 @@ def _segy_kwargs(
     scale = np.where(sc < 0, 1.0 / np.abs(np.where(sc == 0, 1, sc)), np.where(sc == 0, 1.0, sc))
     x, y = x * scale, y * scale
     dead = np.asarray(f.attributes(tf.TraceIdentificationCode)[:]) == 2
-    if dead.any():
+    if dead.any() and lazy:
+        cube.traces[ta_all[dead], tb_all[dead]] = -1
+    elif dead.any():
         if cube.dtype.kind != "f":
             cube = cube.astype(np.float64)
         cube[ta_all[dead], tb_all[dead]] = np.nan

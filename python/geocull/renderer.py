@@ -481,7 +481,10 @@ class Renderer:
         (surface_triangles, nodes_tested, nodes_visible, nodes_straddling,
         occluder_boxes_below/above, occluder_ms, cull_ms, extract_ms, draw_ms, surface_ms
         (= extract + draw), total_ms, patches_cached/extracted, cache_bytes, gpu_cache_bytes,
-        walk_rays / walk_steps (the host's walk: rays entering the volume's box and their steps), ...).
+        walk_rays / walk_steps (the host's walk: rays entering the volume's box and their steps),
+        bytes_read / brick_cache_bytes (a lazy volume: bytes the frame read from its source, bytes
+        its brick cache holds), ...). A lazy volume's (``Volume(lazy=...)``) default occluder and
+        cull depths are ``max_depth() - 3``, so a frame reads only the nodes it extracts.
         Patches are kept within :attr:`iso_cache_budget` bytes, and their vertices and triangles
         stay on the GPU between frames (``gpu_cache_bytes``, at most about twice theirs).
 

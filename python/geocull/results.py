@@ -149,6 +149,8 @@ class IsoStats(TypedDict):
     walk: Literal["gpu", "cpu", "none"]  # where the implicit walk ran ("none": culling="none", no walk)
     walk_rays: int  # host walk: pixel rays that entered the volume's box; 0 when walk != "cpu" (not counted)
     walk_steps: int  # host walk: their steps (a cell entered or a jump across empty bricks); 0 when walk != "cpu"
+    bytes_read: int  # bytes this frame read from a lazy volume's source (brick-cache misses); 0 for one in memory
+    brick_cache_bytes: int  # bytes a lazy volume's brick cache holds after the frame (<= its cache_bytes); else 0
     triangles_drawn: int  # = surface_triangles (name shared with RenderStats)
     tiles_drawn: int  # = nodes_visible (name shared with RenderStats)
     tiles_total: int  # = nodes_straddling (name shared with RenderStats)

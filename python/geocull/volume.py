@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _convert as cv
-from . import _geocull
+from . import _geocull, _lazy
 from ._errors import InputError
 
 if TYPE_CHECKING:
@@ -145,7 +145,8 @@ def _from_dataarray(
             first, step = float(np.asarray(da.coords[dim].values)[0]), -step
         o[k], sp[k] = first, step
     return (
-        da.data,
+        # (A lazily backed DataArray's variable: slicing it reads only the slice; .data would load it.)
+        da.variable if _lazy.backend_is_lazy(da) else da.data,
         None if origin is not None else (o[0], o[1], o[2]),
         None if spacing is not None else (sp[0], sp[1], sp[2]),
         zp,
@@ -264,6 +265,21 @@ class Volume:
         order ((nx,), (ny,), (nz,)): inline and crossline numbers, sample times (ms) or depths;
         :meth:`Scene.add_slice` takes ``inline=``, ``crossline=``, ``time=`` / ``depth=`` in them.
 
+    lazy: read the samples on demand instead of copying them into memory (volumes larger than
+        memory). None (default): lazily for zarr and dask arrays and xarray DataArrays backed by them
+        (or by any lazily indexed file), into memory for numpy arrays and memory maps; True: lazily
+        for any array that slices (an ``np.memmap`` is then never read whole); False: into memory.
+        A lazy volume holds no samples: its octree is built in one streaming pass (slabs of about 128
+        MiB) the first time it is needed; a slice reads its plane alone (:meth:`Scene.add_slice`,
+        and each move of ``set_slice_index``); isosurfaces read, through a cache of bricks of 32³
+        samples, only the nodes they extract (:meth:`Renderer.render_isosurface` extracts the
+        visible ones; its ``stats["bytes_read"]`` counts the bytes a frame read). Its frames'
+        default ``occluder_depth`` and ``cull_depth`` are ``max_depth() - 3`` (the octree's stored
+        bricks, which need no sample). float64 and integer sources are read once more at
+        construction for their midrange (:attr:`offset`). Pickling a lazy volume raises InputError
+        (its samples may not fit in memory); :meth:`to_bytes` reads them all.
+    cache_bytes: a lazy volume's brick-cache budget in bytes (default 512 MiB,
+        ``DEFAULT_CACHE_BYTES``); the cache never holds more (0 keeps no brick).
     xtgeo: an ``xtgeo.Cube`` passed as ``values`` is read by :func:`geocull.io.from_xtgeo_cube`
     (undefined samples NaN, rotation, yflip, z positive down, its inline / crossline numbers and
     sample depths), recognised by its attributes; any other argument given wins.
@@ -277,7 +293,7 @@ class Volume:
 
     def __init__(
         self,
-        values: ArrayLike,
+        values: ArrayLike | Any,  # also zarr / dask arrays, DataArrays, xtgeo cubes
         origin: ArrayLike | None = None,
         spacing: ArrayLike | None = None,
         order: VolumeOrder | None = None,
@@ -288,7 +304,15 @@ class Volume:
         inlines: ArrayLike | None = None,
         crosslines: ArrayLike | None = None,
         samples: ArrayLike | None = None,
+        lazy: bool | None = None,
+        cache_bytes: int | None = None,
     ) -> None:
+        use_lazy = None if lazy is None else cv.boolean(lazy, "lazy")
+        if use_lazy is None:
+            use_lazy = _lazy.is_lazy_source(values)
+        if cache_bytes is not None and not use_lazy:
+            raise InputError("cache_bytes: only a lazy volume has a brick cache (pass lazy=True, or a zarr / dask "
+                             "array)")
         if _is_xtgeo_cube(values):  # an xtgeo Cube: its geometry and survey numbers, keywords winning
             from . import io
 
@@ -315,6 +339,9 @@ class Volume:
                 raise InputError(f"{arg}: {v!r} is not a string")
         rot = 0.0 if rotation is None else cv.number(rotation, "rotation")
         flip = False if yflip is None else cv.boolean(yflip, "yflip", hint="xtgeo's yflip=-1 is yflip=True")
+        if use_lazy:
+            self._init_lazy(values, o3, s3, order, zp, rot, flip, (inlines, crosslines, samples), cache_bytes)
+            return
         a = given = _values(values)
         o = o3 if o3 is not None else (0.0, 0.0, 0.0)
         sp = s3 if s3 is not None else (1.0, 1.0, 1.0)
@@ -342,6 +369,37 @@ class Volume:
         self._flip = (False, flip, (zp or "up") == "down")
         self._survey: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = survey  # type: ignore[assignment]
 
+    def _init_lazy(
+        self, values: Any, o3: tuple[float, float, float] | None, s3: tuple[float, float, float] | None,
+        order: str | None, zp: str | None, rot: float, flip: bool, numbers: tuple[Any, Any, Any],
+        cache_bytes: int | None,
+    ) -> None:
+        """A lazy volume over ``values`` (see ``lazy=``): the checks of the resident path but the
+        samples', a reader (``_lazy.BlockReader``) and the core's lazy volume."""
+        if not all(hasattr(values, k) for k in ("shape", "dtype", "__getitem__")):
+            raise InputError(f"values: a {type(values).__name__} cannot be read lazily; expected an array that "
+                             "slices (zarr, dask, xarray, np.memmap)")
+        arr = _lazy.array_of(values)
+        shape, dt = _lazy.check_array(arr)
+        o = o3 if o3 is not None else (0.0, 0.0, 0.0)
+        sp = s3 if s3 is not None else (1.0, 1.0, 1.0)
+        n = (shape[2], shape[1], shape[0]) if order in (None, "zyx") else shape
+        if flip:  # rows towards -y: origin on the last row (the reader reverses the j axis)
+            o = _right_handed(np.broadcast_to(np.float32(0), (1, n[1], 1)), o, sp[1], rot)[1]
+        _check_extent(o3 or (0.0, 0.0, 0.0), sp, n, rot, flip, (zp or "up") == "down")
+        survey = tuple(
+            _numbers(x, arg, k) for x, arg, k in zip(numbers, ("inlines", "crosslines", "samples"), n, strict=True)
+        )
+        budget = _lazy.DEFAULT_CACHE_BYTES if cache_bytes is None else cv.integer(cache_bytes, "cache_bytes")
+        if budget < 0:
+            raise InputError(f"cache_bytes: {budget} is negative")
+        wide = _lazy.wide(dt)
+        offset = _lazy.midrange(arr) if wide else 0.0
+        reader = _lazy.BlockReader(arr, order or "zyx", (zp or "up") == "down", flip, offset, wide)
+        self._v = _geocull.Volume.lazy(reader, n, o, sp, zp or "up", offset, rot, budget)
+        self._flip = (False, flip, (zp or "up") == "down")
+        self._survey = survey  # type: ignore[assignment]
+
     @classmethod
     def from_segy(
         cls,
@@ -350,6 +408,8 @@ class Volume:
         xline: int = 193,
         z_positive: ZPositive = "down",
         tolerance: float | None = None,
+        lazy: bool = False,
+        cache_bytes: int | None = None,
     ) -> Volume:
         """A post-stack 3-D SEG-Y cube (needs segyio): ``source`` is a path or an open
         ``segyio.SegyFile``; iline / xline: the trace header bytes of the inline and crossline numbers
@@ -362,10 +422,19 @@ class Volume:
         perpendicular (either handedness); dead and missing traces are NaN; skewed, irregular,
         unstructured and pre-stack files, and every reader failure (truncated file, headers that
         contradict it), are InputErrors naming ``source`` and the path. The volume carries the
-        survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`)."""
+        survey's numbers (:attr:`inlines`, :attr:`crosslines`, :attr:`samples`).
+
+        lazy=True: the file is not read (only its headers): a lazy volume (see :class:`Volume`'s
+        ``lazy``) whose reads take, for a box, only its traces and of each only the samples asked
+        for (a path stays open while the volume lives); cache_bytes: its brick cache. Infinite
+        samples are then refused when the octree's pass meets them (InputError naming ``values``)."""
         from . import io
 
-        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance)
+        use_lazy = cv.boolean(lazy, "lazy")
+        kw = io.from_segy(source, iline=iline, xline=xline, z_positive=z_positive, tolerance=tolerance,
+                          lazy=use_lazy)
+        if use_lazy:
+            return cls(**kw, lazy=True, cache_bytes=cache_bytes)
         idx = cv.first_infinite(kw["values"])
         if idx is not None:  # the rule of every volume, named for the file (inline, crossline, sample)
             k = idx[2]
@@ -406,7 +475,10 @@ class Volume:
         """The volume as bytes (shape, origin, spacing, :attr:`offset`, :attr:`rotation` and the float32
         residuals, versioned little-endian); :meth:`from_bytes` reads them. Pickling uses it and also
         keeps the survey numbers and the index order of :meth:`Scene.add_slice` (``from_bytes``
-        alone gives a volume without them, indexed as its stored grid)."""
+        alone gives a volume without them, indexed as its stored grid). A lazy volume's bytes hold
+        every sample: they are all read (after the octree's pass, which refuses infinite ones)."""
+        if self.is_lazy:
+            self._v.max_depth()
         return self._v.to_bytes()
 
     @staticmethod
@@ -425,6 +497,9 @@ class Volume:
         return v
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        if self.is_lazy:
+            raise InputError("volume: a lazy volume is not pickled (its samples may not fit in memory); pickle its "
+                             "source array and make the Volume again, or load it with lazy=False")
         return (Volume._restore, (self.to_bytes(), self._flip, self._survey))
 
     def __copy__(self) -> Volume:
@@ -453,6 +528,28 @@ class Volume:
     def rotation(self) -> float:
         """Degrees counter-clockwise about the vertical through :attr:`origin`."""
         return self._v.rotation
+
+    @property
+    def is_lazy(self) -> bool:
+        """True when the samples are read on demand (``lazy=``), not held in memory."""
+        return self._v.is_lazy
+
+    @property
+    def bytes_read(self) -> int:
+        """Bytes a lazy volume has read from its source so far (4 per float32 residual; the
+        octree's pass, planes, brick-cache misses); 0 for a volume in memory."""
+        return self._v.bytes_read
+
+    @property
+    def cache_info(self) -> tuple[int, int, int] | None:
+        """A lazy volume's brick cache in bytes: (budget, held now, most ever held, never above the
+        budget); None for a volume in memory."""
+        return self._v.cache_info
+
+    def clear_cache(self) -> None:
+        """Drops a lazy volume's cached bricks (its next reads go to the source, e.g. to measure a
+        cold frame's ``stats["bytes_read"]``); does nothing for a volume in memory."""
+        self._v.clear_cache()
 
     @property
     def offset(self) -> float:

@@ -36,7 +36,7 @@ use super::octree::NodeInfo;
 use cases::{cases, face_centre_above, face_corners, CENTRE, EDGES};
 
 pub(crate) mod cases;
-use super::Volume;
+use super::{Volume, Window};
 
 /// Triangles of one box of cells. Positions are grid-frame coordinates (world coordinates of an
 /// unrotated volume; see `Volume::to_world`).
@@ -91,12 +91,12 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// Central-difference gradient at a sample, in world units; one-sided at the
 /// border or next to a NaN neighbour, 0 along an axis with no usable pair.
-fn gradient(vol: &Volume, p: [usize; 3]) -> [f64; 3] {
+fn gradient(vol: &Volume, win: &Window<'_>, p: [usize; 3]) -> [f64; 3] {
     let n = [vol.nx, vol.ny, vol.nz];
-    let v = &vol.values;
-    let c = vol.index(p[0], p[1], p[2]);
+    let v = &win.data[..];
+    let c = win.index(p[0], p[1], p[2]);
     let vc = v[c] as f64;
-    let stride = [1, vol.nx, vol.nx * vol.ny];
+    let stride = win.strides();
     let mut g = [0.0; 3];
     for a in 0..3 {
         let lo = if p[a] > 0 { Some(v[c - stride[a]] as f64) } else { None }.filter(|x| !x.is_nan());
@@ -115,9 +115,18 @@ fn gradient(vol: &Volume, p: [usize; 3]) -> [f64; 3] {
 /// Vertex on the edge from sample `p` to `q = p + d` (canonical direction:
 /// always interpolated from `p` towards `q`), given both samples' gradients.
 #[inline]
-fn edge_vertex(vol: &Volume, w: f32, p: [usize; 3], q: [usize; 3], ga: [f64; 3], gb: [f64; 3]) -> ([f64; 3], [f32; 3]) {
-    let va = vol.values[vol.index(p[0], p[1], p[2])] as f64;
-    let vb = vol.values[vol.index(q[0], q[1], q[2])] as f64;
+#[allow(clippy::too_many_arguments)]
+fn edge_vertex(
+    vol: &Volume,
+    win: &Window<'_>,
+    w: f32,
+    p: [usize; 3],
+    q: [usize; 3],
+    ga: [f64; 3],
+    gb: [f64; 3],
+) -> ([f64; 3], [f32; 3]) {
+    let va = win.get(p[0], p[1], p[2]) as f64;
+    let vb = win.get(q[0], q[1], q[2]) as f64;
     let t = (w as f64 - va) / (vb - va);
     let pa = vol.sample_position(p[0], p[1], p[2]);
     let pb = vol.sample_position(q[0], q[1], q[2]);
@@ -165,10 +174,10 @@ impl GradLayers {
     /// Gradient of local sample `(lx, ly)` in layer `layer` (0 = k, 1 = k+1);
     /// `p` is its global index.
     #[inline]
-    fn get(&mut self, vol: &Volume, lx: usize, ly: usize, layer: usize, p: [usize; 3]) -> [f64; 3] {
+    fn get(&mut self, vol: &Volume, win: &Window<'_>, lx: usize, ly: usize, layer: usize, p: [usize; 3]) -> [f64; 3] {
         let i = ly * self.sx + lx;
         if !self.ok[layer][i] {
-            self.g[layer][i] = gradient(vol, p);
+            self.g[layer][i] = gradient(vol, win, p);
             self.ok[layer][i] = true;
         }
         self.g[layer][i]
@@ -193,6 +202,7 @@ struct SerialOut {
 /// `(i, j, k)` that `keep` takes (the others are left empty).
 fn extract_serial(
     vol: &Volume,
+    win: &Window<'_>,
     w: f32,
     lo: [usize; 3],
     hi: [usize; 3],
@@ -210,9 +220,9 @@ fn extract_serial(
     let mut bottom = Vec::new();
     let mut patch = SurfacePatch::default();
 
-    let (nx, nxy) = (vol.nx, vol.nx * vol.ny);
+    let [_, nx, nxy] = win.strides();
     let offs = [0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1];
-    let v = &vol.values[..];
+    let v = &win.data[..];
 
     for k in lo[2]..hi[2] {
         if k > lo[2] {
@@ -221,13 +231,13 @@ fn extract_serial(
             grads.advance();
         }
         for j in lo[1]..hi[1] {
-            let row = vol.index(0, j, k);
+            let row = win.index(lo[0], j, k);
             for i in lo[0]..hi[0] {
                 patch.cell_starts.push(patch.triangles.len() as u32);
                 if !keep([i, j, k]) {
                     continue;
                 }
-                let base = row + i;
+                let base = row + (i - lo[0]);
                 let mut mask = 0usize;
                 let mut nan = false;
                 let c = offs.map(|o| v[base + o]);
@@ -266,9 +276,9 @@ fn extract_serial(
                             (px + (d & 1) as usize, py + ((d >> 1) & 1) as usize, pz + ((d >> 2) & 1) as usize);
                         let p = [lo[0] + px, lo[1] + py, k + pz];
                         let q = [lo[0] + qx, lo[1] + qy, k + qz];
-                        let ga = grads.get(vol, px, py, pz, p);
-                        let gb = grads.get(vol, qx, qy, qz, q);
-                        let (pos, nrm) = edge_vertex(vol, w, p, q, ga, gb);
+                        let ga = grads.get(vol, win, px, py, pz, p);
+                        let gb = grads.get(vol, win, qx, qy, qz, q);
+                        let (pos, nrm) = edge_vertex(vol, win, w, p, q, ga, gb);
                         *slot = patch.positions.len() as u32;
                         patch.positions.push(pos);
                         patch.normals.push(nrm);
@@ -335,8 +345,9 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
     };
     let layers = hi[2] - lo[2];
     let cells = (hi[0] - lo[0]) * (hi[1] - lo[1]) * layers;
+    let win = vol.cell_window(lo, hi);
     if cells < PARALLEL_MIN_CELLS || layers < 2 {
-        return extract_serial(vol, w, lo, hi, false, &|_| true).patch;
+        return extract_serial(vol, &win, w, lo, hi, false, &|_| true).patch;
     }
     // Fixed chunking (independent of the thread count) for reproducible output.
     let nchunks = layers.min(64).min(cells / (PARALLEL_MIN_CELLS / 4)).max(2);
@@ -344,7 +355,7 @@ pub fn extract(vol: &Volume, w: f32, cell_lo: [u32; 3], cell_hi: [u32; 3]) -> Su
         (0..nchunks).map(|c| (lo[2] + layers * c / nchunks, lo[2] + layers * (c + 1) / nchunks)).collect();
     let parts: Vec<SerialOut> = bounds
         .par_iter()
-        .map(|&(z0, z1)| extract_serial(vol, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true, &|_| true))
+        .map(|&(z0, z1)| extract_serial(vol, &win, w, [lo[0], lo[1], z0], [hi[0], hi[1], z1], true, &|_| true))
         .collect();
 
     // Weld: a chunk's bottom-plane vertices are the previous chunk's top-plane
@@ -450,7 +461,7 @@ pub fn extract_nodes_where(
     nodes
         .par_iter()
         .map(|n| match clamp_box(vol, n.cell_lo, n.cell_hi) {
-            Some((lo, hi)) => extract_serial(vol, w, lo, hi, false, keep).patch,
+            Some((lo, hi)) => extract_serial(vol, &vol.cell_window(lo, hi), w, lo, hi, false, keep).patch,
             None => SurfacePatch::default(),
         })
         .collect()

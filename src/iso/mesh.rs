@@ -63,6 +63,7 @@ pub fn isosurface_mesh_sampled(
     )?;
     let (mesh, grid) = welded(vol, tree, isovalue)?;
     let sampled = grid.iter().map(|&q| sample(values, q)).collect();
+    values.take_error()?;
     Ok((mesh, sampled))
 }
 
@@ -115,6 +116,7 @@ fn welded(vol: &Volume, tree: &MinMaxOctree, isovalue: f64) -> Result<(IsoMesh, 
     let depth = tree.max_depth().saturating_sub(2);
     let nodes = tree.straddling_at_depth(w, depth);
     let patches = extract_nodes(vol, w, &nodes);
+    vol.take_error()?;
     let mut out = IsoMesh::default();
     let mut grid = Vec::new();
     let mut index: HashMap<[u64; 3], u32> = HashMap::new();

@@ -31,6 +31,8 @@ const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
 mod bricks;
 pub mod layout;
+#[cfg(test)]
+mod lazy_tests;
 pub mod march;
 pub mod mesh;
 pub mod octree;
@@ -39,17 +41,20 @@ mod passes;
 mod pool;
 pub mod render;
 mod seen;
+pub mod store;
 mod walk;
 /// The extraction's former name (marching tetrahedra), kept for paths that use it.
 pub use march as tetra;
 
 pub use march::{extract, extract_nodes, PatchCache, SurfacePatch};
 pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
+pub use store::{BrickCache, BrickSource, Window};
 
 /// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
 /// address from being reused), its value offset and its geometry.
 pub(crate) struct VolumeId {
     values: std::sync::Weak<[f32]>,
+    store: Option<std::sync::Weak<BrickCache>>,
     offset: u64,
     dims: [usize; 3],
     origin: [f64; 3],
@@ -60,6 +65,7 @@ impl VolumeId {
     pub(crate) fn of(v: &Volume) -> Self {
         Self {
             values: Arc::downgrade(&v.values),
+            store: v.store.as_ref().map(Arc::downgrade),
             offset: v.offset.to_bits(),
             dims: [v.nx, v.ny, v.nz],
             origin: v.origin,
@@ -68,6 +74,7 @@ impl VolumeId {
     }
     pub(crate) fn matches(&self, v: &Volume) -> bool {
         std::ptr::eq(self.values.as_ptr() as *const f32, Arc::as_ptr(&v.values) as *const f32)
+            && self.store.as_ref().map(|w| w.as_ptr()) == v.store.as_ref().map(Arc::as_ptr)
             && self.offset == v.offset.to_bits()
             && self.dims == [v.nx, v.ny, v.nz]
             && self.origin == v.origin
@@ -81,6 +88,25 @@ fn slice_len((nx, ny, nz): (usize, usize, usize)) -> Result<usize> {
     nx.checked_mul(ny)
         .filter(|s| s.checked_mul(nz).is_some())
         .ok_or_else(|| input_err("values", format!("volume dimensions {nx}x{ny}x{nz} overflow")))
+}
+
+/// The checks of [`Volume::new`] but the values' length: at least 2 samples per axis, cells per
+/// axis within `u32`, finite origin, finite positive spacing. Returns the sample count.
+fn check_grid(dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3]) -> Result<usize> {
+    let (nx, ny, nz) = dims;
+    ensure(nx >= 2 && ny >= 2 && nz >= 2, "values", || {
+        format!("volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}")
+    })?;
+    let max = u32::MAX as usize / 2;
+    ensure(nx <= max && ny <= max && nz <= max, "values", || format!("volume dimensions {nx}x{ny}x{nz} too large"))?;
+    let n = slice_len(dims)? * nz;
+    for (i, o) in origin.iter().enumerate() {
+        ensure(o.is_finite(), "origin", || format!("component {i} is {o}; expected a finite number"))?;
+    }
+    for (i, d) in spacing.iter().enumerate() {
+        ensure(d.is_finite() && *d > 0.0, "spacing", || format!("component {i} is {d}; expected a finite number > 0"))?;
+    }
+    Ok(n)
 }
 
 /// A scalar field sampled on a regular grid.
@@ -112,6 +138,8 @@ pub struct Volume {
     pub rotation: f64,
     /// [`Volume::finite_range`], computed on first use (the samples never change).
     range: std::sync::OnceLock<Option<[f64; 2]>>,
+    /// A lazy volume's samples ([`Volume::lazy`]; `values` is then empty): read on demand.
+    store: Option<Arc<BrickCache>>,
 }
 
 impl Volume {
@@ -120,26 +148,22 @@ impl Volume {
     /// with positive spacing. Errors name the argument: `values`, `origin` or `spacing`.
     pub fn new(values: Arc<[f32]>, dims: (usize, usize, usize), origin: [f64; 3], spacing: [f64; 3]) -> Result<Self> {
         let (nx, ny, nz) = dims;
-        ensure(nx >= 2 && ny >= 2 && nz >= 2, "values", || {
-            format!("volume needs at least 2 samples per axis, got {nx}x{ny}x{nz}")
-        })?;
-        let max = u32::MAX as usize / 2;
-        ensure(nx <= max && ny <= max && nz <= max, "values", || {
-            format!("volume dimensions {nx}x{ny}x{nz} too large")
-        })?;
-        let n = slice_len(dims)? * nz;
+        let n = check_grid(dims, origin, spacing)?;
         ensure(values.len() == n, "values", || {
             format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len())
         })?;
-        for (i, o) in origin.iter().enumerate() {
-            ensure(o.is_finite(), "origin", || format!("component {i} is {o}; expected a finite number"))?;
-        }
-        for (i, d) in spacing.iter().enumerate() {
-            ensure(d.is_finite() && *d > 0.0, "spacing", || {
-                format!("component {i} is {d}; expected a finite number > 0")
-            })?;
-        }
-        Ok(Volume { values, offset: 0.0, nx, ny, nz, origin, spacing, rotation: 0.0, range: Default::default() })
+        Ok(Volume {
+            values,
+            offset: 0.0,
+            nx,
+            ny,
+            nz,
+            origin,
+            spacing,
+            rotation: 0.0,
+            range: Default::default(),
+            store: None,
+        })
     }
 
     /// The same volume rotated by `rotation` degrees counter-clockwise about the vertical through
@@ -321,7 +345,18 @@ impl Volume {
         }
         w.f64(self.offset);
         w.f64(self.rotation);
-        w.f32s(&self.values);
+        match &self.store {
+            None => w.f32s(&self.values),
+            // A lazy volume's samples, read slab by slab (NaN where a read failed: see `take_error`).
+            Some(s) => {
+                let n = self.nx * self.ny * self.nz;
+                w.u64(n as u64);
+                w.0.reserve(4 * n);
+                s.for_each_slab(store::slab_layers(self.nx * self.ny, store::SLAB_BYTES), 0, |_, slab| {
+                    w.0.extend(slab.iter().flat_map(|v| v.to_le_bytes()));
+                });
+            }
+        }
         w.0
     }
 
@@ -353,11 +388,14 @@ impl Volume {
         (k * self.ny + j) * self.nx + i
     }
 
-    /// Sample value at `(i,j,k)`. Panics when out of range.
+    /// Sample value at `(i,j,k)` (a lazy volume's through its cache). Panics when out of range.
     #[inline]
     pub fn get(&self, i: usize, j: usize, k: usize) -> f32 {
         debug_assert!(i < self.nx && j < self.ny && k < self.nz);
-        self.values[self.index(i, j, k)]
+        match &self.store {
+            None => self.values[self.index(i, j, k)],
+            Some(s) => s.read_box([i, j, k], [i + 1, j + 1, k + 1])[0],
+        }
     }
 
     /// Number of cells per axis: `(nx-1, ny-1, nz-1)`.
@@ -398,13 +436,28 @@ impl Volume {
             _ => (0, 1),
         };
         let (nu, nv) = (range[ua].1 - range[ua].0 + 1, range[va].1 - range[va].0 + 1);
+        // A lazy volume reads the plane's box alone, straight from its store (not cached).
+        let mut lo = [0; 3];
+        let mut hi = [0; 3];
+        for a in 0..3 {
+            (lo[a], hi[a]) = if a == axis { (index, index) } else { range[a] };
+        }
+        let win = match &self.store {
+            None => self.window(lo, hi),
+            Some(s) => {
+                let hx = hi.map(|v| v + 1);
+                let mut data = vec![0.0f32; (0..3).map(|a| hx[a] - lo[a]).product()];
+                s.read_direct(lo, hx, &mut data);
+                Window { data: data.into(), lo, dims: [0, 1, 2].map(|a| hx[a] - lo[a]) }
+            }
+        };
         let (mut pos, mut vals) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
         for v in 0..nv {
             for u in 0..nu {
                 let mut ijk = [0; 3];
                 (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
                 pos.push(self.to_world(self.sample_position(ijk[0], ijk[1], ijk[2])));
-                vals.push(self.value(self.get(ijk[0], ijk[1], ijk[2])));
+                vals.push(self.value(win.get(ijk[0], ijk[1], ijk[2])));
             }
         }
         (pos, vals, (nu, nv))
@@ -416,17 +469,34 @@ impl Volume {
     pub fn finite_range(&self) -> Option<[f64; 2]> {
         *self.range.get_or_init(|| {
             let extremes = |(a, b): (f32, f32), (c, d): (f32, f32)| (a.min(c), b.max(d));
-            let (lo, hi) = self
-                .values
-                .par_chunks(1 << 16)
-                .map(|c| {
-                    c.iter()
-                        .filter(|v| v.is_finite())
-                        .fold((f32::INFINITY, f32::NEG_INFINITY), |m, &v| extremes(m, (v, v)))
-                })
-                .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), extremes);
+            let of = |values: &[f32]| {
+                values
+                    .par_chunks(1 << 16)
+                    .map(|c| {
+                        c.iter()
+                            .filter(|v| v.is_finite())
+                            .fold((f32::INFINITY, f32::NEG_INFINITY), |m, &v| extremes(m, (v, v)))
+                    })
+                    .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), extremes)
+            };
+            let (lo, hi) = match &self.store {
+                None => of(&self.values),
+                // One streaming pass (the octree's build sets the range without it).
+                Some(s) => {
+                    let mut m = (f32::INFINITY, f32::NEG_INFINITY);
+                    s.for_each_slab(store::slab_layers(self.nx * self.ny, store::SLAB_BYTES), 0, |_, slab| {
+                        m = extremes(m, of(slab))
+                    });
+                    m
+                }
+            };
             (lo <= hi).then(|| [self.value(lo), self.value(hi)])
         })
+    }
+
+    /// Sets [`Volume::finite_range`] from residual extremes found elsewhere (the octree's root).
+    pub(crate) fn set_range(&self, lo: f32, hi: f32) {
+        let _ = self.range.set((lo <= hi).then(|| [self.value(lo), self.value(hi)]));
     }
 
     /// Samples `f(x,y,z)` at every grid point (in parallel over z slices).

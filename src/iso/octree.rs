@@ -24,7 +24,11 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use super::store::BrickCache;
 use super::Volume;
+use build::{brick_rows, build_streaming};
+
+mod build;
 
 /// Depths below the finest stored level, answered by scanning samples: bricks of 2^3 = 8 cells.
 pub const BRICK_LEVELS: u32 = 3;
@@ -139,6 +143,8 @@ pub struct MinMaxOctree {
     levels: Vec<Level>,
     /// The volume's samples (shared), for the depths finer than the stored ones.
     values: Arc<[f32]>,
+    /// A lazy volume's store (`values` is then empty), read through its cache for those depths.
+    store: Option<Arc<BrickCache>>,
     /// Samples per axis.
     samples: [usize; 3],
 }
@@ -205,42 +211,14 @@ impl MinMaxOctree {
         let bricks = {
             let s = 1usize << (depth - finest);
             let dims = [0, 1, 2].map(|a| (cells[a] as usize).div_ceil(s).max(1) as u32);
-            let (bx, by) = (dims[0] as usize, dims[1] as usize);
-            let n = bx * by * dims[2] as usize;
-            let mut min = vec![f32::INFINITY; n];
-            let mut max = vec![f32::NEG_INFINITY; n];
-            let mut nan = vec![false; n];
-            let v = &vol.values[..];
-            let (nx, ny) = (vol.nx, vol.ny);
-            // Cells b*s .. (b+1)*s of axis a (clamped), i.e. samples b*s ..= that end.
-            let span = |b: usize, a: usize| (b * s, ((b + 1) * s).min(cells[a] as usize));
-            let slab = bx * by;
-            min.par_chunks_mut(slab).zip(max.par_chunks_mut(slab)).zip(nan.par_chunks_mut(slab)).enumerate().for_each(
-                |(bz, ((mn, mx), na))| {
-                    let (z0, z1) = span(bz, 2);
-                    for byi in 0..by {
-                        let (y0, y1) = span(byi, 1);
-                        let r = byi * bx..(byi + 1) * bx;
-                        let (mn, mx, na) = (&mut mn[r.clone()], &mut mx[r.clone()], &mut na[r]);
-                        for k in z0..=z1 {
-                            for j in y0..=y1 {
-                                let row = &v[(k * ny + j) * nx..(k * ny + j + 1) * nx];
-                                for bxi in 0..bx {
-                                    let (x0, x1) = span(bxi, 0);
-                                    let (mut lo, mut hi, mut n) = (mn[bxi], mx[bxi], na[bxi]);
-                                    for &x in &row[x0..=x1] {
-                                        lo = nan_min(lo, x);
-                                        hi = nan_max(hi, x);
-                                        n |= x.is_nan();
-                                    }
-                                    (mn[bxi], mx[bxi], na[bxi]) = (lo, hi, n);
-                                }
-                            }
-                        }
-                    }
-                },
-            );
-            Level { dims, min, max, nan }
+            let n = dims.iter().map(|&d| d as usize).product();
+            let mut level =
+                Level { dims, min: vec![f32::INFINITY; n], max: vec![f32::NEG_INFINITY; n], nan: vec![false; n] };
+            match vol.store() {
+                None => brick_rows(&mut level, &vol.values, 0, 0, samples, s),
+                Some(store) => build_streaming(&mut level, store, samples, s),
+            }
+            level
         };
 
         let mut levels = vec![bricks];
@@ -281,14 +259,39 @@ impl MinMaxOctree {
         }
         levels.reverse();
 
-        MinMaxOctree {
+        let tree = MinMaxOctree {
             depth,
             cells,
             origin: vol.origin,
             spacing: vol.spacing,
             levels,
             values: vol.values.clone(),
+            store: vol.store().cloned(),
             samples,
+        };
+        if vol.is_lazy() {
+            let r = tree.root();
+            vol.set_range(r.min, r.max);
+        }
+        tree
+    }
+
+    /// [`Self::build`], with a lazy volume's read errors (and infinite samples) as an error naming
+    /// `values`.
+    pub fn try_build(vol: &Volume) -> crate::Result<Self> {
+        let t = Self::build(vol);
+        vol.take_error()?;
+        Ok(t)
+    }
+
+    /// Min/max and NaN of the samples `lo..=hi`: the shared samples, or a lazy volume's cache.
+    fn scan(&self, lo: [usize; 3], hi: [usize; 3]) -> (f32, f32, bool) {
+        match &self.store {
+            None => scan(&self.values, self.samples, lo, hi),
+            Some(s) => {
+                let w = s.window(lo, hi);
+                scan(&w.data, w.dims, [0; 3], [0, 1, 2].map(|a| hi[a] - lo[a]))
+            }
         }
     }
 
@@ -336,7 +339,7 @@ impl MinMaxOctree {
                 (l.min[i], l.max[i], l.nan[i])
             }
             // Finer than the stored bricks: at most 5³ samples (cells lo..hi span samples lo..=hi).
-            None => scan(&self.values, self.samples, cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
+            None => self.scan(cell_lo.map(|v| v as usize), cell_hi.map(|v| v as usize)),
         };
         let pos = |p: [u32; 3]| [0, 1, 2].map(|a| self.origin[a] + p[a] as f64 * self.spacing[a]);
         NodeInfo {
@@ -380,7 +383,9 @@ impl MinMaxOctree {
     /// ([`super::bricks::leaf_nodes`]), straight from the samples; `None` when the leaves are
     /// stored levels (then use [`Self::map_at_depth`]).
     pub fn leaf_nodes(&self, w: f32) -> Option<Vec<u8>> {
-        (self.levels.len() as u32 <= self.depth).then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
+        // (A lazy volume's classes come from the stored levels: this would read every sample.)
+        (self.levels.len() as u32 <= self.depth && self.store.is_none())
+            .then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
     }
 
     /// The walk's contour bricks ([`super::bricks::contour_bricks`]) with a block for each of
@@ -389,7 +394,15 @@ impl MinMaxOctree {
     /// cells per axis: the root, brick 0.)
     pub fn contour_bricks(&self, bricks: &[NodeInfo]) -> (Vec<u32>, usize) {
         let blocks: Vec<[u32; 3]> = bricks.iter().map(|n| [n.ix, n.iy, n.iz]).collect();
-        super::bricks::contour_bricks(&self.values, self.samples, &blocks)
+        match &self.store {
+            None => super::bricks::contour_bricks(&self.values, self.samples, &blocks),
+            // (Not reached: a lazy volume has no leaf classes, so no contours. Correct, but reads all.)
+            Some(s) => super::bricks::contour_bricks(
+                &s.window([0; 3], self.samples.map(|n| n - 1)).data,
+                self.samples,
+                &blocks,
+            ),
+        }
     }
 
     /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
@@ -416,7 +429,7 @@ impl MinMaxOctree {
                             let c = [x, y, z];
                             let lo = [0, 1, 2].map(|a| (c[a] as u64 * s) as usize);
                             let hi = [0, 1, 2].map(|a| ((c[a] as u64 + 1) * s).min(self.cells[a] as u64) as usize);
-                            let (mn, mx, nan) = scan(&self.values, self.samples, lo, hi);
+                            let (mn, mx, nan) = self.scan(lo, hi);
                             f(mn, mx, nan)
                         }
                     }

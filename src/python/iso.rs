@@ -8,7 +8,7 @@ use crate::error::{input_err, int_in};
 use crate::iso::layout::{self, AxisOrder, ZPositive};
 use crate::iso::mesh::isosurface_mesh;
 use crate::iso::render::{IsoCulling, IsoOptions, IsoOutput, IsoWalk};
-use crate::iso::{MinMaxOctree, Volume};
+use crate::iso::{BrickCache, MinMaxOctree, Volume};
 use numpy::ndarray::{Array1, Array2, Array3, ArrayView3, Axis};
 use numpy::{IntoPyArray, PyReadonlyArray3};
 use pyo3::prelude::*;
@@ -28,7 +28,7 @@ impl PyVolume {
             return Ok(t.clone());
         }
         let v = &self.inner;
-        let t = run(py, move || Ok(Arc::new(MinMaxOctree::build(v))))?;
+        let t = run(py, move || MinMaxOctree::try_build(v).map(Arc::new))?;
         Ok(self.tree.get_or_init(|| t).clone())
     }
 }
@@ -82,10 +82,64 @@ impl PyVolume {
         Ok(Self { inner, tree: OnceLock::new() })
     }
 
+    /// A lazy volume (`Volume::lazy`) over `reader` (see `super::lazy`), whose `read` gives boxes
+    /// of the stored grid (x fastest, z up): `shape` (nx, ny, nz), the user's origin and spacing
+    /// for `z_positive` (as `new`), the f64 `offset` the reader's residuals are relative to, and a
+    /// brick cache of at most `cache_bytes` bytes.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (reader, shape, origin, spacing, z_positive, offset, rotation, cache_bytes))]
+    fn lazy(
+        reader: Py<PyAny>,
+        shape: (usize, usize, usize),
+        origin: (f64, f64, f64),
+        spacing: (f64, f64, f64),
+        z_positive: &str,
+        offset: f64,
+        rotation: f64,
+        cache_bytes: i64,
+    ) -> PyResult<Self> {
+        let budget = int_in(cache_bytes, "cache_bytes", 0, i64::MAX)?;
+        let (o, sp) = ([origin.0, origin.1, origin.2], [spacing.0, spacing.1, spacing.2]);
+        let z = ZPositive::parse(z_positive)?;
+        layout::check_grid(o, sp, z)?;
+        let so = layout::stored_origin(o, sp, shape.2, z);
+        let dims = [shape.0, shape.1, shape.2];
+        let store = BrickCache::new(Box::new(super::lazy::PySource { reader }), dims, budget);
+        let inner = Volume::lazy(Arc::new(store), offset, shape, so, sp)?.with_rotation(rotation)?;
+        Ok(Self { inner, tree: OnceLock::new() })
+    }
+
+    /// True when the samples are read on demand (`lazy`).
+    #[getter]
+    fn is_lazy(&self) -> bool {
+        self.inner.is_lazy()
+    }
+    /// Bytes read from a lazy volume's source so far (0 in memory).
+    #[getter]
+    fn bytes_read(&self) -> u64 {
+        self.inner.bytes_read()
+    }
+    /// A lazy volume's brick cache: (budget, bytes held now, most bytes ever held); None in memory.
+    #[getter]
+    fn cache_info(&self) -> Option<(usize, usize, u64)> {
+        self.inner.store().map(|s| (s.budget(), s.held_bytes(), s.peak_bytes()))
+    }
+
+    /// Drops a lazy volume's cached bricks (the next reads go to its source); nothing in memory.
+    fn clear_cache(&self) {
+        if let Some(s) = self.inner.store() {
+            s.clear();
+        }
+    }
+
     /// The volume as bytes (`Volume::to_bytes`: shape, origin, spacing, offset, rotation, residuals).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let v = &self.inner;
-        let b = run(py, move || Ok(v.to_bytes()))?;
+        let b = run(py, move || {
+            let b = v.to_bytes();
+            v.take_error().map(|()| b)
+        })?;
         Ok(PyBytes::new(py, &b))
     }
 
@@ -198,6 +252,8 @@ fn iso_dict<'py>(py: Python<'py>, out: IsoOutput) -> PyResult<Bound<'py, PyDict>
     st.set_item("extract_ms", s.extract_ms)?;
     st.set_item("draw_ms", s.draw_ms)?;
     st.set_item("surface_ms", s.surface_ms)?;
+    st.set_item("bytes_read", s.bytes_read)?;
+    st.set_item("brick_cache_bytes", s.brick_cache_bytes)?;
     st.set_item("total_ms", s.total_ms)?;
     st.set_item("readback_ms", s.readback_ms)?;
     st.set_item("setup_ms", s.setup_ms)?;

@@ -19,6 +19,7 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 mod camera;
 mod errors;
 mod iso;
+mod lazy;
 mod renderer;
 mod scene;
 

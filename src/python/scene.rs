@@ -204,6 +204,10 @@ impl PyScene {
     ) -> PyResult<u32> {
         let mut color_by =
             self::coloring(Some(coloring), &[], "none (the slice's values are the volume's)")?.expect("coloring given");
+        if volume.inner.is_lazy() {
+            // A lazy volume's range (the slices' colours) comes with its octree's one pass.
+            volume.tree(py)?;
+        }
         let vol = &volume.inner;
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
@@ -212,6 +216,7 @@ impl PyScene {
             let index = int_in(index, "index", 0, dims[axis] as i64 - 1)?;
             let whole = [(0, vol.nx - 1), (0, vol.ny - 1), (0, vol.nz - 1)];
             let (pos, vals, (nu, nv)) = vol.plane(axis, index, whole);
+            vol.take_error()?;
             // The volume's range, so that every slice of it uses the same colours.
             volume_clim(&mut color_by, vol)?;
             let opts = AddOptions { coarse_factor: 16.0, name, color: None, color_by: Some(color_by), interrupt };
@@ -298,6 +303,9 @@ impl PyScene {
     ) -> PyResult<u32> {
         let mut color_by =
             self::coloring(Some(coloring), &[], "none (the lens's values are the volume's)")?.expect("coloring given");
+        if volume.inner.is_lazy() {
+            volume.tree(py)?;
+        }
         let vol = &volume.inner;
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
@@ -320,6 +328,7 @@ impl PyScene {
                     slices.push(crate::scene::lens::LensSlice { axis, index, positions, values, nu, nv });
                 }
             }
+            vol.take_error()?;
             volume_clim(&mut color_by, vol)?;
             let opts = AddOptions { coarse_factor: 1.0, name, color: None, color_by: Some(color_by), interrupt };
             lock(scene).add_lens(slices, opacity, opts)

@@ -38,14 +38,16 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--pass-triangles", type=int, help="gullfaks: Renderer.pass_triangles of the scenes' renderers "
                    "(at most this many triangles per render pass: less driver memory on CPU drivers; default "
                    "unbounded)")
-    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field", "lod", "scale"),
+    p.add_argument("--scene", choices=("gullfaks", "iso", "grid", "seismic", "field", "lod", "scale", "big-volume"),
                    default="gullfaks",
                    help="gullfaks: horizons and faults (default); iso: isosurfaces (geocull.bench.iso); grid: a "
                    "faulted reservoir grid (geocull.bench.grid); seismic: the gullfaks scene with slices and a lens "
                    "(geocull.bench.seismic); field: a real field's horizons, grid and wells (geocull.bench.field); "
                    "lod: the LOD build of mesh tiles, meshoptimizer against fast-simplification (geocull.bench.lod; "
                    "--size: samples per horizon side); scale: the gullfaks scene ever finer, 3.9 M / 15 M / 61 M "
-                   "triangles, each in its own process (geocull.bench.scale; --scale-sizes)")
+                   "triangles, each in its own process (geocull.bench.scale; --scale-sizes); big-volume: a lazy "
+                   "volume larger than memory, a salt body in a zarr cube (geocull.bench.big_volume; --big-n, "
+                   "--cache-mib)")
     p.add_argument("--data", help="field: the field's directory (surfaces/*.gri, grid/*.EGRID or *.grdecl + porosity, "
                    "wells/*.w; default ../shared/data/reek beside the checkout)")
     p.add_argument("--scale-sizes", help="scale: comma-separated samples per horizon side (default 418,835,1669; "
@@ -55,6 +57,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--iso-volumes", help="iso: comma-separated volumes of pesco, channels, frog "
                    "(default all; quick: pesco)")
     p.add_argument("--iso-n", type=int, help="iso: samples per axis of the Pesco field (default 128; quick 32)")
+    p.add_argument("--big-n", type=int, help="big-volume: samples per axis of the zarr cube (default 1024, 4 GiB; "
+                   "quick 128)")
+    p.add_argument("--cache-mib", type=int, help="big-volume: the lazy volume's brick cache in MiB (default 512; "
+                   "quick 16)")
     p.add_argument("--occluder-depth", type=int, help="iso: octree depth of the occluders (default: geocull's)")
     p.add_argument("--cull-depth", type=int, help="iso: octree depth of the tested nodes (default: geocull's)")
     return p
@@ -113,6 +119,11 @@ def config(a: argparse.Namespace) -> dict[str, Any]:
         from .scale import scale_config
 
         cfg.update(scale_config(mode, a))
+    elif a.scene == "big-volume":
+        small = mode != "full"
+        cfg.update(big_n=a.big_n or (48 if mode == "tiny" else 128 if small else 1024),
+                   cache_mib=a.cache_mib if a.cache_mib is not None else (16 if small else 512),
+                   width=a.width or (96 if small else 512), height=a.height or (96 if small else 512))
     elif a.scene == "seismic":
         small = mode != "full"
         cfg.update(cube=(24, 24, 16) if mode == "tiny" else (60, 60, 40) if small else (200, 200, 120),
@@ -129,10 +140,10 @@ def main(argv: list[str] | None = None) -> int:
 
         result = iso.run(cfg)
         print(iso.format_table(result), flush=True)
-    elif cfg["scene"] in ("grid", "seismic", "field", "lod", "scale"):
+    elif cfg["scene"] in ("grid", "seismic", "field", "lod", "scale", "big-volume"):
         import importlib
 
-        mod = importlib.import_module(f".{cfg['scene']}", __package__)
+        mod = importlib.import_module(f".{cfg['scene'].replace('-', '_')}", __package__)
         result = mod.run(cfg)
         print(mod.format_table(result), flush=True)
     else:

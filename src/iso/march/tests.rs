@@ -137,7 +137,16 @@ fn per_node_matches_whole_volume() {
         }
         // serial == parallel chunked
         let cells = vol.cells();
-        let serial = extract_serial(vol, w, [0; 3], cells, false, &|_| true).patch;
+        let serial = extract_serial(
+            vol,
+            &vol.window([0; 3], [vol.nx - 1, vol.ny - 1, vol.nz - 1]),
+            w,
+            [0; 3],
+            cells,
+            false,
+            &|_| true,
+        )
+        .patch;
         assert_eq!(serial.triangle_count(), whole.triangle_count());
         assert_eq!(tri_set(&serial), tri_set(&whole));
         assert_eq!(serial.vertex_count(), whole.vertex_count());

@@ -91,8 +91,11 @@ fn check(args: &FrameArgs<'_>) -> Result<Checked> {
         "the octree was built from another volume".into()
     })?;
     let maxd = tree.max_depth();
-    let occ_depth = opts.occluder_depth.unwrap_or(maxd);
-    let cull_depth = opts.cull_depth.unwrap_or(maxd.saturating_sub(2));
+    // A lazy volume's defaults are the finest stored depth: its classes and candidates come from
+    // the octree alone, and only the visible nodes' samples are read.
+    let lazy = vol.is_lazy().then(|| tree.stored_depth());
+    let occ_depth = opts.occluder_depth.or(lazy).unwrap_or(maxd);
+    let cull_depth = opts.cull_depth.or(lazy).unwrap_or(maxd.saturating_sub(2));
     ensure(occ_depth <= maxd, "occluder_depth", || {
         format!("occluder_depth is {occ_depth}; this volume's octree has depths 0..={maxd}")
     })?;
@@ -166,6 +169,7 @@ impl IsoRenderer {
         let setup_ms = std::mem::take(&mut self.setup_ms) + targets_ms;
 
         let t0 = Instant::now();
+        let read0 = args.vol.bytes_read();
         let f = Frame::new(*args, checked);
         self.bind_volume(args.vol);
         // A quarter of the budget for node lists, the rest for patches.
@@ -210,6 +214,11 @@ impl IsoRenderer {
         let t_ex = Instant::now();
         let patches = self.extract(&f, &culled, &mut stats);
         stats.extract_ms = t_ex.elapsed().as_secs_f64() * 1e3;
+        if let Err(e) = args.vol.take_error() {
+            // (Patches and node lists of samples that failed to read are NaN-holed: none is kept.)
+            self.clear_cache();
+            return Err(e);
+        }
         opts.interrupt.check()?;
 
         // ---- Draw.
@@ -233,6 +242,8 @@ impl IsoRenderer {
         stats.cache_bytes = self.cache_bytes() as u64;
         stats.gpu_cache_bytes = self.pool.bytes();
         stats.contour_bytes = self.classes.as_ref().map_or(0, |g| g.data.contour_bytes());
+        stats.bytes_read = args.vol.bytes_read() - read0;
+        stats.brick_cache_bytes = args.vol.store().map_or(0, |s| s.held_bytes() as u64);
         Ok(IsoOutput {
             width,
             height,

@@ -77,7 +77,8 @@ pub struct IsoOptions {
     /// Depth of the occluder nodes (root = 0); `None` = `max_depth` (single cells: the class grid
     /// costs 4 bits per cell and the walk little more than at coarser depths).
     pub occluder_depth: Option<u32>,
-    /// Depth of the nodes tested and extracted (root = 0); `None` = `max_depth - 2`.
+    /// Depth of the nodes tested and extracted (root = 0); `None` = `max_depth - 2` (a lazy
+    /// volume's: `max_depth - 3`, the octree's finest stored depth, whose nodes need no sample).
     pub cull_depth: Option<u32>,
     /// Surface colour, RGB in [0, 1].
     pub color: [f32; 3],
@@ -193,6 +194,10 @@ pub struct IsoStats {
     /// the GPU (not counted there) or there was none.
     pub walk_rays: u64,
     pub walk_steps: u64,
+    /// Bytes this frame read from a lazy volume's sample store (brick-cache misses; 0 for a volume
+    /// in memory), and the bytes its brick cache holds after the frame (`iso::store`).
+    pub bytes_read: u64,
+    pub brick_cache_bytes: u64,
 }
 
 /// One rendered isosurface frame as host arrays.

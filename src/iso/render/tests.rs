@@ -43,3 +43,42 @@ fn sphere_implicit_equals_none() {
     assert!(imp.stats.surface_triangles < none.stats.surface_triangles);
     assert!(imp.stats.nodes_visible < imp.stats.nodes_straddling);
 }
+
+#[test]
+fn lazy_volume_draws_the_resident_image_reading_only_visible_nodes() {
+    use crate::iso::store::{BrickCache, Resident};
+    let Some(ctx) = device() else { return };
+    let vol = super::super::sphere_field(97, 0.6);
+    let dims = [vol.nx, vol.ny, vol.nz];
+    let store = BrickCache::new(Box::new(Resident { values: vol.values.clone(), dims }), dims, 8 << 20);
+    let lazy =
+        crate::iso::Volume::lazy(std::sync::Arc::new(store), 0.0, (97, 97, 97), vol.origin, vol.spacing).unwrap();
+    let (tree, ltree) = (MinMaxOctree::build(&vol), MinMaxOctree::try_build(&lazy).unwrap());
+    let built = lazy.bytes_read();
+    let cam = Camera::look_at(
+        [3.0, 1.0, 1.0],
+        [0.0; 3],
+        [0.0, 0.0, 1.0],
+        40.0,
+        None,
+        None,
+        Projection::Perspective,
+        None,
+        1.0,
+    )
+    .unwrap();
+    let sd = tree.stored_depth();
+    let opts = IsoOptions { occluder_depth: Some(sd), cull_depth: Some(sd), ..Default::default() };
+    let mut r = IsoRenderer::new(&ctx);
+    let want = r.render(&ctx, 64, 64, &vol, &tree, 0.0, &cam, &opts).unwrap();
+    assert_eq!(want.stats.bytes_read, 0);
+    let mut r = IsoRenderer::new(&ctx);
+    let got = r.render(&ctx, 64, 64, &lazy, &ltree, 0.0, &cam, &IsoOptions::default()).unwrap();
+    assert_eq!((got.stats.occluder_depth, got.stats.cull_depth), (sd, sd), "a lazy volume's defaults");
+    assert_eq!(got.image, want.image);
+    assert_eq!(got.stats.bytes_read, lazy.bytes_read() - built);
+    // (Bricks of 32³: the near half of the sphere touches most of the 27 bricks of this small cube.)
+    assert!(got.stats.bytes_read > 0 && got.stats.bytes_read < 4 * 97 * 97 * 97, "{}", got.stats.bytes_read);
+    let again = r.render(&ctx, 64, 64, &lazy, &ltree, 0.0, &cam, &IsoOptions::default()).unwrap();
+    assert_eq!((again.image, again.stats.bytes_read), (want.image, 0), "patches and bricks cached");
+}
