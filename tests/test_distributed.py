@@ -92,3 +92,28 @@ def test_scene_objects_and_dict_cameras(spec, cameras, serial, client):
     kw = dict(eye=cameras[0].eye, target=cameras[0].target, fov_y=cameras[0].fov_y)
     out = gd.render_views(scene, [kw], client, W, H, culling="three_pass", pixel_threshold=5)
     np.testing.assert_array_equal(out[0].image, serial[0].image)
+
+
+def test_workers_build_a_lazy_volume_from_the_store(client, tmp_path):
+    """VolumeStoreScene: only a description travels (no cube); each worker opens the zarr store
+    itself, reads what its slice and isosurface need, and renders what a local build renders."""
+    pytest.importorskip("zarr")
+    import pickle
+
+    from geocull.bench.big_volume import write_cube
+
+    path = str(tmp_path / "cube.zarr")
+    write_cube(path, 40)
+    source = gd.VolumeStoreScene(path, spacing=(12.5, 12.5, 4.0), slices=(("inline", 20),), isovalue=0.0,
+                                 cache_bytes=1 << 20)
+    assert len(pickle.dumps(source)) < 1000
+    local = source.build()
+    assert local.n_triangles > 1000
+    cams = [gc.Camera.fit(local, azimuth=az, elevation=25.0, aspect=W / H) for az in (30.0, 160.0, 250.0)]
+    r = gc.Renderer(W, H)
+    want = [r.render(local, c, culling="three_pass", pixel_threshold=0) for c in cams]
+    out = gd.render_views(source, cams, client, W, H, culling="three_pass", pixel_threshold=0)
+    for got, ref in zip(out, want, strict=True):
+        np.testing.assert_array_equal(got.image, ref.image)
+        np.testing.assert_array_equal(got.depth, ref.depth)
+    assert gd._worker_name() not in {v.worker for v in out}

@@ -26,10 +26,46 @@ from ._errors import InputError
 from .camera import Camera
 
 if TYPE_CHECKING:
+    from ._scene_slices import SliceAxis
     from .renderer import Renderer
     from .scene import Scene
 
-__all__ = ["render_views", "RenderedView", "SceneSource", "worker_cache_info", "benchmark"]
+__all__ = ["render_views", "RenderedView", "SceneSource", "VolumeStoreScene", "worker_cache_info", "benchmark"]
+
+@dataclass(frozen=True)
+class VolumeStoreScene:
+    """A scene source for :func:`render_views` that each worker builds from a volume store itself:
+    only this description travels (a few hundred bytes of pickle), never the cube. ``store``: the
+    path or URL of a zarr array (n_i, n_j, n_k) that every worker can open (a shared file system,
+    an object store); ``spacing`` / ``origin``: as for :class:`geocull.Volume` (metres);
+    ``slices``: ``(axis, index)`` pairs, each a seismic slice (:meth:`geocull.Scene.add_slice`);
+    ``isovalue``: an isosurface of it (:meth:`geocull.Scene.add_isosurface`) when not None;
+    ``cache_bytes``: each worker's brick cache. The volume is lazy (``gc.Volume(zarr_array)``):
+    a worker reads the samples its scene needs, through its cache."""
+
+    store: str
+    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    slices: tuple[tuple[SliceAxis | int, int], ...] = ()
+    isovalue: float | None = None
+    cache_bytes: int | None = None
+
+    def build(self) -> Scene:
+        """The scene: the store's volume (lazy), its slices and isosurface."""
+        import zarr
+
+        from .scene import Scene
+        from .volume import Volume
+
+        vol = Volume(zarr.open_array(self.store, mode="r"), spacing=self.spacing, origin=self.origin,
+                     cache_bytes=self.cache_bytes)
+        scene = Scene()
+        for axis, index in self.slices:
+            scene.add_slice(vol, axis, index)
+        if self.isovalue is not None:
+            scene.add_isosurface(vol, self.isovalue)
+        return scene
+
 
 #: What :func:`render_views` accepts as the scene: a :class:`geocull.Scene` (pickled as its bytes),
 #: an object with a ``build()`` method (a :class:`geocull.data.SceneSpec`), or a picklable callable
