@@ -165,7 +165,6 @@ fn octahedral(p: u32) -> vec3<f32> {
     return n;
 }
 
-
 // The normal a vertex carries to the fragment (`normal_slot`), where a well tube's ring is not
 // exaggerated (ring height `rz` not 0 and z_scale > 1, common.wgsl `ring_lift`): its radial
 // normal as is. (A ring vertex's radial normal has a vertical part exactly where its ring height
