@@ -552,15 +552,15 @@ impl Scene {
         Ok((verts, faces))
     }
 
-    /// Bytes of geometry held on the host: vertices with their values and normals, and the
-    /// triangle lists (fine, coarse, levels), each shared list once.
+    /// Bytes of geometry held on the host: vertices with their values, normals, grid coordinates
+    /// and ring heights, and the triangle lists (fine, coarse, levels), each shared list once.
     pub fn host_bytes(&self) -> usize {
         // Triangle lists shared between tiles (lod::share_indices) count once.
         let mut seen = std::collections::HashSet::new();
         let mut list = |l: &crate::lod::Indices| if seen.insert(l.as_ptr()) { l.len() * 4 } else { 0 };
         let mut bytes = 0;
         for t in self.objects.iter().flat_map(|o| &o.tiles) {
-            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len() + t.grid_uv.len()) * 4;
+            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len() + t.grid_uv.len() + t.ring_z.len()) * 4;
             bytes += list(&t.fine) + list(&t.coarse);
             bytes += t.levels.iter().map(|l| list(&l.indices)).sum::<usize>();
         }
