@@ -30,9 +30,14 @@
 //!   on average over directions (a convex polygon's mean width is its perimeter over pi): an
 //!   inscribed triangle would be a quarter thinner, which on a tube a few pixels wide changes
 //!   most of its pixels. A level's error (world units) bounds the distance from its surface to
-//!   level 0's: the largest distance of a dropped station from the kept polyline plus the largest
-//!   distance between the two polygons, `max(r_l - radius cos(pi / sides), radius - r_l cos(pi /
-//!   sides_l))` (each lies between its inscribed and circumscribed circles).
+//!   level 0's, drawn at any exaggeration (see the next point): from the largest distance `dev`
+//!   of a dropped station from the kept polyline (`dev_z` of it vertical) and the largest
+//!   distance `gap` between the two polygons, `max(r_l - radius cos(pi / sides), radius - r_l
+//!   cos(pi / sides_l))` (each lies between its inscribed and circumscribed circles), as
+//!   [`level_errors`] combines them.
+//! * Every vertex carries its height above its ring's centre (`TileMesh::ring_z`; a cap's, its
+//!   ring's): the lit pass exaggerates the centre and not that offset, so a tube keeps its radius
+//!   under exaggeration. Each vertex minus it lies within the tile's box ([`fit_ring_z`]).
 //! * Shading: ring vertices carry radial unit normals (cap vertices none: flat). Interpolated
 //!   over a side facet, a radial normal points from the axis to the facet's point, so at the same
 //!   angle about the path every level's normal is level 0's up to the turn of the path's
