@@ -34,10 +34,10 @@
 //!   of a dropped station from the kept polyline (`dev_z` of it vertical) and the largest
 //!   distance `gap` between the two polygons, `max(r_l - radius cos(pi / sides), radius - r_l
 //!   cos(pi / sides_l))` (each lies between its inscribed and circumscribed circles), as
-//!   [`level_errors`] combines them.
+//!   `level_errors` combines them.
 //! * Every vertex carries its height above its ring's centre (`TileMesh::ring_z`; a cap's, its
 //!   ring's): the lit pass exaggerates the centre and not that offset, so a tube keeps its radius
-//!   under exaggeration. Each vertex minus it lies within the tile's box ([`fit_ring_z`]).
+//!   under exaggeration. Each vertex minus it lies within the tile's box (`fit_ring_z`).
 //! * Shading: ring vertices carry radial unit normals (cap vertices none: flat). Interpolated
 //!   over a side facet, a radial normal points from the axis to the facet's point, so at the same
 //!   angle about the path every level's normal is level 0's up to the turn of the path's
