@@ -428,9 +428,7 @@ pub fn tile_heightfield(
 fn exact_hole_levels(tile: &mut TileMesh, size: (usize, usize), map: &[u32]) -> bool {
     let Some(bounds) = hole_level_bounds(tile, size, map) else { return false };
     for (l, e) in tile.levels.iter_mut().zip(bounds) {
-        // Rounded up to an f32 at or above the bound.
-        let f = e as f32;
-        l.error = if (f as f64) < e { f.next_up() } else { f };
+        l.error = f32_at_least(e);
         // A vertical bound: all of it is vertical.
         l.error_z = l.error;
     }
@@ -453,6 +451,26 @@ pub fn hole_level_bounds(tile: &TileMesh, (w, h): (usize, usize), map: &[u32]) -
         v => zk[v as usize],
     };
     tile.levels.iter().map(|l| levels::grid_level_error((w, h), z, (&at, &zk), &l.indices)).collect()
+}
+
+/// The least f32 at or above `x` (finite): where a bound computed in f64 is stored as f32.
+pub(crate) fn f32_at_least(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// The greatest f32 at or below `x` (finite).
+pub(crate) fn f32_at_most(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x {
+        f.next_down()
+    } else {
+        f
+    }
 }
 
 /// Optional per-vertex attributes of a mesh, one per vertex each.

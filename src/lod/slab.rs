@@ -249,11 +249,10 @@ fn prism(slab: &mut Slab, corners: &[[f32; 2]], bounds: &[(f64, f64)], flip: boo
 /// `exact` as f32, rounded up for a top (`side` > 0) and down for a bottom, so that the f32 still
 /// bounds the f64.
 fn bound_f32(exact: f64, side: f32) -> f32 {
-    let v = exact as f32;
     if side > 0.0 {
-        next_up(v, exact)
+        super::f32_at_least(exact)
     } else {
-        next_down(v, exact)
+        super::f32_at_most(exact)
     }
 }
 
@@ -314,24 +313,6 @@ fn cell_error(a: (usize, usize), b: (usize, usize), z: &impl Fn(usize, usize) ->
         e = e.max((fine(t * sx, t * sy) - (za + t * (zc - za))).abs());
     }
     e
-}
-
-/// `v` (the f32 nearest `exact`), raised by one ulp where it fell below `exact`.
-fn next_up(v: f32, exact: f64) -> f32 {
-    if (v as f64) < exact {
-        f32::from_bits(if v >= 0.0 { v.to_bits() + 1 } else { v.to_bits() - 1 })
-    } else {
-        v
-    }
-}
-
-/// `v` (the f32 nearest `exact`), lowered by one ulp where it rose above `exact`.
-fn next_down(v: f32, exact: f64) -> f32 {
-    if (v as f64) > exact {
-        f32::from_bits(if v > 0.0 { v.to_bits() - 1 } else { v.to_bits() + 1 })
-    } else {
-        v
-    }
 }
 
 #[cfg(test)]

@@ -404,15 +404,7 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
 fn level_errors(dev: f64, dev_z: f64, gap: f64) -> (f32, f32) {
     let ez = 3.0 * dev_z;
     let e = ((dev + gap).powi(2) + gap * gap / 8.0).sqrt().max(ez);
-    let up = |x: f64| {
-        let f = x as f32;
-        if (f as f64) < x {
-            f.next_up()
-        } else {
-            f
-        }
-    };
-    let (e, ez) = (up(e), up(ez));
+    let (e, ez) = (super::f32_at_least(e), super::f32_at_least(ez));
     (e, ez.min(e))
 }
 
