@@ -152,18 +152,20 @@ impl Volume {
         ensure(values.len() == n, "values", || {
             format!("volume of {nx}x{ny}x{nz} needs {n} values, got {}", values.len())
         })?;
-        Ok(Volume {
-            values,
-            offset: 0.0,
-            nx,
-            ny,
-            nz,
-            origin,
-            spacing,
-            rotation: 0.0,
-            range: Default::default(),
-            store: None,
-        })
+        Ok(Volume::assemble(values, 0.0, dims, origin, spacing, None))
+    }
+
+    /// A volume of these parts, unrotated, its range not computed yet (the constructors check
+    /// the parts first).
+    fn assemble(
+        values: Arc<[f32]>,
+        offset: f64,
+        (nx, ny, nz): (usize, usize, usize),
+        origin: [f64; 3],
+        spacing: [f64; 3],
+        store: Option<Arc<BrickCache>>,
+    ) -> Self {
+        Volume { values, offset, nx, ny, nz, origin, spacing, rotation: 0.0, range: Default::default(), store }
     }
 
     /// The same volume rotated by `rotation` degrees counter-clockwise about the vertical through

@@ -343,18 +343,7 @@ impl Volume {
         })?;
         check_grid(dims, origin, spacing)?;
         ensure(offset.is_finite(), "offset", || format!("offset is {offset}; expected a finite number"))?;
-        Ok(Volume {
-            values: Arc::from(Vec::new()),
-            offset,
-            nx,
-            ny,
-            nz,
-            origin,
-            spacing,
-            rotation: 0.0,
-            range: Default::default(),
-            store: Some(store),
-        })
+        Ok(Volume::assemble(Arc::from(Vec::new()), offset, dims, origin, spacing, Some(store)))
     }
 
     /// The sample store of a lazy volume ([`Volume::lazy`]); None for a resident one.

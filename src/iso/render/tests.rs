@@ -1,6 +1,12 @@
 use super::*;
 use crate::camera::Projection;
 
+/// The sphere fields' view: from (3, 1, 1) towards the origin, 40 degrees.
+fn camera() -> Camera {
+    let persp = Projection::Perspective;
+    Camera::look_at([3.0, 1.0, 1.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0, None, None, persp, None, 1.0).unwrap()
+}
+
 fn device() -> Option<GpuContext> {
     GpuContext::new("auto", wgpu::Features::empty()).ok()
 }
@@ -11,18 +17,7 @@ fn sphere_implicit_equals_none() {
     let mut r = IsoRenderer::new(&ctx);
     let vol = super::super::sphere_field(24, 0.6);
     let tree = MinMaxOctree::build(&vol);
-    let cam = Camera::look_at(
-        [3.0, 1.0, 1.0],
-        [0.0; 3],
-        [0.0, 0.0, 1.0],
-        40.0,
-        None,
-        None,
-        Projection::Perspective,
-        None,
-        1.0,
-    )
-    .unwrap();
+    let cam = camera();
     let none = r
         .render(&ctx, 64, 64, &vol, &tree, 0.0, &cam, &IsoOptions { culling: IsoCulling::None, ..Default::default() })
         .unwrap();
@@ -55,18 +50,7 @@ fn lazy_volume_draws_the_resident_image_reading_only_visible_nodes() {
         crate::iso::Volume::lazy(std::sync::Arc::new(store), 0.0, (97, 97, 97), vol.origin, vol.spacing).unwrap();
     let (tree, ltree) = (MinMaxOctree::build(&vol), MinMaxOctree::try_build(&lazy).unwrap());
     let built = lazy.bytes_read();
-    let cam = Camera::look_at(
-        [3.0, 1.0, 1.0],
-        [0.0; 3],
-        [0.0, 0.0, 1.0],
-        40.0,
-        None,
-        None,
-        Projection::Perspective,
-        None,
-        1.0,
-    )
-    .unwrap();
+    let cam = camera();
     let sd = tree.stored_depth();
     let opts = IsoOptions { occluder_depth: Some(sd), cull_depth: Some(sd), ..Default::default() };
     let mut r = IsoRenderer::new(&ctx);
