@@ -117,3 +117,5 @@ def test_workers_build_a_lazy_volume_from_the_store(client, tmp_path):
         np.testing.assert_array_equal(got.image, ref.image)
         np.testing.assert_array_equal(got.depth, ref.depth)
     assert gd._worker_name() not in {v.worker for v in out}
+    with pytest.raises(gc.InputError, match="store"):
+        gd.VolumeStoreScene(str(tmp_path / "missing.zarr")).build()

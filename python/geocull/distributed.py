@@ -57,8 +57,11 @@ class VolumeStoreScene:
         from .scene import Scene
         from .volume import Volume
 
-        vol = Volume(zarr.open_array(self.store, mode="r"), spacing=self.spacing, origin=self.origin,
-                     cache_bytes=self.cache_bytes)
+        try:
+            arr = zarr.open_array(self.store, mode="r")
+        except Exception as e:  # zarr's own errors for a missing or foreign store
+            raise InputError(f"store: {self.store!r} is not a zarr array that can be opened ({e})") from None
+        vol = Volume(arr, spacing=self.spacing, origin=self.origin, cache_bytes=self.cache_bytes)
         scene = Scene()
         for axis, index in self.slices:
             scene.add_slice(vol, axis, index)
