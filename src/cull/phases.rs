@@ -306,7 +306,10 @@ pub fn draw_and_test_the_rest(
     let boxes_buf = passes::boxes_buffer(d, &t.boxes);
     f.passes.record_box_test(d, enc, bg, main, &boxes_buf, t.boxes.len(), first, &gate, &box_counts, ts("test_ms"));
     if let (Some((vertices, indices)), false) = (&f.geometry.slabs, t.slabs.is_empty()) {
-        let draws = passes::args_buffer(d, "slab_args", &t.slabs);
+        let all = passes::args_buffer(d, "slab_args", &t.slabs);
+        let draws = passes::empty_args_buffer(d, "slab_open", t.slabs.len());
+        let gate_ts = f.timestamps.and_then(|t| t.compute("count_ms"));
+        f.passes.record_slab_gate(d, enc, &gate, &all, first, &draws, t.slabs.len(), gate_ts);
         let place = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("slab_place"),
             contents: bytemuck::cast_slice(&t.place),

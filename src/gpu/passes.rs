@@ -9,7 +9,8 @@
 //! - [`Passes::record_box_test`]: per tile, the pixels where its box is at or in front of a
 //!   depth image (box_test.wgsl, with box.wgsl; box_test_early.wgsl on the hardware's early depth
 //!   test where the device allows it exactly, `box_early.rs`);
-//! - [`Passes::record_select_rest`]: the draws not yet made whose count is above a threshold.
+//! - [`Passes::record_select_rest`]: the draws not yet made whose count is above a threshold;
+//! - [`Passes::record_slab_gate`]: the slab test's draws of the tiles whose gate is open.
 //!
 //! Sets of draws are indirect buffers of [`DrawArgs`], one per tile, drawn with one
 //! `multi_draw_indexed_indirect`.
@@ -120,6 +121,8 @@ pub struct Passes {
     select: wgpu::ComputePipeline,
     rest_layout: wgpu::BindGroupLayout,
     select_rest: wgpu::ComputePipeline,
+    /// The slab test's draws switched off behind closed gates (slab_gate.wgsl).
+    slab_gate: wgpu::ComputePipeline,
     box_layout: wgpu::BindGroupLayout,
     box_test: wgpu::RenderPipeline,
     /// The 36 corner indices of a box's 12 triangles (box.wgsl `CUBE`): one indexed instance per
@@ -459,6 +462,25 @@ impl Passes {
     ) {
         let buffers = [counts, src, done, out];
         self.run_selection(d, enc, "select_rest", &self.rest_layout, &self.select_rest, &buffers, n, threshold, ts);
+    }
+
+    /// Pass: `out[k] = slabs[k]` (`n` draws, one per slab, its tile in `first_instance`) where the
+    /// tile's draw in `done` is off and its `gate` count is above 0, else switched off: the slab
+    /// test then runs no vertex work for the slabs of tiles whose whole box counted nothing.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_slab_gate(
+        &self,
+        d: &wgpu::Device,
+        enc: &mut wgpu::CommandEncoder,
+        gate: &wgpu::Buffer,
+        slabs: &wgpu::Buffer,
+        done: &wgpu::Buffer,
+        out: &wgpu::Buffer,
+        n: usize,
+        ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let buffers = [gate, slabs, done, out];
+        self.run_selection(d, enc, "slab_gate", &self.rest_layout, &self.slab_gate, &buffers, n, 0.0, ts);
     }
 
     /// One selection dispatch: `SelectParams { n, threshold }` at binding 0, then `buffers` at

@@ -1,6 +1,6 @@
 //! The scene passes' pipelines and bind-group layouts, built once per device ([`Passes::new`]):
 //! the layouts, the scene pipelines (lit passes, blended, prepass), the compute pipelines
-//! (histogram, select, select_rest), the box test's.
+//! (histogram, select, select_rest, slab_gate), the box test's.
 
 use super::{
     box_pipeline, depth_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, Passes, BOX_TEST_WGSL,
@@ -35,6 +35,7 @@ struct ComputePipelines {
     select: wgpu::ComputePipeline,
     rest_layout: wgpu::BindGroupLayout,
     select_rest: wgpu::ComputePipeline,
+    slab_gate: wgpu::ComputePipeline,
 }
 
 /// The box test's layout and pipelines, the slab test, and the box's corner indices.
@@ -62,7 +63,8 @@ impl Passes {
             draw_blend,
             prepass,
         } = scene_pipelines(d, &layouts.scene, gl);
-        let ComputePipelines { histogram, select, rest_layout, select_rest } = compute_pipelines(d, &layouts);
+        let ComputePipelines { histogram, select, rest_layout, select_rest, slab_gate } =
+            compute_pipelines(d, &layouts);
         let BoxPipelines { box_layout, box_test, box_early, slab_test, box_indices } =
             box_pipelines(d, &layouts.scene, gl);
         let Layouts { scene: scene_layout, hist: hist_layout, select: select_layout } = layouts;
@@ -84,6 +86,7 @@ impl Passes {
             select,
             rest_layout,
             select_rest,
+            slab_gate,
             box_early,
             box_layout,
             box_test,
@@ -277,7 +280,7 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
     }
 }
 
-/// The histogram, select and select_rest compute pipelines.
+/// The histogram, select, select_rest and slab_gate compute pipelines.
 fn compute_pipelines(d: &wgpu::Device, layouts: &Layouts) -> ComputePipelines {
     let cs = wgpu::ShaderStages::COMPUTE;
     let hist_shader = shader(d, "histogram.wgsl", include_str!("../shaders/histogram.wgsl").into());
@@ -297,7 +300,10 @@ fn compute_pipelines(d: &wgpu::Device, layouts: &Layouts) -> ComputePipelines {
     let rest_shader =
         shader(d, "select_rest.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("../shaders/select_rest.wgsl")));
     let select_rest = compute(d, "select_rest", &rest_layout, &rest_shader, "select_rest");
-    ComputePipelines { histogram, select, rest_layout, select_rest }
+    let gate_shader =
+        shader(d, "slab_gate.wgsl", format!("{SELECT_WGSL}\n{}", include_str!("../shaders/slab_gate.wgsl")));
+    let slab_gate = compute(d, "slab_gate", &rest_layout, &gate_shader, "slab_gate");
+    ComputePipelines { histogram, select, rest_layout, select_rest, slab_gate }
 }
 
 /// The box test's layout and pipelines (over the scene's layout and its own), the slab test and
