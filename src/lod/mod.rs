@@ -17,6 +17,7 @@ pub mod blocks;
 pub mod levels;
 pub mod normals;
 pub mod per_vertex;
+pub mod plane;
 pub mod shading;
 pub mod simplify;
 pub mod slab;
