@@ -453,16 +453,22 @@ impl Volume {
                 Window { data: data.into(), lo, dims: [0, 1, 2].map(|a| hx[a] - lo[a]) }
             }
         };
-        let (mut pos, mut vals) = (Vec::with_capacity(nu * nv), Vec::with_capacity(nu * nv));
-        for v in 0..nv {
-            for u in 0..nu {
-                let mut ijk = [0; 3];
-                (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
-                pos.push(self.to_world(self.sample_position(ijk[0], ijk[1], ijk[2])));
-                vals.push(self.value(win.get(ijk[0], ijk[1], ijk[2])));
-            }
-        }
-        (pos, vals, (nu, nv))
+        // Row by row in parallel (each sample computed as a serial pass would): a plane across
+        // the volume's fastest axis reads one sample per cache line.
+        let (pos, vals): (Vec<Vec<[f64; 3]>>, Vec<Vec<f64>>) = (0..nv)
+            .into_par_iter()
+            .map(|v| {
+                (0..nu)
+                    .map(|u| {
+                        let mut ijk = [0; 3];
+                        (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
+                        let p = self.to_world(self.sample_position(ijk[0], ijk[1], ijk[2]));
+                        (p, self.value(win.get(ijk[0], ijk[1], ijk[2])))
+                    })
+                    .unzip()
+            })
+            .unzip();
+        (pos.concat(), vals.concat(), (nu, nv))
     }
 
     /// The smallest and largest finite sample values, in the volume's units; None when no

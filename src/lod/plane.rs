@@ -63,7 +63,7 @@ pub fn tile_plane(
             }
             let w = u1 - u0 + 1;
             let h = v1 - v0 + 1;
-            let fine: Vec<u32> = cells(w, h).collect();
+            let fine = cells(w, h);
             let corners = [0, w - 1, h * w - 1, (h - 1) * w].map(|k| k as u32);
             let coarse = vec![corners[0], corners[1], corners[2], corners[0], corners[2], corners[3]];
             let error = off_plane(&tile.positions, corners);
@@ -75,14 +75,16 @@ pub fn tile_plane(
 }
 
 /// The triangle list of a `w` x `h` lattice (row-major local vertices), two triangles per cell.
-fn cells(w: usize, h: usize) -> impl Iterator<Item = u32> {
-    (0..h - 1).flat_map(move |v| {
-        (0..w - 1).flat_map(move |u| {
+fn cells(w: usize, h: usize) -> Vec<u32> {
+    let mut out = Vec::with_capacity(6 * (w - 1) * (h - 1));
+    for v in 0..h - 1 {
+        for u in 0..w - 1 {
             let a = (v * w + u) as u32;
             let (b, c, d) = (a + 1, a + 1 + w as u32, a + w as u32);
-            [a, b, c, a, c, d]
-        })
-    })
+            out.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    out
 }
 
 /// The largest distance of `positions` from the plane through the corners `c[0]`, `c[1]`, `c[3]`
