@@ -107,7 +107,6 @@ fn off_plane(positions: &[[f32; 3]], c: [u32; 4]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::slice::lattice_faces;
 
     /// A tilted plane's lattice, `nu` x `nv`, values = the vertex number.
     fn plane(nu: usize, nv: usize) -> (Vec<[f64; 3]>, Vec<f64>) {
@@ -135,7 +134,11 @@ mod tests {
                 t.fine.chunks_exact(3).map(|f| [0, 1, 2].map(|i| t.values[f[i] as usize] as i64)).collect::<Vec<_>>()
             })
             .collect();
-        let mut want = lattice_faces(nu, nv);
+        // The lattice's triangles as `scene::slice::lattice_faces` lists them.
+        let mut want: Vec<[i64; 3]> = (0..nv - 1)
+            .flat_map(|v| (0..nu - 1).map(move |u| (v * nu + u) as i64))
+            .flat_map(|a| [[a, a + 1, a + 1 + nu as i64], [a, a + 1 + nu as i64, a + nu as i64]])
+            .collect();
         got.sort_unstable();
         want.sort_unstable();
         assert_eq!(got, want);
