@@ -84,16 +84,26 @@ pub fn lattice_levels(
         let k = 1 << l;
         let (Some(xs), Some(ys)) = (lattice_steps(w, k), lattice_steps(h, k)) else { break };
         let mut tris: Vec<[(usize, usize); 3]> = Vec::new();
+        // Square inner cells, measured by `square_cell_error`; the other cells' triangles (fans
+        // on the tile's border, the shorter last cells) by `lattice_error`.
+        let (mut squares, mut others) = (Vec::new(), Vec::new());
         for jj in ys.windows(2) {
             for ii in xs.windows(2) {
+                let start = tris.len();
                 cell_triangles((ii[0], jj[0]), (ii[1], jj[1]), (w, h), &mut tris);
+                if tris.len() - start == 2 && ii[1] - ii[0] == jj[1] - jj[0] {
+                    squares.push((ii[0], jj[0], ii[1] - ii[0]));
+                } else {
+                    others.extend_from_slice(&tris[start..]);
+                }
             }
         }
         if tris.len() as f64 > 0.6 * prev as f64 {
             break;
         }
         prev = tris.len();
-        let error = lattice_error(&tris, &z) as f32;
+        let inner = squares.iter().map(|&(a, b, side)| square_cell_error((a, b), side, &z)).fold(0.0, f64::max);
+        let error = inner.max(lattice_error(&others, &z)) as f32;
         let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
         levels.push(Level { indices, error, error_z: error, shading_error: 0.0 });
     }
@@ -131,6 +141,29 @@ fn cell_triangles(lo: (usize, usize), hi: (usize, usize), size: (usize, usize), 
     }
 }
 
+/// The largest vertical distance between the fine surface and the two triangles of the square
+/// lattice cell of side `k` at local sample (a, b), split along its diagonal from (a, b) to
+/// (a + k, b + k) as [`cell_triangles`] splits an inner cell: the same as [`lattice_error`] of
+/// those two triangles, in one pass over the cell's samples. The cell's diagonal runs along the
+/// fine cells' diagonals (split the same way), so every fine triangle of the cell lies in one of
+/// its two triangles, where both surfaces are linear: their difference is largest at a fine
+/// sample.
+fn square_cell_error((a, b): (usize, usize), k: usize, z: &impl Fn(usize, usize) -> f64) -> f64 {
+    let (z00, z10, z11, z01) = (z(a, b), z(a + k, b), z(a + k, b + k), z(a, b + k));
+    let kf = k as f64;
+    let mut err = 0.0f64;
+    for dj in 0..=k {
+        let v = dj as f64 / kf;
+        for di in 0..=k {
+            let u = di as f64 / kf;
+            let g =
+                if u >= v { z00 + u * (z10 - z00) + v * (z11 - z10) } else { z00 + u * (z11 - z01) + v * (z01 - z00) };
+            err = err.max((z(a + di, b + dj) - g).abs());
+        }
+    }
+    err
+}
+
 /// Height of the fine surface at a point (x, y) of local sample coordinates: two triangles per
 /// cell, split along the diagonal from (i, j) to (i + 1, j + 1), as the fine level is built.
 fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
@@ -164,7 +197,21 @@ fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64)
         let (x0, x1) = (t.iter().map(|q| q.0).min().unwrap(), t.iter().map(|q| q.0).max().unwrap());
         let (y0, y1) = (t.iter().map(|q| q.1).min().unwrap(), t.iter().map(|q| q.1).max().unwrap());
         for j in y0..=y1 {
-            for i in x0..=x1 {
+            // Only the columns between the triangle's edges at this row (widened: the barycentric
+            // test below decides), so a thin fan triangle costs its area, not its box's.
+            let y = j as f64;
+            let (mut xl, mut xr) = (f64::INFINITY, f64::NEG_INFINITY);
+            for e in 0..3 {
+                let (a, b) = (p[e], p[(e + 1) % 3]);
+                if (a.1 - y) * (b.1 - y) <= 0.0 {
+                    let x = if a.1 == b.1 { a.0.min(b.0) } else { a.0 + (y - a.1) * (b.0 - a.0) / (b.1 - a.1) };
+                    let x2 = if a.1 == b.1 { a.0.max(b.0) } else { x };
+                    (xl, xr) = (xl.min(x), xr.max(x2));
+                }
+            }
+            let from = ((xl - 1e-6).ceil().max(x0 as f64)) as usize;
+            let to = ((xr + 1e-6).floor().min(x1 as f64)) as usize;
+            for i in from..=to {
                 let (l0, l1, l2) = plane(i as f64, j as f64);
                 if l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9 {
                     let g = l0 * p[0].2 + l1 * p[1].2 + l2 * p[2].2;
@@ -392,6 +439,92 @@ mod tests {
         let z: Vec<f64> = (0..w * h).map(|k| f(k % w, k / w)).collect();
         let zz = z.clone();
         (lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]), z)
+    }
+
+    #[test]
+    fn level_errors_equal_the_brute_force_measure() {
+        // Rough heights over tiles of several shapes: every level's error (square inner cells in
+        // one pass, fans by their rows' spans) is the brute-force measure's over all its
+        // triangles, samples inside and edge crossings.
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (w, h) in [(42, 42), (57, 33), (9, 70), (65, 65)] {
+            let z: Vec<f64> = (0..w * h).map(|_| 100.0 * rnd() - 1500.0).collect();
+            let zz = z.clone();
+            let levels = lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]);
+            assert!(levels.len() >= 2, "{w} x {h}");
+            for l in &levels {
+                let tris: Vec<[(usize, usize); 3]> = l
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|c| (t[c] as usize % w, t[c] as usize / w)))
+                    .collect();
+                let want = brute_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32;
+                assert_eq!(lattice_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32, want);
+                assert!((l.error - want).abs() <= 1e-6 * want.max(1.0), "{w} x {h}: {} vs {want}", l.error);
+            }
+        }
+    }
+
+    #[test]
+    fn a_spike_anywhere_is_measured_as_the_brute_force_measure_does() {
+        // One raised sample at a time: whichever cell holds it (square, fan or short last cell),
+        // every level's error is the brute-force measure's.
+        let (w, h) = (19, 14);
+        for s in 0..w * h {
+            let z: Vec<f64> = (0..w * h).map(|k| if k == s { 7.0 } else { 0.1 * (k % 3) as f64 }).collect();
+            let zz = z.clone();
+            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]) {
+                let tris: Vec<[(usize, usize); 3]> = l
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|c| (t[c] as usize % w, t[c] as usize / w)))
+                    .collect();
+                let want = brute_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32;
+                assert_eq!(l.error, want, "spike at {s}");
+            }
+        }
+    }
+
+    /// The reference measure: every sample of each triangle's box tested for inclusion, and
+    /// every crossing of its edges with the grid lines.
+    fn brute_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
+        let max = tris.iter().flatten().fold((1, 1), |m, &(i, j)| (m.0.max(i), m.1.max(j)));
+        let mut err = 0.0f64;
+        for t in tris {
+            let p = t.map(|(i, j)| (i as f64, j as f64, z(i, j)));
+            let det = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
+            if det == 0.0 {
+                continue;
+            }
+            for j in 0..=max.1 {
+                for i in 0..=max.0 {
+                    let (x, y) = (i as f64, j as f64);
+                    let l1 = ((x - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (y - p[0].1)) / det;
+                    let l2 = ((p[1].0 - p[0].0) * (y - p[0].1) - (x - p[0].0) * (p[1].1 - p[0].1)) / det;
+                    let l0 = 1.0 - l1 - l2;
+                    if l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9 {
+                        err = err.max((z(i, j) - (l0 * p[0].2 + l1 * p[1].2 + l2 * p[2].2)).abs());
+                    }
+                }
+            }
+            for e in 0..3 {
+                let (a, b) = (p[e], p[(e + 1) % 3]);
+                for (u, v) in [(a.0, b.0), (a.1, b.1)] {
+                    if u != v {
+                        for g in (u.min(v).ceil() as i64)..=(u.max(v).floor() as i64) {
+                            let s = (g as f64 - u) / (v - u);
+                            let (x, y) = (a.0 + s * (b.0 - a.0), a.1 + s * (b.1 - a.1));
+                            err = err.max((fine_height(x, y, z, max) - (a.2 + s * (b.2 - a.2))).abs());
+                        }
+                    }
+                }
+            }
+        }
+        err
     }
 
     /// Undirected edge -> number of triangles using it.
