@@ -1,0 +1,115 @@
+"""culling="implicit": conservative three_pass whose box test also sees the isosurfaces' enclosed
+occluder boxes. On a salt body with horizons and a slice it gives the unculled image bit for bit
+from any camera (inside the volume's box too, where the occluders are switched off), and culls the
+isosurface's back where the first set's depth leaves gaps in front of the salt."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import geocull as gc
+
+W, H = 320, 256
+N = 48  # samples per axis of the salt volume
+
+
+def salt_volume() -> gc.Volume:
+    """A lumpy salt body (values > 0 inside, isovalue 0) in a 48^3 volume over
+    x, y in [0, 1000], z in [-1000, 0], well inside the volume's box."""
+    c = np.linspace(0.0, 1.0, N)
+    z, y, x = c[:, None, None], c[None, :, None], c[None, None, :]
+    r = np.sqrt((x - 0.5) ** 2 + (y - 0.5) ** 2 + ((z - 0.45) / 1.3) ** 2)
+    wobble = 0.03 * np.sin(9 * x) * np.cos(7 * y) + 0.02 * np.sin(11 * z)
+    vals = (0.26 + wobble - r).astype(np.float32)
+    return gc.Volume(vals, origin=(0.0, 0.0, -1000.0), spacing=(1000 / (N - 1),) * 3)
+
+
+def salt_scene() -> tuple[gc.Scene, int]:
+    """The salt (32 tiles), a horizon above part of it, one below all of it, one beside it, and a
+    slice through the volume's middle."""
+    s = gc.Scene()
+    vol = salt_volume()
+    salt = s.add_isosurface(vol, 0.0, tiles=32, color=(0.9, 0.9, 0.9))
+    g = np.linspace(-500.0, 1500.0, 41)
+    xx, yy = np.meshgrid(g, g)
+    above = np.where(xx < 300.0, -80.0 + 0.02 * yy, np.nan)
+    s.add_heightfield(above, origin=(-500.0, -500.0), spacing=(50.0, 50.0), tiles=(4, 4))
+    s.add_heightfield(-950.0 + 0.03 * xx, origin=(-500.0, -500.0), spacing=(50.0, 50.0), tiles=(4, 4))
+    beside = np.where(xx > 1000.0, -500.0 + 0.05 * yy, np.nan)
+    s.add_heightfield(beside, origin=(-500.0, -500.0), spacing=(50.0, 50.0), tiles=(4, 4))
+    s.add_slice(vol, axis=1, index=N // 2)
+    return s, salt
+
+
+CAMERAS = {
+    "above": ((600.0, 300.0, 2500.0), (500.0, 500.0, -500.0)),
+    "beside": ((3200.0, 900.0, -400.0), (500.0, 500.0, -500.0)),
+    "below": ((400.0, 700.0, -3500.0), (500.0, 500.0, -500.0)),
+    "oblique": ((-1800.0, -1500.0, 900.0), (500.0, 500.0, -500.0)),
+    "inside_box": ((500.0, 60.0, -500.0), (500.0, 500.0, -500.0)),
+}
+
+
+def camera(name: str) -> gc.Camera:
+    eye, target = CAMERAS[name]
+    return gc.Camera.look_at(eye, target, up=(0.0, 0.0, 1.0), fov_y=40.0)
+
+
+@pytest.fixture(scope="module")
+def scene() -> tuple[gc.Scene, int]:
+    return salt_scene()
+
+
+@pytest.fixture(scope="module")
+def renderer() -> gc.Renderer:
+    return gc.Renderer(W, H)
+
+
+def test_implicit_is_registered():
+    assert "implicit" in gc.CULLING_MODES
+
+
+@pytest.mark.parametrize("view", list(CAMERAS))
+@pytest.mark.parametrize("prepass_scale", [None, 0.125])
+def test_implicit_equals_none(scene, renderer, view, prepass_scale):
+    s, salt = scene
+    cam = camera(view)
+    none = renderer.render(s, cam, culling="none")
+    imp = renderer.render(s, cam, culling="implicit", pixel_threshold=0, prepass_scale=prepass_scale)
+    np.testing.assert_array_equal(imp.image, none.image)
+    np.testing.assert_array_equal(imp.depth, none.depth)
+    missed = (none.tile_pixels > 0) & ~imp.tile_drawn
+    assert not missed.any()
+    used = imp.stats["implicit_objects"]
+    assert used == (0 if view == "inside_box" else 1)
+    assert (imp.stats["implicit_occluder_boxes"] > 0) == (used > 0)
+
+
+def iso_triangles(s: gc.Scene, salt: int, res: gc.RenderResult) -> int:
+    t = s.tile_table()
+    on = res.tile_drawn & (t["object"] == salt)
+    return int(t["tris_fine"][on].sum())
+
+
+def test_implicit_culls_more_of_the_salt_than_three_pass(scene, renderer):
+    """From the oblique view the first set's depth leaves gaps in front of the salt's inside (its
+    prepass chose the tiles, at half the image's size, by their cheapest proxies), through which
+    three_pass's box test sees the salt's back tiles; the occluder boxes close them. (Measured:
+    6976 isosurface triangles unculled, 3270 three_pass, 3052 implicit.)"""
+    s, salt = scene
+    cam = camera("oblique")
+    tp = renderer.render(s, cam, culling="three_pass", pixel_threshold=0)
+    imp = renderer.render(s, cam, culling="implicit", pixel_threshold=0)
+    none = renderer.render(s, cam, culling="none")
+    np.testing.assert_array_equal(imp.image, none.image)
+    assert iso_triangles(s, salt, imp) < iso_triangles(s, salt, tp) < iso_triangles(s, salt, none)
+    assert imp.stats["triangles_drawn"] < tp.stats["triangles_drawn"]
+
+
+def test_scenes_read_from_bytes_have_no_occluders(scene, renderer):
+    s, _ = scene
+    back = gc.Scene.from_bytes(s.to_bytes())
+    res = renderer.render(back, camera("beside"), culling="implicit", pixel_threshold=0)
+    assert res.stats["implicit_objects"] == 0
+    np.testing.assert_array_equal(res.image, renderer.render(back, camera("beside"), culling="none").image)
