@@ -1,6 +1,6 @@
 """culling="implicit": conservative three_pass whose box test also sees the isosurfaces' enclosed
 occluder boxes. On a salt body with horizons and a slice it gives the unculled image bit for bit
-from any camera (inside the volume's box too, where the occluders are switched off), and culls the
+from any camera (inside the salt and its bounding box too, where the occluders are switched off), and culls the
 isosurface's back where the first set's depth leaves gaps in front of the salt."""
 
 from __future__ import annotations
@@ -47,8 +47,11 @@ CAMERAS = {
     "beside": ((3200.0, 900.0, -400.0), (500.0, 500.0, -500.0)),
     "below": ((400.0, 700.0, -3500.0), (500.0, 500.0, -500.0)),
     "oblique": ((-1800.0, -1500.0, 900.0), (500.0, 500.0, -500.0)),
-    "inside_box": ((500.0, 60.0, -500.0), (500.0, 500.0, -500.0)),
+    # Inside the salt's bounding box (beside the body) and inside the body: no occluders.
+    "inside_bbox": ((280.0, 280.0, -300.0), (500.0, 500.0, -500.0)),
+    "inside_salt": ((500.0, 480.0, -450.0), (900.0, 500.0, -450.0)),
 }
+INSIDE = ("inside_bbox", "inside_salt")
 
 
 def camera(name: str) -> gc.Camera:
@@ -82,7 +85,7 @@ def test_implicit_equals_none(scene, renderer, view, prepass_scale):
     missed = (none.tile_pixels > 0) & ~imp.tile_drawn
     assert not missed.any()
     used = imp.stats["implicit_objects"]
-    assert used == (0 if view == "inside_box" else 1)
+    assert used == (0 if view in INSIDE else 1)
     assert (imp.stats["implicit_occluder_boxes"] > 0) == (used > 0)
 
 

@@ -20,7 +20,7 @@
 //! box of object O is drawn at p, the pixel's ray reaches a point P of the box, and by
 //! `iso::enclosed`'s argument it has crossed O's surface at least a quarter cell before P (the
 //! boxes are inset by that much from cells the surface does not touch, and the ray's start lies
-//! outside the box of the volume's inner cells). O's surface is drawn in full at p by `none` (the conditions below),
+//! outside the surface's bounding box). O's surface is drawn in full at p by `none` (the conditions below),
 //! so F(p) lies at or in front of that crossing, hence in front of the box's depth at p: D(p) is
 //! still at or behind F(p), and the box test's argument holds unchanged (a tile with a visible
 //! fragment at p has its box entry at or in front of F(p), so it counts p). The quarter cell and
@@ -30,12 +30,12 @@
 //! An object's occluders are used in a frame only where that argument's premises hold:
 //! * the object is visible and opaque, and every one of its tiles is visible and drawn at level 0
 //!   (a coarser level of detail is not the surface the boxes were proven against);
-//! * the box of the volume's cells that do not touch its border (`Occluders::bounds`,
-//!   `iso::enclosed::enclosed_bounds`, render space, grown against round-off), which holds every
-//!   enclosed region and the surface around it, lies wholly beyond the near plane: every pixel's
-//!   ray then starts outside it (perspective or orthographic), and no fragment of the surface in
-//!   front of a box is clipped. (Not the whole volume's box: an automatic near plane fits the
-//!   scene, often at a slice's edge on that box's face.) A camera inside that box uses none.
+//! * the bounding box of the object's surface (`Occluders::bounds`, `iso::enclosed::mesh_bounds`,
+//!   render space, grown against round-off), which holds every enclosed region, lies wholly
+//!   beyond the near plane: every pixel's ray then starts outside every region (perspective or
+//!   orthographic), and the crossing lies on the ray after its start, so it is not clipped. (The
+//!   automatic near plane lies in front of the scene's bounds, so only a camera given a near plane,
+//!   or one among or inside the salt, switches them off.)
 //!
 //! The rest is three_pass's: a box reaching the near plane is drawn untested; threshold t > 0 loses
 //! only tiles with at most t visible pixels. `conservative` and `predict_errors` are ignored (this

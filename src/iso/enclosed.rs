@@ -41,18 +41,16 @@ pub const MAX_CELLS: usize = 1 << 27;
 /// Each box is inset by this fraction of a cell on every face.
 pub const INSET: f64 = 0.25;
 
-/// The box of the cells that do not touch the volume's border (world, grid frame): every
-/// enclosed region lies in it (module docs: Ω stays in cells the fill never reaches, which touch
-/// no border), so an eye, or a ray's start on the near plane, outside it reaches the boxes of
-/// [`enclosed_boxes`] only through the surface. `None` when the volume has fewer than 3 cells
-/// along an axis (then it has no such cells and no boxes).
-pub fn enclosed_bounds(vol: &Volume) -> Option<([f64; 3], [f64; 3])> {
-    let n = [vol.nx, vol.ny, vol.nz];
-    if n.iter().any(|&k| k < 4) {
-        return None;
-    }
-    let at = |a: usize, i: usize| vol.origin[a] + i as f64 * vol.spacing[a];
-    Some((std::array::from_fn(|a| at(a, 1)), std::array::from_fn(|a| at(a, n[a] - 2))))
+/// The bounding box of `vertices` (an isosurface's mesh), None when there are none. An eye (or a
+/// ray's start on the near plane) outside it reaches the boxes of [`enclosed_boxes`] only through
+/// the surface: an enclosed region Ω is bounded and its boundary lies on the surface (module
+/// docs), so every point of Ω lies between two points of that boundary on any line through it,
+/// hence in the convex hull of the surface's vertices' box.
+pub fn mesh_bounds(vertices: &[[f64; 3]]) -> Option<([f64; 3], [f64; 3])> {
+    let first = *vertices.first()?;
+    Some(vertices.iter().fold((first, first), |(lo, hi), v| {
+        (std::array::from_fn(|a| lo[a].min(v[a])), std::array::from_fn(|a| hi[a].max(v[a])))
+    }))
 }
 
 /// A box of cells: first cell (inclusive) and last (exclusive) per axis.
@@ -188,7 +186,8 @@ mod tests {
             let v = Volume::new(vals.into(), (25, 25, 25), v.origin, v.spacing).unwrap();
             let boxes = enclosed_boxes(&v, 0.0).unwrap();
             assert!(!boxes.is_empty() && boxes.len() < 200, "{} boxes", boxes.len());
-            let (blo, bhi) = enclosed_bounds(&v).unwrap();
+            let mesh = super::super::mesh::isosurface_mesh(&v, &super::super::MinMaxOctree::build(&v), 0.0).unwrap();
+            let (blo, bhi) = mesh_bounds(&mesh.vertices).unwrap();
             for b in &boxes {
                 assert!((0..3).all(|a| b.0[a] >= blo[a] && b.1[a] <= bhi[a]));
                 assert!(inside_sphere(b, [0.0; 3], 0.6), "{b:?}");

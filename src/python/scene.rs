@@ -290,7 +290,7 @@ impl PyScene {
             let boxes = crate::iso::enclosed::enclosed_boxes(vol, isovalue)?;
             let mut s = lock(scene);
             let id = s.add_mesh(&m.vertices, &faces, "isosurface", tiles, opts)?;
-            if let (Some(bounds), false) = (crate::iso::enclosed::enclosed_bounds(vol), boxes.is_empty()) {
+            if let (Some(bounds), false) = (crate::iso::enclosed::mesh_bounds(&m.vertices), boxes.is_empty()) {
                 s.set_occluders(id, &boxes, bounds)?;
             }
             Ok(id)

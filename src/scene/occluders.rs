@@ -15,7 +15,7 @@ pub struct Occluders {
     /// object's own surface for any eye outside `bounds`.
     pub boxes: Vec<[[f32; 3]; 2]>,
     /// The box (relative to the object's origin) the eye must lie outside of (for an isosurface,
-    /// its volume's cells off the border).
+    /// its surface's bounding box).
     pub bounds: [[f64; 3]; 2],
 }
 
