@@ -116,3 +116,47 @@ def test_scenes_read_from_bytes_have_no_occluders(scene, renderer):
     res = renderer.render(back, camera("beside"), culling="implicit", pixel_threshold=0)
     assert res.stats["implicit_objects"] == 0
     np.testing.assert_array_equal(res.image, renderer.render(back, camera("beside"), culling="none").image)
+
+
+def blob_scene(rng: np.random.Generator, trial: int) -> gc.Scene:
+    """A random isosurface of a few Gaussian blobs with a little noise in a 24^3 volume (every third
+    with NaN samples; every other one enclosing the low side), under a rough plane."""
+    c = np.linspace(0.0, 1.0, 24)
+    z, y, x = np.meshgrid(c, c, c, indexing="ij")
+    v = np.zeros_like(x)
+    for _ in range(4):
+        p, s = rng.uniform(0.3, 0.7, 3), rng.uniform(0.06, 0.12)
+        v += np.exp(-((x - p[0]) ** 2 + (y - p[1]) ** 2 + (z - p[2]) ** 2) / (2 * s * s))
+    v += 0.02 * rng.standard_normal(v.shape)
+    if trial % 3 == 0:
+        v[rng.random(v.shape) < 0.002] = np.nan
+    iso = rng.uniform(0.3, 0.8)
+    if trial % 2:
+        v, iso = 1.5 - v, 1.5 - iso
+    scene = gc.Scene()
+    scene.add_isosurface(gc.Volume(v.astype(np.float32), origin=(0, 0, 0), spacing=(1, 1, 1)), iso, tiles=16)
+    scene.add_heightfield(20.0 + rng.normal(0.0, 1.0, (9, 9)), origin=(-4, -4), spacing=(4, 4))
+    return scene
+
+
+def test_random_isosurfaces_from_random_cameras_equal_none():
+    """Blobs, NaN samples, both sides, perspective and orthographic cameras near and far (some
+    inside the surface's bounding box): the image and depth are none's, and the occluders are used
+    in most frames."""
+    rng = np.random.default_rng(7)
+    r = gc.Renderer(160, 128)
+    used = frames = 0
+    for trial in range(8):
+        scene = blob_scene(rng, trial)
+        for k in range(6):
+            d = rng.normal(size=3)
+            eye = np.array([12.0, 12.0, 12.0]) + d / np.linalg.norm(d) * rng.uniform(6, 40)
+            ortho = dict(projection="orthographic", ortho_height=30.0) if k % 3 == 2 else {}
+            cam = gc.Camera.look_at(eye, (12 + rng.normal(0, 3), 12, 12), fov_y=rng.uniform(20, 60), **ortho)
+            a = r.render(scene, cam, culling="none")
+            b = r.render(scene, cam, culling="implicit", pixel_threshold=0)
+            np.testing.assert_array_equal(b.image, a.image, err_msg=f"{trial} {k}")
+            np.testing.assert_array_equal(b.depth, a.depth, err_msg=f"{trial} {k}")
+            used += b.stats["implicit_objects"]
+            frames += 1
+    assert used > frames // 2
