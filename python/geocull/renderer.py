@@ -25,7 +25,7 @@ __all__ = ["Renderer", "CULLING_MODES", "CullingMode", "ISO_CULLING_MODES", "Iso
 
 #: Culling modes of :meth:`Renderer.render`, for type checkers. The runtime list is
 #: :data:`CULLING_MODES`, which comes from the core.
-CullingMode = Literal["none", "three_pass", "oracle", "horizon", "frustum", "temporal"]
+CullingMode = Literal["none", "three_pass", "oracle", "horizon", "frustum", "temporal", "implicit"]
 
 #: Culling modes :meth:`Renderer.render` accepts, in the core's order (its registry).
 CULLING_MODES: tuple[str, ...] = tuple(_geocull.culling_modes())
@@ -361,7 +361,11 @@ class Renderer:
         this renderer's last frame of the same scene drawn first, then every other tile's box tested
         against that image at full resolution and drawn when it shows: about the oracle's cost for a
         coherent camera, exact like conservative three_pass; a scene's first frame starts from
-        three_pass's prepass; stats ``tiles_reused``).
+        three_pass's prepass; stats ``tiles_reused``), "implicit" (conservative three_pass whose box
+        test also sees the isosurfaces' implicit occluders: boxes of cells that no ray reaches
+        without crossing the isosurface first, found when it was added; a salt body then culls what
+        lies behind it; stats ``implicit_occluder_boxes``, ``implicit_objects``; scenes read from
+        bytes have no occluders).
         pixel_threshold: >= 0, in full-image pixels: tiles with at most this many visible pixels
         are not drawn.  prepass_scale: (0, 1], prepass resolution as a fraction of the image's
         width and height; None (default): 0.5 with conservative=True (the image does not depend on
@@ -402,7 +406,7 @@ class Renderer:
         units) along every axis: no frame can show it well.
 
         Accuracy: "none", "oracle", "horizon" and "frustum" give the unculled image, and so does
-        "three_pass" with conservative=True and "temporal", both with pixel_threshold=0 (for any
+        "three_pass" with conservative=True, "temporal" and "implicit", with pixel_threshold=0 (for any
         camera, proxies and history).
         With conservative=False "three_pass" is exact only with pixel_threshold=0, coarse_factor=1
         and prepass_scale=1; with coarser proxies it is approximate, as in the method's paper: a
@@ -428,8 +432,9 @@ class Renderer:
                            cv.number(alpha, "alpha"), cv.number(lam, "lam"))
         res: RenderResult[RenderStats] = RenderResult(d, culling, camera)
         _compose(res.image, res.depth, self._bg_rows)
-        # three_pass counts its prepass, an estimate: there the objects drawn are those in the frame.
-        res.colorings = scene.colorings(scene._frame_objects(res.tile_drawn, res.tile_pixels, culling != "three_pass"))
+        # three_pass (and implicit) count their prepass, an estimate: there the objects drawn are those in the frame.
+        by_pixels = culling not in ("three_pass", "implicit")
+        res.colorings = scene.colorings(scene._frame_objects(res.tile_drawn, res.tile_pixels, by_pixels))
         tiny = _warn_if_tiny(scene.bounds, camera)
         if len(res.tile_pixels) and not res.tile_pixels.any() and not tiny:  # nothing drawn: near clipped all?
             t = scene.tile_table()

@@ -56,6 +56,8 @@ class RenderStats(TypedDict):
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
     frame_repeated: NotRequired[int]  # temporal: 1 when it repeated the last frame (its visible tiles, untested)
     tiles_proven_hidden: NotRequired[int]  # three_pass conservative, temporal: hidden by a height field (CPU proof)
+    implicit_occluder_boxes: NotRequired[int]  # implicit: isosurface occluder boxes drawn into the box test's depth
+    implicit_objects: NotRequired[int]  # implicit: isosurfaces whose occluders were used this frame
     tiles_drawn_first: NotRequired[int]  # three_pass conservative / predict_errors: tiles the prepass chose
     tiles_drawn_second: NotRequired[int]  # three_pass conservative: tiles added by the box test
     test_ms: NotRequired[float]  # three_pass conservative / predict_errors, temporal with GPU timestamps: ms, box test

@@ -393,7 +393,10 @@ class Scene(SceneColorings):
         ``tiles`` spatially coherent tiles (default one per ~4096 triangles) with coarse proxies, drawn
         with the other objects and culled by them like any mesh (three_pass hides a salt body under a
         horizon). :meth:`Renderer.render_isosurface` stays the single-object path with the volume's
-        own implicit occluders.
+        own implicit occluders. The scene keeps the isosurface's *enclosed occluder boxes* (cells
+        wholly on one side of ``isovalue`` that no ray from outside the volume reaches without
+        crossing the surface; none for rotated or lazy volumes, nor after :meth:`from_bytes`), with
+        which ``culling="implicit"`` also culls what the salt body itself hides.
 
         values: a second :class:`Volume` on the same grid (the same samples per axis, origin,
         spacing and rotation: built as ``volume`` was, e.g. the amplitude cube of a salt-probability

@@ -12,6 +12,7 @@
 pub mod frustum;
 pub mod hidden;
 pub mod horizon;
+pub mod implicit;
 pub mod none;
 pub mod oracle;
 pub mod phases;
@@ -28,7 +29,7 @@ use crate::scene::Scene;
 
 /// Every strategy, in the order Python lists them. Adding a strategy: its file, one line here.
 pub const REGISTRY: &[fn() -> Box<dyn CullStrategy>] =
-    &[none::make, three_pass::make, oracle::make, horizon::make, frustum::make, temporal::make];
+    &[none::make, three_pass::make, oracle::make, horizon::make, frustum::make, temporal::make, implicit::make];
 
 /// Names of the registered strategies (what `culling=` accepts).
 pub fn names() -> Vec<&'static str> {

@@ -280,8 +280,13 @@ pub fn draw_and_test_the_rest(
     add: bool,
     drawn: Option<&[bool]>,
 ) -> Rest {
-    let d = &f.ctx.device;
-    let n = f.n_tiles();
+    draw_first(f, enc, first);
+    test_the_rest(f, enc, first, fine, threshold, add, drawn, f.main_targets)
+}
+
+/// Draws `first` (the set A, as indirect args, one per tile) into the final targets, clearing
+/// them: the first half of [`draw_and_test_the_rest`].
+pub fn draw_first(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder, first: &wgpu::Buffer) {
     f.passes.record_draw(
         enc,
         f.main_targets,
@@ -294,13 +299,32 @@ pub fn draw_and_test_the_rest(
         f.pass_breaks,
         f.timestamps,
     );
+}
+
+/// The second half of [`draw_and_test_the_rest`], once `first` is drawn: every other visible
+/// tile's boxes (or slab) tested against the depth of `test` (the final targets, or targets of
+/// their size whose depth is at or in front of theirs everywhere and still at or behind the
+/// nearest fine surface of the scene: `cull::implicit`), and the selection from `fine`.
+#[allow(clippy::too_many_arguments)]
+pub fn test_the_rest(
+    f: &FrameInputs<'_>,
+    enc: &mut wgpu::CommandEncoder,
+    first: &wgpu::Buffer,
+    fine: &wgpu::Buffer,
+    threshold: f32,
+    add: bool,
+    drawn: Option<&[bool]>,
+    test: &Targets,
+) -> Rest {
+    let d = &f.ctx.device;
+    let n = f.n_tiles();
     let t = tile_boxes(f, drawn);
     // The gates first (every gate open for them), then the boxes behind open gates.
     let gate = passes::counts_buffer_init(d, &t.gate_init);
     let open = passes::counts_buffer_init(d, &vec![1; n]);
     let gates_buf = passes::boxes_buffer(d, &t.gates);
     let ts = |name| f.timestamps.and_then(|t| t.render(name));
-    let (main, bg) = (f.main_targets, f.scene_bg);
+    let (main, bg) = (test, f.scene_bg);
     f.passes.record_box_test(d, enc, bg, main, &gates_buf, t.gates.len(), first, &open, &gate, ts("test_ms"));
     let box_counts = passes::counts_buffer_init(d, &t.init);
     let boxes_buf = passes::boxes_buffer(d, &t.boxes);

@@ -11,6 +11,7 @@ mod context;
 pub mod depth_read;
 pub mod geometry;
 pub mod layout;
+pub mod occluder_depth;
 pub mod passes;
 pub mod readback;
 pub mod slab_test;

@@ -30,6 +30,7 @@ use crate::scene::serial::{Reader, Writer};
 const VOLUME_MAGIC: &[u8; 8] = b"GCVOLUM\0";
 
 mod bricks;
+pub mod enclosed;
 pub mod layout;
 #[cfg(test)]
 mod lazy_tests;

@@ -241,7 +241,8 @@ impl PyScene {
     }
 
     /// The isosurface `volume == isovalue` as a scene mesh (kind "isosurface") of about `tiles`
-    /// spatially coherent tiles, culled like any object (three_pass: by the other objects).
+    /// spatially coherent tiles, culled like any object (three_pass: by the other objects), with
+    /// its enclosed occluder boxes (`crate::iso::enclosed`) for `culling = "implicit"`.
     /// With `values` (a volume on `volume`'s grid) and `coloring`, its values at the vertices are
     /// the surface's (`coloring`'s own values stay None; coloured by them, its clim defaults to
     /// `values`' finite range, as a slice of that volume is).
@@ -285,7 +286,14 @@ impl PyScene {
                 None => Some(n.div_ceil(4096).max(1)),
             };
             let opts = AddOptions { coarse_factor, name, color, color_by, interrupt };
-            lock(scene).add_mesh(&m.vertices, &faces, "isosurface", tiles, opts)
+            // The enclosed occluder boxes (`culling = "implicit"`), behind this very mesh.
+            let boxes = crate::iso::enclosed::enclosed_boxes(vol, isovalue)?;
+            let mut s = lock(scene);
+            let id = s.add_mesh(&m.vertices, &faces, "isosurface", tiles, opts)?;
+            if let (Some(bounds), false) = (crate::iso::enclosed::mesh_bounds(&m.vertices), boxes.is_empty()) {
+                s.set_occluders(id, &boxes, bounds)?;
+            }
+            Ok(id)
         })
     }
 

@@ -16,6 +16,8 @@ pub mod grid;
 mod heightfield;
 pub mod lens;
 mod mesh;
+mod occluders;
+pub use occluders::Occluders;
 pub(crate) mod serial;
 pub mod slice;
 pub mod well;
@@ -65,6 +67,10 @@ pub struct Object {
     /// Caches of what is derived from one object's geometry key by it, so changes to other
     /// objects leave them valid.
     pub geometry_stamp: u64,
+    /// Enclosed occluder boxes (`culling = "implicit"`, [`Scene::set_occluders`]); None for most
+    /// objects and for every object read from bytes (they are not serialised). Boxed: an object
+    /// without stays small (issue 39).
+    pub occluders: Option<std::sync::Arc<Occluders>>,
 }
 
 static NEXT_GEOMETRY_STAMP: AtomicU64 = AtomicU64::new(1);
@@ -460,6 +466,7 @@ impl Scene {
             tiles,
             priority: None,
             geometry_stamp: new_geometry_stamp(),
+            occluders: None,
         });
         self.geometry_version += 1;
         self.last_add = Some((self.geometry_version, id));

@@ -443,6 +443,8 @@ impl Scene {
                 origin: object_origin,
                 tiles,
                 geometry_stamp: super::new_geometry_stamp(),
+                // Not stored: a scene read from bytes culls its isosurfaces as plain meshes.
+                occluders: None,
             });
         }
         r.finish()?;
