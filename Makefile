@@ -61,7 +61,8 @@ test-python: setup
 test-gl: setup
 	GEOCULL_BACKEND=gl $(PY) -m pytest -q tests/test_render.py tests/test_three_pass.py tests/test_hard_cases.py \
 	  tests/test_iso.py tests/test_cull_frustum.py tests/test_horizon.py tests/test_interrupt.py tests/test_color.py tests/test_slices.py tests/test_grid.py \
-	  tests/test_lod.py tests/test_cull_temporal.py tests/test_pass_triangles.py tests/test_slab_culling.py tests/test_wells.py tests/test_grid_cells.py tests/test_priority.py
+	  tests/test_lod.py tests/test_cull_temporal.py tests/test_pass_triangles.py tests/test_slab_culling.py tests/test_wells.py tests/test_grid_cells.py tests/test_priority.py \
+	  tests/test_implicit.py
 
 test: setup test-rust test-python test-gl
 
