@@ -21,7 +21,8 @@ shallow parts leave the image) from azimuths all round, elevations 10-90 degrees
 and 10, two of them zoomed in. Methods (:func:`methods`): ``none`` (the reference), three_pass
 conservative (threshold 0) and the paper's approximate mode (threshold 10, prepass scale 1),
 ``temporal`` (threshold 0, on its own renderer; its history is its last frame, the same view), ``horizon``,
-``frustum``, ``oracle`` (the lower bound), any other mode of :data:`geocull.CULLING_MODES` with its
+``frustum``, ``oracle`` (the lower bound), ``implicit`` (threshold 0: three_pass with the isosurfaces'
+enclosed occluders; a field without isosurfaces has none), any other mode of :data:`geocull.CULLING_MODES` with its
 defaults, ``temporal`` + ``lod="screen_error"`` 0.5 px, the same with ``grid_lod="screen_error"``
 too, ``temporal`` and ``temporal`` + lod with a moving camera (``,moving``: every frame alternates
 between the view and the view turned by :data:`NUDGE_DEGREES` of azimuth, so that no frame repeats
@@ -80,7 +81,8 @@ VIEWS: tuple[tuple[str, float, float, float, float], ...] = (
 )
 
 #: Methods whose image must equal ``none``'s bit for bit (the renderer's contract).
-EXACT = ("none", "three_pass(cons,t=0)", "temporal(t=0)", "temporal(t=0,moving)", "horizon", "frustum", "oracle")
+EXACT = ("none", "three_pass(cons,t=0)", "temporal(t=0)", "temporal(t=0,moving)", "horizon", "frustum", "oracle",
+         "implicit(t=0)")
 
 
 def _say(msg: str) -> None:
@@ -114,6 +116,7 @@ def methods() -> list[tuple[str, dict[str, Any]]]:
         ("horizon", dict(culling="horizon")),
         ("frustum", dict(culling="frustum")),
         ("oracle", dict(culling="oracle")),
+        ("implicit(t=0)", dict(culling="implicit", pixel_threshold=0)),
     ]
     known = {rk["culling"] for _, rk in out}
     out += [(m, dict(culling=m)) for m in gc.CULLING_MODES if m not in known]
