@@ -1,18 +1,8 @@
-// Box test (box.wgsl is prepended): per tile, the pixels where the front faces of its box are at
-// or in front of a depth image (reverse-Z: nearer = larger). The comparison is done here by hand,
-// with no depth attachment, so hidden fragments are never counted and no early-depth-test feature
-// is needed. Tiles whose draw is already on (`skip`), or whose `gate` count is 0, are not tested:
-// their box collapses.
-
-struct Globals {
-    view_proj: mat4x4<f32>,
-    light_dir: vec4<f32>,
-    z_scale: f32,
-    // Orthographic: near / (far - near); perspective: -1 (priority_clip).
-    ortho_near: f32,
-    _pad1: f32,
-    _pad2: f32,
-}
+// Box test (box_globals.wgsl, box.wgsl and priority.wgsl are prepended): per tile, the pixels
+// where the front faces of its box are at or in front of a depth image (reverse-Z: nearer =
+// larger). The comparison is done here by hand, with no depth attachment, so hidden fragments are
+// never counted and no early-depth-test feature is needed. Tiles whose draw is already on
+// (`skip`), or whose `gate` count is 0, are not tested: their box collapses.
 
 struct DrawArgs {
     index_count: u32,
@@ -22,7 +12,6 @@ struct DrawArgs {
     first_instance: u32,
 }
 
-@group(0) @binding(0) var<uniform> g: Globals;
 // The depth image as an unfilterable float texture (GLSL cannot textureLoad depth textures).
 @group(1) @binding(0) var depth: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read_write> counts: array<atomic<u32>>;

@@ -1,18 +1,9 @@
-// Occluder depth (box.wgsl and priority.wgsl are prepended): a depth image that is an earlier
-// image's depth (`fs_copy`, one full-screen triangle) with the front faces of boxes drawn over it
-// where they are nearer (`vs_box_depth`), no colour. The boxes are pushed 16 priority steps
-// farther (2^-17 of their distance): what they occlude must lie clearly behind them.
+// Occluder depth (box_globals.wgsl, box.wgsl and priority.wgsl are prepended): a depth image
+// that is an earlier image's depth (`fs_copy`, one full-screen triangle) with the front faces of
+// boxes drawn over it where they are nearer (`vs_box_depth`), no colour. The boxes are pushed 16
+// priority steps farther (2^-17 of their distance): what they occlude must lie clearly behind
+// them.
 
-struct Globals {
-    view_proj: mat4x4<f32>,
-    light_dir: vec4<f32>,
-    z_scale: f32,
-    ortho_near: f32,
-    _pad1: f32,
-    _pad2: f32,
-}
-
-@group(0) @binding(0) var<uniform> g: Globals;
 // The earlier image's depth as an unfilterable float texture (as the box test reads it).
 @group(1) @binding(0) var source: texture_2d<f32>;
 
