@@ -457,11 +457,7 @@ mod tests {
             let levels = lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]);
             assert!(levels.len() >= 2, "{w} x {h}");
             for l in &levels {
-                let tris: Vec<[(usize, usize); 3]> = l
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|c| (t[c] as usize % w, t[c] as usize / w)))
-                    .collect();
+                let tris = sample_triangles(&l.indices, w);
                 let want = brute_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32;
                 assert_eq!(lattice_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32, want);
                 assert!((l.error - want).abs() <= 1e-6 * want.max(1.0), "{w} x {h}: {} vs {want}", l.error);
@@ -478,15 +474,17 @@ mod tests {
             let z: Vec<f64> = (0..w * h).map(|k| if k == s { 7.0 } else { 0.1 * (k % 3) as f64 }).collect();
             let zz = z.clone();
             for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]) {
-                let tris: Vec<[(usize, usize); 3]> = l
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|c| (t[c] as usize % w, t[c] as usize / w)))
-                    .collect();
+                let tris = sample_triangles(&l.indices, w);
                 let want = brute_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32;
                 assert_eq!(l.error, want, "spike at {s}");
             }
         }
+    }
+
+    /// A level's triangles as local samples (column, row) of a tile `w` samples wide whose vertex
+    /// k is sample (k % w, k / w).
+    fn sample_triangles(indices: &[u32], w: usize) -> Vec<[(usize, usize); 3]> {
+        indices.chunks_exact(3).map(|t| [0, 1, 2].map(|c| (t[c] as usize % w, t[c] as usize / w))).collect()
     }
 
     /// The reference measure: every sample of each triangle's box tested for inclusion, and
