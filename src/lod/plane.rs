@@ -36,6 +36,18 @@ pub fn tile_plane(
     let us = tile_bounds(nu, (nu - 1).div_ceil(block));
     let vs = tile_bounds(nv, (nv - 1).div_ceil(block));
     let (tu, tv) = (us.len() - 1, vs.len() - 1);
+    // The tiles' few shapes (even cuts: two widths and two heights at most), each one triangle
+    // list that its tiles share.
+    let sides = |b: &[usize]| {
+        let mut s: Vec<usize> = b.windows(2).map(|p| p[1] - p[0] + 1).collect();
+        s.sort_unstable();
+        s.dedup();
+        s
+    };
+    let lists: Vec<((usize, usize), Indices)> = sides(&us)
+        .into_iter()
+        .flat_map(|w| sides(&vs).into_iter().map(move |h| ((w, h), Indices::from(cells(w, h)))))
+        .collect();
     stop.set_total(tu * tv);
     (0..tu * tv)
         .into_par_iter()
@@ -63,11 +75,11 @@ pub fn tile_plane(
             }
             let w = u1 - u0 + 1;
             let h = v1 - v0 + 1;
-            let fine = cells(w, h);
             let corners = [0, w - 1, h * w - 1, (h - 1) * w].map(|k| k as u32);
             let coarse = vec![corners[0], corners[1], corners[2], corners[0], corners[2], corners[3]];
             let error = off_plane(&tile.positions, corners);
-            tile.fine = Indices::from(fine);
+            // Every cut's width and height is listed, so every tile's shape is.
+            tile.fine = lists.iter().find(|(shape, _)| *shape == (w, h)).expect("a listed tile shape").1.clone();
             tile.finish(coarse_factor, Some((coarse, error)), false)
         })
         .inspect(|_| stop.item_done())
@@ -142,6 +154,17 @@ mod tests {
         got.sort_unstable();
         want.sort_unstable();
         assert_eq!(got, want);
+        // Tiles of one shape (cut by tile_bounds into 5 x 3) share one triangle list.
+        let (us, vs) = (tile_bounds(nu, 5), tile_bounds(nv, 3));
+        let shape = |t: &TileMesh| {
+            let (i, j) = (t.ix as usize, t.iy as usize);
+            (us[i + 1] - us[i], vs[j + 1] - vs[j])
+        };
+        for a in &tiles {
+            for b in &tiles {
+                assert_eq!(std::sync::Arc::ptr_eq(&a.fine, &b.fine), shape(a) == shape(b));
+            }
+        }
         for t in &tiles {
             for (p, &v) in t.positions.iter().zip(&t.values) {
                 let q = pos[v as usize];
