@@ -11,7 +11,7 @@
 //! * Hole-free height-field tiles ([`lattice_levels`]): the sample lattice at strides 2, 4, 8, ...;
 //!   lattice cells that touch the tile border are fanned from their centre sample to every border
 //!   sample. Error: the largest vertical distance between the level and the fine surface, at the
-//!   fine samples and where the level's edges cross the grid lines.
+//!   fine samples and where the level's edges cross the fine edges (grid lines and diagonals).
 //! * Every other tile ([`simplified_levels`]): meshoptimizer's quadric simplification of the
 //!   previous level to a quarter of its triangles with the border (and hole outlines) locked.
 //!   Error: the sum of meshoptimizer's estimates of each step (relative to the tile's extent, times
@@ -164,11 +164,12 @@ fn square_cell_error((a, b): (usize, usize), k: usize, z: &impl Fn(usize, usize)
     err
 }
 
-/// Height of the fine surface at a point (x, y) of local sample coordinates: two triangles per
-/// cell, split along the diagonal from (i, j) to (i + 1, j + 1), as the fine level is built.
+/// Height of the fine surface at a point (x, y) ≥ 0 of local sample coordinates: two triangles
+/// per cell, split along the diagonal from (i, j) to (i + 1, j + 1), as the fine level is built.
 fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
-    let i = (x.floor() as usize).min(max.0 - 1);
-    let j = (y.floor() as usize).min(max.1 - 1);
+    // A cast truncates: the floor for x, y ≥ 0 (and 0 for a rounding below it).
+    let i = (x as usize).min(max.0 - 1);
+    let j = (y as usize).min(max.1 - 1);
     let (u, v) = (x - i as f64, y - j as f64);
     let (z00, z10, z11, z01) = (z(i, j), z(i + 1, j), z(i + 1, j + 1), z(i, j + 1));
     if u >= v {
@@ -178,14 +179,32 @@ fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, us
     }
 }
 
-/// The largest vertical distance between the triangles `tris` and the fine surface, at the fine
-/// samples inside each triangle and where each edge crosses a grid line x = i or y = j.
+/// The largest vertical distance between the triangles `tris` and the fine surface, where `tris`
+/// are whole lattice cells' triangles, counter-clockwise, corners at samples (so that an edge
+/// that is neither axis-aligned nor along the fine diagonals lies inside a cell, between two of
+/// its triangles, once in each direction). The two surfaces are linear over every piece where a
+/// level triangle meets a fine one, so the distance is largest at a corner of such a piece: a
+/// fine sample inside or on a level triangle, or a point where a level edge crosses a fine edge
+/// (a grid line x = i or y = j, or a cell's diagonal x - y = c). An edge along a grid line or a
+/// diagonal meets them only at samples; any other edge is measured once, from its lower end.
 fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
     let max = tris.iter().flatten().fold((1, 1), |m, &(i, j)| (m.0.max(i), m.1.max(j)));
     let mut err = 0.0f64;
+    // Whether the segment a -> b can bend the fine surface between its ends.
+    let bends = |a: (usize, usize), b: (usize, usize)| {
+        let (dx, dy) = (b.0 as i64 - a.0 as i64, b.1 as i64 - a.1 as i64);
+        dx != 0 && dy != 0 && dx != dy
+    };
     for t in tris {
-        let p: Vec<(f64, f64, f64)> = t.iter().map(|&(i, j)| (i as f64, j as f64, z(i, j))).collect();
+        let p = t.map(|(i, j)| (i as f64, j as f64, z(i, j)));
         let det = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            // A flat triangle's edges whatever their direction: their twins may be its own.
+            if bends(a, b) && (a < b || det == 0.0) {
+                err = err.max(edge_error(a, b, z, max));
+            }
+        }
         if det == 0.0 {
             continue;
         }
@@ -219,20 +238,23 @@ fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64)
                 }
             }
         }
-        for e in 0..3 {
-            let (a, b) = (p[e], p[(e + 1) % 3]);
-            let mut check = |s: f64| {
-                let (x, y, g) = (a.0 + s * (b.0 - a.0), a.1 + s * (b.1 - a.1), a.2 + s * (b.2 - a.2));
-                err = err.max((fine_height(x, y, z, max) - g).abs());
-            };
-            for (u, v) in [(a.0, b.0), (a.1, b.1)] {
-                if u != v {
-                    let (lo, hi) = (u.min(v).ceil() as i64, u.max(v).floor() as i64);
-                    for g in lo..=hi {
-                        check((g as f64 - u) / (v - u));
-                    }
-                }
-            }
+    }
+    err
+}
+
+/// The largest vertical distance between the segment from sample `a` to sample `b` (linear
+/// between their heights) and the fine surface under it: at the segment's crossings with the
+/// grid lines x = i, y = j and the cells' diagonals x - y = c, where the fine surface along it
+/// bends (at its ends, samples, the two agree).
+fn edge_error(a: (usize, usize), b: (usize, usize), z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
+    let (ax, ay, bx, by) = (a.0 as i64, a.1 as i64, b.0 as i64, b.1 as i64);
+    let (za, zb) = (z(a.0, a.1), z(b.0, b.1));
+    let mut err = 0.0f64;
+    for (u, v) in [(ax, bx), (ay, by), (ax - ay, bx - by)] {
+        for g in u.min(v) + 1..u.max(v) {
+            let s = (g - u) as f64 / (v - u) as f64;
+            let (x, y) = (ax as f64 + s * (bx - ax) as f64, ay as f64 + s * (by - ay) as f64);
+            err = err.max((fine_height(x, y, z, max) - (za + s * (zb - za))).abs());
         }
     }
     err
@@ -481,6 +503,40 @@ mod tests {
         }
     }
 
+    #[test]
+    fn no_point_of_a_level_is_further_from_the_fine_surface_than_its_error() {
+        // Sampled densely (eighths of a cell, barycentric over every level triangle) on rough
+        // heights: a level edge that crosses a cell's diagonal over a ridge must be measured
+        // there, where neither grid line nor sample shows the distance.
+        let mut seed = 777u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (w, h) in [(23, 23), (30, 17)] {
+            let z: Vec<f64> = (0..w * h).map(|_| 50.0 * rnd()).collect();
+            let zf = |i: usize, j: usize| z[j * w + i];
+            let zz = z.clone();
+            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]) {
+                let mut seen = 0.0f64;
+                for t in sample_triangles(&l.indices, w) {
+                    let p = t.map(|(i, j)| (i as f64, j as f64, zf(i, j)));
+                    let n = 8 * t.iter().map(|q| q.0.abs_diff(t[0].0) + q.1.abs_diff(t[0].1)).max().unwrap().max(1);
+                    for a in 0..=n {
+                        for b in 0..=n - a {
+                            let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
+                            let c = 1.0 - u - v;
+                            let (x, y) = (c * p[0].0 + u * p[1].0 + v * p[2].0, c * p[0].1 + u * p[1].1 + v * p[2].1);
+                            let g = c * p[0].2 + u * p[1].2 + v * p[2].2;
+                            seen = seen.max((fine_height(x, y, &zf, (w - 1, h - 1)) - g).abs());
+                        }
+                    }
+                }
+                assert!(l.error as f64 >= seen * (1.0 - 1e-6), "{w} x {h}: error {} below {seen}", l.error);
+            }
+        }
+    }
+
     /// A level's triangles as local samples (column, row) of a tile `w` samples wide whose vertex
     /// k is sample (k % w, k / w).
     fn sample_triangles(indices: &[u32], w: usize) -> Vec<[(usize, usize); 3]> {
@@ -488,7 +544,7 @@ mod tests {
     }
 
     /// The reference measure: every sample of each triangle's box tested for inclusion, and
-    /// every crossing of its edges with the grid lines.
+    /// every crossing of its edges with the grid lines and the cells' diagonals.
     fn brute_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
         let max = tris.iter().flatten().fold((1, 1), |m, &(i, j)| (m.0.max(i), m.1.max(j)));
         let mut err = 0.0f64;
@@ -511,7 +567,7 @@ mod tests {
             }
             for e in 0..3 {
                 let (a, b) = (p[e], p[(e + 1) % 3]);
-                for (u, v) in [(a.0, b.0), (a.1, b.1)] {
+                for (u, v) in [(a.0, b.0), (a.1, b.1), (a.0 - a.1, b.0 - b.1)] {
                     if u != v {
                         for g in (u.min(v).ceil() as i64)..=(u.max(v).floor() as i64) {
                             let s = (g as f64 - u) / (v - u);
