@@ -21,8 +21,9 @@
 //! F(p); a tile T with a visible fragment at p lies at F(p) there, inside T's box, so the box's
 //! entry point on p's ray is at or in front of D(p): T's count is at least its number of visible
 //! pixels. The same holds for any set of boxes whose union holds what is drawn of T (the ray enters
-//! one of them in front of the fragment): T's sub-boxes (`TileMesh::occludee_boxes`: each cell of its
-//! (x, y) box spanning only its own triangles' heights, or each slice along its longest side
+//! one of them in front of the fragment): T's sub-boxes (`SceneGeometry::sub_boxes`: a height-field
+//! tile's quarters of its height blocks; another tile's `TileMesh::occludee_boxes`, each cell of
+//! its (x, y) box spanning only its own triangles' heights, or each slice along its longest side
 //! only its own triangles, whichever is smaller: a tube's slices follow it) when T is drawn at
 //! level 0, which cuts the tiles whose box pokes through an occluder while their surface stays
 //! behind it; the whole box

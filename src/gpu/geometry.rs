@@ -49,8 +49,8 @@ pub struct SceneGeometry {
     pub levels: Vec<Vec<LevelDraw>>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
-    /// Per tile, boxes whose union holds its fine triangles (`TileMesh::occludee_boxes`),
-    /// origin-relative like `bbox`: the box tests' occludees of tiles drawn at level 0.
+    /// Per tile, boxes whose union holds its fine triangles ([`tile_sub_boxes`]), origin-relative
+    /// like `bbox`: the box tests' occludees of tiles drawn at level 0.
     pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
     /// Per tile, a height-field tile's height blocks (`Object::height_blocks`, origin-relative
     /// like `bbox`): what the CPU proof of hidden tiles (`cull::hidden`) reads; None for others.
@@ -155,10 +155,13 @@ fn tile_bbox(t: &crate::lod::TileMesh) -> (DVec3, DVec3) {
     (DVec3::from_array(t.bbox_min.map(f64::from)), DVec3::from_array(t.bbox_max.map(f64::from)))
 }
 
-/// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them (`TileMesh::occludee_boxes`).
-fn tile_sub_boxes(t: &crate::lod::TileMesh) -> Vec<(DVec3, DVec3)> {
+/// A tile's sub-boxes as `SceneGeometry::sub_boxes` keeps them: a height-field tile's quarters of
+/// its height blocks (`HeightBlocks::quarter_boxes`, read off its blocks), another tile's
+/// `TileMesh::occludee_boxes` (a pass over its triangles).
+fn tile_sub_boxes(t: &crate::lod::TileMesh, blocks: Option<&crate::lod::blocks::HeightBlocks>) -> Vec<(DVec3, DVec3)> {
     let d = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
-    t.occludee_boxes().into_iter().map(|(l, h)| (d(l), d(h))).collect()
+    let boxes = blocks.map_or_else(|| t.occludee_boxes(), |b| b.quarter_boxes());
+    boxes.into_iter().map(|(l, h)| (d(l), d(h))).collect()
 }
 
 /// The second vertex stream's words of `n` vertices (`SceneGeometry::values`): the scalar (0
@@ -302,7 +305,7 @@ impl SceneGeometry {
         }
         for (k, t) in tiles_done {
             self.bbox[k] = tile_bbox(t);
-            self.sub_boxes[k] = tile_sub_boxes(t);
+            self.sub_boxes[k] = tile_sub_boxes(t, self.height_blocks[k].as_ref());
             for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
                 (l.error, l.error_z, l.shading_error) = (new.error, new.error_z, new.shading_error);
             }

@@ -139,10 +139,10 @@ impl TileMesh {
 
     /// Boxes whose union holds every fine triangle, as the box test uses them in place of the
     /// tile's box at level 0: of [`Self::sub_boxes`] (2 × 2 cells of the (x, y) box: a sloping
-    /// surface) and [`Self::slice_boxes`] (4 slices along the box's longest side: a tube, a steep
-    /// or long piece), the set of the smaller total volume.
+    /// surface) and [`Self::slice_boxes`] (8 slices along the box's longest side: a tube, a steep
+    /// or long piece), the set of the smaller total volume. Both in one pass over the triangles.
     pub fn occludee_boxes(&self) -> Vec<([f32; 3], [f32; 3])> {
-        let (grid, slices) = (self.sub_boxes(2), self.slice_boxes(8));
+        let (grid, slices) = self.cell_and_slice_boxes(2, 8);
         if boxes_volume(&slices) < boxes_volume(&grid) {
             slices
         } else {
@@ -154,23 +154,7 @@ impl TileMesh {
     /// into `k` equal slices, each the bounding box of the triangles whose centroid lies in it
     /// (their whole extent, so slices overlap where triangles straddle); empty slices left out.
     pub fn slice_boxes(&self, k: usize) -> Vec<([f32; 3], [f32; 3])> {
-        let k = k.max(1);
-        let (lo, hi) = (self.bbox_min, self.bbox_max);
-        let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
-        let width = (hi[axis] - lo[axis]) / k as f32;
-        let mut boxes = vec![([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]); k];
-        for t in self.fine.chunks_exact(3) {
-            let p = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
-            let c = (p[0][axis] + p[1][axis] + p[2][axis]) / 3.0;
-            let slot = if width > 0.0 { (((c - lo[axis]) / width).floor().max(0.0) as usize).min(k - 1) } else { 0 };
-            let (l, h) = &mut boxes[slot];
-            for q in &p {
-                *l = std::array::from_fn(|a| l[a].min(q[a]));
-                *h = std::array::from_fn(|a| h[a].max(q[a]));
-            }
-        }
-        boxes.retain(|(l, h)| l[0] <= h[0]);
-        boxes
+        self.cell_and_slice_boxes(1, k).1
     }
 
     /// Boxes whose union holds every fine triangle: the tile's (x, y) box cut into `s` × `s` cells,
@@ -178,19 +162,36 @@ impl TileMesh {
     /// where triangles straddle cells); cells without triangles are left out. Tighter than the
     /// tile's box for a sloping or curved tile: each cell spans only its part of the heights.
     pub fn sub_boxes(&self, s: usize) -> Vec<([f32; 3], [f32; 3])> {
-        let s = s.max(1);
+        self.cell_and_slice_boxes(s, 1).0
+    }
+
+    /// [`Self::sub_boxes`]`(s)` and [`Self::slice_boxes`]`(k)` in one pass over the triangles.
+    #[allow(clippy::type_complexity)]
+    fn cell_and_slice_boxes(&self, s: usize, k: usize) -> (Vec<([f32; 3], [f32; 3])>, Vec<([f32; 3], [f32; 3])>) {
+        let (s, k) = (s.max(1), k.max(1));
         let (lo, hi) = (self.bbox_min, self.bbox_max);
+        let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
+        let width = (hi[axis] - lo[axis]) / k as f32;
         let cell = [(hi[0] - lo[0]) / s as f32, (hi[1] - lo[1]) / s as f32];
-        let mut boxes = vec![([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]); s * s];
-        let index = |v: f32, a: usize| {
-            if cell[a] > 0.0 {
-                (((v - lo[a]) / cell[a]).floor().max(0.0) as usize).min(s - 1)
+        // The slot of `v` among `n` of size `size` from `from`: floor, clamped to 0..n (a cast
+        // truncates, which is the floor of what max(0) leaves; NaN goes to 0 either way).
+        let slot = |v: f32, from: f32, size: f32, n: usize| {
+            if size > 0.0 {
+                (((v - from) / size).max(0.0) as usize).min(n - 1)
             } else {
                 0
             }
         };
+        let empty = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        let (mut cells, mut slices) = (vec![empty; s * s], vec![empty; k]);
+        let grow = |(l, h): &mut ([f32; 3], [f32; 3]), a: [f32; 3], b: [f32; 3]| {
+            for d in 0..3 {
+                l[d] = l[d].min(a[d]);
+                h[d] = h[d].max(b[d]);
+            }
+        };
         for t in self.fine.chunks_exact(3) {
-            let p = [t[0], t[1], t[2]].map(|k| self.positions[k as usize]);
+            let p = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
             let (mut a, mut b) = (p[0], p[0]);
             for q in &p[1..] {
                 for d in 0..3 {
@@ -198,18 +199,18 @@ impl TileMesh {
                     b[d] = b[d].max(q[d]);
                 }
             }
-            for cy in index(a[1], 1)..=index(b[1], 1) {
-                for cx in index(a[0], 0)..=index(b[0], 0) {
-                    let (l, h) = &mut boxes[cy * s + cx];
-                    for d in 0..3 {
-                        l[d] = l[d].min(a[d]);
-                        h[d] = h[d].max(b[d]);
-                    }
+            let c = (p[0][axis] + p[1][axis] + p[2][axis]) / 3.0;
+            grow(&mut slices[slot(c, lo[axis], width, k)], a, b);
+            let (x0, x1) = (slot(a[0], lo[0], cell[0], s), slot(b[0], lo[0], cell[0], s));
+            for cy in slot(a[1], lo[1], cell[1], s)..=slot(b[1], lo[1], cell[1], s) {
+                for cx in x0..=x1 {
+                    grow(&mut cells[cy * s + cx], a, b);
                 }
             }
         }
-        boxes.retain(|(l, h)| l[0] <= h[0]);
-        boxes
+        cells.retain(|(l, h)| l[0] <= h[0]);
+        slices.retain(|(l, h)| l[0] <= h[0]);
+        (cells, slices)
     }
 
     /// Bounding box, and the coarse proxy (with its error) by quadric simplification unless

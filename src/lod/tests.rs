@@ -111,6 +111,29 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
     assert!(std::sync::Arc::ptr_eq(&twins[0].fine, &twins[1].fine));
 }
 
+/// A height-field tile's quarters of its height blocks (the sub-boxes the upload reads off the
+/// blocks instead of passing over the triangles) hold every fine triangle, also around a hole,
+/// and on a sloping tile span little more than the 2 x 2 sub-boxes (its 3 x 3 blocks halve as 2
+/// and 1: quarters of 13 and 7 cells a side against 10 and 10).
+#[test]
+fn quarter_boxes_of_the_height_blocks_hold_the_triangles() {
+    let (nx, ny) = (21, 21);
+    let mut z: Vec<f64> = (0..nx * ny).map(|k| 0.5 * (k % nx) as f64 + 0.1 * ((k / nx) as f64).sin()).collect();
+    for j in 0..10 {
+        for i in 0..10 {
+            z[j * nx + i] = f64::NAN;
+        }
+    }
+    let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
+    let t = &tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0[0];
+    let at = |li: usize, lj: usize| t.positions.iter().copied().find(|p| (p[0], p[1]) == (li as f32, lj as f32));
+    let quarters = blocks::height_blocks(nx, ny, at).quarter_boxes();
+    assert_eq!(quarters.len(), 4);
+    assert_boxes_hold_fine_triangles(t, &quarters);
+    let (sum, subs) = (boxes_volume(&quarters), boxes_volume(&t.sub_boxes(2)));
+    assert!(sum < 1.5 * subs, "{sum} {subs}");
+}
+
 /// A slanted tube's tile: its 8 slices along its length hold every fine triangle and a
 /// fraction of the 2 x 2 sub-boxes' volume, so `occludee_boxes` takes them; a square height
 /// field sloping along x keeps its sub-boxes (its slices, across y of the tied longest sides,
