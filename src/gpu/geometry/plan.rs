@@ -89,15 +89,25 @@ impl Plan {
         let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
         // Pattern ids by hash (a list per hash, compared in full), in first-use order.
         let mut by_hash: std::collections::HashMap<u64, Vec<usize>> = std::collections::HashMap::new();
+        let mut known = KnownRuns::default();
         for batch in tiles.chunks(PLAN_BATCH) {
-            let work: Vec<TileWork> = batch
+            let work: Vec<TileWork> =
+                batch.par_iter().map(|&(oi, t)| tile_work(scene, oi, t, shading_base, values_base)).collect();
+            // The patterns of the lattice tiles whose lists and vertices no tile before had.
+            let fresh: Vec<Option<Vec<(u64, Pattern)>>> = batch
                 .par_iter()
+                .zip(&work)
                 .map_init(
                     || (Vec::new(), Vec::new()),
-                    |(remap, cidx), &(oi, t)| tile_work(scene, oi, t, shading_base, values_base, remap, cidx),
+                    |(remap, cidx), (&(_, t), w)| match w {
+                        TileWork::Lattice { local, .. } if known.get(t, local).is_none() => {
+                            Some(tile_patterns(t, local, remap, cidx))
+                        }
+                        _ => None,
+                    },
                 )
                 .collect();
-            for w in work {
+            for ((w, patterns), &(_, t)) in work.into_iter().zip(fresh).zip(batch) {
                 match w {
                     TileWork::Own { nv, ni } => {
                         plan.runs.push(None);
@@ -106,21 +116,18 @@ impl Plan {
                         plan.nv += nv;
                         plan.ni += ni;
                     }
-                    TileWork::Lattice { patterns, grid } => {
-                        let run = patterns
-                            .into_iter()
-                            .map(|(h, p)| {
-                                let ids = by_hash.entry(h).or_default();
-                                match ids.iter().find(|&&k| plan.patterns[k] == p) {
-                                    Some(&k) => k,
-                                    None => {
-                                        ids.push(plan.patterns.len());
-                                        plan.patterns.push(p);
-                                        plan.patterns.len() - 1
-                                    }
-                                }
-                            })
-                            .collect();
+                    TileWork::Lattice { local, grid } => {
+                        let run = match (known.get(t, &local), patterns) {
+                            (Some(run), _) => run.clone(),
+                            (None, patterns) => {
+                                let patterns = patterns
+                                    .unwrap_or_else(|| tile_patterns(t, &local, &mut Vec::new(), &mut Vec::new()));
+                                let run: Vec<usize> =
+                                    patterns.into_iter().map(|(h, p)| plan.pattern_id(&mut by_hash, h, p)).collect();
+                                known.insert(t, local, run.clone());
+                                run
+                            }
+                        };
                         plan.runs.push(Some(run));
                         plan.tile_grid.extend(grid);
                     }
@@ -133,6 +140,19 @@ impl Plan {
         }
         plan.tile_domains(scene);
         plan
+    }
+
+    /// The id of pattern `p` (hash `h`), added when new.
+    fn pattern_id(&mut self, by_hash: &mut std::collections::HashMap<u64, Vec<usize>>, h: u64, p: Pattern) -> usize {
+        let ids = by_hash.entry(h).or_default();
+        match ids.iter().find(|&&k| self.patterns[k] == p) {
+            Some(&k) => k,
+            None => {
+                ids.push(self.patterns.len());
+                self.patterns.push(p);
+                self.patterns.len() - 1
+            }
+        }
     }
 
     /// Writes each height-field tile's samples (columns i0..=i1, rows j0..=j1) into the last two
@@ -174,22 +194,49 @@ const PLAN_BATCH: usize = 64;
 enum TileWork {
     /// Drawn from vertices of its own: the vertices and indices of its draws.
     Own { nv: u64, ni: u64 },
-    /// A lattice tile: the patterns (with their hashes) of its fine, coarse, level and occluder
-    /// draws, and its three `tile_grid` vec4.
-    Lattice { patterns: Vec<(u64, Pattern)>, grid: [[f32; 4]; 3] },
+    /// A lattice tile: its vertices' (column, row) (`Object::tile_lattice`) and its three
+    /// `tile_grid` vec4.
+    Lattice { local: Vec<[u32; 2]>, grid: [[f32; 4]; 3] },
 }
 
-/// Tile `t` of object `oi` as [`Plan::new`] counts it (`remap`, `cidx`: scratch).
+/// The pattern runs of the lattice tiles seen so far, by their triangle lists (the shared
+/// allocations of [`crate::lod::share_indices`], by address) and their vertices' (column, row):
+/// a tile whose lists are the same allocations and whose vertices are the same samples in the
+/// same order has the same patterns, so hole-free tiles of one shape are compacted once.
+#[derive(Default)]
+struct KnownRuns {
+    /// By the lists' addresses and lengths: each (vertices' samples, pattern ids) seen.
+    by_lists: std::collections::HashMap<Vec<usize>, Vec<Known>>,
+}
+
+/// A lattice tile's vertices' (column, row) and the ids of its patterns.
+type Known = (Vec<[u32; 2]>, Vec<usize>);
+
+impl KnownRuns {
+    /// The addresses of `t`'s fine, coarse and level lists (those [`tile_patterns`] reads).
+    fn lists(t: &crate::lod::TileMesh) -> Vec<usize> {
+        let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
+        draws.flat_map(|l| [l.as_ptr() as usize, l.len()]).collect()
+    }
+
+    fn get(&self, t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Option<&Vec<usize>> {
+        let seen = self.by_lists.get(&Self::lists(t))?;
+        seen.iter().find(|(l, _)| l == local).map(|(_, run)| run)
+    }
+
+    fn insert(&mut self, t: &crate::lod::TileMesh, local: Vec<[u32; 2]>, run: Vec<usize>) {
+        self.by_lists.entry(Self::lists(t)).or_default().push((local, run));
+    }
+}
+
+/// Tile `t` of object `oi` as [`Plan::new`] counts it: its lattice when it is a lattice tile.
 fn tile_work(
     scene: &Scene,
     oi: usize,
     t: &crate::lod::TileMesh,
     shading_base: &[Option<u32>],
     values_base: &[Option<u32>],
-    remap: &mut Vec<u32>,
-    cidx: &mut Vec<u32>,
 ) -> TileWork {
-    use std::hash::{Hash, Hasher};
     let o = &scene.objects()[oi];
     let lattice = match (shading_base[oi], o.grid_axes()) {
         (Some(base), Some(g))
@@ -210,19 +257,6 @@ fn tile_work(
         }
         return TileWork::Own { nv, ni };
     };
-    let hashed = |p: Pattern| {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        p.hash(&mut h);
-        (h.finish(), p)
-    };
-    let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
-    let mut patterns: Vec<(u64, Pattern)> = draws
-        .map(|idx| {
-            let used = compact_indices(idx, t.positions.len(), remap, cidx);
-            hashed((used.iter().map(|&k| l.local[k as usize]).collect(), cidx.clone()))
-        })
-        .collect();
-    patterns.push(hashed(occluder_pattern(t, &l.local)));
     let corner = g.pos(l.i0, l.j0);
     let first = l.j0 * g.nx + l.i0;
     let k0 = base as usize + first;
@@ -232,5 +266,30 @@ fn tile_work(
         [g.v[0] as f32, g.v[1] as f32, f32::from_bits(k0 as u32), f32::from_bits(g.nx as u32)],
         [f32::from_bits(v0), 0.0, 0.0, 0.0],
     ];
-    TileWork::Lattice { patterns, grid }
+    TileWork::Lattice { local: l.local, grid }
+}
+
+/// The patterns (with their hashes) of lattice tile `t`'s fine, coarse, level and occluder draws
+/// (`local`: its vertices' (column, row); `remap`, `cidx`: scratch).
+fn tile_patterns(
+    t: &crate::lod::TileMesh,
+    local: &[[u32; 2]],
+    remap: &mut Vec<u32>,
+    cidx: &mut Vec<u32>,
+) -> Vec<(u64, Pattern)> {
+    use std::hash::{Hash, Hasher};
+    let hashed = |p: Pattern| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        p.hash(&mut h);
+        (h.finish(), p)
+    };
+    let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
+    let mut patterns: Vec<(u64, Pattern)> = draws
+        .map(|idx| {
+            let used = compact_indices(idx, t.positions.len(), remap, cidx);
+            hashed((used.iter().map(|&k| local[k as usize]).collect(), cidx.clone()))
+        })
+        .collect();
+    patterns.push(hashed(occluder_pattern(t, local)));
+    patterns
 }
