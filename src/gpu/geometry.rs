@@ -54,7 +54,7 @@ pub struct SceneGeometry {
     pub sub_boxes: Vec<Vec<(DVec3, DVec3)>>,
     /// Per tile, a height-field tile's height blocks (`Object::height_blocks`, origin-relative
     /// like `bbox`): what the CPU proof of hidden tiles (`cull::hidden`) reads; None for others.
-    pub height_blocks: Vec<Option<crate::lod::blocks::HeightBlocks>>,
+    pub height_blocks: Vec<Option<std::sync::Arc<crate::lod::blocks::HeightBlocks>>>,
     /// Every height-field tile's slab (`TileMesh::slab`, `lod::slab`), the box tests' occludee of
     /// such tiles: its draw in `slabs` (one instance, first_instance = the tile) and whether its
     /// levels of detail lie within their errors of the fine surface everywhere (lattice levels),
@@ -305,7 +305,7 @@ impl SceneGeometry {
         }
         for (k, t) in tiles_done {
             self.bbox[k] = tile_bbox(t);
-            self.sub_boxes[k] = tile_sub_boxes(t, self.height_blocks[k].as_ref());
+            self.sub_boxes[k] = tile_sub_boxes(t, self.height_blocks[k].as_deref());
             for (l, new) in self.levels[k].iter_mut().zip(&t.levels) {
                 (l.error, l.error_z, l.shading_error) = (new.error, new.error_z, new.shading_error);
             }

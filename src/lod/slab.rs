@@ -51,6 +51,9 @@ pub struct Slab {
     /// (`super::levels::grid_level_error`). Then the slab grown by a level's error holds that
     /// level. Set by the tile's builder.
     pub levels_exact: bool,
+    /// The tile's height blocks (`super::blocks`), built with the slab from the same samples:
+    /// what the CPU proof of hidden tiles reads and the tile's sub-boxes are made of.
+    pub blocks: std::sync::Arc<super::blocks::HeightBlocks>,
 }
 
 /// A height field's slabs, one per tile (None: the tile gets none and is box-tested), built at
@@ -271,7 +274,9 @@ pub fn tile_slab(
         Some(p) => (p[0] as f64, p[1] as f64),
         None => grid_xy(li, lj),
     };
-    heightfield_slab(w, h, pos, |li, lj| at(li, lj).map_or(f64::NAN, |p| p[2] as f64))
+    let slab = heightfield_slab(w, h, pos, |li, lj| at(li, lj).map_or(f64::NAN, |p| p[2] as f64))?;
+    let blocks = super::blocks::height_blocks(w, h, |li, lj| at(li, lj).copied());
+    Some(Slab { blocks: blocks.into(), ..slab })
 }
 
 /// The largest vertical distance between the fine surface over the lattice cell `a..=b` (local

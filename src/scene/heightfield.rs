@@ -403,24 +403,13 @@ impl Object {
             .collect()
     }
 
-    /// Per tile of a height field, its height blocks (`lod::blocks`), for tiles with a slab (whose
-    /// vertices are distinct samples of the tile and whose triangles are the lattice's: every tile
-    /// this crate builds, and tiles read from bytes that pass [`Self::slabs`]' checks); None for
-    /// other tiles and kinds.
-    pub fn height_blocks(&self) -> Vec<Option<lod::blocks::HeightBlocks>> {
-        let none = || vec![None; self.tiles.len()];
-        let (Some(g), Some(bounds)) = (self.grid_axes(), self.tile_sample_bounds()) else { return none() };
-        let slabs = self.slabs();
-        self.tiles
-            .par_iter()
-            .enumerate()
-            .map(|(t, tile)| {
-                slabs.get(t)?.as_ref()?;
-                let (_, (w, h), map) = lattice_map(&g, &bounds, tile)?;
-                let at = |li: usize, lj: usize| tile.positions.get(map[lj * w + li] as usize).copied();
-                Some(lod::blocks::height_blocks(w, h, at))
-            })
-            .collect()
+    /// Per tile of a height field, its height blocks (`lod::blocks`, built with its slab: see
+    /// [`Self::slabs`]), for tiles with a slab; None for other tiles and kinds.
+    pub fn height_blocks(&self) -> Vec<Option<std::sync::Arc<lod::blocks::HeightBlocks>>> {
+        match &self.kind {
+            ObjectKind::Heightfield(_) => self.slabs().iter().map(|s| s.as_ref().map(|s| s.blocks.clone())).collect(),
+            _ => vec![None; self.tiles.len()],
+        }
     }
 
     /// A height field's tile boundaries in samples (`lod::tile_bounds` of each axis), when its

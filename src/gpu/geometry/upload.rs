@@ -221,7 +221,7 @@ impl SceneGeometry {
         });
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
         let height_blocks: Vec<_> = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
-        let sub_boxes = tiles.par_iter().zip(&height_blocks).map(|(t, b)| tile_sub_boxes(t, b.as_ref())).collect();
+        let sub_boxes = tiles.par_iter().zip(&height_blocks).map(|(t, b)| tile_sub_boxes(t, b.as_deref())).collect();
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
