@@ -221,7 +221,8 @@ impl Renderer {
             a.index_count -= n.min(a.index_count);
         }
         let pass_breaks = passes::pass_breaks(draw_args.iter().map(|a| a.index_count), *pass_triangles);
-        let draw_runs = geometry.frame_runs(&draw_args);
+        let draw_runs = geometry.frame_runs(scene, &draw_args);
+        let fine_depth_tiles: usize = draw_runs.iter().filter(|r| r.fine_depth).map(|r| r.tiles.len()).sum();
         let inputs = FrameInputs {
             ctx,
             passes,
@@ -274,6 +275,9 @@ impl Renderer {
         out.stats.extra.push(("upload_ms", Stat::Float(upload_ms)));
         out.stats.extra.push(("objects_patched", Stat::Count(patched)));
         out.stats.extra.push(("draw_passes", Stat::Count(pass_breaks.len() as u64 + 1)));
+        if chosen.is_some() {
+            out.stats.extra.push(("tiles_fine_depth", Stat::Count(fine_depth_tiles as u64)));
+        }
         out.stats.extra.extend(extra);
         grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]), &interior);
         out.stats.extra.extend(lens_stats.unwrap_or_default());

@@ -267,3 +267,36 @@ def test_a_surface_just_below_a_coarse_level_stays_hidden(renderer_small, cullin
     assert blue.sum() <= 2, np.argwhere(blue)[:10]
     diff = np.abs(lod.image.astype(int) - full.image.astype(int)).max(axis=2)
     assert (diff > 4).mean() < 0.001, (diff > 4).mean()
+
+
+def test_coarse_levels_write_the_fine_depth_only_where_another_object_is_within_their_error(renderer_small):
+    """Writing the fine surface's depth costs each fragment its early depth test, so a tile drawn
+    at a coarser level writes it only where another object comes within the level's vertical
+    error of the tile (its clearance, lod::clearance): alone, no tile does; with a mesh far below
+    (beyond every level's error) none does either; with the mesh just below (as in the test
+    above), every coarse tile over it does."""
+    x = np.arange(65) * SPACING
+    z = 20.0 * np.sin(x[None, :] / 90.0) * np.cos(x[:, None] / 70.0)
+    cam = gc.Camera.look_at((-300.0, -400.0, 500.0), (320.0, 320.0, 0.0))
+    r = renderer_small(160, 120)
+
+    def frame(below: float | None) -> tuple[gc.Scene, gc.RenderResult[gc.RenderStats], int]:
+        s = gc.Scene()
+        h = s.add_heightfield(z, origin=(0.0, 0.0), spacing=(SPACING, SPACING), tiles=(4, 4))
+        if below is not None:
+            v, f = s.geometry(h)
+            s.add_mesh(v - [0.0, 0.0, below], f, color=(0.0, 0.0, 1.0))
+        return s, r.render(s, cam, lod="screen_error", max_pixel_error=0.5), h
+
+    s, alone, h = frame(None)
+    errors = s.tile_table()["level_error"]
+    top = float(np.nanmax(errors))
+    coarse = int(((alone.tile_level > 0) & (s.tile_table()["object"] == h)).sum())
+    assert coarse >= 4, alone.tile_level
+    assert alone.stats["tiles_fine_depth"] == 0
+    s, far, h = frame(10.0 * top + 100.0)
+    assert far.stats["tiles_fine_depth"] == 0
+    s, near, h = frame(0.02 * top)
+    coarse_near = int(((near.tile_level > 0) & (s.tile_table()["object"] == h)).sum())
+    assert coarse_near == coarse and near.stats["tiles_fine_depth"] == coarse
+    assert "tiles_fine_depth" not in r.render(s, cam).stats  # no lod: no levels

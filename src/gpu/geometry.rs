@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::scene::{ObjectKind, Scene};
 use glam::DVec3;
 use plan::compact_indices;
+use rayon::prelude::*;
 
 /// GPU copy of a scene's geometry, keyed by [`Scene::geometry_key`].
 pub struct SceneGeometry {
@@ -81,11 +82,19 @@ pub struct SceneGeometry {
     /// pipeline.
     pub draw_runs: Vec<DrawRun>,
     pub bytes: u64,
+    /// Per tile, its clearance (`lod::clearance`) for the objects' placements it was measured at:
+    /// measured on the first frame that draws a height-field tile coarser than its fine level,
+    /// again when an object has moved.
+    pub(crate) clearance: std::sync::Mutex<Option<Clearance>>,
     /// Per tile drawn from vertices of its own, the vertex counts of its fine, coarse and level
     /// draws (each its own copy, in that order); empty for lattice tiles. What [`Self::patch`]
     /// checks a replaced object against.
     own_vertices: Vec<Vec<u32>>,
 }
+
+/// The objects' placements (`Object::placement` from the world's origin) and every tile's
+/// clearance measured there (`SceneGeometry::clearances`).
+pub type Clearance = (Vec<[f64; 3]>, std::sync::Arc<Vec<f32>>);
 
 /// A run of consecutive tiles that the lit pass draws with one pipeline
 /// (`SceneGeometry::draw_runs`, `Passes::record_draw`).
@@ -104,9 +113,10 @@ pub struct DrawRun {
     /// Tiles of a grid coloured per cell (`SceneGeometry::cell_colors`): `fs_cells`.
     pub cells: bool,
     /// Height-field tiles (`field`) that this frame draws at a coarser level than their fine one
-    /// (`SceneGeometry::frame_runs`): their fragments write the fine surface's depth on their
-    /// pixel's ray (draw.wgsl `fine_depth`), so that they hide and are hidden by other surfaces
-    /// as the fine tile is. Never set in `SceneGeometry::draw_runs`.
+    /// whose vertical error reaches the tile's clearance (`SceneGeometry::frame_runs`,
+    /// `lod::clearance`: another object comes that close): their fragments write the fine
+    /// surface's depth on their pixel's ray (draw.wgsl `fine_depth`), so that they hide and are
+    /// hidden by that object as the fine tile is. Never set in `SceneGeometry::draw_runs`.
     pub fine_depth: bool,
 }
 
@@ -310,6 +320,8 @@ impl SceneGeometry {
                 (l.error, l.error_z, l.shading_error) = (new.error, new.error_z, new.shading_error);
             }
         }
+        // Their boxes moved: measured again on first use.
+        *self.clearance.get_mut().unwrap_or_else(|e| e.into_inner()) = None;
         self.key = scene.geometry_key();
         Ok(true)
     }
@@ -336,11 +348,58 @@ impl SceneGeometry {
     /// a tile's draw (`draw_args`, one per tile) is not its fine one, those parts `fine_depth`
     /// ([`split_coarse_fields`]). `draw_runs` itself where every height-field tile is drawn fine
     /// (every exact frame: its image is what it was).
-    pub fn frame_runs(&self, draw_args: &[DrawArgs]) -> std::borrow::Cow<'_, [DrawRun]> {
-        match split_coarse_fields(&self.draw_runs, |k| draw_args.get(k).is_some_and(|a| *a != self.fine[k])) {
+    pub fn frame_runs(&self, scene: &Scene, draw_args: &[DrawArgs]) -> std::borrow::Cow<'_, [DrawRun]> {
+        let coarse = |k: usize| draw_args.get(k).is_some_and(|a| *a != self.fine[k]);
+        if !self.draw_runs.iter().any(|r| r.field && r.tiles.clone().any(coarse)) {
+            return std::borrow::Cow::Borrowed(&self.draw_runs);
+        }
+        let clearance = self.clearances(scene);
+        // The drawn level's vertical error (+inf for a draw that is no level: a proxy).
+        let error_z = |k: usize| {
+            let level = self.levels[k].iter().find(|l| l.args == draw_args[k]);
+            level.map_or(f32::INFINITY, |l| l.error_z)
+        };
+        match split_coarse_fields(&self.draw_runs, |k| coarse(k) && error_z(k) >= clearance[k]) {
             Some(runs) => std::borrow::Cow::Owned(runs),
             None => std::borrow::Cow::Borrowed(&self.draw_runs),
         }
+    }
+
+    /// Every tile's clearance (`lod::clearance`) with `scene`'s objects where they are now: a
+    /// height-field tile's height blocks against the parts of the other objects' tiles (their
+    /// height blocks; for other tiles 8 x 8 cells or 32 slices of their triangles' boxes,
+    /// `TileMesh::finer_boxes`: a fault's or a well's pieces follow it), measured once per
+    /// placement.
+    pub fn clearances(&self, scene: &Scene) -> std::sync::Arc<Vec<f32>> {
+        let objects = scene.objects();
+        let placed: Vec<[f64; 3]> = objects.iter().map(|o| o.placement(DVec3::ZERO).to_array()).collect();
+        let mut cache = self.clearance.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, c)) = cache.as_ref().filter(|(at, _)| *at == placed) {
+            return c.clone();
+        }
+        let tiles: Vec<&crate::lod::TileMesh> = objects.iter().flat_map(|o| &o.tiles).collect();
+        if tiles.len() != self.n_tiles() {
+            return std::sync::Arc::new(vec![0.0; self.n_tiles()]); // not this scene's geometry: no clearance
+        }
+        let parts: Vec<crate::lod::clearance::TileParts> = tiles
+            .par_iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let o = self.tile_object_cpu[k];
+                let off = DVec3::from_array(placed[o as usize]);
+                let f = |v: [f32; 3]| DVec3::from_array(v.map(f64::from));
+                let at = |lo: [f32; 3], hi: [f32; 3]| ((f(lo) + off).to_array(), (f(hi) + off).to_array());
+                let boxes = match &self.height_blocks[k] {
+                    _ if t.is_empty() => Vec::new(),
+                    Some(b) => b.blocks.iter().filter(|b| !b.is_empty()).map(|b| at(b.lo, b.hi)).collect(),
+                    None => t.finer_boxes(8, 32).into_iter().map(|(l, h)| at(l, h)).collect(),
+                };
+                crate::lod::clearance::TileParts { object: o, field: self.height_blocks[k].is_some(), boxes }
+            })
+            .collect();
+        let c = std::sync::Arc::new(crate::lod::clearance::clearances(&parts));
+        *cache = Some((placed, c.clone()));
+        c
     }
 }
 

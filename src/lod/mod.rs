@@ -14,6 +14,7 @@
 //! of the grid's own (i, j) frame either way, only the vertex positions are turned.
 
 pub mod blocks;
+pub mod clearance;
 pub mod levels;
 pub mod normals;
 pub mod per_vertex;
@@ -142,7 +143,13 @@ impl TileMesh {
     /// surface) and [`Self::slice_boxes`] (8 slices along the box's longest side: a tube, a steep
     /// or long piece), the set of the smaller total volume. Both in one pass over the triangles.
     pub fn occludee_boxes(&self) -> Vec<([f32; 3], [f32; 3])> {
-        let (grid, slices) = self.cell_and_slice_boxes(2, 8);
+        self.finer_boxes(2, 8)
+    }
+
+    /// Of [`Self::sub_boxes`]`(s)` and [`Self::slice_boxes`]`(k)`, the set of the smaller total
+    /// volume (one pass over the triangles).
+    pub fn finer_boxes(&self, s: usize, k: usize) -> Vec<([f32; 3], [f32; 3])> {
+        let (grid, slices) = self.cell_and_slice_boxes(s, k);
         if boxes_volume(&slices) < boxes_volume(&grid) {
             slices
         } else {

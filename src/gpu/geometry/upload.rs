@@ -252,6 +252,7 @@ impl SceneGeometry {
             cell_colors: cells.objects,
             draw_runs,
             bytes,
+            clearance: Default::default(),
             own_vertices,
         })
     }
