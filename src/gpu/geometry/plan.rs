@@ -224,8 +224,12 @@ impl KnownRuns {
         seen.iter().find(|(l, _)| l == local).map(|(_, run)| run)
     }
 
+    /// Remembers `t`'s runs when another tile may have them: when its fine list is shared (a
+    /// tile with holes has lists of its own, and keeping its samples would only cost memory).
     fn insert(&mut self, t: &crate::lod::TileMesh, local: Vec<[u32; 2]>, run: Vec<usize>) {
-        self.by_lists.entry(Self::lists(t)).or_default().push((local, run));
+        if std::sync::Arc::strong_count(&t.fine) > 1 {
+            self.by_lists.entry(Self::lists(t)).or_default().push((local, run));
+        }
     }
 }
 
@@ -271,7 +275,7 @@ fn tile_work(
 
 /// The patterns (with their hashes) of lattice tile `t`'s fine, coarse, level and occluder draws
 /// (`local`: its vertices' (column, row); `remap`, `cidx`: scratch).
-fn tile_patterns(
+pub(super) fn tile_patterns(
     t: &crate::lod::TileMesh,
     local: &[[u32; 2]],
     remap: &mut Vec<u32>,

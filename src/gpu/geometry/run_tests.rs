@@ -80,3 +80,35 @@ fn height_field_tiles_carry_their_samples_for_the_fine_depth() {
     assert_eq!(words(0), (4 << 16 | 1 << 31, 8 << 16));
     assert_eq!(words(1), (4 | 8 << 16, 8 << 16));
 }
+
+#[test]
+fn tiles_of_one_shape_share_the_patterns_each_would_compact_to() {
+    // A 41 x 29 field in 4 x 3 tiles of two widths and heights, two of them with a hole: every
+    // tile's run names the patterns its own compaction gives (the plan compacts a shape once),
+    // and hole-free tiles of one shape name the same ones.
+    let (nx, ny) = (41, 29);
+    let mut z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + (k / nx) as f64 * 0.05).collect();
+    z[5 * nx + 6] = f64::NAN;
+    z[20 * nx + 33] = f64::NAN;
+    let mut s = Scene::new();
+    let frame = GridFrame::new([0.0, 0.0], [10.0, 10.0]).rotated(25.0, false);
+    s.add_heightfield(&z, ny, nx, frame, (4, 3), None, AddOptions::new(4.0)).unwrap();
+    let plan = plan::Plan::new(&s, &[Some(0)], &[None]);
+    let o = &s.objects()[0];
+    let mut ids_by_shape: std::collections::HashMap<(usize, usize), Vec<usize>> = Default::default();
+    for (k, t) in o.tiles.iter().enumerate() {
+        let local = o.tile_lattice(t).unwrap().local;
+        let want: Vec<_> =
+            plan::tile_patterns(t, &local, &mut Vec::new(), &mut Vec::new()).into_iter().map(|(_, p)| p).collect();
+        let run = plan.runs[k].as_ref().expect("a lattice tile");
+        let got: Vec<_> = run.iter().map(|&p| plan.patterns[p].clone()).collect();
+        assert_eq!(got, want, "tile {k}");
+        let shape =
+            (local.iter().map(|p| p[0]).max().unwrap() as usize, local.iter().map(|p| p[1]).max().unwrap() as usize);
+        if t.fine_triangles() == 2 * shape.0 * shape.1 {
+            let seen = ids_by_shape.entry(shape).or_insert_with(|| run.clone());
+            assert_eq!(seen, run, "tile {k} of shape {shape:?}");
+        }
+    }
+    assert!(ids_by_shape.len() >= 2);
+}
