@@ -64,9 +64,11 @@ pub struct SceneGeometry {
     /// The slabs' vertices (x, y, z, side) and u32 indices; None when no tile has one.
     pub slabs: Option<(wgpu::Buffer, wgpu::Buffer)>,
     /// The fine surfaces of the height fields as the lit pass samples them
-    /// (`Object::shading_samples`), object after object, two words per sample: the gradient as
-    /// two f16 (x in the low half) and the object-relative height's f32 bits.
+    /// (`Object::shading_samples`), object after object, one word per sample: the gradient as
+    /// two f16 (x in the low half); a structured grid mesh's packed fine normal.
     pub shading: wgpu::Buffer,
+    /// The heights of those samples (f32 bits, 0 for a grid mesh's normals), in the same order.
+    pub shading_z: wgpu::Buffer,
     /// Per object (scene order), the first sample of its gradients in `shading`; None for objects
     /// without (meshes, grids; height fields past the device's storage-binding limit), which the
     /// lit pass shades with their facets' normals.
@@ -271,8 +273,7 @@ impl SceneGeometry {
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
                 (Some(dims), Some(base), Some((nu, nv, normals))) if dims == (nu as u32, nv as u32) => {
-                    let w: Vec<[u32; 2]> = normals.iter().map(|&n| [n, 0]).collect();
-                    writes.push((&self.shading, base as u64 * 8, bytemuck::cast_slice(&w).to_vec()));
+                    writes.push((&self.shading, base as u64 * 4, bytemuck::cast_slice(&normals).to_vec()));
                 }
                 (None, _, None) => {}
                 _ => return Ok(false),

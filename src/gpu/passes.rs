@@ -632,6 +632,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 4, resource: geom.shading.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: geom.tile_grid.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 6, resource: geom.sample_values.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 7, resource: geom.shading_z.as_entire_binding() },
             ],
         })
     }

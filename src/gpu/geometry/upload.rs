@@ -15,15 +15,16 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 /// The normal map of the lit pass: every height field's shading samples and every structured
-/// grid mesh's fine normals, as long as they fit one storage binding (later height fields fall
-/// back to facet normals and vertex heights, later grid meshes to their vertex normals). Returns
-/// the buffer, each object's first sample, and each grid mesh's grid size.
+/// grid mesh's fine normals, as long as they fit one storage binding of 4 bytes a sample (later
+/// height fields fall back to facet normals and vertex heights, later grid meshes to their vertex
+/// normals). Returns the gradients (or normals) and the heights (0 for normals), each object's
+/// first sample, and each grid mesh's grid size.
 #[allow(clippy::type_complexity)]
 fn upload_shading(
     ctx: &GpuContext,
     scene: &Scene,
-) -> Result<(wgpu::Buffer, Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
-    let max_samples = ctx.limits.max_storage_buffer_binding_size / 8;
+) -> Result<([wgpu::Buffer; 2], Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
+    let max_samples = ctx.limits.max_storage_buffer_binding_size / 4;
     let mut total = 0u64;
     let mut dims = vec![None; scene.objects().len()];
     // Per object in the map: its sample count and, for a grid mesh, its fine normals (small:
@@ -58,14 +59,17 @@ fn upload_shading(
     } else {
         wgpu::BufferUsages::empty()
     };
-    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("shading"),
-        size: 8 * total.max(1),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | direct,
-        mapped_at_creation: true,
+    let bufs = ["shading", "shading_z"].map(|label| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: 4 * total.max(1),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | direct,
+            mapped_at_creation: true,
+        })
     });
     {
-        let mut map = buf.slice(..).get_mapped_range_mut().map_err(map_err)?;
+        let mut gmap = bufs[0].slice(..).get_mapped_range_mut().map_err(map_err)?;
+        let mut zmap = bufs[1].slice(..).get_mapped_range_mut().map_err(map_err)?;
         let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
         let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
             match normals {
@@ -84,13 +88,17 @@ fn upload_shading(
         let mut at = 0usize;
         for batch in parts.chunks(rayon::current_num_threads().max(1)) {
             for words in batch.par_iter().map(samples).collect::<Vec<_>>() {
-                map.slice(at * 8..(at + words.len()) * 8).copy_from_slice(bytemuck::cast_slice(&words));
+                let (g, z): (Vec<u32>, Vec<u32>) = words.iter().map(|w| (w[0], w[1])).unzip();
+                gmap.slice(at * 4..(at + words.len()) * 4).copy_from_slice(bytemuck::cast_slice(&g));
+                zmap.slice(at * 4..(at + words.len()) * 4).copy_from_slice(bytemuck::cast_slice(&z));
                 at += words.len();
             }
         }
     }
-    buf.unmap();
-    Ok((buf, base, dims))
+    for b in &bufs {
+        b.unmap();
+    }
+    Ok((bufs, base, dims))
 }
 
 /// The per-sample values of the height fields coloured by data (`SceneGeometry::sample_values`)
@@ -189,7 +197,7 @@ impl SceneGeometry {
     /// temporaries beyond the patterns.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
-        let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
+        let ([shading, shading_z], shading_base, grid_dims) = upload_shading(ctx, scene)?;
         let (sample_values, values_base, cells) = upload_values(ctx, scene, &shading_base);
         let mut plan = Plan::new(scene, &shading_base, &values_base);
         cell_table_grid(&mut plan, &cells);
@@ -224,7 +232,7 @@ impl SceneGeometry {
         let sub_boxes = tiles.par_iter().zip(&height_blocks).map(|(t, b)| tile_sub_boxes(t, b.as_deref())).collect();
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
-        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + sample_values.size();
+        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + shading_z.size() + sample_values.size();
         let bytes = bytes + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
@@ -247,6 +255,7 @@ impl SceneGeometry {
             slab_draws,
             slabs,
             shading,
+            shading_z,
             shading_base,
             grid_dims,
             cell_colors: cells.objects,

@@ -108,6 +108,7 @@ fn layouts(d: &wgpu::Device) -> Layouts {
             storage_entry(4, true, vf),
             storage_entry(5, true, vf),
             storage_entry(6, true, vf),
+            storage_entry(7, true, vf),
         ],
     });
     let cs = wgpu::ShaderStages::COMPUTE;

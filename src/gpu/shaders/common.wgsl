@@ -40,8 +40,11 @@ struct Object {
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 @group(0) @binding(2) var<storage, read> tile_object: array<u32>;
 // Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
-// sample: the gradient (dz/dx, dz/dy) as two f16, and the object-relative height's f32 bits.
-@group(0) @binding(4) var<storage, read> surface: array<vec2<u32>>;
+// sample: the gradient (dz/dx, dz/dy) as two f16 in `surface_g` (a grid mesh's packed fine
+// normal), the object-relative height in `surface_z` (two bindings of 4 bytes a sample, so that
+// twice the samples fit a device's storage-binding limit).
+@group(0) @binding(4) var<storage, read> surface_g: array<u32>;
+@group(0) @binding(7) var<storage, read> surface_z: array<u32>;
 // Per tile three vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
 // object-relative (x, y) and the grid's column axis; its row axis, the first sample's index in
 // `surface` and the grid's row length (u32 bits); the first sample's index in `sample_values`
@@ -59,7 +62,7 @@ fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
     }
     let a = tile_grid[3u * tile];
     let k = k0 + u32(pos.y) * bitcast<u32>(b.w) + u32(pos.x);
-    return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface[k].y));
+    return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface_z[k]));
 }
 
 // Clip position `clip` of a vertex of object `o` with its depth-tie priority applied

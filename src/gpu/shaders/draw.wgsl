@@ -40,15 +40,11 @@ fn surface_cell(o: Object, w: vec3<f32>) -> SurfaceCell {
     let c = min(floor(q), n - 2.0);
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let s00 = surface[k];
-    let s10 = surface[k + 1u];
-    let s01 = surface[k + nx];
-    let s11 = surface[k + nx + 1u];
     return SurfaceCell(q0, c, q - c,
-                       vec3<f32>(unpack2x16float(s00.x), bitcast<f32>(s00.y)),
-                       vec3<f32>(unpack2x16float(s10.x), bitcast<f32>(s10.y)),
-                       vec3<f32>(unpack2x16float(s01.x), bitcast<f32>(s01.y)),
-                       vec3<f32>(unpack2x16float(s11.x), bitcast<f32>(s11.y)));
+                       vec3<f32>(unpack2x16float(surface_g[k]), bitcast<f32>(surface_z[k])),
+                       vec3<f32>(unpack2x16float(surface_g[k + 1u]), bitcast<f32>(surface_z[k + 1u])),
+                       vec3<f32>(unpack2x16float(surface_g[k + nx]), bitcast<f32>(surface_z[k + nx])),
+                       vec3<f32>(unpack2x16float(surface_g[k + nx + 1u]), bitcast<f32>(surface_z[k + nx + 1u])));
 }
 
 // The fine surface under render-space point `w` of a height field with a normal map:
@@ -80,13 +76,13 @@ fn grid_mesh_normal(o: Object, uv: vec2<f32>) -> vec3<f32> {
     let f = q - c;
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let a = vertex_normal(surface[k].x);
-    let d = vertex_normal(surface[k + nx + 1u].x);
+    let a = vertex_normal(surface_g[k]);
+    let d = vertex_normal(surface_g[k + nx + 1u]);
     var v: vec3<f32>;
     if (f.x >= f.y) {
-        v = (1.0 - f.x) * a + (f.x - f.y) * vertex_normal(surface[k + 1u].x) + f.y * d;
+        v = (1.0 - f.x) * a + (f.x - f.y) * vertex_normal(surface_g[k + 1u]) + f.y * d;
     } else {
-        v = (1.0 - f.y) * a + (f.y - f.x) * vertex_normal(surface[k + nx].x) + f.x * d;
+        v = (1.0 - f.y) * a + (f.y - f.x) * vertex_normal(surface_g[k + nx]) + f.x * d;
     }
     return v;
 }
@@ -352,9 +348,9 @@ fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, 
     f = q - c;
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let z00 = bitcast<f32>(surface[k].y);
-    let z11 = bitcast<f32>(surface[k + nx + 1u].y);
-    let zo = bitcast<f32>(surface[select(k + nx, k + 1u, f.x >= f.y)].y);
+    let z00 = bitcast<f32>(surface_z[k]);
+    let z11 = bitcast<f32>(surface_z[k + nx + 1u]);
+    let zo = bitcast<f32>(surface_z[select(k + nx, k + 1u, f.x >= f.y)]);
     a = select(vec2<f32>(z11 - zo, zo - z00), vec2<f32>(zo - z00, z11 - zo), f.x >= f.y);
     gap = zs * (o.offset.z + z00 + dot(a, q0 - c)) - w.z;
     den = r.z - zs * dot(a, qr);
