@@ -232,8 +232,8 @@ impl SceneGeometry {
         let sub_boxes = tiles.par_iter().zip(&height_blocks).map(|(t, b)| tile_sub_boxes(t, b.as_deref())).collect();
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
-        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size() + shading.size() + shading_z.size() + sample_values.size();
-        let bytes = bytes + slab_bytes;
+        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size();
+        let bytes = bytes + shading.size() + shading_z.size() + sample_values.size() + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
         Ok(Self {
