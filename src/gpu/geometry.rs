@@ -346,9 +346,10 @@ impl SceneGeometry {
 
 impl SceneGeometry {
     /// The runs of this frame's lit draws: `draw_runs`, with the runs of height fields split where
-    /// a tile's draw (`draw_args`, one per tile) is not its fine one, those parts `fine_depth`
-    /// ([`split_coarse_fields`]). `draw_runs` itself where every height-field tile is drawn fine
-    /// (every exact frame: its image is what it was).
+    /// a tile's draw (`draw_args`, one per tile) is a coarser level whose vertical error reaches
+    /// the tile's clearance ([`Self::clearances`]), those parts `fine_depth`
+    /// ([`split_coarse_fields`]). `draw_runs` itself where no height-field tile is drawn so (every
+    /// exact frame: its image is what it was).
     pub fn frame_runs(&self, scene: &Scene, draw_args: &[DrawArgs]) -> std::borrow::Cow<'_, [DrawRun]> {
         let coarse = |k: usize| draw_args.get(k).is_some_and(|a| *a != self.fine[k]);
         if !self.draw_runs.iter().any(|r| r.field && r.tiles.clone().any(coarse)) {
