@@ -30,7 +30,7 @@ impl DrawArgs {
     }
 }
 
-/// Per-frame uniforms of the scene passes (`Globals` in common.wgsl).
+/// Per-frame uniforms of the scene passes (`Globals` in globals.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct Globals {

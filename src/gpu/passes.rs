@@ -24,18 +24,19 @@ use super::timing::Timestamps;
 use super::GpuContext;
 use wgpu::util::DeviceExt;
 
+/// The scene passes' uniforms (`Globals`, `g`): prepended to common.wgsl and to the box passes.
+const GLOBALS_WGSL: &str = include_str!("shaders/globals.wgsl");
+/// What the scene passes share, after their uniforms.
 const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
 const BOX_WGSL: &str = include_str!("shaders/box.wgsl");
-/// The scene globals as the box passes bind them (group 0, binding 0).
-const BOX_GLOBALS_WGSL: &str = include_str!("shaders/box_globals.wgsl");
 const SELECT_WGSL: &str = include_str!("shaders/select_common.wgsl");
 /// Depth-tie priorities: appended to the scene passes' and the box tests' sources.
 const PRIORITY_WGSL: &str = include_str!("shaders/priority.wgsl");
 
-/// `source` with the box passes' globals (box_globals.wgsl: `Globals`, `g`), the shared box
-/// geometry (box.wgsl: `CUBE`, `box_corner`) and the depth-tie priorities prepended.
+/// `source` with the scene's uniforms (globals.wgsl: `Globals`, `g`), the shared box geometry
+/// (box.wgsl: `CUBE`, `box_corner`) and the depth-tie priorities prepended.
 pub fn with_box_wgsl(source: &str) -> String {
-    format!("{BOX_GLOBALS_WGSL}\n{BOX_WGSL}\n{PRIORITY_WGSL}\n{source}")
+    format!("{GLOBALS_WGSL}\n{BOX_WGSL}\n{PRIORITY_WGSL}\n{source}")
 }
 
 /// The box test's shader (box.wgsl is prepended): vertex stage and the hand-compared fragment.

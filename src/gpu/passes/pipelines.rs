@@ -4,7 +4,7 @@
 
 use super::{
     box_pipeline, depth_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, Passes, BOX_TEST_WGSL,
-    COMMON_WGSL, PRIORITY_WGSL, SELECT_WGSL,
+    COMMON_WGSL, GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
 };
 use crate::gpu::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
 use wgpu::util::DeviceExt;
@@ -186,7 +186,7 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
                           targets: &[Option<wgpu::ColorTargetState>],
                           depth: &wgpu::DepthStencilState,
                           cull_mode: Option<wgpu::Face>| {
-        let module = shader(d, label, format!("{COMMON_WGSL}\n{PRIORITY_WGSL}\n{file}"));
+        let module = shader(d, label, format!("{GLOBALS_WGSL}\n{COMMON_WGSL}\n{PRIORITY_WGSL}\n{file}"));
         // (entry point, its GL variant)
         let (vs, fs) = if gl { (vs.1, format!("{fs}_gl")) } else { (vs.0, fs.to_string()) };
         d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

@@ -1,4 +1,4 @@
-// Box test (box_globals.wgsl, box.wgsl and priority.wgsl are prepended): per tile, the pixels
+// Box test (globals.wgsl, box.wgsl and priority.wgsl are prepended): per tile, the pixels
 // where the front faces of its box are at or in front of a depth image (reverse-Z: nearer =
 // larger). The comparison is done here by hand, with no depth attachment, so hidden fragments are
 // never counted and no early-depth-test feature is needed. Tiles whose draw is already on

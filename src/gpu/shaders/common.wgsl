@@ -1,22 +1,8 @@
-// Shared by the scene passes (prepended to draw.wgsl and prepass.wgsl): one vertex buffer of f32
+// Shared by the scene passes (prepended to draw.wgsl and prepass.wgsl, globals.wgsl before it): one vertex buffer of f32
 // positions relative to their objects' origins, drawn with multi-draw-indirect where
 // first_instance carries the global tile index. A lattice tile's vertices are (column, row, 0)
 // of a shared pattern instead, turned into positions by tile_position. Every pass uses this one
 // transform, so their depths agree.
-
-struct Globals {
-    view_proj: mat4x4<f32>,
-    // Direction towards the head light (over the viewer's shoulder), render space, w unused.
-    light_dir: vec4<f32>,
-    z_scale: f32,
-    // Orthographic: near / (far - near); perspective: -1 (priority_clip).
-    ortho_near: f32,
-    _pad1: f32,
-    _pad2: f32,
-    // The pixel rays (draw.wgsl `fine_depth`): perspective, the eye in render space and w = 1;
-    // orthographic, the unit view direction and w = 0.
-    eye: vec4<f32>,
-}
 
 struct Object {
     // Translation (world units) applied before exaggeration.
@@ -36,7 +22,6 @@ struct Object {
     normal_map: vec4<u32>,
 }
 
-@group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var<storage, read> objects: array<Object>;
 @group(0) @binding(2) var<storage, read> tile_object: array<u32>;
 // Height fields' fine surfaces (scene::Object::shading_samples), object after object, per

@@ -1,4 +1,4 @@
-// Occluder depth (box_globals.wgsl, box.wgsl and priority.wgsl are prepended): a depth image
+// Occluder depth (globals.wgsl, box.wgsl and priority.wgsl are prepended): a depth image
 // that is an earlier image's depth (`fs_copy`, one full-screen triangle) with the front faces of
 // boxes drawn over it where they are nearer (`vs_box_depth`), no colour. The boxes are pushed 16
 // priority steps farther (2^-17 of their distance): what they occlude must lie clearly behind
