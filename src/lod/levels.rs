@@ -468,11 +468,8 @@ mod tests {
         // Rough heights over tiles of several shapes: every level's error (square inner cells in
         // one pass, fans by their rows' spans) is the brute-force measure's over all its
         // triangles, samples inside and edge crossings.
-        let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::TestRng(12345);
+        let mut rnd = || rng.f();
         for (w, h) in [(42, 42), (57, 33), (9, 70), (65, 65)] {
             let z: Vec<f64> = (0..w * h).map(|_| 100.0 * rnd() - 1500.0).collect();
             let zz = z.clone();
@@ -508,11 +505,8 @@ mod tests {
         // Sampled densely (eighths of a cell, barycentric over every level triangle) on rough
         // heights: a level edge that crosses a cell's diagonal over a ridge must be measured
         // there, where neither grid line nor sample shows the distance.
-        let mut seed = 777u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::TestRng(777);
+        let mut rnd = || rng.f();
         for (w, h) in [(23, 23), (30, 17)] {
             let z: Vec<f64> = (0..w * h).map(|_| 50.0 * rnd()).collect();
             let zf = |i: usize, j: usize| z[j * w + i];

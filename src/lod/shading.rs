@@ -474,11 +474,8 @@ mod tests {
         let tris: Vec<[usize; 3]> =
             coarse.chunks_exact(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
         let grid = TriangleGrid::new(&p, &tris);
-        let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::TestRng(12345);
+        let mut rnd = || rng.f();
         // The grid's answer is as near as the nearest of all triangles.
         let check = |grid: &TriangleGrid, p: &[DVec3], tris: &[[usize; 3]], q: DVec3| {
             let (k, b) = grid.closest(p, tris, q).unwrap();

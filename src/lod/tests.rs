@@ -84,11 +84,9 @@ fn lattice_proxy_reaches_the_factor_and_neighbours_share_border_samples() {
     }
 }
 
-/// Every fine triangle lies in one of its tile's sub-boxes; on a sloping tile the 2 × 2
-/// sub-boxes hold half the volume of the tile's box; cells without triangles (a hole) get
-/// none; equal triangle lists are shared.
-#[test]
-fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
+/// One tile of a 21 x 21 height field at unit spacing sloping along x (0.5 a column, a slight
+/// ripple along y), its first 10 x 10 samples a hole.
+fn sloping_tile_with_a_hole() -> TileMesh {
     let (nx, ny) = (21, 21);
     let mut z: Vec<f64> = (0..nx * ny).map(|k| 0.5 * (k % nx) as f64 + 0.1 * ((k / nx) as f64).sin()).collect();
     for j in 0..10 {
@@ -97,7 +95,15 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
         }
     }
     let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-    let mut tiles = tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0;
+    tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0.remove(0)
+}
+
+/// Every fine triangle lies in one of its tile's sub-boxes; on a sloping tile the 2 × 2
+/// sub-boxes hold half the volume of the tile's box; cells without triangles (a hole) get
+/// none; equal triangle lists are shared.
+#[test]
+fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
+    let mut tiles = vec![sloping_tile_with_a_hole()];
     let t = &tiles[0];
     let boxes = t.sub_boxes(2);
     assert_eq!(boxes.len(), 3, "the hole's cell has no triangles");
@@ -117,17 +123,9 @@ fn sub_boxes_hold_the_triangles_tighter_than_the_box() {
 /// and 1: quarters of 13 and 7 cells a side against 10 and 10).
 #[test]
 fn quarter_boxes_of_the_height_blocks_hold_the_triangles() {
-    let (nx, ny) = (21, 21);
-    let mut z: Vec<f64> = (0..nx * ny).map(|k| 0.5 * (k % nx) as f64 + 0.1 * ((k / nx) as f64).sin()).collect();
-    for j in 0..10 {
-        for i in 0..10 {
-            z[j * nx + i] = f64::NAN;
-        }
-    }
-    let g = GridSpec { z: &z, nx, ny, x0: 0.0, y0: 0.0, dx: 1.0, dy: 1.0, rot: (1.0, 0.0), yflip: false, values: None };
-    let t = &tile_heightfield(&g, DVec3::ZERO, (1, 1), 4.0, &Work::default()).0[0];
+    let t = &sloping_tile_with_a_hole();
     let at = |li: usize, lj: usize| t.positions.iter().copied().find(|p| (p[0], p[1]) == (li as f32, lj as f32));
-    let quarters = blocks::height_blocks(nx, ny, at).quarter_boxes();
+    let quarters = blocks::height_blocks(21, 21, at).quarter_boxes();
     assert_eq!(quarters.len(), 4);
     assert_boxes_hold_fine_triangles(t, &quarters);
     let (sum, subs) = (boxes_volume(&quarters), boxes_volume(&t.sub_boxes(2)));
