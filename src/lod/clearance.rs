@@ -65,17 +65,17 @@ fn overlap_xy((alo, ahi): ([f64; 3], [f64; 3]), (blo, bhi): ([f64; 3], [f64; 3])
 
 /// The parts of every tile in a uniform (x, y) grid of cells about the size of a median part, each
 /// part listed in every cell its (x, y) box touches.
-struct Index {
+struct Index<'a> {
     lo: [f64; 2],
     cell: f64,
     dims: [usize; 2],
     /// Per cell, (tile, part) of the parts touching it.
     cells: Vec<Vec<(u32, u32)>>,
-    parts: Vec<Vec<([f64; 3], [f64; 3])>>,
+    tiles: &'a [TileParts],
 }
 
-impl Index {
-    fn new(tiles: &[TileParts]) -> Self {
+impl<'a> Index<'a> {
+    fn new(tiles: &'a [TileParts]) -> Self {
         let all = || tiles.iter().flat_map(|t| t.boxes.iter());
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         let mut sizes = Vec::new();
@@ -86,16 +86,15 @@ impl Index {
             }
             sizes.push((h[0] - l[0]).max(h[1] - l[1]));
         }
-        let parts: Vec<_> = tiles.iter().map(|t| t.boxes.clone()).collect();
         if sizes.is_empty() {
-            return Index { lo: [0.0; 2], cell: 1.0, dims: [1, 1], cells: vec![Vec::new()], parts };
+            return Index { lo: [0.0; 2], cell: 1.0, dims: [1, 1], cells: vec![Vec::new()], tiles };
         }
         sizes.sort_unstable_by(f64::total_cmp);
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         // A median part a cell, at most 1024 cells a side (and a positive size for a flat scene).
         let cell = sizes[sizes.len() / 2].max(extent / 1024.0).max(1e-9 * (1.0 + extent));
         let dims = [0, 1].map(|a| (((hi[a] - lo[a]) / cell) as usize + 1).min(1024));
-        let mut index = Index { lo, cell, dims, cells: vec![Vec::new(); dims[0] * dims[1]], parts };
+        let mut index = Index { lo, cell, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tiles };
         for (k, t) in tiles.iter().enumerate() {
             for (p, (l, h)) in t.boxes.iter().enumerate() {
                 let ([i0, j0], [i1, j1]) = (index.at(*l), index.at(*h));
@@ -121,7 +120,7 @@ impl Index {
         for j in j0..=j1 {
             for i in i0..=i1 {
                 for &(k, p) in &self.cells[j * self.dims[0] + i] {
-                    f(k as usize, self.parts[k as usize][p as usize]);
+                    f(k as usize, self.tiles[k as usize].boxes[p as usize]);
                 }
             }
         }
@@ -164,11 +163,8 @@ mod tests {
     #[test]
     fn the_grid_index_finds_what_brute_force_finds() {
         // Random boxes of random objects: every clearance equals the pairwise minimum.
-        let mut seed = 99u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::TestRng(99);
+        let mut rnd = || rng.f();
         let tiles: Vec<TileParts> = (0..200)
             .map(|k| {
                 let boxes = (0..1 + k % 4)

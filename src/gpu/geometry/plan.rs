@@ -120,8 +120,8 @@ impl Plan {
                         let run = match (known.get(t, &local), patterns) {
                             (Some(run), _) => run.clone(),
                             (None, patterns) => {
-                                let patterns = patterns
-                                    .unwrap_or_else(|| tile_patterns(t, &local, &mut Vec::new(), &mut Vec::new()));
+                                // `known` only grows: no run known now was none when `fresh` ran.
+                                let patterns = patterns.expect("worked out in `fresh`");
                                 let run: Vec<usize> =
                                     patterns.into_iter().map(|(h, p)| plan.pattern_id(&mut by_hash, h, p)).collect();
                                 known.insert(t, local, run.clone());
