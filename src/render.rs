@@ -12,6 +12,7 @@
 //! Isosurfaces ([`Renderer::render_isosurface`]) have their own passes in `crate::iso`, on the
 //! same device.
 
+mod groups;
 mod lenses;
 mod levels;
 mod options;
@@ -282,7 +283,7 @@ impl Renderer {
         grid_stats(scene, &mut out, chosen.as_ref().map(|c| &c.0[..]), &interior);
         out.stats.extra.extend(lens_stats.unwrap_or_default());
         if let Some((level, err_px)) = chosen {
-            self.lod_stats(&mut out, &level, &err_px);
+            self.lod_stats(&mut out, &level, &err_px, &draw_args);
             out.tile_counts.push(("tile_level", level.iter().map(|&l| l as u32).collect()));
             out.arrays.push(("tile_error_px", err_px));
         }

@@ -89,11 +89,11 @@ class _Fields:
 
 
 def scene_fields(b: bytes) -> list[Field]:
-    """The fields of scene bytes, version 9 (layout: src/scene/serial.rs's module docs)."""
+    """The fields of scene bytes, version 10 (layout: src/scene/serial.rs's module docs)."""
     p = _Fields(b)
     assert b[:8] == b"GCSCENE\0"
     p.pos = 8
-    assert p.get("version", "<I") == 9, "the scene format changed: update scene_fields"
+    assert p.get("version", "<I") == 10, "the scene format changed: update scene_fields"
     p.get("has_origin", "<B")
     for a in "xyz":
         p.get(f"origin.{a}", "<d")
@@ -167,6 +167,9 @@ def scene_fields(b: bytes) -> list[Field]:
                 q.get(f"level{v}.shading_error", "<f")
                 q.get(f"level{v}.error_z", "<f")
                 q.arr(f"level{v}.indices", "<I")
+                q.get(f"level{v}.grouped_error", "<f")
+                for d in range(q.get(f"level{v}.n_grouped", "<I")):
+                    q.arr(f"level{v}.grouped{d}", "<I")
             if t == 0:
                 p.out.extend(q.out)
             p.pos = q.pos

@@ -164,7 +164,7 @@ impl FrameInputs<'_> {
             return Some(0.0);
         }
         let exact = g.slab_draws[i].is_some_and(|(_, exact)| exact);
-        g.levels[i].iter().find(|l| exact && l.args == d).map(|l| l.error as f64)
+        g.drawn_errors(i, &d).filter(|_| exact).map(|e| e.0 as f64)
     }
 
     /// Tile `i`'s box in render space (its object's placement and z_scale applied), grown against

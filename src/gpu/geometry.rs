@@ -131,6 +131,27 @@ pub struct LevelDraw {
     pub error_z: f32,
     /// Shading error, a normal chord (unitless; `lod::shading`).
     pub shading_error: f32,
+    /// The level's draws in groups of depth 1..=`lod::groups::MAX_GROUP_DEPTH` (`Level::grouped`;
+    /// entry d - 1; index_count 0 where the tile has none: only lattice tiles drawn from the normal
+    /// map have them), and their error (vertical, world units).
+    pub grouped: [DrawArgs; crate::lod::groups::MAX_GROUP_DEPTH],
+    pub grouped_error: f32,
+}
+
+impl LevelDraw {
+    /// Whether `d` is this level's draw or one of its group draws.
+    pub fn draws(&self, d: &DrawArgs) -> bool {
+        self.args == *d || self.grouped.iter().any(|g| g.index_count > 0 && g == d)
+    }
+    /// The errors (world units: all, vertical) of draw `d` of this level: the group error for a
+    /// group draw.
+    pub fn errors_of(&self, d: &DrawArgs) -> (f32, f32) {
+        if self.args == *d {
+            (self.error, self.error_z)
+        } else {
+            (self.grouped_error, self.grouped_error)
+        }
+    }
 }
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
@@ -357,14 +378,30 @@ impl SceneGeometry {
         }
         let clearance = self.clearances(scene);
         // The drawn level's vertical error (+inf for a draw that is no level: a proxy).
-        let error_z = |k: usize| {
-            let level = self.levels[k].iter().find(|l| l.args == draw_args[k]);
-            level.map_or(f32::INFINITY, |l| l.error_z)
-        };
+        let error_z = |k: usize| self.drawn_errors(k, &draw_args[k]).map_or(f32::INFINITY, |e| e.1);
         match split_coarse_fields(&self.draw_runs, |k| coarse(k) && error_z(k) >= clearance[k]) {
             Some(runs) => std::borrow::Cow::Owned(runs),
             None => std::borrow::Cow::Borrowed(&self.draw_runs),
         }
+    }
+
+    /// Whether level `l` (1..) of height-field tile `k` lies past its chain of full borders
+    /// (`lod::levels::LatticeShape`: it does not reach 0.6 × the triangles of the level before,
+    /// it exists for groups) with an error that reaches the tile's `clearance`: such a level is not
+    /// drawn, as the lit pass's fine depth (two steps along the pixel's ray) would miss the fine
+    /// surface under so coarse a level (another object just below would show through).
+    pub fn too_deep(&self, k: usize, l: usize, error: f32, clearance: &[f32]) -> bool {
+        if self.height_blocks[k].is_none() || l == 0 || error < clearance.get(k).copied().unwrap_or(0.0) {
+            return false;
+        }
+        let before = if l == 1 { self.fine[k].index_count } else { self.levels[k][l - 2].args.index_count };
+        self.levels[k][l - 1].args.index_count as f64 > 0.6 * before as f64
+    }
+
+    /// The errors (world units: all, vertical) of tile `k`'s draw `d` when it is one of its levels
+    /// or their group draws; None for its fine draw or a proxy.
+    pub fn drawn_errors(&self, k: usize, d: &DrawArgs) -> Option<(f32, f32)> {
+        self.levels.get(k)?.iter().find(|l| l.draws(d)).map(|l| l.errors_of(d))
     }
 
     /// Every tile's clearance (`lod::clearance`) with `scene`'s objects where they are now: a

@@ -432,7 +432,14 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         stats.push(st);
         kinds.push(kind_counts(&lev));
         let error = lev.error as f32;
-        tile.levels.push(Level { indices: idx.into(), error, error_z: error, shading_error: lev.shading as f32 });
+        tile.levels.push(Level {
+            indices: idx.into(),
+            error,
+            error_z: error,
+            shading_error: lev.shading as f32,
+            grouped: Vec::new(),
+            grouped_error: error,
+        });
     }
     match tile.levels.last() {
         Some(l) => {

@@ -2,7 +2,8 @@
 //! with about a quarter of the triangles of the one before and its geometric error in world
 //! units (level 0 is the tile's fine triangles, error 0).
 //!
-//! Every level of every tile keeps the tile's border at full resolution, so neighbouring tiles
+//! Every level of every tile keeps the tile's border at full resolution (its group variants
+//! aside, [`super::groups`]), so neighbouring tiles
 //! drawn at different levels share the same border vertices and meet without cracks, by
 //! construction (no skirts: skirts hide cracks with extra geometry that the full-resolution image
 //! does not have, visible from below and at grazing angles; a locked border costs triangles on
@@ -28,7 +29,8 @@
 //! takes a level only if both errors hold (`crate::render`).
 //!
 //! The chain stops when a level would not reach 0.6 × the triangles of the one before (the border
-//! then dominates), or after [`MAX_LEVELS`] levels.
+//! then dominates), or after [`MAX_LEVELS`] levels; a hole-free height-field tile's goes on while
+//! the level drawn in a group ([`super::groups`], whose shared sides are coarse) would.
 
 use super::{shading, simplify};
 pub use shading::Shading;
@@ -54,6 +56,13 @@ pub struct Level {
     /// levels (shaded from the fine surface); reservoir-grid levels bound it by summing each
     /// level's chord to the triangles of the faces it merges (`grid::merge`).
     pub shading_error: f32,
+    /// Hole-free height-field tiles, levels 3..: this level drawn as one of a group of 2^d x 2^d
+    /// tiles at the same level, for d = 1..=[`super::groups::MAX_GROUP_DEPTH`] (entry d - 1): the
+    /// sides the tile shares with the group's other tiles at the level's stride instead of full
+    /// resolution ([`super::groups`]). Empty for other tiles and levels.
+    pub grouped: Vec<super::Indices>,
+    /// The geometric error of every entry of `grouped`, vertical, world units: at least `error`.
+    pub grouped_error: f32,
 }
 
 /// Lattice positions 0, k, 2k, ..., n - 1 along a side of n samples, with every gap at least 2
@@ -71,52 +80,184 @@ fn lattice_steps(n: usize, k: usize) -> Option<Vec<usize>> {
 }
 
 /// Levels of a hole-free height-field tile of `w` × `h` samples: `vid(li, lj)` is the vertex of
-/// local sample (li, lj), `z(li, lj)` its height. Empty when the tile is too small to coarsen.
+/// local sample (li, lj), `z(li, lj)` its height; `masks[d - 1]`: the tile's sides drawn at the
+/// level's stride when it is drawn in a group of depth d ([`super::groups::side_masks`]; empty:
+/// no groups). Empty when the tile is too small to coarsen. [`LatticeShape::new`] then
+/// [`LatticeShape::levels`]; tiles of one size and masks share the shape.
 pub fn lattice_levels(
     w: usize,
     h: usize,
     vid: impl Fn(usize, usize) -> u32,
     z: impl Fn(usize, usize) -> f64,
+    masks: &[u8],
 ) -> Vec<Level> {
-    let mut levels = Vec::new();
-    let mut prev = 2 * (w - 1) * (h - 1);
-    for l in 1..=MAX_LEVELS {
-        let k = 1 << l;
-        let (Some(xs), Some(ys)) = (lattice_steps(w, k), lattice_steps(h, k)) else { break };
-        let mut tris: Vec<[(usize, usize); 3]> = Vec::new();
-        // Square inner cells, measured by `square_cell_error`; the other cells' triangles (fans
-        // on the tile's border, the shorter last cells) by `lattice_error`.
-        let (mut squares, mut others) = (Vec::new(), Vec::new());
-        for jj in ys.windows(2) {
-            for ii in xs.windows(2) {
-                let start = tris.len();
-                cell_triangles((ii[0], jj[0]), (ii[1], jj[1]), (w, h), &mut tris);
-                if tris.len() - start == 2 && ii[1] - ii[0] == jj[1] - jj[0] {
-                    squares.push((ii[0], jj[0], ii[1] - ii[0]));
-                } else {
-                    others.extend_from_slice(&tris[start..]);
+    LatticeShape::new(w, h, &vid, masks).levels(&z)
+}
+
+/// The most lattice shapes [`LatticeShape::shared`] keeps (a height field of tiles of two sizes a
+/// side and groups: some hundreds).
+const SHAPES_KEPT: usize = 4096;
+
+/// What the lattice levels of a hole-free tile are, apart from its heights: per level the lattice,
+/// its cells (square inner cells; the other cells' triangles) and triangle lists. The same for
+/// every tile of one size whose vertices are numbered alike, and one set of masks, so a height
+/// field builds it once per such tile shape (`lod::tile_heightfield`).
+///
+/// The chain of levels stops when a level would not reach 0.6 × the triangles of the one before,
+/// or, with groups, when neither it nor its wholly coarse variant would (a level past the first
+/// that did not is a level for groups, whose border part of the error is bounded by
+/// [`super::groups::BorderErrors::fans`] rather than measured: its fans cover most of the tile, and
+/// measuring them doubled the time of a tile's levels).
+#[derive(Debug)]
+pub struct LatticeShape {
+    size: (usize, usize),
+    /// The fine triangles: two a cell, split from (i, j) to (i + 1, j + 1), cells row by row.
+    pub fine: super::Indices,
+    levels: Vec<ShapeLevel>,
+}
+
+#[derive(Debug)]
+struct ShapeLevel {
+    xs: Vec<usize>,
+    ys: Vec<usize>,
+    /// Square inner cells (corner, side), measured by `square_cell_error`.
+    squares: Vec<(usize, usize, usize)>,
+    /// The other cells' triangles (fans on the tile's border, the shorter last cells).
+    others: Vec<[(usize, usize); 3]>,
+    indices: super::Indices,
+    grouped: Vec<super::Indices>,
+    /// Within the chain of full borders (its error measured exactly).
+    chain: bool,
+}
+
+impl LatticeShape {
+    /// The shape of a tile of `w` × `h` samples, its vertices numbered by `vid`, with `masks` as
+    /// [`lattice_levels`] takes them.
+    pub fn new(w: usize, h: usize, vid: &impl Fn(usize, usize) -> u32, masks: &[u8]) -> Self {
+        let mut levels = Vec::new();
+        let mut prev = 2 * (w - 1) * (h - 1);
+        let mut prev_coarse = prev;
+        let mut chain = true;
+        for l in 1..=MAX_LEVELS {
+            let k = 1 << l;
+            let (Some(xs), Some(ys)) = (lattice_steps(w, k), lattice_steps(h, k)) else { break };
+            let mut tris: Vec<[(usize, usize); 3]> = Vec::new();
+            let (mut squares, mut others) = (Vec::new(), Vec::new());
+            for jj in ys.windows(2) {
+                for ii in xs.windows(2) {
+                    let start = tris.len();
+                    cell_triangles((ii[0], jj[0]), (ii[1], jj[1]), (w, h), 0, &mut tris);
+                    if tris.len() - start == 2 && ii[1] - ii[0] == jj[1] - jj[0] {
+                        squares.push((ii[0], jj[0], ii[1] - ii[0]));
+                    } else {
+                        others.extend_from_slice(&tris[start..]);
+                    }
                 }
             }
+            // The wholly coarse variant: two triangles a cell.
+            let coarse = 2 * (xs.len() - 1) * (ys.len() - 1);
+            let fewer = |n: usize, before: usize| n as f64 <= 0.6 * before as f64;
+            chain &= fewer(tris.len(), prev);
+            let for_groups = !masks.is_empty() && fewer(coarse, prev_coarse);
+            if !chain && !for_groups {
+                break;
+            }
+            (prev, prev_coarse) = (tris.len(), coarse);
+            let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
+            // Groups from level 3 on (below, the border is a smaller part of the tile's triangles, and
+            // the variants, uploaded once per tile size and masks, would cost more than they save).
+            let grouped = if masks.is_empty() || l < 3 {
+                Vec::new()
+            } else {
+                super::groups::variants(&xs, &ys, (w, h), masks, vid)
+            };
+            levels.push(ShapeLevel { xs, ys, squares, others, indices, grouped, chain });
         }
-        if tris.len() as f64 > 0.6 * prev as f64 {
-            break;
-        }
-        prev = tris.len();
-        let inner = squares.iter().map(|&(a, b, side)| square_cell_error((a, b), side, &z)).fold(0.0, f64::max);
-        let error = inner.max(lattice_error(&others, &z)) as f32;
-        let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
-        levels.push(Level { indices, error, error_z: error, shading_error: 0.0 });
+        let fine = (0..h - 1)
+            .flat_map(|j| (0..w - 1).map(move |i| (i, j)))
+            .flat_map(|(i, j)| {
+                let (a, b, c, d) = (vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1));
+                [a, b, c, a, c, d]
+            })
+            .collect();
+        LatticeShape { size: (w, h), fine, levels }
     }
-    levels
+
+    /// [`Self::new`], remembered (the last [`SHAPES_KEPT`] sizes and masks asked for) and shared
+    /// with every caller that asks for the same: for tiles whose vertices `vid` numbers as every
+    /// such tile's are (`lod::tile_heightfield`'s hole-free tiles), so that their lists are one
+    /// allocation across tiles and height fields (the upload then compacts each once).
+    pub fn shared(w: usize, h: usize, vid: &impl Fn(usize, usize) -> u32, masks: &[u8]) -> std::sync::Arc<Self> {
+        use std::sync::{Arc, Mutex};
+        type Shapes = std::collections::HashMap<(usize, usize, Vec<u8>), Arc<LatticeShape>>;
+        static SHAPES: Mutex<Option<Shapes>> = Mutex::new(None);
+        let key = (w, h, masks.to_vec());
+        let lock = || SHAPES.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(shape) = lock().as_ref().and_then(|m| m.get(&key)) {
+            return shape.clone();
+        }
+        let shape = Arc::new(Self::new(w, h, vid, masks));
+        let mut shapes = lock();
+        let map = shapes.get_or_insert_with(Default::default);
+        if map.len() >= SHAPES_KEPT {
+            map.clear();
+        }
+        map.entry(key).or_insert(shape).clone()
+    }
+
+    /// The levels of a tile of this shape with heights `z(li, lj)`: the shape's triangle lists
+    /// (shared) with their errors measured.
+    pub fn levels(&self, z: &impl Fn(usize, usize) -> f64) -> Vec<Level> {
+        self.levels
+            .iter()
+            .map(|s| {
+                let inner =
+                    s.squares.iter().map(|&(a, b, side)| square_cell_error((a, b), side, z)).fold(0.0, f64::max);
+                let border = (!s.grouped.is_empty() || !s.chain)
+                    .then(|| super::groups::border_errors(&s.xs, &s.ys, self.size, z, !s.chain));
+                let error = match border.and_then(|b| b.fans) {
+                    None => inner.max(lattice_error(&s.others, z)) as f32,
+                    Some(fans) => super::f32_at_least(inner.max(fans)),
+                };
+                let grouped_error = match border {
+                    Some(b) if !s.grouped.is_empty() => super::f32_at_least((error as f64).max(b.coarse)),
+                    _ => error,
+                };
+                Level {
+                    indices: s.indices.clone(),
+                    error,
+                    error_z: error,
+                    shading_error: 0.0,
+                    grouped: s.grouped.clone(),
+                    grouped_error,
+                }
+            })
+            .collect()
+    }
 }
 
 /// Triangles (counter-clockwise in x, y) of the lattice cell `lo..hi` (local sample indices) of a
-/// tile of `size` samples: two if no side lies on the tile border, else a fan from the cell's
-/// centre sample to every sample of its border sides and the corners of its other sides.
-fn cell_triangles(lo: (usize, usize), hi: (usize, usize), size: (usize, usize), out: &mut Vec<[(usize, usize); 3]>) {
+/// tile of `size` samples: two if no side lies on a tile side drawn at full resolution, else a fan
+/// from the cell's centre sample to every sample of those sides and the corners of its other
+/// sides. `coarse`: the tile's sides drawn at the lattice's stride (bits 1 bottom, row 0; 2 right;
+/// 4 top; 8 left, column 0), 0 for a tile whose whole border is at full resolution; a cell at a
+/// corner of the tile draws a coarse side there at full resolution when the other side there is
+/// at full resolution (the neighbour across the coarse side has the same: `lod::groups`).
+pub(super) fn cell_triangles(
+    lo: (usize, usize),
+    hi: (usize, usize),
+    size: (usize, usize),
+    coarse: u8,
+    out: &mut Vec<[(usize, usize); 3]>,
+) {
     let (a, b) = lo;
     let (a1, b1) = hi;
-    let (bottom, right, top, left) = (b == 0, a1 == size.0 - 1, b1 == size.1 - 1, a == 0);
+    let on = [b == 0, a1 == size.0 - 1, b1 == size.1 - 1, a == 0];
+    // A coarse side of the tile is drawn at full resolution in a cell that also lies on a side
+    // at right angles to it that is.
+    let full_side = |s: usize| on[s] && coarse & (1 << s) == 0;
+    let full = |s: usize| on[s] && (full_side(s) || full_side((s + 1) % 4) || full_side((s + 3) % 4));
+    let (bottom, right, top, left) = (full(0), full(1), full(2), full(3));
     if !(bottom || right || top || left) {
         out.push([(a, b), (a1, b), (a1, b1)]);
         out.push([(a, b), (a1, b1), (a, b1)]);
@@ -148,7 +289,7 @@ fn cell_triangles(lo: (usize, usize), hi: (usize, usize), size: (usize, usize), 
 /// fine cells' diagonals (split the same way), so every fine triangle of the cell lies in one of
 /// its two triangles, where both surfaces are linear: their difference is largest at a fine
 /// sample.
-fn square_cell_error((a, b): (usize, usize), k: usize, z: &impl Fn(usize, usize) -> f64) -> f64 {
+pub(super) fn square_cell_error((a, b): (usize, usize), k: usize, z: &impl Fn(usize, usize) -> f64) -> f64 {
     let (z00, z10, z11, z01) = (z(a, b), z(a + k, b), z(a + k, b + k), z(a, b + k));
     let kf = k as f64;
     let mut err = 0.0f64;
@@ -166,7 +307,7 @@ fn square_cell_error((a, b): (usize, usize), k: usize, z: &impl Fn(usize, usize)
 
 /// Height of the fine surface at a point (x, y) ≥ 0 of local sample coordinates: two triangles
 /// per cell, split along the diagonal from (i, j) to (i + 1, j + 1), as the fine level is built.
-fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
+pub(super) fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, usize)) -> f64 {
     // A cast truncates: the floor for x, y ≥ 0 (and 0 for a rounding below it).
     let i = (x as usize).min(max.0 - 1);
     let j = (y as usize).min(max.1 - 1);
@@ -187,7 +328,7 @@ fn fine_height(x: f64, y: f64, z: &impl Fn(usize, usize) -> f64, max: (usize, us
 /// fine sample inside or on a level triangle, or a point where a level edge crosses a fine edge
 /// (a grid line x = i or y = j, or a cell's diagonal x - y = c). An edge along a grid line or a
 /// diagonal meets them only at samples; any other edge is measured once, from its lower end.
-fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
+pub(super) fn lattice_error(tris: &[[(usize, usize); 3]], z: &impl Fn(usize, usize) -> f64) -> f64 {
     let max = tris.iter().flatten().fold((1, 1), |m, &(i, j)| (m.0.max(i), m.1.max(j)));
     let mut err = 0.0f64;
     // Whether the segment a -> b can bend the fine surface between its ends.
@@ -445,7 +586,14 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], shading: Option<s
         }
         error += step;
         let shading_error = shading.map_or(0.0, |sh| shading::shading_error(positions, sh, fine, &idx));
-        levels.push(Level { indices: idx.as_slice().into(), error, error_z: error, shading_error });
+        levels.push(Level {
+            indices: idx.as_slice().into(),
+            error,
+            error_z: error,
+            shading_error,
+            grouped: Vec::new(),
+            grouped_error: error,
+        });
         prev = idx;
     }
     levels
@@ -460,7 +608,7 @@ mod tests {
     fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f64) -> (Vec<Level>, Vec<f64>) {
         let z: Vec<f64> = (0..w * h).map(|k| f(k % w, k / w)).collect();
         let zz = z.clone();
-        (lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]), z)
+        (lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i], &[]), z)
     }
 
     #[test]
@@ -473,7 +621,7 @@ mod tests {
         for (w, h) in [(42, 42), (57, 33), (9, 70), (65, 65)] {
             let z: Vec<f64> = (0..w * h).map(|_| 100.0 * rnd() - 1500.0).collect();
             let zz = z.clone();
-            let levels = lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]);
+            let levels = lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i], &[]);
             assert!(levels.len() >= 2, "{w} x {h}");
             for l in &levels {
                 let tris = sample_triangles(&l.indices, w);
@@ -492,7 +640,7 @@ mod tests {
         for s in 0..w * h {
             let z: Vec<f64> = (0..w * h).map(|k| if k == s { 7.0 } else { 0.1 * (k % 3) as f64 }).collect();
             let zz = z.clone();
-            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]) {
+            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i], &[]) {
                 let tris = sample_triangles(&l.indices, w);
                 let want = brute_error(&tris, &|i: usize, j: usize| z[j * w + i]) as f32;
                 assert_eq!(l.error, want, "spike at {s}");
@@ -511,7 +659,7 @@ mod tests {
             let z: Vec<f64> = (0..w * h).map(|_| 50.0 * rnd()).collect();
             let zf = |i: usize, j: usize| z[j * w + i];
             let zz = z.clone();
-            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i]) {
+            for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i], &[]) {
                 let mut seen = 0.0f64;
                 for t in sample_triangles(&l.indices, w) {
                     let p = t.map(|(i, j)| (i as f64, j as f64, zf(i, j)));

@@ -15,6 +15,7 @@
 
 pub mod blocks;
 pub mod clearance;
+pub mod groups;
 pub mod levels;
 pub mod normals;
 pub mod per_vertex;
@@ -39,8 +40,10 @@ pub type Indices = std::sync::Arc<[u32]>;
 /// copy costs the vertices only.
 pub fn share_indices(tiles: &mut [TileMesh]) {
     let mut seen: std::collections::HashSet<Indices> = std::collections::HashSet::new();
+    // Allocations already shared (lattice shapes' lists): by address, without hashing their content.
+    let mut kept: std::collections::HashSet<(usize, usize)> = std::collections::HashSet::new();
     let mut share = |l: &mut Indices| {
-        if l.is_empty() {
+        if l.is_empty() || kept.contains(&(l.as_ptr() as usize, l.len())) {
             return;
         }
         match seen.get(l) {
@@ -49,12 +52,14 @@ pub fn share_indices(tiles: &mut [TileMesh]) {
                 seen.insert(l.clone());
             }
         }
+        kept.insert((l.as_ptr() as usize, l.len()));
     };
     for t in tiles {
         share(&mut t.fine);
         share(&mut t.coarse);
         for l in &mut t.levels {
             share(&mut l.indices);
+            l.grouped.iter_mut().for_each(&mut share);
         }
     }
 }
@@ -105,6 +110,11 @@ pub struct TileMesh {
 }
 
 impl TileMesh {
+    /// Each level's triangle list followed by its group variants (`Level::grouped`), level by
+    /// level: the draws the upload gives a lattice tile after its fine and coarse ones.
+    pub fn level_lists(&self) -> impl Iterator<Item = &Indices> {
+        self.levels.iter().flat_map(|l| std::iter::once(&l.indices).chain(&l.grouped))
+    }
     pub fn is_empty(&self) -> bool {
         self.fine.is_empty()
     }
@@ -408,7 +418,13 @@ pub fn tile_heightfield(
             });
             if !holes {
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
-                tile.levels = levels::lattice_levels(w, h, |li, lj| map[lj * w + li], zl);
+                // Hole-free tiles of one size number their vertices alike (the loop above), so
+                // tiles of one size and masks share a shape, in this height field and others.
+                let masks = groups::side_masks(ix, iy, tx, ty);
+                let shape = levels::LatticeShape::shared(w, h, &|li, lj| map[lj * w + li], &masks);
+                tile.levels = shape.levels(&zl);
+                debug_assert_eq!(tile.fine, shape.fine);
+                tile.fine = shape.fine.clone(); // one allocation for all such tiles
             }
             let grid_xy = |li: usize, lj: usize| {
                 let (x, y) = g.pos(i0 + li, j0 + lj);
@@ -440,6 +456,7 @@ fn exact_hole_levels(tile: &mut TileMesh, size: (usize, usize), map: &[u32]) -> 
         l.error = f32_at_least(e);
         // A vertical bound: all of it is vertical.
         l.error_z = l.error;
+        l.grouped_error = l.error;
     }
     true
 }

@@ -378,7 +378,14 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
                 let (sides_tris, caps) = piece(spec, origin, &kept, &lf, (sides, r), (true, true), &mut tile);
                 let indices: Vec<u32> = sides_tris.into_iter().chain(caps).collect();
                 let (error, error_z) = level_errors(dev, dev_z, polygon);
-                let level = Level { indices: indices.into(), error, error_z, shading_error: chord as f32 };
+                let level = Level {
+                    indices: indices.into(),
+                    error,
+                    error_z,
+                    shading_error: chord as f32,
+                    grouped: Vec::new(),
+                    grouped_error: error,
+                };
                 tile.levels.push(level);
             }
             let target = n_fine as f64 / coarse_factor.max(1.0) as f64;

@@ -66,6 +66,8 @@ pub(super) fn choose_levels(
         .collect();
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
+    let mut scales = Vec::with_capacity(g.n_tiles());
+    let clearance = if lod == Lod::Full { None } else { Some(g.clearances(scene)) };
     for (i, &d2) in dist2.iter().enumerate() {
         let scale = if perspective {
             if d2 > 0.0 {
@@ -76,6 +78,7 @@ pub(super) fn choose_levels(
         } else {
             px_per_unit
         };
+        scales.push(scale);
         let px_of = |l: &crate::gpu::geometry::LevelDraw| {
             let e = exaggerated(l.error, l.error_z, camera.z_scale);
             if e == 0.0 {
@@ -90,6 +93,9 @@ pub(super) fn choose_levels(
             let mut l = 0usize;
             for (k, lv) in g.levels[i].iter().enumerate() {
                 if px_of(lv) > max_px || lv.shading_error as f64 * per_chord > MAX_SHADING_LEVELS {
+                    break;
+                }
+                if clearance.as_ref().is_some_and(|c| g.too_deep(i, k + 1, lv.error_z, c)) {
                     break;
                 }
                 l = k + 1;
@@ -114,6 +120,10 @@ pub(super) fn choose_levels(
         level.push(l as u8);
         err_px.push(e);
     }
+    if let Lod::ScreenError { max_pixel_error } = lod {
+        let budget = super::groups::Budget { scale: &scales, z_scale: camera.z_scale, max_px: max_pixel_error };
+        super::groups::group_levels(g, scene, &budget, (&mut level, &mut args, &mut err_px));
+    }
     (args, Some((level, err_px)))
 }
 
@@ -129,18 +139,26 @@ pub(super) fn exaggerated(error: f32, error_z: f32, z_scale: f64) -> f64 {
 }
 
 impl Renderer {
-    /// LOD stats of a frame: triangles drawn per level, the largest error used (pixels, metres).
-    pub(super) fn lod_stats(&self, out: &mut RenderOutput, level: &[u8], err_px: &[f32]) {
+    /// LOD stats of a frame: triangles drawn per level, the largest error used (pixels, metres),
+    /// the tiles drawn in groups (`tiles_grouped`). `draw_args`: the frame's draws, one per tile.
+    pub(super) fn lod_stats(&self, out: &mut RenderOutput, level: &[u8], err_px: &[f32], draw_args: &[DrawArgs]) {
         let g = self.geometry.as_ref().expect("uploaded");
         let mut tris = [0u64; LEVEL_STATS.len()];
-        let (mut max_px, mut max_m) = (0.0f64, 0.0f64);
+        let (mut max_px, mut max_m, mut grouped) = (0.0f64, 0.0f64, 0u64);
         for (i, &drawn) in out.tile_drawn.iter().enumerate() {
             if !drawn {
                 continue;
             }
             let l = level[i] as usize;
-            let (args, err) =
-                if l == 0 { (g.fine[i], 0.0) } else { (g.levels[i][l - 1].args, g.levels[i][l - 1].error) };
+            let (args, err) = match (l, draw_args.get(i)) {
+                (0, _) => (g.fine[i], 0.0),
+                // A group draw (`render::groups`), with its error.
+                (_, Some(d)) if g.levels[i][l - 1].args != *d && g.levels[i][l - 1].draws(d) => {
+                    grouped += 1;
+                    (*d, g.levels[i][l - 1].grouped_error)
+                }
+                _ => (g.levels[i][l - 1].args, g.levels[i][l - 1].error),
+            };
             tris[l] += args.index_count as u64 / 3;
             max_px = max_px.max(err_px[i] as f64);
             max_m = max_m.max(err as f64);
@@ -148,6 +166,7 @@ impl Renderer {
         for (name, t) in LEVEL_STATS.iter().zip(tris) {
             out.stats.extra.push((name, Stat::Count(t)));
         }
+        out.stats.extra.push(("tiles_grouped", Stat::Count(grouped)));
         out.stats.extra.push(("lod_max_error_px", Stat::Float(max_px)));
         out.stats.extra.push(("lod_max_error_m", Stat::Float(max_m)));
     }

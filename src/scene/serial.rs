@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 9 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 10 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -27,7 +27,9 @@
 //!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
 //!             measured again on reading: `lod::shading`, 0 for height fields and grids),
-//!             error_z f32 (version 8; before, the error), indices [u32]
+//!             error_z f32 (version 8; before, the error), indices [u32], then (version 10;
+//!             none before) grouped_error f32, n_grouped u32, per group depth indices [u32]
+//!             (`lod::groups`)
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
@@ -45,7 +47,7 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 9;
+const VERSION: u32 = 10;
 
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
@@ -258,7 +260,8 @@ impl Scene {
         self.write(VERSION)
     }
 
-    /// The bytes of format `version` 8 or 9 (8: no ring heights), for tests of older formats.
+    /// The bytes of format `version` 8 to 10 (8: no ring heights; before 10: no group variants), for
+    /// tests of older formats.
     #[cfg(test)]
     pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
         assert!((8..=VERSION).contains(&version));
@@ -366,6 +369,13 @@ impl Scene {
                     w.f32(l.shading_error);
                     w.f32(l.error_z);
                     w.u32s(&l.indices);
+                    if version >= 10 {
+                        w.f32(l.grouped_error);
+                        w.u32(l.grouped.len() as u32);
+                        for g in &l.grouped {
+                            w.u32s(g);
+                        }
+                    }
                 }
             }
         }
@@ -601,9 +611,33 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         let error = r.f32()?;
         let shading_error = if version >= 6 { r.f32()? } else { f32::NAN };
         let error_z = if version >= 8 { r.f32()? } else { error };
-        levels.push(crate::lod::levels::Level { error, error_z, shading_error, indices: indices(r.u32s()?) });
+        let level_indices = indices(r.u32s()?);
+        let (grouped_error, mut grouped) = (if version >= 10 { r.f32()? } else { error }, Vec::new());
+        if version >= 10 {
+            let ng = r.u32()? as usize;
+            if ng > crate::lod::groups::MAX_GROUP_DEPTH {
+                let most = crate::lod::groups::MAX_GROUP_DEPTH;
+                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; at most {most}")));
+            }
+            for _ in 0..ng {
+                grouped.push(indices(r.u32s()?));
+            }
+        }
+        // (NaN fails too.)
+        if version >= 10 && grouped_error.partial_cmp(&error).is_none_or(|o| o.is_lt()) {
+            return Err(r.err(format!("object {id}: a tile's level has a group error below its error")));
+        }
+        levels.push(crate::lod::levels::Level {
+            error,
+            error_z,
+            shading_error,
+            indices: level_indices,
+            grouped,
+            grouped_error,
+        });
     }
-    for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)) {
+    let grouped = levels.iter().flat_map(|l| &l.grouped);
+    for level in [&fine, &coarse].into_iter().chain(levels.iter().map(|l| &l.indices)).chain(grouped) {
         if level.len() % 3 != 0 || level.iter().any(|&k| k as usize >= positions.len()) {
             return Err(r.err(format!("object {id}: a tile's triangles index beyond its vertices")));
         }

@@ -196,8 +196,8 @@ fn damaged_bytes_are_input_errors() {
         assert!(e.starts_with("data"), "{e}");
     }
     let mut v = b.clone();
-    v[8] = 10; // version 10
-    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 10"));
+    v[8] = 11; // version 11
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 11"));
     let mut extra = b.clone();
     extra.push(0);
     assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
@@ -251,8 +251,8 @@ fn a_count_reserves_only_records_the_unclaimed_bytes_hold() {
     v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
     for version in 1..=VERSION {
-        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84][version as usize - 1]);
-        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96][version as usize - 1]);
+        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84, 84][version as usize - 1]);
+        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96, 96][version as usize - 1]);
     }
 }
 
@@ -294,4 +294,31 @@ fn ring_heights_round_trip_and_a_centre_out_of_the_box_is_refused() {
     bad[at..at + 4].copy_from_slice(&(depth + 1.0).to_le_bytes());
     let e = Scene::from_bytes(&bad).unwrap_err().to_string();
     assert!(e.starts_with("data") && e.contains("ring height"), "{e}");
+}
+
+#[test]
+fn group_variants_round_trip_and_older_versions_read_without_them() {
+    // A 41 x 41 field in 2 x 2 tiles: levels from 2 on have group variants (`lod::groups`).
+    let mut s = Scene::new();
+    let z: Vec<f64> = (0..41 * 41).map(|k| ((k % 41) as f64 * 0.4).sin() * 3.0 + (k / 41) as f64 * 0.1).collect();
+    s.add_heightfield(&z, 41, 41, GridFrame::new([0.0; 2], [10.0; 2]), (2, 2), None, AddOptions::new(4.0)).unwrap();
+    let levels = |s: &Scene| -> Vec<crate::lod::levels::Level> {
+        s.objects()[0].tiles.iter().flat_map(|t| t.levels.clone()).collect()
+    };
+    let before = levels(&s);
+    assert!(before.iter().any(|l| !l.grouped.is_empty()));
+    let back = levels(&Scene::from_bytes(&s.to_bytes()).unwrap());
+    assert_eq!(back.len(), before.len());
+    for (a, b) in back.iter().zip(&before) {
+        assert_eq!((&a.grouped, a.grouped_error.to_bits()), (&b.grouped, b.grouped_error.to_bits()));
+    }
+    // Version 9 has none: its levels draw with full borders, the group error their error.
+    let old = levels(&Scene::from_bytes(&s.to_bytes_version(9)).unwrap());
+    assert!(old.iter().all(|l| l.grouped.is_empty() && l.grouped_error == l.error));
+    // A group error below the level's error is damage.
+    let mut bad = s.clone();
+    let l = bad.objects[0].tiles[0].levels.iter_mut().find(|l| !l.grouped.is_empty()).unwrap();
+    l.grouped_error = l.error * 0.5;
+    let e = Scene::from_bytes(&bad.to_bytes()).unwrap_err().to_string();
+    assert!(e.contains("group error below its error"), "{e}");
 }

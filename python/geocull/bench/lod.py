@@ -41,7 +41,7 @@ __all__ = ["run", "format_table", "scene_tiles", "surface_distance", "level_erro
 #: benchmark scene hold 3,500).
 TRIS_PER_TILE = 4000
 METHODS = ("meshoptimizer (geocull)", "fast-simplification, border kept", "fast-simplification, border free")
-_SERIAL_VERSION = 9  # Scene.to_bytes's layout read by scene_tiles (src/scene/serial.rs)
+_SERIAL_VERSION = 10  # Scene.to_bytes's layout read by scene_tiles (src/scene/serial.rs)
 
 
 def _say(msg: str) -> None:
@@ -144,6 +144,9 @@ def scene_tiles(scene: Any) -> list[dict[str, Any]]:
             for _ in range(r.u32()):
                 err, _shading, _error_z = r.take("fff")
                 levels.append((float(err), r.array("u4").reshape(-1, 3)))
+                r.take("f")  # group error (height fields' group variants, lod::groups)
+                for _ in range(r.u32()):
+                    r.array("u4")
             if kind_tag == 1 and len(fine):
                 out.append(dict(object=oid, kind=label, positions=pos.reshape(-1, 3), fine=fine.reshape(-1, 3),
                                 levels=levels))

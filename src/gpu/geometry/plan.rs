@@ -67,8 +67,9 @@ fn occluder_pattern(t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Pattern {
 /// f32 position plus column and row times the axes, in f32, within a few units in the last place
 /// of the tile's extent of the vertices it replaces.
 pub(super) struct Plan {
-    /// Per tile: the patterns of its fine, coarse and level draws (in that order) for a lattice
-    /// tile, None for a tile drawn from vertices of its own.
+    /// Per tile: the patterns of its fine, coarse, level (each with its group variants) and
+    /// occluder draws (in that order) for a lattice tile, None for a tile drawn from vertices of
+    /// its own (which draws no group variants).
     pub(super) runs: Vec<Option<Vec<usize>>>,
     pub(super) patterns: Vec<Pattern>,
     /// Three vec4 per tile (`tile_grid` in common.wgsl).
@@ -89,25 +90,25 @@ impl Plan {
         let mut plan = Plan { runs: Vec::new(), patterns: Vec::new(), tile_grid: Vec::new(), nv: 0, ni: 0 };
         // Pattern ids by hash (a list per hash, compared in full), in first-use order.
         let mut by_hash: std::collections::HashMap<u64, Vec<usize>> = std::collections::HashMap::new();
-        let mut known = KnownRuns::default();
+        let mut known = KnownLists::default();
         for batch in tiles.chunks(PLAN_BATCH) {
             let work: Vec<TileWork> =
                 batch.par_iter().map(|&(oi, t)| tile_work(scene, oi, t, shading_base, values_base)).collect();
-            // The patterns of the lattice tiles whose lists and vertices no tile before had.
-            let fresh: Vec<Option<Vec<(u64, Pattern)>>> = batch
+            // The patterns of the lattice tiles' lists that no tile before had over the same vertices.
+            let fresh: Vec<Option<Fresh>> = batch
                 .par_iter()
                 .zip(&work)
                 .map_init(
                     || (Vec::new(), Vec::new()),
                     |(remap, cidx), (&(_, t), w)| match w {
-                        TileWork::Lattice { local, .. } if known.get(t, local).is_none() => {
-                            Some(tile_patterns(t, local, remap, cidx))
+                        TileWork::Lattice { local, .. } => {
+                            Some(fresh_patterns(t, local, known.get(t, local), remap, cidx))
                         }
-                        _ => None,
+                        TileWork::Own { .. } => None,
                     },
                 )
                 .collect();
-            for ((w, patterns), &(_, t)) in work.into_iter().zip(fresh).zip(batch) {
+            for ((w, fresh), &(_, t)) in work.into_iter().zip(fresh).zip(batch) {
                 match w {
                     TileWork::Own { nv, ni } => {
                         plan.runs.push(None);
@@ -117,17 +118,8 @@ impl Plan {
                         plan.ni += ni;
                     }
                     TileWork::Lattice { local, grid } => {
-                        let run = match (known.get(t, &local), patterns) {
-                            (Some(run), _) => run.clone(),
-                            (None, patterns) => {
-                                // `known` only grows: no run known now was none when `fresh` ran.
-                                let patterns = patterns.expect("worked out in `fresh`");
-                                let run: Vec<usize> =
-                                    patterns.into_iter().map(|(h, p)| plan.pattern_id(&mut by_hash, h, p)).collect();
-                                known.insert(t, local, run.clone());
-                                run
-                            }
-                        };
+                        let fresh = fresh.expect("worked out for every lattice tile");
+                        let run = known.run(t, local, fresh, |h, p| plan.pattern_id(&mut by_hash, h, p));
                         plan.runs.push(Some(run));
                         plan.tile_grid.extend(grid);
                     }
@@ -199,38 +191,119 @@ enum TileWork {
     Lattice { local: Vec<[u32; 2]>, grid: [[f32; 4]; 3] },
 }
 
-/// The pattern runs of the lattice tiles seen so far, by their triangle lists (the shared
-/// allocations of [`crate::lod::share_indices`], by address) and their vertices' (column, row):
-/// a tile whose lists are the same allocations and whose vertices are the same samples in the
-/// same order has the same patterns, so hole-free tiles of one shape are compacted once.
+/// The patterns of the lattice tiles' lists seen so far, by the vertices they index (found by the
+/// fine list's address, compared in full) and each list's address: tiles of one shape share their
+/// lists ([`crate::lod::share_indices`], `lod::levels::LatticeShape::shared`), so each list of a
+/// shape is compacted once, whichever of its variants a tile draws.
 #[derive(Default)]
-struct KnownRuns {
-    /// By the lists' addresses and lengths: each (vertices' samples, pattern ids) seen.
-    by_lists: std::collections::HashMap<Vec<usize>, Vec<Known>>,
+struct KnownLists {
+    by_fine: std::collections::HashMap<(usize, usize), Vec<Layout>>,
 }
 
-/// A lattice tile's vertices' (column, row) and the ids of its patterns.
-type Known = (Vec<[u32; 2]>, Vec<usize>);
+/// The vertices' (column, row) of some lattice tiles, the pattern ids of the lists compacted over
+/// them (by address and length) and of their occluder.
+struct Layout {
+    local: Vec<[u32; 2]>,
+    lists: std::collections::HashMap<(usize, usize), usize>,
+    occluder: usize,
+}
 
-impl KnownRuns {
-    /// The addresses of `t`'s fine, coarse and level lists (those [`tile_patterns`] reads).
-    fn lists(t: &crate::lod::TileMesh) -> Vec<usize> {
-        let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
-        draws.flat_map(|l| [l.as_ptr() as usize, l.len()]).collect()
+/// What [`fresh_patterns`] worked out of a tile: per list (fine, coarse, level lists) its pattern
+/// with its hash where it was not known, and the occluder's where the layout was not.
+type Fresh = (Vec<Option<(u64, Pattern)>>, Option<(u64, Pattern)>);
+
+fn address(l: &crate::lod::Indices) -> (usize, usize) {
+    (l.as_ptr() as usize, l.len())
+}
+
+/// The fine, coarse and level lists (each level followed by its group variants) of a lattice tile,
+/// in the order of its run.
+fn tile_lists(t: &crate::lod::TileMesh) -> impl Iterator<Item = &crate::lod::Indices> {
+    [&t.fine, &t.coarse].into_iter().chain(t.level_lists())
+}
+
+impl KnownLists {
+    fn get(&self, t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Option<&Layout> {
+        self.by_fine.get(&address(&t.fine))?.iter().find(|l| l.local == local)
     }
 
-    fn get(&self, t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Option<&Vec<usize>> {
-        let seen = self.by_lists.get(&Self::lists(t))?;
-        seen.iter().find(|(l, _)| l == local).map(|(_, run)| run)
-    }
-
-    /// Remembers `t`'s runs when another tile may have them: when its fine list is shared (a
-    /// tile with holes has lists of its own, and keeping its samples would only cost memory).
-    fn insert(&mut self, t: &crate::lod::TileMesh, local: Vec<[u32; 2]>, run: Vec<usize>) {
-        if std::sync::Arc::strong_count(&t.fine) > 1 {
-            self.by_lists.entry(Self::lists(t)).or_default().push((local, run));
+    /// Tile `t`'s run (pattern ids of its lists, then its occluder's), numbering what `fresh` has
+    /// that is still unknown by `id`; remembered when another tile may share the lists (its fine
+    /// list is shared: a tile with holes has lists of its own, and keeping its samples would only
+    /// cost memory).
+    fn run(
+        &mut self,
+        t: &crate::lod::TileMesh,
+        local: Vec<[u32; 2]>,
+        (lists, occluder): Fresh,
+        mut id: impl FnMut(u64, Pattern) -> usize,
+    ) -> Vec<usize> {
+        let keep = std::sync::Arc::strong_count(&t.fine) > 1;
+        let at = self.by_fine.get(&address(&t.fine)).and_then(|v| v.iter().position(|l| l.local == local));
+        let mut layout = match at {
+            Some(k) => self.by_fine.get_mut(&address(&t.fine)).expect("found above").swap_remove(k),
+            None => {
+                // `known` only grows: a layout unknown now was unknown when `fresh` ran.
+                let (h, p) = occluder.expect("worked out with the layout");
+                Layout { local, lists: Default::default(), occluder: id(h, p) }
+            }
+        };
+        let mut run: Vec<usize> = tile_lists(t)
+            .zip(lists)
+            .map(|(l, p)| match layout.lists.get(&address(l)) {
+                Some(&k) => k,
+                None => {
+                    let (h, p) = p.expect("worked out where unknown");
+                    let k = id(h, p);
+                    layout.lists.insert(address(l), k);
+                    k
+                }
+            })
+            .collect();
+        run.push(layout.occluder);
+        if keep {
+            self.by_fine.entry(address(&t.fine)).or_default().push(layout);
         }
+        run
     }
+}
+
+/// The patterns of lattice tile `t`'s lists (and occluder) that `known` (the layout of its vertices
+/// `local`, if seen) does not hold ([`tile_patterns`]).
+fn fresh_patterns(
+    t: &crate::lod::TileMesh,
+    local: &[[u32; 2]],
+    known: Option<&Layout>,
+    remap: &mut Vec<u32>,
+    cidx: &mut Vec<u32>,
+) -> Fresh {
+    let lists = tile_lists(t)
+        .map(|l| match known.and_then(|k| k.lists.get(&address(l))) {
+            Some(_) => None,
+            None => Some(list_pattern(t, l, local, remap, cidx)),
+        })
+        .collect();
+    (lists, known.is_none().then(|| hashed(occluder_pattern(t, local))))
+}
+
+fn hashed(p: Pattern) -> (u64, Pattern) {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    p.hash(&mut h);
+    (h.finish(), p)
+}
+
+/// The pattern (with its hash) of list `idx` of lattice tile `t` (`local`: its vertices' (column,
+/// row); `remap`, `cidx`: scratch).
+fn list_pattern(
+    t: &crate::lod::TileMesh,
+    idx: &[u32],
+    local: &[[u32; 2]],
+    remap: &mut Vec<u32>,
+    cidx: &mut Vec<u32>,
+) -> (u64, Pattern) {
+    let used = compact_indices(idx, t.positions.len(), remap, cidx);
+    hashed((used.iter().map(|&k| local[k as usize]).collect(), cidx.clone()))
 }
 
 /// Tile `t` of object `oi` as [`Plan::new`] counts it: its lattice when it is a lattice tile.
@@ -273,27 +346,17 @@ fn tile_work(
     TileWork::Lattice { local: l.local, grid }
 }
 
-/// The patterns (with their hashes) of lattice tile `t`'s fine, coarse, level and occluder draws
-/// (`local`: its vertices' (column, row); `remap`, `cidx`: scratch).
+/// The patterns (with their hashes) of lattice tile `t`'s fine, coarse, level (each followed by its
+/// group variants, `TileMesh::level_lists`) and occluder draws (`local`: its vertices' (column,
+/// row); `remap`, `cidx`: scratch): a run's patterns, as [`Plan::new`] finds them.
+#[cfg(test)]
 pub(super) fn tile_patterns(
     t: &crate::lod::TileMesh,
     local: &[[u32; 2]],
     remap: &mut Vec<u32>,
     cidx: &mut Vec<u32>,
 ) -> Vec<(u64, Pattern)> {
-    use std::hash::{Hash, Hasher};
-    let hashed = |p: Pattern| {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        p.hash(&mut h);
-        (h.finish(), p)
-    };
-    let draws = [&t.fine, &t.coarse].into_iter().chain(t.levels.iter().map(|l| &l.indices));
-    let mut patterns: Vec<(u64, Pattern)> = draws
-        .map(|idx| {
-            let used = compact_indices(idx, t.positions.len(), remap, cidx);
-            hashed((used.iter().map(|&k| local[k as usize]).collect(), cidx.clone()))
-        })
-        .collect();
+    let mut patterns: Vec<(u64, Pattern)> = tile_lists(t).map(|l| list_pattern(t, l, local, remap, cidx)).collect();
     patterns.push(hashed(occluder_pattern(t, local)));
     patterns
 }

@@ -361,15 +361,25 @@ fn write_tiles(
                 fine.push(args(ids[0]));
                 coarse.push(args(ids[1]));
                 occluder.push(args(*ids.last().expect("fine, coarse, levels, occluder")));
+                let mut next = ids[2..].iter();
+                let mut take = || args(*next.next().expect("a pattern per level list"));
                 levels.push(
-                    ids[2..]
+                    t.levels
                         .iter()
-                        .zip(&t.levels)
-                        .map(|(&p, l)| LevelDraw {
-                            args: args(p),
-                            error: l.error,
-                            error_z: l.error_z,
-                            shading_error: l.shading_error,
+                        .map(|l| {
+                            let level = take();
+                            let mut grouped = [DrawArgs::default(); crate::lod::groups::MAX_GROUP_DEPTH];
+                            for g in grouped.iter_mut().take(l.grouped.len()) {
+                                *g = take();
+                            }
+                            LevelDraw {
+                                args: level,
+                                error: l.error,
+                                error_z: l.error_z,
+                                shading_error: l.shading_error,
+                                grouped,
+                                grouped_error: l.grouped_error,
+                            }
                         })
                         .collect(),
                 );
@@ -414,6 +424,8 @@ fn write_tiles(
                         error: l.error,
                         error_z: l.error_z,
                         shading_error: l.shading_error,
+                        grouped: Default::default(),
+                        grouped_error: l.error,
                     })
                     .collect(),
             );
