@@ -94,9 +94,9 @@ pub fn lattice_levels(
     LatticeShape::new(w, h, &vid, masks).levels(&z)
 }
 
-/// The most lattice shapes [`LatticeShape::shared`] keeps (a height field of tiles of two sizes a
-/// side and groups: some hundreds).
-const SHAPES_KEPT: usize = 4096;
+/// Lattice shapes by tile size and masks ([`LatticeShape::shared`]), for the tiles of one build.
+pub type ShapeCache =
+    std::sync::Mutex<std::collections::HashMap<(usize, usize, Vec<u8>), std::sync::Arc<LatticeShape>>>;
 
 /// What the lattice levels of a hole-free tile are, apart from its heights: per level the lattice,
 /// its cells (square inner cells; the other cells' triangles) and triangle lists. The same for
@@ -183,26 +183,24 @@ impl LatticeShape {
         LatticeShape { size: (w, h), fine, levels }
     }
 
-    /// [`Self::new`], remembered (the last [`SHAPES_KEPT`] sizes and masks asked for) and shared
-    /// with every caller that asks for the same: for tiles whose vertices `vid` numbers as every
-    /// such tile's are (`lod::tile_heightfield`'s hole-free tiles), so that their lists are one
-    /// allocation across tiles and height fields (the upload then compacts each once).
-    pub fn shared(w: usize, h: usize, vid: &impl Fn(usize, usize) -> u32, masks: &[u8]) -> std::sync::Arc<Self> {
-        use std::sync::{Arc, Mutex};
-        type Shapes = std::collections::HashMap<(usize, usize, Vec<u8>), Arc<LatticeShape>>;
-        static SHAPES: Mutex<Option<Shapes>> = Mutex::new(None);
+    /// [`Self::new`], remembered in `cache` and shared with every caller that asks it for the same
+    /// size and masks: for tiles whose vertices `vid` numbers as every such tile's are
+    /// (`lod::tile_heightfield`'s hole-free tiles), so that their lists are one allocation (the
+    /// upload then compacts each once).
+    pub fn shared(
+        cache: &ShapeCache,
+        w: usize,
+        h: usize,
+        vid: &impl Fn(usize, usize) -> u32,
+        masks: &[u8],
+    ) -> std::sync::Arc<Self> {
         let key = (w, h, masks.to_vec());
-        let lock = || SHAPES.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(shape) = lock().as_ref().and_then(|m| m.get(&key)) {
+        let lock = || cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(shape) = lock().get(&key) {
             return shape.clone();
         }
-        let shape = Arc::new(Self::new(w, h, vid, masks));
-        let mut shapes = lock();
-        let map = shapes.get_or_insert_with(Default::default);
-        if map.len() >= SHAPES_KEPT {
-            map.clear();
-        }
-        map.entry(key).or_insert(shape).clone()
+        let shape = std::sync::Arc::new(Self::new(w, h, vid, masks));
+        lock().entry(key).or_insert(shape).clone()
     }
 
     /// The levels of a tile of this shape with heights `z(li, lj)`: the shape's triangle lists

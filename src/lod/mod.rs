@@ -329,6 +329,7 @@ pub fn tile_heightfield(
     let (tx, ty) = tiles;
     let bx = tile_bounds(g.nx, tx);
     let by = tile_bounds(g.ny, ty);
+    let shapes = levels::ShapeCache::default();
     (0..tx * ty)
         .into_par_iter()
         .map(|t| {
@@ -419,9 +420,9 @@ pub fn tile_heightfield(
             if !holes {
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 // Hole-free tiles of one size number their vertices alike (the loop above), so
-                // tiles of one size and masks share a shape, in this height field and others.
+                // tiles of one size and masks share a shape.
                 let masks = groups::side_masks(ix, iy, tx, ty);
-                let shape = levels::LatticeShape::shared(w, h, &|li, lj| map[lj * w + li], &masks);
+                let shape = levels::LatticeShape::shared(&shapes, w, h, &|li, lj| map[lj * w + li], &masks);
                 tile.levels = shape.levels(&zl);
                 debug_assert_eq!(tile.fine, shape.fine);
                 tile.fine = shape.fine.clone(); // one allocation for all such tiles

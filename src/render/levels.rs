@@ -67,7 +67,9 @@ pub(super) fn choose_levels(
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     let mut scales = Vec::with_capacity(g.n_tiles());
-    let clearance = if lod == Lod::Full { None } else { Some(g.clearances(scene)) };
+    // (Only height-field tiles are ever too deep: `SceneGeometry::too_deep`.)
+    let fields = g.height_blocks.iter().any(Option::is_some);
+    let clearance = (lod != Lod::Full && fields).then(|| g.clearances(scene));
     for (i, &d2) in dist2.iter().enumerate() {
         let scale = if perspective {
             if d2 > 0.0 {
