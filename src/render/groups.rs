@@ -32,7 +32,7 @@ pub(super) fn group_levels(
     budget: &Budget<'_>,
     (level, args, err_px): (&mut [u8], &mut [DrawArgs], &mut [f32]),
 ) {
-    let clearance = g.clearances(scene);
+    let mut clearance = None; // measured on first use (cached per placement)
     let mut first = 0;
     for o in scene.objects() {
         let range = first..first + o.tiles.len();
@@ -41,6 +41,7 @@ pub(super) fn group_levels(
         if !range.clone().any(has_groups) {
             continue;
         }
+        let clearance = clearance.get_or_insert_with(|| g.clearances(scene));
         let tx = o.tiles.iter().map(|t| t.ix as usize + 1).max().unwrap_or(0);
         let ty = o.tiles.iter().map(|t| t.iy as usize + 1).max().unwrap_or(0);
         let mut slot = vec![None; tx * ty];
