@@ -203,7 +203,8 @@ fn fan_to_split(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::levels::{fine_height, lattice_levels, Level};
+    use crate::lod::levels::tests::distance_sampled;
+    use crate::lod::levels::{lattice_levels, Level};
     use crate::lod::tile_bounds;
     use std::collections::HashMap;
 
@@ -303,30 +304,6 @@ mod tests {
         assert!(groups_seen > 20);
     }
 
-    /// The largest vertical distance between the triangles `indices` (vertex k: sample (k % n,
-    /// k / n)) and the fine surface of heights `zf`, sampled at eighths of a cell over each.
-    fn distance_sampled(indices: &[u32], n: usize, zf: &impl Fn(usize, usize) -> f64) -> f64 {
-        let mut seen = 0.0f64;
-        for tri in indices.chunks_exact(3) {
-            let p = [0, 1, 2].map(|c| {
-                let (i, j) = (tri[c] as usize % n, tri[c] as usize / n);
-                (i as f64, j as f64, zf(i, j))
-            });
-            let span = p.iter().map(|q| (q.0 - p[0].0).abs() + (q.1 - p[0].1).abs()).fold(1.0, f64::max);
-            let k = 8 * span as usize;
-            for a in 0..=k {
-                for b in 0..=k - a {
-                    let (u, w) = (a as f64 / k as f64, b as f64 / k as f64);
-                    let c = 1.0 - u - w;
-                    let (x, y) = (c * p[0].0 + u * p[1].0 + w * p[2].0, c * p[0].1 + u * p[1].1 + w * p[2].1);
-                    let g = c * p[0].2 + u * p[1].2 + w * p[2].2;
-                    seen = seen.max((fine_height(x, y, zf, (n - 1, n - 1)) - g).abs());
-                }
-            }
-        }
-        seen
-    }
-
     #[test]
     fn every_variant_lies_within_the_grouped_error() {
         // Sampled densely (eighths of a cell) over every variant's triangles on rough heights, on
@@ -348,9 +325,9 @@ mod tests {
                 assert!(l.grouped_error >= l.error);
                 // The level's own triangles against its error (bounded past the chain), then the
                 // variants against the group error.
-                let own = distance_sampled(&l.indices, n, &zf);
+                let own = distance_sampled(&l.indices, (n, n), &zf);
                 assert!(l.error as f64 >= own * (1.0 - 1e-6), "{} below {own}", l.error);
-                let seen = l.grouped.iter().map(|v| distance_sampled(v, n, &zf)).fold(0.0, f64::max);
+                let seen = l.grouped.iter().map(|v| distance_sampled(v, (n, n), &zf)).fold(0.0, f64::max);
                 assert!(l.grouped_error as f64 >= seen * (1.0 - 1e-6), "{} below {seen}", l.grouped_error);
             }
         }

@@ -599,4 +599,4 @@ pub fn simplified_levels(positions: &[[f32; 3]], fine: &[u32], shading: Option<s
 
 #[cfg(test)]
 #[path = "levels_tests.rs"]
-mod tests;
+pub(super) mod tests;

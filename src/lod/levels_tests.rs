@@ -59,20 +59,7 @@ fn no_point_of_a_level_is_further_from_the_fine_surface_than_its_error() {
         let zf = |i: usize, j: usize| z[j * w + i];
         let zz = z.clone();
         for l in lattice_levels(w, h, |i, j| (j * w + i) as u32, move |i, j| zz[j * w + i], &[]) {
-            let mut seen = 0.0f64;
-            for t in sample_triangles(&l.indices, w) {
-                let p = t.map(|(i, j)| (i as f64, j as f64, zf(i, j)));
-                let n = 8 * t.iter().map(|q| q.0.abs_diff(t[0].0) + q.1.abs_diff(t[0].1)).max().unwrap().max(1);
-                for a in 0..=n {
-                    for b in 0..=n - a {
-                        let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
-                        let c = 1.0 - u - v;
-                        let (x, y) = (c * p[0].0 + u * p[1].0 + v * p[2].0, c * p[0].1 + u * p[1].1 + v * p[2].1);
-                        let g = c * p[0].2 + u * p[1].2 + v * p[2].2;
-                        seen = seen.max((fine_height(x, y, &zf, (w - 1, h - 1)) - g).abs());
-                    }
-                }
-            }
+            let seen = distance_sampled(&l.indices, (w, h), &zf);
             assert!(l.error as f64 >= seen * (1.0 - 1e-6), "{w} x {h}: error {} below {seen}", l.error);
         }
     }
@@ -287,4 +274,30 @@ fn grid_level_error_is_exact_and_refuses_triangles_over_holes() {
 fn small_tiles_have_no_levels() {
     assert!(grid(2, 9, |_, _| 0.0).0.is_empty());
     assert!(grid(3, 3, |_, _| 0.0).0.is_empty());
+}
+
+/// The largest vertical distance between the triangles `indices` of a tile of `w` × `h` samples
+/// (vertex k: sample (k % w, k / w)) and its fine surface of heights `zf`, sampled at eighths of a
+/// cell over each triangle (barycentric): a level edge that crosses a cell's diagonal over a ridge
+/// is measured there too. (Also `lod::groups`' tests.)
+pub(in crate::lod) fn distance_sampled(
+    indices: &[u32],
+    (w, h): (usize, usize),
+    zf: &impl Fn(usize, usize) -> f64,
+) -> f64 {
+    let mut seen = 0.0f64;
+    for t in sample_triangles(indices, w) {
+        let p = t.map(|(i, j)| (i as f64, j as f64, zf(i, j)));
+        let n = 8 * t.iter().map(|q| q.0.abs_diff(t[0].0) + q.1.abs_diff(t[0].1)).max().unwrap().max(1);
+        for a in 0..=n {
+            for b in 0..=n - a {
+                let (u, v) = (a as f64 / n as f64, b as f64 / n as f64);
+                let c = 1.0 - u - v;
+                let (x, y) = (c * p[0].0 + u * p[1].0 + v * p[2].0, c * p[0].1 + u * p[1].1 + v * p[2].1);
+                let g = c * p[0].2 + u * p[1].2 + v * p[2].2;
+                seen = seen.max((fine_height(x, y, zf, (w - 1, h - 1)) - g).abs());
+            }
+        }
+    }
+    seen
 }
