@@ -12,11 +12,13 @@
 //! Isosurfaces ([`Renderer::render_isosurface`]) have their own passes in `crate::iso`, on the
 //! same device.
 
+mod background;
 mod groups;
 mod lenses;
 mod levels;
 mod options;
 
+pub use background::Background;
 pub use options::{GridLod, Lod, RenderOptions, RenderOutput, RenderStats, MAX_SHADING_LEVELS};
 
 use lenses::draw_lenses;
@@ -59,6 +61,8 @@ pub struct Renderer {
     cache_budget: u64,
     /// At most this many triangles per lit render pass (`None`: one pass), [`Self::set_pass_triangles`].
     pass_triangles: Option<u64>,
+    /// Put into every image read back where nothing was drawn (`None`: the passes' black).
+    background: Option<Background>,
 }
 
 impl Renderer {
@@ -90,6 +94,7 @@ impl Renderer {
             iso: None,
             cache_budget,
             pass_triangles: None,
+            background: None,
         })
     }
 
@@ -130,6 +135,13 @@ impl Renderer {
             "pass_triangles is 0; expected >= 1, or None for one pass per draw".into()
         })?;
         self.pass_triangles = max;
+        Ok(())
+    }
+    /// Sets the background put into every image where nothing was drawn: `rgb` one RGB8 colour
+    /// per image row, top row first ([`Background`]); `None`: the passes' own black. Input error
+    /// naming `background` when `rgb` is not 3 bytes per row of this renderer's images.
+    pub fn set_background(&mut self, rgb: Option<&[u8]>) -> Result<()> {
+        self.background = rgb.map(|c| Background::from_rows(c, self.height)).transpose()?;
         Ok(())
     }
     /// Bytes of scene geometry currently held on the GPU.
@@ -347,8 +359,11 @@ impl Renderer {
         );
         ctx.wait()?;
         ctx.take_error()?;
-        let image = color_rb.read_rows()?;
+        let mut image = color_rb.read_rows()?;
         let depth: Vec<f32> = depth_rb.read()?.par_iter().map(|&v| fc.linear_depth(v)).collect();
+        if let Some(bg) = &self.background {
+            bg.fill(&mut image, &depth);
+        }
         let tile_pixels: Vec<u32> = match (visible.pixels, counted) {
             (Pixels::Host(c), _) => c,
             (_, Some((buf, scale))) => {
@@ -440,7 +455,13 @@ impl Renderer {
         opts: &IsoOptions,
     ) -> Result<IsoOutput> {
         let iso = self.iso.get_or_insert_with(|| Box::new(IsoRenderer::new(&self.ctx)));
-        iso.render(&self.ctx, self.width, self.height, vol, tree, w, camera, opts)
+        let mut out = iso.render(&self.ctx, self.width, self.height, vol, tree, w, camera, opts)?;
+        if let Some(bg) = &self.background {
+            let t = Instant::now();
+            bg.fill(&mut out.image, &out.depth);
+            out.stats.readback_ms += t.elapsed().as_secs_f64() * 1e3;
+        }
+        Ok(out)
     }
 }
 

@@ -108,6 +108,12 @@ impl PyRenderer {
             Ok(())
         })
     }
+    /// The background put into every image where nothing was drawn: `rgb` 3 bytes (RGB8) per
+    /// image row, top row first; None: black.
+    #[pyo3(signature = (rgb))]
+    fn set_background(&self, py: Python<'_>, rgb: Option<Vec<u8>>) -> PyResult<()> {
+        with_lock(py, &self.inner, |r| Ok(r.set_background(rgb.as_deref())?))
+    }
     #[getter]
     fn pass_triangles(&self, py: Python<'_>) -> PyResult<Option<u64>> {
         with_lock(py, &self.inner, |r| Ok(r.pass_triangles()))

@@ -141,7 +141,8 @@ impl RenderStats {
 pub struct RenderOutput {
     pub width: u32,
     pub height: u32,
-    /// RGBA8, row-major, row 0 = top.
+    /// RGBA8, row-major, row 0 = top; the renderer's background where nothing was drawn
+    /// (`Renderer::set_background`; opaque black without one).
     pub image: Vec<u8>,
     /// Distance along the view axis (render-space units), +inf where empty.
     pub depth: Vec<f32>,

@@ -205,7 +205,8 @@ pub struct IsoStats {
 pub struct IsoOutput {
     pub width: u32,
     pub height: u32,
-    /// RGBA8, row-major, row 0 = top; background opaque black.
+    /// RGBA8, row-major, row 0 = top; opaque black where empty (`Renderer::render_isosurface`
+    /// puts its background there).
     pub image: Vec<u8>,
     /// Distance along the view axis (render-space units), +inf where empty.
     pub depth: Vec<f32>,
