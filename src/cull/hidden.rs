@@ -33,6 +33,7 @@
 //! growing. Holes, tiles outside the frustum and tiles not drawn only make blocks unusable where a
 //! ray meets them: stacks of rotated, dipping horizons with undefined rims are proven part by part.
 
+mod flat;
 mod hider;
 
 use super::{box_corners, FrameInputs};
@@ -50,6 +51,14 @@ const SOLIDS_PER_TILE: u32 = 16;
 /// Per tile: proven hidden by a height field (see the module docs). Only visible tiles with a
 /// draw are considered, as hiders and as hidden, and only those where `candidate` holds as hidden
 /// (temporal frames skip the tiles seen in the last frame: they are drawn first anyway).
+///
+/// A height field's tiles are taken as a quadtree over its tile grid ([`Proof::node`]): a block
+/// of tiles whose union box is proven hidden is hidden whole (each tile's box lies in it, and the
+/// argument holds for every point of a proven solid), one whose union box lies on the eye's side of
+/// every hider is left whole to the GPU passes (so does every tile's box in it), and the others
+/// are split, down to single tiles, which are tested as before. The blocks change which tests
+/// are made, not what is proven sound: a frame's CPU work then follows the blocks that differ,
+/// not the number of tiles.
 pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) -> bool + Sync)) -> Vec<bool> {
     let g = f.geometry;
     let n = g.n_tiles();
@@ -59,33 +68,153 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
     if hiders.is_empty() {
         return hidden;
     }
-    hidden.par_iter_mut().enumerate().filter(|(b, _)| drawn(*b) && candidate(*b)).for_each(|(b, h)| {
+    let want = |b: usize| drawn(b) && candidate(b);
+    let proof = Proof { f, hiders: &hiders, want: &want };
+    let roots = roots(f);
+    let found: Vec<usize> = roots
+        .par_iter()
+        .flat_map_iter(|r| match r {
+            Root::Tile(b) => {
+                (want(*b) && proof.tile(*b, &vec![false; hiders.len()])).then_some(*b).into_iter().collect()
+            }
+            Root::Grid(grid) => proof.node(grid, (0, grid.tx), (0, grid.ty), &vec![false; hiders.len()]),
+        })
+        .collect();
+    for b in found {
+        hidden[b] = true;
+    }
+    hidden
+}
+
+/// A height field's tiles on its tile grid: `tiles[iy * tx + ix]`, the frame's tile index.
+struct TileGrid {
+    tx: usize,
+    ty: usize,
+    tiles: Vec<Option<usize>>,
+}
+
+/// Where the proof starts: a height field's tile grid (a quadtree over it), or a tile of another
+/// object alone.
+enum Root {
+    Grid(TileGrid),
+    Tile(usize),
+}
+
+/// The frame's roots: every height field with a tile grid as one, every other tile alone.
+fn roots(f: &FrameInputs<'_>) -> Vec<Root> {
+    let mut out = Vec::new();
+    let mut first = 0usize;
+    for o in f.scene.objects() {
+        let range = first..first + o.tiles.len();
+        first = range.end;
+        match o.tile_sample_bounds() {
+            Some((bx, by)) => {
+                let (tx, ty) = (bx.len() - 1, by.len() - 1);
+                let mut tiles = vec![None; tx * ty];
+                for (t, i) in o.tiles.iter().zip(range) {
+                    if let Some(slot) = tiles.get_mut(t.iy as usize * tx + t.ix as usize) {
+                        *slot = Some(i);
+                    }
+                }
+                out.push(Root::Grid(TileGrid { tx, ty, tiles }));
+            }
+            None => out.extend(range.map(Root::Tile)),
+        }
+    }
+    out
+}
+
+/// One frame's proof: its inputs, hiders and the tiles it tries to prove hidden.
+struct Proof<'a> {
+    f: &'a FrameInputs<'a>,
+    hiders: &'a [Hider],
+    want: &'a (dyn Fn(usize) -> bool + Sync),
+}
+
+impl Proof<'_> {
+    /// The tiles of `grid`'s block `x0..x1` × `y0..y1` proven hidden (quadtree: see
+    /// [`hidden_by_heightfields`]). `hopeless`: per hider, the block lies wholly on the eye's side
+    /// of it (found for a block around this one): so does every tile and part in it.
+    fn node(
+        &self,
+        grid: &TileGrid,
+        (x0, x1): (usize, usize),
+        (y0, y1): (usize, usize),
+        hopeless: &[bool],
+    ) -> Vec<usize> {
+        let members: Vec<usize> = (y0..y1)
+            .flat_map(|y| (x0..x1).filter_map(move |x| grid.tiles[y * grid.tx + x]))
+            .filter(|&b| (self.want)(b))
+            .collect();
+        match members.as_slice() {
+            [] => return Vec::new(),
+            [b] => return if self.tile(*b, hopeless) { vec![*b] } else { Vec::new() },
+            _ => {}
+        }
+        let g = self.f.geometry;
+        let (lo, hi) = members
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &b| (lo.min(g.bbox[b].0), hi.max(g.bbox[b].1)));
+        let mut hl = hopeless.to_vec();
+        let (rlo, rhi, near) = self.f.render_box(members[0], lo, hi);
+        let verdict = if near {
+            Verdict::Failed
+        } else {
+            self.solid(g.tile_object_cpu[members[0]], &box_corners(rlo, rhi), false, &mut hl)
+        };
+        match verdict {
+            Verdict::Proven => members,
+            Verdict::Hopeless => Vec::new(),
+            Verdict::Failed => {
+                let (xm, ym) = ((x0 + x1).div_ceil(2), (y0 + y1).div_ceil(2));
+                let xs = if x1 - x0 > 1 { vec![(x0, xm), (xm, x1)] } else { vec![(x0, x1)] };
+                let ys = if y1 - y0 > 1 { vec![(y0, ym), (ym, y1)] } else { vec![(y0, y1)] };
+                let kids: Vec<_> = ys.iter().flat_map(|&y| xs.iter().map(move |&x| (x, y))).collect();
+                kids.par_iter().flat_map_iter(|&(x, y)| self.node(grid, x, y, &hl)).collect()
+            }
+        }
+    }
+
+    /// Whether the solid `corners` (render space) of object `object` is hidden by a hider of
+    /// another object; `hopeless` marks the hiders a non-dip test finds it on the eye's side of
+    /// (skipped, and set here).
+    fn solid(&self, object: u32, corners: &[DVec3; 8], dip: bool, hopeless: &mut [bool]) -> Verdict {
+        let fc = self.f.fc;
+        if corners.iter().any(|&p| (p - fc.eye).dot(fc.forward) <= fc.near * 1.001 + 1e-9) {
+            return Verdict::Failed;
+        }
+        let mut verdict = Verdict::Hopeless;
+        for (k, a) in self.hiders.iter().enumerate() {
+            if a.object == object || hopeless[k] {
+                continue;
+            }
+            let v = hides(self.f, a, corners, dip);
+            if !dip && v == Verdict::Hopeless {
+                // The solid on the eye's side of this hider: so is every part of it.
+                hopeless[k] = true;
+            }
+            match v {
+                Verdict::Proven => return Verdict::Proven,
+                Verdict::Failed => verdict = Verdict::Failed,
+                Verdict::Hopeless => {}
+            }
+        }
+        verdict
+    }
+
+    /// Whether tile `b` is proven hidden: its box, then its parts, within [`SOLIDS_PER_TILE`]
+    /// solids. `hopeless` as [`Self::node`].
+    fn tile(&self, b: usize, hopeless: &[bool]) -> bool {
+        let (f, g) = (self.f, self.f.geometry);
         let object = g.tile_object_cpu[b];
         let budget = std::cell::Cell::new(SOLIDS_PER_TILE);
-        let hopeless = std::cell::RefCell::new(vec![false; hiders.len()]);
+        let hopeless = std::cell::RefCell::new(hopeless.to_vec());
         let hidden_solid = |corners: &[DVec3; 8], dip: bool| {
             if budget.get() == 0 {
                 return Verdict::Hopeless;
             }
             budget.set(budget.get() - 1);
-            let near = corners.iter().any(|&p| (p - f.fc.eye).dot(f.fc.forward) <= f.fc.near * 1.001 + 1e-9);
-            if near {
-                return Verdict::Failed;
-            }
-            let mut verdict = Verdict::Hopeless;
-            for (k, a) in hiders.iter().enumerate().filter(|(k, a)| a.object != object && !hopeless.borrow()[*k]) {
-                let v = hides(f, a, corners, dip);
-                if !dip && v == Verdict::Hopeless {
-                    // The tile's box on the eye's side of this hider: so is every part of it.
-                    hopeless.borrow_mut()[k] = true;
-                }
-                match v {
-                    Verdict::Proven => return Verdict::Proven,
-                    Verdict::Failed => verdict = Verdict::Failed,
-                    Verdict::Hopeless => {}
-                }
-            }
-            verdict
+            self.solid(object, corners, dip, &mut hopeless.borrow_mut())
         };
         // Boxes are tested with heights as they are: a box is level, shearing it makes it taller.
         let hidden_box = |lo: DVec3, hi: DVec3| {
@@ -96,14 +225,13 @@ pub fn hidden_by_heightfields(f: &FrameInputs<'_>, candidate: &(dyn Fn(usize) ->
                 hidden_solid(&box_corners(lo, hi), false)
             }
         };
-        *h = match hidden_box(g.bbox[b].0, g.bbox[b].1) {
+        match hidden_box(g.bbox[b].0, g.bbox[b].1) {
             Verdict::Proven => true,
             // The tile lies on the eye's side of every hider under it: so does every part of it.
             Verdict::Hopeless => false,
             Verdict::Failed => hidden_in_parts(f, b, &hidden_box, &hidden_solid),
-        };
-    });
-    hidden
+        }
+    }
 }
 
 /// Whether every part of tile `b` is hidden (`hidden_box`: an origin-relative box,
@@ -267,7 +395,11 @@ fn hides_over(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |r, z| (r.0.min(z), r.1.max(z)));
     let (eye, forward) = (plane.over(fc.eye), plane.slope(fc.forward));
     // Start from the blocks under B's own footprint, then grow.
-    let Some(mut z) = a.first_guess(lo, hi, plane) else { return Verdict::Hopeless };
+    // No usable block under B: hopeless (so is any solid over part of that footprint); more
+    // blocks than one query reads: only failed (a smaller solid may be proven).
+    let Some(mut z) = a.first_guess(lo, hi, plane) else {
+        return if a.too_many(lo, hi, plane) { Verdict::Failed } else { Verdict::Hopeless };
+    };
     let (above, below) = (if persp { eye > z.1 } else { forward < 0.0 }, if persp { eye < z.0 } else { forward > 0.0 });
     if (above && bz_lo > z.1) || (below && bz_hi < z.0) {
         return Verdict::Hopeless; // B lies wholly on the eye's side of A's blocks under it
