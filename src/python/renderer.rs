@@ -112,7 +112,7 @@ impl PyRenderer {
     /// image row, top row first; None: black.
     #[pyo3(signature = (rgb))]
     fn set_background(&self, py: Python<'_>, rgb: Option<Vec<u8>>) -> PyResult<()> {
-        with_lock(py, &self.inner, |r| Ok(r.set_background(rgb.as_deref())?))
+        with_lock(py, &self.inner, |r| r.set_background(rgb.as_deref()))
     }
     #[getter]
     fn pass_triangles(&self, py: Python<'_>) -> PyResult<Option<u64>> {

@@ -284,7 +284,7 @@ impl GridAxes {
         // Rounded half away from zero as `f64::round` (a libm call on baseline x86-64, most of
         // this function's time over every vertex of an upload): for v > -0.5, v + 0.5 >= 0, so
         // truncation is the floor; v <= -0.5 rounds below 0, off the grid either way.
-        let near = |v: f64, n: usize| (v > -0.5 && v + 0.5 < n as f64).then(|| (v + 0.5) as usize);
+        let near = |v: f64, n: usize| (v > -0.5 && v + 0.5 < n as f64).then_some((v + 0.5) as usize);
         Some((near(a / self.dx, self.nx)?, near(b / self.dy, self.ny)?))
     }
 }
