@@ -184,14 +184,7 @@ fn mesh_sheet(f: impl Fn(f64, f64) -> f64) -> (Vec<[f32; 3]>, Vec<u32>, Vec<u32>
     let n = 33;
     let v: Vec<[f64; 3]> =
         (0..n * n).map(|k| [(k % n) as f64, (k / n) as f64, f((k % n) as f64, (k / n) as f64)]).collect();
-    let mut faces = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let k = (j * n + i) as u32;
-            faces.push([k, k + 1, k + n as u32 + 1]);
-            faces.push([k, k + n as u32 + 1, k + n as u32]);
-        }
-    }
+    let faces = super::super::normals::sheet_faces(n);
     let normals = super::super::normals::smooth_normals(&v, &faces).expect("smooth");
     let pos = v.iter().map(|p| p.map(|c| c as f32)).collect();
     (pos, faces.into_iter().flatten().collect(), normals)

@@ -96,6 +96,21 @@ pub fn unpack(p: u32) -> Option<DVec3> {
     DVec3::new(x, y, z).try_normalize()
 }
 
+/// For tests: the triangles of an `n` × `n` vertex sheet (vertex `j * n + i` at column i, row j),
+/// two per cell, split from (i, j) to (i + 1, j + 1), wound counter-clockwise seen from +z.
+#[cfg(test)]
+pub(crate) fn sheet_faces(n: usize) -> Vec<[u32; 3]> {
+    let mut f = Vec::with_capacity(2 * (n - 1) * (n - 1));
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let k = (j * n + i) as u32;
+            f.push([k, k + 1, k + n as u32 + 1]);
+            f.push([k, k + n as u32 + 1, k + n as u32]);
+        }
+    }
+    f
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -129,14 +144,7 @@ mod tests {
                 v.push([x, y, 0.02 * x * x]);
             }
         }
-        let mut f = Vec::new();
-        for j in 0..n - 1 {
-            for i in 0..n - 1 {
-                let k = (j * n + i) as u32;
-                f.push([k, k + 1, k + n as u32 + 1]);
-                f.push([k, k + n as u32 + 1, k + n as u32]);
-            }
-        }
+        let f = sheet_faces(n);
         let packed = smooth_normals(&v, &f).unwrap();
         for (k, p) in packed.iter().enumerate() {
             let x = v[k][0];
