@@ -118,7 +118,7 @@ def test_a_memmap_is_read_lazily_when_asked(tmp_path):
     assert not gc.Volume(as_zarr(a, tmp_path), lazy=False).is_lazy
 
 
-def test_slices_equal_and_a_move_reads_one_plane(tmp_path, renderer):
+def test_slices_equal_and_a_move_reads_its_bricks_once(tmp_path, renderer):
     a = salt()
     v = gc.Volume(a, **GEOM)
     lz = gc.Volume(as_zarr(a, tmp_path), **GEOM)
@@ -132,8 +132,21 @@ def test_slices_equal_and_a_move_reads_one_plane(tmp_path, renderer):
     before = lz.bytes_read
     for (s, sid) in scenes:
         s.set_slice_index(sid, 40)
-    assert lz.bytes_read - before == 4 * N * N, "one plane of 64 x 64 float32"
+    assert lz.bytes_read - before == 4 * N * N * 32, "the 64 x 64 x 32 bricks of layers 32..63"
     assert np.array_equal(renderer.render(scenes[0][0], cam).image, renderer.render(scenes[1][0], cam).image)
+    before = lz.bytes_read
+    for (s, sid) in scenes:
+        s.set_slice_index(sid, 63)
+    assert lz.bytes_read == before, "a move within the same bricks reads nothing"
+    assert np.array_equal(renderer.render(scenes[0][0], cam).image, renderer.render(scenes[1][0], cam).image)
+    # A cache whose quarter the bricks do not fit in: each move reads its plane alone.
+    small = gc.Volume(as_zarr(a, tmp_path, name="small"), cache_bytes=4 * 4 * N * N * 32 - 4, **GEOM)
+    s = gc.Scene()
+    sid = s.add_slice(small, "sample", 10)
+    before = small.bytes_read
+    s.set_slice_index(sid, 11)
+    assert small.bytes_read - before == 4 * N * N, "one plane of 64 x 64 float32"
+    assert small.cache_info[1] == 0
     # A scene pickles its slices' geometry, not their volume (lazy or not).
     again = pickle.loads(pickle.dumps(scenes[1][0]))
     assert np.array_equal(renderer.render(again, cam).image, renderer.render(scenes[0][0], cam).image)
@@ -204,7 +217,9 @@ def test_bench_big_volume_tiny():
     cfg = cli.config(cli.parser().parse_args(["--scene", "big-volume", "--tiny"]))
     assert (cfg["big_n"], cfg["cache_mib"]) == (48, 16)
     res = big_volume.run(dict(cfg, width=48, height=48))
-    assert res["slice_move_read"] == 4 * 48 * 48, "a move reads one plane"
+    # Moves 16 -> 23, 30, 37, 44: only 37 leaves the bricks of x 0..31 (and reads x 32..47).
+    assert (res["slice_moves"], res["slice_moves_cold"]) == (4, 1)
+    assert res["slice_move_read"] == 4 * 16 * 48 * 48, "a move reads its plane's bricks"
     assert res["cache_peak"] <= 16 << 20 and res["peak_rss"] > 0
     assert [v["equal"] for v in res["views"]] == [True] * 3
     assert all(0 < v["bytes_read"] <= res["cube_bytes"] for v in res["views"])

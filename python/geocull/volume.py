@@ -270,9 +270,11 @@ class Volume:
         (or by any lazily indexed file), into memory for numpy arrays and memory maps; True: lazily
         for any array that slices (an ``np.memmap`` is then never read whole); False: into memory.
         A lazy volume holds no samples: its octree is built in one streaming pass (slabs of about 128
-        MiB) the first time it is needed; a slice reads its plane alone (:meth:`Scene.add_slice`,
-        and each move of ``set_slice_index``); isosurfaces read, through a cache of bricks of 32³
-        samples, only the nodes they extract (:meth:`Renderer.render_isosurface` extracts the
+        MiB) the first time it is needed; a slice (:meth:`Scene.add_slice`, each move of
+        ``set_slice_index``) reads the 32³-sample bricks its plane crosses and keeps them in the
+        cache when they take at most a quarter of ``cache_bytes`` (the next moves within the same
+        32 samples read nothing; else it reads its plane alone); isosurfaces read, through that
+        cache of bricks, only the nodes they extract (:meth:`Renderer.render_isosurface` extracts the
         visible ones; its ``stats["bytes_read"]`` counts the bytes a frame read). Its frames'
         default ``occluder_depth`` and ``cull_depth`` are ``max_depth() - 3`` (the octree's stored
         bricks, which need no sample). float64 and integer sources are read once more at

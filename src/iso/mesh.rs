@@ -128,7 +128,7 @@ fn welded(vol: &Volume, tree: &MinMaxOctree, isovalue: f64) -> Result<(IsoMesh, 
             .zip(&p.normals)
             .map(|(q, n)| {
                 *index.entry(q.map(f64::to_bits)).or_insert_with(|| {
-                    out.vertices.push(vol.to_world(*q));
+                    out.vertices.push(vol.rotated((c, s), *q));
                     grid.push(*q);
                     out.normals.push([c as f32 * n[0] - s as f32 * n[1], s as f32 * n[0] + c as f32 * n[1], n[2]]);
                     (out.vertices.len() - 1) as u32

@@ -186,7 +186,13 @@ impl Volume {
     /// World position of a grid-frame point (rotation about the origin's vertical applied).
     #[inline]
     pub fn to_world(&self, p: [f64; 3]) -> [f64; 3] {
-        let (c, s) = self.cos_sin();
+        self.rotated(self.cos_sin(), p)
+    }
+
+    /// [`Self::to_world`] with the rotation's (cos, sin) given ([`Self::cos_sin`], taken once
+    /// for many points).
+    #[inline]
+    pub(crate) fn rotated(&self, (c, s): (f64, f64), p: [f64; 3]) -> [f64; 3] {
         if (c, s) == (1.0, 0.0) {
             return p;
         }
@@ -439,7 +445,7 @@ impl Volume {
             _ => (0, 1),
         };
         let (nu, nv) = (range[ua].1 - range[ua].0 + 1, range[va].1 - range[va].0 + 1);
-        // A lazy volume reads the plane's box alone, straight from its store (not cached).
+        // A lazy volume reads the plane's box through its cache's plane path (`read_plane`).
         let mut lo = [0; 3];
         let mut hi = [0; 3];
         for a in 0..3 {
@@ -449,27 +455,23 @@ impl Volume {
             None => self.window(lo, hi),
             Some(s) => {
                 let hx = hi.map(|v| v + 1);
-                let mut data = vec![0.0f32; (0..3).map(|a| hx[a] - lo[a]).product()];
-                s.read_direct(lo, hx, &mut data);
-                Window { data: data.into(), lo, dims: [0, 1, 2].map(|a| hx[a] - lo[a]) }
+                Window { data: s.read_plane(lo, hx).into(), lo, dims: [0, 1, 2].map(|a| hx[a] - lo[a]) }
             }
         };
-        // Row by row in parallel (each sample computed as a serial pass would): a plane across
-        // the volume's fastest axis reads one sample per cache line.
-        let (pos, vals): (Vec<Vec<[f64; 3]>>, Vec<Vec<f64>>) = (0..nv)
-            .into_par_iter()
-            .map(|v| {
-                (0..nu)
-                    .map(|u| {
-                        let mut ijk = [0; 3];
-                        (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
-                        let p = self.to_world(self.sample_position(ijk[0], ijk[1], ijk[2]));
-                        (p, self.value(win.get(ijk[0], ijk[1], ijk[2])))
-                    })
-                    .unzip()
-            })
-            .unzip();
-        (pos.concat(), vals.concat(), (nu, nv))
+        // Row by row in parallel, into the outputs (each sample computed as a serial pass
+        // would): a plane across the volume's fastest axis reads one sample per cache line.
+        let cs = self.cos_sin();
+        let mut pos = vec![[0.0; 3]; nu * nv];
+        let mut vals = vec![0.0; nu * nv];
+        pos.par_chunks_mut(nu).zip(vals.par_chunks_mut(nu)).enumerate().for_each(|(v, (prow, vrow))| {
+            for (u, (p, val)) in prow.iter_mut().zip(vrow).enumerate() {
+                let mut ijk = [0; 3];
+                (ijk[axis], ijk[ua], ijk[va]) = (index, range[ua].0 + u, range[va].0 + v);
+                *p = self.rotated(cs, self.sample_position(ijk[0], ijk[1], ijk[2]));
+                *val = self.value(win.get(ijk[0], ijk[1], ijk[2]));
+            }
+        });
+        (pos, vals, (nu, nv))
     }
 
     /// The smallest and largest finite sample values, in the volume's units; None when no

@@ -3,8 +3,9 @@
 //! in `crate::python`) through a bounded LRU cache of bricks ([`BrickCache`]).
 //!
 //! **Lazy volumes.** A volume over a source holds no samples: the octree is built in one streaming
-//! pass over slabs of sample layers (about [`OCTREE_SLAB_BYTES`]) ([`BrickCache::read_direct`], never cached); a slice reads its
-//! plane alone; the extraction reads, per node, the box of samples it needs (the node's cells and a
+//! pass over slabs of sample layers (about [`OCTREE_SLAB_BYTES`]) ([`BrickCache::read_direct`], never cached); a slice reads
+//! the bricks its plane crosses, in a few large reads, and keeps them while they take at most a
+//! quarter of the budget (else it reads its plane alone; [`BrickCache::read_plane`]); the extraction reads, per node, the box of samples it needs (the node's cells and a
 //! one-sample ring for the gradients) as a [`Window`] assembled from cached bricks of [`BRICK`]³
 //! samples. The cache holds at most its budget of brick bytes (least recently used dropped first;
 //! a budget below one brick keeps none) and counts every byte read from the source
@@ -42,6 +43,12 @@ pub const SLAB_BYTES: usize = 32 << 20;
 /// source (1024² layers: 33 layers, about two 32-layer chunk rows per read).
 pub const OCTREE_SLAB_BYTES: usize = 128 << 20;
 
+/// Bytes per read when a plane's missing bricks are read ([`BrickCache::read_plane`]).
+pub const PLANE_BATCH_BYTES: usize = 32 << 20;
+
+/// Bytes of a box from which [`BrickCache::read_box`] fills it in parallel.
+pub const PARALLEL_BOX_BYTES: usize = 1 << 20;
+
 /// A store of f32 samples (residuals, see [`super::Volume`]) on a grid of `dims` (x, y, z).
 pub trait BrickSource: Send + Sync {
     /// Writes the samples of the box `lo..hi` (exclusive per axis, x y z; inside the grid,
@@ -72,6 +79,24 @@ fn copy_box(src: &[f32], dims: [usize; 3], lo: [usize; 3], hi: [usize; 3], out: 
             out[o..o + w].copy_from_slice(&src[row + lo[0]..row + hi[0]]);
             o += w;
         }
+    }
+}
+
+/// Samples in `parts` (the pieces of a box being filled).
+fn out_len(parts: &[(usize, usize, &mut [f32])]) -> usize {
+    parts.iter().map(|p| p.2.len()).sum()
+}
+
+/// `dst` = `src` (equal lengths): a plain loop for the short rows of a thin box (a plane across
+/// x copies one sample per row, where `copy_from_slice` calls `memmove` for each).
+#[inline]
+fn copy_row(dst: &mut [f32], src: &[f32]) {
+    if dst.len() < 16 {
+        for (d, s) in dst.iter_mut().zip(src) {
+            *d = *s;
+        }
+    } else {
+        dst.copy_from_slice(src);
     }
 }
 
@@ -250,33 +275,112 @@ impl BrickCache {
         let mut data = vec![0.0f32; box_len(lo, hi)];
         let ok = self.read_direct(lo, hi, &mut data);
         let data: Arc<[f32]> = data.into();
-        let bytes = 4 * data.len();
-        if ok && bytes <= self.budget {
-            let mut l = self.lock();
-            if !l.bricks.contains_key(&b) {
-                while l.bytes + bytes > self.budget {
-                    let Some((_, key)) = l.order.pop_first() else { break };
-                    if let Some((old, _)) = l.bricks.remove(&key) {
-                        l.bytes -= 4 * old.len();
-                    }
-                }
-                l.tick += 1;
-                let tick = l.tick;
-                l.bricks.insert(b, (data.clone(), tick));
-                l.order.insert(tick, b);
-                l.bytes += bytes;
-                self.peak.fetch_max(l.bytes as u64, Ordering::Relaxed);
-            }
+        if ok {
+            self.insert(b, data.clone());
         }
         data
     }
 
-    /// The samples of the box `lo..hi` (inside the grid), assembled from cached bricks.
+    /// Caches brick `b` (unless held already or over the budget), dropping the least recently
+    /// used bricks to make room.
+    fn insert(&self, b: [usize; 3], data: Arc<[f32]>) {
+        let bytes = 4 * data.len();
+        if bytes > self.budget {
+            return;
+        }
+        let mut l = self.lock();
+        if l.bricks.contains_key(&b) {
+            return;
+        }
+        while l.bytes + bytes > self.budget {
+            let Some((_, key)) = l.order.pop_first() else { break };
+            if let Some((old, _)) = l.bricks.remove(&key) {
+                l.bytes -= 4 * old.len();
+            }
+        }
+        l.tick += 1;
+        let tick = l.tick;
+        l.bricks.insert(b, (data, tick));
+        l.order.insert(tick, b);
+        l.bytes += bytes;
+        self.peak.fetch_max(l.bytes as u64, Ordering::Relaxed);
+    }
+
+    /// The samples of a plane's box `lo..hi` (one sample thick along some axis; inside the
+    /// grid). When the bricks it crosses take at most a quarter of the budget, it is read through
+    /// the cache: the missing bricks in a few large reads (rows of bricks, at most
+    /// [`PLANE_BATCH_BYTES`] each: a chunked source decodes whole chunks however thin the box),
+    /// so that the next planes within the same bricks (a slice moved by a few samples) read
+    /// nothing. Otherwise straight from the source, not cached. A failed read is NaN and kept.
+    pub fn read_plane(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
+        let (b0, b1) = (lo.map(|v| v / BRICK), hi.map(|v| (v - 1) / BRICK));
+        let (blo, bhi) = (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])));
+        if 4 * box_len(blo, bhi) > self.budget / 4 {
+            let mut out = vec![0.0f32; box_len(lo, hi)];
+            self.read_direct(lo, hi, &mut out);
+            return out;
+        }
+        // Batches: runs of brick rows, cut along the slowest axis that spans more than one brick.
+        let cut = (0..3).rev().find(|&a| b1[a] > b0[a]).unwrap_or(2);
+        let row = 4 * box_len(blo, bhi) / (b1[cut] - b0[cut] + 1);
+        let per = (PLANE_BATCH_BYTES / row.max(1)).max(1);
+        let mut c = b0[cut];
+        while c <= b1[cut] {
+            let e = (c + per - 1).min(b1[cut]);
+            let (mut q0, mut q1) = (b0, b1);
+            (q0[cut], q1[cut]) = (c, e);
+            self.fill_bricks(q0, q1);
+            c = e + 1;
+        }
+        self.read_box(lo, hi)
+    }
+
+    /// Reads the bricks `b0 ..= b1` (brick indices) in one read of their box when any is
+    /// missing from the cache, and caches them.
+    fn fill_bricks(&self, b0: [usize; 3], b1: [usize; 3]) {
+        let all = |b0: [usize; 3], b1: [usize; 3]| {
+            (b0[2]..=b1[2])
+                .flat_map(move |z| (b0[1]..=b1[1]).flat_map(move |y| (b0[0]..=b1[0]).map(move |x| [x, y, z])))
+        };
+        let missing = || all(b0, b1).any(|b| !self.lock().bricks.contains_key(&b));
+        if !missing() {
+            return;
+        }
+        let _reading = self.lock_of(&self.reading);
+        if !missing() {
+            return;
+        }
+        let (lo, hi) = (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])));
+        let dims = [0, 1, 2].map(|a| hi[a] - lo[a]);
+        let mut data = vec![0.0f32; box_len(lo, hi)];
+        if !self.read_direct(lo, hi, &mut data) {
+            return;
+        }
+        for b in all(b0, b1) {
+            let s = [0, 1, 2].map(|a| b[a] * BRICK - lo[a]);
+            let e = [0, 1, 2].map(|a| (s[a] + BRICK).min(dims[a]));
+            let mut brick = vec![0.0f32; box_len(s, e)];
+            copy_box(&data, dims, s, e, &mut brick);
+            self.insert(b, brick.into());
+        }
+    }
+
+    /// The samples of the box `lo..hi` (inside the grid), assembled from cached bricks; a large
+    /// box (a plane) one layer of bricks per task, in parallel.
     pub fn read_box(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
         let mut out = vec![0.0f32; box_len(lo, hi)];
         let (b0, b1) = (lo.map(|v| v / BRICK), hi.map(|v| (v - 1) / BRICK));
+        // `out` cut at the bricks' z boundaries: part `bz` holds layers k0..k1.
+        let mut parts = Vec::with_capacity(b1[2] - b0[2] + 1);
+        let mut rest = &mut out[..];
         for bz in b0[2]..=b1[2] {
+            let (k0, k1) = (lo[2].max(bz * BRICK), hi[2].min((bz + 1) * BRICK));
+            let (part, r) = std::mem::take(&mut rest).split_at_mut((k1 - k0) * w * h);
+            rest = r;
+            parts.push((bz, k0, part));
+        }
+        let fill = |(bz, k0, part): (usize, usize, &mut [f32])| {
             for by in b0[1]..=b1[1] {
                 for bx in b0[0]..=b1[0] {
                     let data = self.brick([bx, by, bz]);
@@ -286,12 +390,18 @@ impl BrickCache {
                     for k in s[2]..e[2] {
                         for j in s[1]..e[1] {
                             let src = ((k - blo[2]) * bd[1] + (j - blo[1])) * bd[0] - blo[0];
-                            let dst = ((k - lo[2]) * h + (j - lo[1])) * w - lo[0];
-                            out[dst + s[0]..dst + e[0]].copy_from_slice(&data[src + s[0]..src + e[0]]);
+                            let dst = ((k - k0) * h + (j - lo[1])) * w - lo[0];
+                            copy_row(&mut part[dst + s[0]..dst + e[0]], &data[src + s[0]..src + e[0]]);
                         }
                     }
                 }
             }
+        };
+        if parts.len() > 1 && 4 * out_len(&parts) >= PARALLEL_BOX_BYTES {
+            use rayon::prelude::*;
+            parts.into_par_iter().for_each(fill);
+        } else {
+            parts.into_iter().for_each(fill);
         }
         out
     }
@@ -414,6 +524,20 @@ mod tests {
             }
             c.take_error().unwrap();
         }
+        // A box over PARALLEL_BOX_BYTES (filled a brick layer per task) and one over several
+        // brick layers just under it (serially).
+        let big = [128, 64, 40];
+        let values_big = grid(big);
+        let c = BrickCache::new(Box::new(Resident { values: values_big.clone(), dims: big }), big, 1 << 30);
+        for (lo, hi) in [([0, 0, 0], big), ([3, 1, 2], [127, 63, 39]), ([1, 2, 3], [100, 60, 37])] {
+            let mut want = vec![0.0; box_len(lo, hi)];
+            copy_box(&values_big, big, lo, hi, &mut want);
+            assert_eq!(c.read_box(lo, hi), want);
+        }
+        assert!(
+            4 * box_len([0; 3], big) >= PARALLEL_BOX_BYTES
+                && 4 * box_len([1, 2, 3], [100, 60, 37]) < PARALLEL_BOX_BYTES
+        );
         // Hits read nothing.
         let c = BrickCache::new(Box::new(Resident { values, dims }), dims, 1 << 30);
         let w = c.window([1, 2, 3], [40, 40, 36]);
@@ -421,6 +545,44 @@ mod tests {
         assert_eq!(read as usize, 4 * 64 * dims[1] * dims[2], "every brick of the box (x < 64), once");
         assert_eq!(w.get(5, 6, 7), c.window([5, 6, 7], [5, 6, 7]).data[0]);
         assert_eq!(c.bytes_read(), read);
+    }
+
+    #[test]
+    fn planes_read_their_bricks_once_when_they_fit_and_alone_when_not() {
+        let dims = [70, 45, 38];
+        let values = grid(dims);
+        let plane = |c: &BrickCache, axis: usize, index: usize| {
+            let (mut lo, mut hi) = ([0; 3], dims);
+            (lo[axis], hi[axis]) = (index, index + 1);
+            let mut want = vec![0.0; box_len(lo, hi)];
+            copy_box(&values, dims, lo, hi, &mut want);
+            assert_eq!(c.read_plane(lo, hi), want, "axis {axis}, index {index}");
+        };
+        // The x = 40 plane crosses 2 x 2 bricks of x 32..64 (64 x 45 x 38 samples).
+        let slab = 4 * 32 * dims[1] * dims[2];
+        let c = BrickCache::new(Box::new(Resident { values: values.clone(), dims }), dims, 4 * slab);
+        plane(&c, 0, 40);
+        assert_eq!(c.bytes_read() as usize, slab, "the plane's bricks, once");
+        plane(&c, 0, 63);
+        plane(&c, 0, 33);
+        assert_eq!(c.bytes_read() as usize, slab, "planes within the same bricks read nothing");
+        plane(&c, 0, 64);
+        assert_eq!(c.bytes_read() as usize, slab + 4 * 6 * dims[1] * dims[2], "the next bricks (x 64..70)");
+        for (axis, index) in [(1, 0), (1, 44), (2, 37), (2, 5)] {
+            plane(&c, axis, index);
+        }
+        assert!(c.peak_bytes() as usize <= 4 * slab);
+        // A budget the bricks do not fit in a quarter of: the plane alone, nothing kept.
+        let c = BrickCache::new(Box::new(Resident { values: values.clone(), dims }), dims, 4 * slab - 4);
+        plane(&c, 0, 40);
+        plane(&c, 0, 41);
+        assert_eq!(c.bytes_read() as usize, 2 * 4 * dims[1] * dims[2]);
+        assert_eq!(c.held_bytes(), 0);
+        // Errors: NaN, kept, nothing cached.
+        let c = BrickCache::new(Box::new(Failing), [4, 4, 4], 1 << 20);
+        assert!(c.read_plane([0, 0, 1], [4, 4, 2]).iter().all(|v| v.is_nan()));
+        assert_eq!(c.held_bytes(), 0);
+        assert!(c.take_error().is_err());
     }
 
     struct Failing;
