@@ -130,8 +130,8 @@ pub fn heightfield_slab(
         }
     }
     let thick = 3.0 * slope * push;
-    // Cells whose coarse surface departs from the fine one by more than this are refined (a
-    // twentieth of the mean sample spacing): a fault's step or a sharp fold gets small cells.
+    // Cells whose coarse surface departs from the fine one by more than this are refined
+    // ([`TOLERANCE`] of the mean sample spacing): a fault's step or a sharp fold gets small cells.
     let spacing = (DVec2::from(pos(w - 1, 0)) - DVec2::from(p00)).length() / (w - 1) as f64;
     let spacing = 0.5 * (spacing + (DVec2::from(pos(0, h - 1)) - DVec2::from(p00)).length() / (h - 1) as f64);
     let tol = TOLERANCE * spacing;
