@@ -3,13 +3,14 @@
 //! in `crate::python`) through a bounded LRU cache of bricks ([`BrickCache`]).
 //!
 //! **Lazy volumes.** A volume over a source holds no samples: the octree is built in one streaming
-//! pass over slabs of sample layers (about [`OCTREE_SLAB_BYTES`]) ([`BrickCache::read_direct`], never cached); a slice reads
-//! the bricks its plane crosses, in a few large reads, and keeps them while they take at most a
-//! quarter of the budget (else it reads its plane alone; [`BrickCache::read_plane`]); the extraction reads, per node, the box of samples it needs (the node's cells and a
-//! one-sample ring for the gradients) as a [`Window`] assembled from cached bricks of [`BRICK`]³
-//! samples. The cache holds at most its budget of brick bytes (least recently used dropped first;
-//! a budget below one brick keeps none) and counts every byte read from the source
-//! ([`BrickCache::bytes_read`]).
+//! pass over slabs of sample layers (about [`OCTREE_SLAB_BYTES`]; [`BrickCache::read_direct`],
+//! never cached); a slice reads the bricks its plane crosses, in a few large reads, and keeps
+//! them while they take at most a quarter of the budget, else its plane alone
+//! ([`BrickCache::read_plane`]); the extraction reads, per node, the box of samples it needs (the
+//! node's cells and a one-sample ring for the gradients) as a [`Window`] assembled from cached
+//! bricks of [`BRICK`]³ samples. The cache holds at most its budget of brick bytes (least recently
+//! used dropped first; a budget below one brick keeps none) and counts every byte read from the
+//! source ([`BrickCache::bytes_read`]).
 //!
 //! **Errors.** The readers of samples (the octree, the extraction) return no `Result`: a failed
 //! read fills its box with NaN and is kept ([`BrickCache::take_error`]); the entry points that
@@ -329,32 +330,35 @@ impl BrickCache {
             let e = (c + per - 1).min(b1[cut]);
             let (mut q0, mut q1) = (b0, b1);
             (q0[cut], q1[cut]) = (c, e);
-            self.fill_bricks(q0, q1);
+            if !self.fill_bricks(q0, q1) {
+                // The error is kept; the plane is NaN (no brick-by-brick retry of a failing source).
+                return vec![f32::NAN; box_len(lo, hi)];
+            }
             c = e + 1;
         }
         self.read_box(lo, hi)
     }
 
     /// Reads the bricks `b0 ..= b1` (brick indices) in one read of their box when any is
-    /// missing from the cache, and caches them.
-    fn fill_bricks(&self, b0: [usize; 3], b1: [usize; 3]) {
+    /// missing from the cache, and caches them; false when that read failed (kept).
+    fn fill_bricks(&self, b0: [usize; 3], b1: [usize; 3]) -> bool {
         let all = |b0: [usize; 3], b1: [usize; 3]| {
             (b0[2]..=b1[2])
                 .flat_map(move |z| (b0[1]..=b1[1]).flat_map(move |y| (b0[0]..=b1[0]).map(move |x| [x, y, z])))
         };
         let missing = || all(b0, b1).any(|b| !self.lock().bricks.contains_key(&b));
         if !missing() {
-            return;
+            return true;
         }
         let _reading = self.lock_of(&self.reading);
         if !missing() {
-            return;
+            return true;
         }
         let (lo, hi) = (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])));
         let dims = [0, 1, 2].map(|a| hi[a] - lo[a]);
         let mut data = vec![0.0f32; box_len(lo, hi)];
         if !self.read_direct(lo, hi, &mut data) {
-            return;
+            return false;
         }
         for b in all(b0, b1) {
             let s = [0, 1, 2].map(|a| b[a] * BRICK - lo[a]);
@@ -363,6 +367,7 @@ impl BrickCache {
             copy_box(&data, dims, s, e, &mut brick);
             self.insert(b, brick.into());
         }
+        true
     }
 
     /// The samples of the box `lo..hi` (inside the grid), assembled from cached bricks; a large
@@ -578,11 +583,14 @@ mod tests {
         plane(&c, 0, 41);
         assert_eq!(c.bytes_read() as usize, 2 * 4 * dims[1] * dims[2]);
         assert_eq!(c.held_bytes(), 0);
-        // Errors: NaN, kept, nothing cached.
-        let c = BrickCache::new(Box::new(Failing), [4, 4, 4], 1 << 20);
-        assert!(c.read_plane([0, 0, 1], [4, 4, 2]).iter().all(|v| v.is_nan()));
-        assert_eq!(c.held_bytes(), 0);
-        assert!(c.take_error().is_err());
+        // Errors: NaN, kept, nothing cached, the source asked once (through the cache or not).
+        for budget in [1 << 20, 0] {
+            let c = BrickCache::new(Box::new(Failing), [4, 4, 4], budget);
+            assert!(c.read_plane([0, 0, 1], [4, 4, 2]).iter().all(|v| v.is_nan()));
+            assert_eq!(c.held_bytes(), 0);
+            assert_eq!(c.bytes_read(), if budget > 0 { 4 * 4 * 4 * 4 } else { 4 * 4 * 4 });
+            assert!(c.take_error().is_err());
+        }
     }
 
     struct Failing;
