@@ -71,7 +71,10 @@ fn lazy_octree_extraction_and_planes_equal_the_resident_ones() {
                 .product();
             let read = l.bytes_read() - before;
             if 4 * bricks <= budget / 4 {
-                assert!(read <= 4 * bricks as u64, "at most the plane's bricks, once");
+                assert!(
+                    read <= 4 * bricks as u64,
+                    "at most the plane's bricks, once: budget {budget}, axis {axis}, read {read}, bricks {bricks}"
+                );
                 let again = l.bytes_read();
                 assert_eq!(l.plane(axis, index, r).1.len(), b.1.len());
                 assert_eq!(l.bytes_read(), again, "held in the cache");

@@ -282,15 +282,21 @@ impl BrickCache {
         data
     }
 
-    /// Caches brick `b` (unless held already or over the budget), dropping the least recently
-    /// used bricks to make room.
+    /// Caches brick `b` (over the budget: not at all), dropping the least recently used bricks to
+    /// make room; a brick held already is only marked used, so that bricks inserted after it (the
+    /// rest of a plane's) never drop it.
     fn insert(&self, b: [usize; 3], data: Arc<[f32]>) {
         let bytes = 4 * data.len();
         if bytes > self.budget {
             return;
         }
         let mut l = self.lock();
-        if l.bricks.contains_key(&b) {
+        l.tick += 1;
+        let tick = l.tick;
+        if let Some((_, used)) = l.bricks.get_mut(&b) {
+            let old = std::mem::replace(used, tick);
+            l.order.remove(&old);
+            l.order.insert(tick, b);
             return;
         }
         while l.bytes + bytes > self.budget {
@@ -299,8 +305,6 @@ impl BrickCache {
                 l.bytes -= 4 * old.len();
             }
         }
-        l.tick += 1;
-        let tick = l.tick;
         l.bricks.insert(b, (data, tick));
         l.order.insert(tick, b);
         l.bytes += bytes;
@@ -591,6 +595,27 @@ mod tests {
             assert_eq!(c.bytes_read(), if budget > 0 { 4 * 4 * 4 * 4 } else { 4 * 4 * 4 });
             assert!(c.take_error().is_err());
         }
+    }
+
+    #[test]
+    fn a_plane_whose_bricks_are_partly_cached_reads_each_once() {
+        // Bricks of x 0..32 are 32 KiB here, of x 32..40 8 KiB; the cache holds 160 KiB.
+        let dims = [40, 8, 200];
+        let values = grid(dims);
+        let c = BrickCache::new(Box::new(Resident { values: values.clone(), dims }), dims, 160 << 10);
+        c.read_box([0, 0, 0], [1, 1, 1]); // brick (0, 0, 0), the least recently used
+        for k in 1..5 {
+            c.read_box([0, 0, 32 * k], [1, 1, 32 * k + 1]);
+        }
+        assert_eq!(c.held_bytes(), 160 << 10, "full");
+        // The plane z = 3 crosses (0, 0, 0), held, and (1, 0, 0), missing: both are read in one
+        // read, and keeping (1, 0, 0) must drop another brick than (0, 0, 0).
+        let before = c.bytes_read();
+        let (lo, hi) = ([0, 0, 3], [40, 8, 4]);
+        let mut want = vec![0.0; box_len(lo, hi)];
+        copy_box(&values, dims, lo, hi, &mut want);
+        assert_eq!(c.read_plane(lo, hi), want);
+        assert_eq!(c.bytes_read() - before, 4 * 40 * 8 * 32, "the plane's bricks once, none read again");
     }
 
     struct Failing;
