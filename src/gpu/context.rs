@@ -8,6 +8,9 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex, Weak};
 
+/// How often [`GpuContext::wait_interruptible`] polls the device for finished work.
+const WAIT_STEP: std::time::Duration = std::time::Duration::from_millis(1);
+
 /// What a user should do when no adapter is found (no GPU here is normal: lavapipe renders on CPU).
 pub const INSTALL_HINT: &str = "install a Vulkan driver; on Debian/Ubuntu without a GPU: \
     `apt-get install libvulkan1 mesa-vulkan-drivers` (Mesa's lavapipe renders on the CPU)";
@@ -324,22 +327,33 @@ impl GpuContext {
         self.await_worker(rx, interrupt)
     }
 
-    /// [`wait`](Self::wait), polling `interrupt` every `Interrupt::POLL`.
+    /// [`wait`](Self::wait) for the work submitted so far, polling `interrupt` every
+    /// `Interrupt::POLL`. It polls without waiting (every [`WAIT_STEP`]) for the queue's
+    /// work-done callback instead of waiting with a timeout: in wgpu-core 30, a wait that times
+    /// out while another thread polls or submits on the same device can trip an assertion in
+    /// `Device::maintain` (gfx-rs/wgpu#9958, fixed upstream after 30.0.2), which renderers of
+    /// one process share and `cargo test` hit.
     fn wait_interruptible(&self, interrupt: &Interrupt) -> Result<()> {
+        let done = Arc::new(AtomicBool::new(false));
+        let flag = done.clone();
+        self.queue.on_submitted_work_done(move || flag.store(true, Ordering::Release));
+        let mut checked = std::time::Instant::now();
         loop {
-            match self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(Interrupt::POLL) }) {
-                Ok(_) => {
-                    self.abandoned.store(false, Ordering::Relaxed);
-                    return Ok(());
-                }
-                Err(wgpu::PollError::Timeout) => {
-                    if let Err(e) = interrupt.check() {
-                        self.abandoned.store(true, Ordering::Relaxed);
-                        return Err(e);
-                    }
-                }
-                Err(e) => return Err(Error::Device(format!("waiting for the GPU failed: {e}"))),
+            if let Err(e) = self.device.poll(wgpu::PollType::Poll) {
+                return Err(Error::Device(format!("waiting for the GPU failed: {e}")));
             }
+            if done.load(Ordering::Acquire) {
+                self.abandoned.store(false, Ordering::Relaxed);
+                return Ok(());
+            }
+            if checked.elapsed() >= Interrupt::POLL {
+                checked = std::time::Instant::now();
+                if let Err(e) = interrupt.check() {
+                    self.abandoned.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            std::thread::sleep(WAIT_STEP);
         }
     }
 
