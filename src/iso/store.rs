@@ -271,8 +271,7 @@ impl BrickCache {
         if let Some(d) = self.cached(b) {
             return d;
         }
-        let lo = b.map(|v| v * BRICK);
-        let hi = [0, 1, 2].map(|a| (lo[a] + BRICK).min(self.dims[a]));
+        let (lo, hi) = self.bricks_box(b, b);
         let mut data = vec![0.0f32; box_len(lo, hi)];
         let ok = self.read_direct(lo, hi, &mut data);
         let data: Arc<[f32]> = data.into();
@@ -280,6 +279,12 @@ impl BrickCache {
             self.insert(b, data.clone());
         }
         data
+    }
+
+    /// The samples `lo..hi` of the bricks `b0 ..= b1` (brick indices; the grid's last bricks
+    /// are cut at its sides).
+    fn bricks_box(&self, b0: [usize; 3], b1: [usize; 3]) -> ([usize; 3], [usize; 3]) {
+        (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])))
     }
 
     /// Caches brick `b` (over the budget: not at all), dropping the least recently used bricks to
@@ -319,7 +324,7 @@ impl BrickCache {
     /// nothing. Otherwise straight from the source, not cached. A failed read is NaN and kept.
     pub fn read_plane(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
         let (b0, b1) = (lo.map(|v| v / BRICK), hi.map(|v| (v - 1) / BRICK));
-        let (blo, bhi) = (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])));
+        let (blo, bhi) = self.bricks_box(b0, b1);
         if 4 * box_len(blo, bhi) > self.budget / 4 {
             let mut out = vec![0.0f32; box_len(lo, hi)];
             self.read_direct(lo, hi, &mut out);
@@ -358,7 +363,7 @@ impl BrickCache {
         if !missing() {
             return true;
         }
-        let (lo, hi) = (b0.map(|v| v * BRICK), [0, 1, 2].map(|a| ((b1[a] + 1) * BRICK).min(self.dims[a])));
+        let (lo, hi) = self.bricks_box(b0, b1);
         let dims = [0, 1, 2].map(|a| hi[a] - lo[a]);
         let mut data = vec![0.0f32; box_len(lo, hi)];
         if !self.read_direct(lo, hi, &mut data) {
