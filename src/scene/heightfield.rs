@@ -281,12 +281,22 @@ impl GridAxes {
         let (c, s) = self.rot;
         let (qx, qy) = (x - self.o[0], y - self.o[1]);
         let (a, b) = if (c, s) == (1.0, 0.0) { (qx, qy) } else { (c * qx + s * qy, c * qy - s * qx) };
-        // Rounded half away from zero as `f64::round` (a libm call on baseline x86-64, most of
-        // this function's time over every vertex of an upload): for v > -0.5, v + 0.5 >= 0, so
-        // truncation is the floor; v <= -0.5 rounds below 0, off the grid either way.
-        let near = |v: f64, n: usize| (v > -0.5 && v + 0.5 < n as f64).then_some((v + 0.5) as usize);
-        Some((near(a / self.dx, self.nx)?, near(b / self.dy, self.ny)?))
+        Some((nearest_index(a / self.dx, self.nx)?, nearest_index(b / self.dy, self.ny)?))
     }
+}
+
+/// `v` rounded half away from zero, as `f64::round` rounds it, when that lies in `0..n`; None
+/// otherwise (NaN included). Without `round`, a libm call on baseline x86-64 that took most of
+/// [`GridAxes::sample_at`]'s time over every vertex of an upload: `round(v)` is in `0..n`
+/// exactly when -0.5 < v < n - 0.5 (both bounds exact in f64 for the grid sizes a scene
+/// holds); there the cast truncates to t = floor(v) (0 for v in (-0.5, 0)), and `v - t`,
+/// exact (v and t lie within 1 of each other), says whether to round up.
+pub(super) fn nearest_index(v: f64, n: usize) -> Option<usize> {
+    if !(v > -0.5 && v < n as f64 - 0.5) {
+        return None;
+    }
+    let t = v as usize;
+    Some(if v - t as f64 >= 0.5 { t + 1 } else { t })
 }
 
 /// A height-field tile's vertices as samples of its grid (`Object::tile_lattice`).

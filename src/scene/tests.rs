@@ -180,3 +180,27 @@ fn undefined_marker_is_named() {
         .to_string();
     assert!(!e.contains("xtgeo"), "{e}");
 }
+
+/// `nearest_index` is `f64::round` kept in `0..n`, at the values where `floor(v + 0.5)` is not:
+/// just below a half (where v + 0.5 rounds up to the next integer), halves, the grid's ends.
+#[test]
+fn nearest_index_rounds_as_round_does() {
+    let want = |v: f64, n: usize| {
+        let r = v.round();
+        (0.0..n as f64).contains(&r).then_some(r as usize)
+    };
+    let below_half = 0.5f64.next_down();
+    let mut values = vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.5, -0.49, -0.0, 0.0, below_half];
+    for k in [1.0, 2.0, 7.0, 9.0, 4503599627370495.0] {
+        for d in [-0.5, 0.0, 0.5] {
+            let x: f64 = k + d;
+            values.extend([x.next_down(), x, x.next_up()]);
+        }
+        values.push(k - 0.5 + below_half);
+    }
+    for v in values {
+        for n in [1, 2, 8, 10] {
+            assert_eq!(heightfield::nearest_index(v, n), want(v, n), "v {v:e}, n {n}");
+        }
+    }
+}
