@@ -19,7 +19,9 @@ mod levels;
 mod options;
 
 pub use background::Background;
-pub use options::{GridLod, Lod, RenderOptions, RenderOutput, RenderStats, MAX_SHADING_LEVELS};
+pub use options::{
+    GridLod, Lod, RenderOptions, RenderOutput, RenderStats, MAX_SHADING_LEVELS, MAX_TUBE_SHADING_LEVELS,
+};
 
 use lenses::draw_lenses;
 use levels::{choose_levels, grid_stats};
@@ -519,9 +521,12 @@ fn frame_state(
             }
             normal_map[1] = u32::from(o.tiles.iter().any(|t| !t.normals.is_empty()));
             // A grid coloured per cell by its values (`grid::cells`); by z it takes its vertices'.
-            if geom.cell_colors[oi] && o.color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
+            let by_values = o.color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values);
+            if geom.table_colors[oi] && by_values && !geom.log_colors[oi] {
                 normal_map[1] = 3;
             }
+            // A well whose vertices carry their stations, its log a table (`gpu::cell_values`).
+            normal_map[3] = u32::from(geom.log_colors[oi] && by_values);
             if let (Some((nu, nv)), Some(base)) = (geom.grid_dims[oi], geom.shading_base[oi]) {
                 grid_rows = [0.0, 0.0, nu as f32, nv as f32];
                 normal_map = [base + 1, 2, 0, 0];

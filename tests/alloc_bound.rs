@@ -202,12 +202,12 @@ impl Walk<'_> {
     }
 }
 
-/// The fields of scene bytes, version 10 (src/scene/serial.rs's module docs): every integer of
+/// The fields of scene bytes, version 11 (src/scene/serial.rs's module docs): every integer of
 /// every object and tile; floats and array elements of each object and its first tile.
 fn scene_fields(b: &[u8]) -> Vec<Field> {
     assert_eq!(&b[..8], b"GCSCENE\0");
     let mut p = Walk { b, pos: 8, out: Vec::new(), all: true };
-    assert_eq!(p.get("version", Ty::U32), 10, "the scene format changed: update scene_fields");
+    assert_eq!(p.get("version", Ty::U32), 11, "the scene format changed: update scene_fields");
     p.get("has_origin", Ty::U8);
     for a in "xyz".chars() {
         p.get(&format!("origin.{a}"), Ty::F64);
@@ -282,6 +282,7 @@ fn scene_fields(b: &[u8]) -> Vec<Field> {
                 p.arr(&format!("{q}.{k}"), Ty::U32);
             }
             p.arr(&format!("{q}.ring_z"), Ty::F32);
+            p.arr(&format!("{q}.stations"), Ty::F32);
             for k in ["fine", "coarse"] {
                 p.arr(&format!("{q}.{k}"), Ty::U32);
             }

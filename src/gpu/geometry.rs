@@ -77,9 +77,13 @@ pub struct SceneGeometry {
     /// (`Object::grid_normals`: one sample per grid vertex, the packed normal then 0), whose
     /// vertices carry their grid coordinates in place of their normals; None for other objects.
     pub grid_dims: Vec<Option<(u32, u32)>>,
-    /// Per object, a reservoir grid whose tiles' cell values are in `sample_values`
-    /// (`grid::cells`): its fragments look their cell's value up (draw.wgsl `fs_cells`).
-    pub cell_colors: Vec<bool>,
+    /// Per object, one whose tiles' colouring scalars are tables in `sample_values`
+    /// (`gpu::cell_values`: a reservoir grid's cell values, a well's log): its fragments look
+    /// their value up (draw.wgsl `fs_cells`).
+    pub table_colors: Vec<bool>,
+    /// Per object, a well whose logs are such tables: its vertices carry their stations
+    /// (`TileMesh::stations`) where others carry their values.
+    pub log_colors: Vec<bool>,
     /// The tiles in runs, in order, covering every tile, each drawn by the lit pass with one
     /// pipeline.
     pub draw_runs: Vec<DrawRun>,
@@ -112,7 +116,7 @@ pub struct DrawRun {
     /// (`Scene::seen_from_outside`) its drawn faces bound its cells, wound outwards, and the lit
     /// pass culls their back faces.
     pub closed: Option<usize>,
-    /// Tiles of a grid coloured per cell (`SceneGeometry::cell_colors`): `fs_cells`.
+    /// Tiles of an object coloured from tables (`SceneGeometry::table_colors`): `fs_cells`.
     pub cells: bool,
     /// Height-field tiles (`field`) that this frame draws at a coarser level than their fine one
     /// whose vertical error reaches the tile's clearance (`SceneGeometry::frame_runs`,
@@ -172,6 +176,16 @@ fn scalar_word(x: f32) -> f32 {
     }
 }
 
+/// What a tile's vertices carry in the lit pass's scalar slot: a well's stations where its log is
+/// a table (`log_table`), else its values.
+fn scalar_slot(log_table: bool, t: &crate::lod::TileMesh) -> &[f32] {
+    if log_table {
+        &t.stations
+    } else {
+        &t.values
+    }
+}
+
 /// What a tile's vertices carry in the lit pass's normal slot: a grid-shaded mesh's grid
 /// coordinates, a reservoir grid's cell coordinates (`grid::cells`; it has no normals), else
 /// its normals.
@@ -223,14 +237,15 @@ struct CompactDraw {
 }
 
 impl CompactDraw {
-    /// The draw of `indices` of tile `t` (`nrm`: the normals or grid coordinates its vertices
-    /// carry): its vertices, their values and normals, and the indices into them.
-    fn build(&mut self, t: &crate::lod::TileMesh, nrm: &[u32], indices: &[u32]) {
+    /// The draw of `indices` of tile `t` (`vals`, `nrm`: the scalars and the normals or grid
+    /// coordinates its vertices carry): its vertices, their scalars and normals, and the indices
+    /// into them.
+    fn build(&mut self, t: &crate::lod::TileMesh, (vals, nrm): (&[f32], &[u32]), indices: &[u32]) {
         let used = compact_indices(indices, t.positions.len(), &mut self.remap, &mut self.idx);
         self.verts.clear();
         self.verts.extend(used.iter().map(|&k| t.positions[k as usize]));
         self.vals.clear();
-        self.vals.extend(used.iter().filter_map(|&k| t.values.get(k as usize)));
+        self.vals.extend(used.iter().filter_map(|&k| vals.get(k as usize)));
         self.normals.clear();
         self.normals.extend(used.iter().filter_map(|&k| nrm.get(k as usize)));
         self.ring_z.clear();
@@ -288,8 +303,8 @@ impl SceneGeometry {
             let o = &scene.objects()[oi];
             let first = self.tile_object_cpu.iter().position(|&x| x as usize == oi).unwrap_or(0);
             let n = self.tile_object_cpu.iter().skip(first).take_while(|&&x| x as usize == oi).count();
-            // (A grid coloured per cell has its tables in `sample_values`: uploaded afresh.)
-            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield(_)) || self.cell_colors[oi] {
+            // (An object coloured from tables has them in `sample_values`: uploaded afresh.)
+            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield(_)) || self.table_colors[oi] {
                 return Ok(false);
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
@@ -321,7 +336,7 @@ impl SceneGeometry {
                 };
                 put(&self.fine[k], &t.positions, (&t.values, nrm, &t.ring_z), &t.fine);
                 for ((args, indices), &count) in draws.into_iter().zip(&counts[1..]) {
-                    cd.build(t, nrm, indices);
+                    cd.build(t, (&t.values, nrm), indices);
                     if cd.verts.len() != count as usize || cd.idx.len() != args.index_count as usize {
                         return Ok(false);
                     }
@@ -475,7 +490,7 @@ fn draw_runs(
     tile_object: &[u32],
     shading_base: &[Option<u32>],
     grid_dims: &[Option<(u32, u32)>],
-    cell_colors: &[bool],
+    table_colors: &[bool],
 ) -> Vec<DrawRun> {
     let mut runs: Vec<DrawRun> = Vec::new();
     for (k, &oi) in tile_object.iter().enumerate() {
@@ -484,7 +499,7 @@ fn draw_runs(
         let field =
             !grid_mesh && shading_base[o].is_some() && matches!(scene.objects()[o].kind, ObjectKind::Heightfield(_));
         let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
-        let cells = cell_colors.get(o).copied().unwrap_or(false);
+        let cells = table_colors.get(o).copied().unwrap_or(false);
         let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells, fine_depth: false };
         match runs.last_mut() {
             Some(r) if (r.grid_mesh, r.field, r.closed, r.cells) == (grid_mesh, field, closed, cells) => {

@@ -70,8 +70,9 @@ pub struct GpuObject {
     /// (`TileMesh::normals`), 2 when they carry grid coordinates (`TileMesh::grid_uv`) and its
     /// normals are in the normal map, 3 for a reservoir grid coloured per cell (its vertices
     /// carry cell coordinates, `grid::cells`); else the lit pass shades by facets. `z`: the
-    /// object's depth-tie priority (`scene::Object::priority`, common.wgsl `priority_clip`); `w`
-    /// unused.
+    /// object's depth-tie priority (`scene::Object::priority`, common.wgsl `priority_clip`); `w`:
+    /// 1 for a well coloured by its log from tables (its vertices carry their stations,
+    /// `TileMesh::stations`; draw.wgsl `log_scalar`), else 0.
     pub normal_map: [u32; 4],
 }
 

@@ -415,6 +415,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     tile.fine = fine.into();
     stats.push(st);
     kinds.push(kind_counts(&lev));
+    let mut levels = Vec::new();
     for h in 1..=block_levels(bw, bh) {
         lev = merge::next_level(&lev, h, b, (g.ni, g.nj), ctx.cells, &mut verts);
         let (idx, mut st) = emit(&lev, &verts, &mut tile, h + 1);
@@ -432,7 +433,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
         stats.push(st);
         kinds.push(kind_counts(&lev));
         let error = lev.error as f32;
-        tile.levels.push(Level {
+        levels.push(Level {
             indices: idx.into(),
             error,
             error_z: error,
@@ -441,6 +442,7 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
             grouped_error: error,
         });
     }
+    tile.levels = levels.into();
     match tile.levels.last() {
         Some(l) => {
             tile.coarse = l.indices.clone();

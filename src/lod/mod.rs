@@ -92,6 +92,13 @@ pub struct TileMesh {
     /// in z. Empty for other tiles (and for tubes read from bytes older than version 9, drawn
     /// exaggerated whole), else one per entry of `positions`.
     pub ring_z: PerVertex<f32>,
+    /// Per-vertex station of a well tube coloured by a log, counted from the tile's first station
+    /// (a small exact integer; [`tube`]): the lit pass interpolates it and looks the log up per
+    /// fragment from the tile's table (`values` by station, `gpu::cell_values`), so that a level
+    /// keeping fewer stations shows level 0's colours. Empty for other tiles (and for tubes read
+    /// from bytes older than version 11, coloured by their vertices' values), else one per entry
+    /// of `positions`.
+    pub stations: PerVertex<f32>,
     /// Fine (level 0) triangle list into `positions` (shared with the tiles of the same shape,
     /// [`share_indices`]).
     pub fine: Indices,
@@ -106,7 +113,7 @@ pub struct TileMesh {
     pub proxy_error: f32,
     /// Levels 1.. for screen-space-error LOD ([`levels`]): each about a quarter of the triangles
     /// of the one before, the tile's border at full resolution; level 0 is `fine`.
-    pub levels: Vec<levels::Level>,
+    pub levels: Box<[levels::Level]>,
 }
 
 impl TileMesh {
@@ -241,7 +248,7 @@ impl TileMesh {
         (self.coarse, self.proxy_error) = (c.into(), e);
         if self.levels.is_empty() && !self.fine.is_empty() && self.values.is_empty() {
             let shading = (!fine_shaded).then_some(levels::Shading { normals: &self.normals, grid_uv: &self.grid_uv });
-            self.levels = levels::simplified_levels(&self.positions, &self.fine, shading);
+            self.levels = levels::simplified_levels(&self.positions, &self.fine, shading).into();
         }
         self
     }
@@ -423,7 +430,7 @@ pub fn tile_heightfield(
                 // tiles of one size and masks share a shape.
                 let masks = groups::side_masks(ix, iy, tx, ty);
                 let shape = levels::LatticeShape::shared(&shapes, w, h, &|li, lj| map[lj * w + li], &masks);
-                tile.levels = shape.levels(&zl);
+                tile.levels = shape.levels(&zl).into();
                 debug_assert_eq!(tile.fine, shape.fine);
                 tile.fine = shape.fine.clone(); // one allocation for all such tiles
             }

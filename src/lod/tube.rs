@@ -14,44 +14,47 @@
 //! * Level 0 of a tile is exactly its part of [`tube`]'s rings and side triangles (the caps
 //!   only on the tiles holding the path's ends), so the fine tubes of all tiles together are
 //!   [`tube`]'s triangles.
-//! * Level l >= 1 is a tube of `sides_l` sides (non-increasing, at least 3) around a subset of
-//!   the tile's stations that keeps its two end stations: a station is dropped only where it lies
-//!   within `tol_l` of the segment between the kept stations about it and the path's direction
-//!   there turns by a normal chord of at most `chord_l` from that segment's (Douglas–Peucker on
-//!   both), and, for a tube coloured by a log, where its value is within `value_tol` of the value
-//!   interpolated there between those stations (no data only between no data: both stations
-//!   where a log starts or stops having data stay). Each level piece is closed by flat caps at
-//!   both ends, so that neighbours drawn at different levels leave no gap to see through; its end
-//!   rings use level 0's frames (a level's rings are turned by parallel transport along the kept
-//!   stations, the remaining twist spread evenly), so neighbours at the same level meet ring to
-//!   ring.
-//! * A level's polygon has the fine polygon's perimeter (circumradius `r_l = radius * sides
-//!   sin(pi / sides) / (sides_l sin(pi / sides_l))`), so its silhouette is as wide as level 0's
-//!   on average over directions (a convex polygon's mean width is its perimeter over pi): an
-//!   inscribed triangle would be a quarter thinner, which on a tube a few pixels wide changes
-//!   most of its pixels. A level's error (world units) bounds the distance from its surface to
-//!   level 0's, drawn at any exaggeration (see the next point): from the largest distance `dev`
-//!   of a dropped station from the kept polyline (`dev_z` of it vertical) and the largest
-//!   distance `gap` between the two polygons, `max(r_l - radius cos(pi / sides), radius - r_l
-//!   cos(pi / sides_l))` (each lies between its inscribed and circumscribed circles), as
-//!   `level_errors` combines them.
+//! * Level l >= 1 keeps a subset of the tile's stations, its two end stations always, and at each
+//!   kept station level 0's own ring (same sides, radius and frame); its side triangles join kept
+//!   rings as level 0's join consecutive ones, and it has level 0's caps (only at the path's
+//!   ends). So every level of a tile ends in the same rings: neighbours at any two levels meet
+//!   ring to ring, with nothing to see through.
+//! * Stations are dropped Douglas–Peucker fashion, comparing every dropped station k with the
+//!   level at the same station: on the level's segment between kept stations i < k < j, at
+//!   `t = (k - i) / (j - i)`, its axis point is `lerp(p_i, p_j, t)` and its ring vertex at angle a
+//!   is `lerp(ring_i(a), ring_j(a), t)`. With `dev` the distance between the axis points (`dev_z`
+//!   its vertical part) and `gap` the largest distance over every angle between level 0's unit
+//!   radial at k and the interpolated radials (exact over the continuum of angles,
+//!   [`radial_gap`]), each ring vertex of level 0 lies within `dev + radius gap` of the level's
+//!   point at the same station and angle; between stations both levels are linear in the
+//!   station, so the bound holds along the path. The normal turns there by at most `chord`, the
+//!   chord between level 0's normal and the level's normalised interpolated one (bounded as
+//!   [`radial_gap`] says). A station is dropped where its shading error `chord + gap + dev /
+//!   radius` stays within the level's budget ([`LEVEL_SHADING`]): a tube displaced sideways by e
+//!   turns the normal a pixel at its middle sees by e / radius, so on a tube a few pixels wide
+//!   any displacement shows in its shade long before it shows in its outline.
+//! * A level's error (world units, [`level_errors`]) bounds that displacement drawn at any
+//!   exaggeration: the axis points are exaggerated, the ring offsets are not (next point). Its
+//!   shading error ([`super::levels::Level::shading_error`]) is the largest `chord + gap` over
+//!   its dropped stations plus its error over the radius.
 //! * Every vertex carries its height above its ring's centre (`TileMesh::ring_z`; a cap's, its
 //!   ring's): the lit pass exaggerates the centre and not that offset, so a tube keeps its radius
 //!   under exaggeration. Each vertex minus it lies within the tile's box (`fit_ring_z`).
-//! * Shading: ring vertices carry radial unit normals (cap vertices none: flat). Interpolated
-//!   over a side facet, a radial normal points from the axis to the facet's point, so at the same
-//!   angle about the path every level's normal is level 0's up to the turn of the path's
-//!   direction; a level's shading error ([`super::levels::Level::shading_error`]) is the largest
-//!   such turn (a chord of unit directions) over the tile's stations. Where a ray meets two
-//!   polygons at different angles (towards the silhouette), the normals differ as the points do,
-//!   within the geometric error.
+//! * A tube coloured by a log: every vertex carries its value (`TileMesh::values`) and its station
+//!   counted from the tile's first (`TileMesh::stations`, a small exact integer). The lit pass
+//!   interpolates the station and looks the log up per fragment (draw.wgsl), so every level shows
+//!   level 0's colours at the same station, displaced only within the level's error: colours
+//!   take no part in which stations a level keeps.
+//! * Shading: ring vertices carry radial unit normals (cap vertices none: flat).
 //! * A candidate level that would keep more than 0.8 of the triangles of the level before it is
 //!   left out (the next, coarser candidate may still pay); at most
-//!   [`super::levels::MAX_LEVELS`] levels. The coarse proxy (prepass) is the first level with at most
-//!   1/coarse_factor of the fine triangles, else the coarsest.
+//!   [`super::levels::MAX_LEVELS`] levels. The coarse proxy (prepass) is the first level with at
+//!   most 1/coarse_factor of the fine triangles, else the coarsest.
 //!
-//! A tube a few pixels wide is thus drawn with 3 or 4 sides and a station every few pixels
-//! along the path, where its fine level has `sides` sides at every station of the log.
+//! Levels keep the fine polygon: a polygon of fewer sides turns the normal of most of a tube's
+//! pixels (the pixels a facet covers move to another facet), which changes their shade by far
+//! more than an 8-bit level, however thin the tube. A smooth path drawn with a station every
+//! metre keeps a few stations per tile instead.
 
 use super::levels::{Level, MAX_LEVELS};
 use super::{normals, TileMesh};
@@ -62,11 +65,11 @@ use rayon::prelude::*;
 /// per piece.
 pub const SEGMENTS_PER_TILE: usize = 128;
 
-/// Per level l = 1.. its sides (at most the fine level's), station tolerance in radii, and the
-/// largest normal chord a dropped station may cause (the turn of the path's direction there).
-const LEVEL_SIDES: [usize; MAX_LEVELS] = [6, 4, 3, 3, 3];
-const LEVEL_TOL_RADII: [f64; MAX_LEVELS] = [0.25, 1.0, 4.0, 16.0, 64.0];
-const LEVEL_CHORD: [f64; MAX_LEVELS] = [2e-4, 1e-3, 4e-3, 1.6e-2, 6.4e-2];
+/// Per level l = 1.. the largest shading error a dropped station may cause (see the module's
+/// contract), doubling from level to level: 0.001 moves the lit pass's shade by at most
+/// 0.001 x 0.8 x 255 = 0.2 8-bit levels (`super::shading`); `render::MAX_TUBE_SHADING_LEVELS`
+/// (2 levels) takes a level whose error reaches 0.0098 unexaggerated.
+const LEVEL_SHADING: [f64; MAX_LEVELS] = [1e-3, 2e-3, 4e-3, 8e-3, 1.6e-2];
 
 /// Direction of the path at station `k`: the mean of its segments' unit directions (the
 /// incoming one at a hairpin).
@@ -155,46 +158,49 @@ fn side_faces(first: usize, rings: usize, sides: usize, out: &mut impl FnMut([u3
 }
 
 /// A well's tube to be tiled: stations (distinct consecutive), the log per station (None: not
-/// coloured by a log), radius and sides of the fine tube, and the value tolerance of the levels.
+/// coloured by a log), radius and sides of the tube.
 pub struct TubeSpec<'a> {
     pub path: &'a [DVec3],
     pub values: Option<&'a [f64]>,
     pub radius: f64,
     pub sides: usize,
-    pub value_tol: f64,
 }
 
-/// Builds one piece of tube into `tile`: rings at `stations` (path indices) with the frames
-/// `frames` (direction, axis) and `sides` sides, side triangles, and caps at the ends asked for.
-/// Returns the piece's side triangles and its caps' (indices into `tile.positions`).
+/// Builds one piece of tube into `tile`: rings at `stations` (path indices, from the tile's first
+/// station `a`) with level 0's frames `frames` (direction, axis; indexed from `a`), side
+/// triangles, and caps at the ends asked for. Returns the piece's triangles.
 fn piece(
     spec: &TubeSpec<'_>,
-    origin: DVec3,
+    (origin, a): (DVec3, usize),
     stations: &[usize],
     frames: &[(DVec3, DVec3)],
-    (sides, radius): (usize, f64),
     caps: (bool, bool),
     tile: &mut TileMesh,
-) -> (Vec<u32>, Vec<u32>) {
+) -> Vec<u32> {
+    let (sides, radius) = (spec.sides, spec.radius);
     let base = tile.positions.len() as u32;
     let local = |p: DVec3| (p - origin).as_vec3().to_array();
-    for (&k, &(d, u)) in stations.iter().zip(frames) {
-        let c = spec.path[k];
+    // A ring vertex's (or cap vertex's) scalars: its log value and its station from the tile's first.
+    let scalars = |tile: &mut TileMesh, k: usize| {
+        if let Some(v) = spec.values {
+            tile.values.push(v[k] as f32);
+            tile.stations.push((k - a) as f32);
+        }
+    };
+    for &k in stations {
+        let (c, (d, u)) = (spec.path[k], frames[k - a]);
         let cz = (c - origin).z;
         for q in ring(c, d, u, radius, sides) {
             let p = local(q);
             tile.positions.push(p);
             tile.ring_z.push((p[2] as f64 - cz) as f32);
             tile.normals.push(normals::pack((q - c) / radius));
-            if let Some(v) = spec.values {
-                tile.values.push(v[k] as f32);
-            }
+            scalars(tile, k);
         }
     }
     let mut tris = Vec::with_capacity(6 * stations.len() * sides);
     side_faces(0, stations.len(), sides, &mut |t| tris.extend(t.map(|i| i + base)));
     // Caps with their own vertices (no smooth normal: flat), facing away from the path.
-    let mut caps_tris = Vec::new();
     for (end, want) in [(0usize, caps.0), (stations.len() - 1, caps.1)] {
         if !want {
             continue;
@@ -205,149 +211,110 @@ fn piece(
             tile.positions.push(tile.positions[ring0 + s]);
             tile.ring_z.push(tile.ring_z[ring0 + s]);
             tile.normals.push(normals::NONE);
-            if let Some(v) = spec.values {
-                tile.values.push(v[stations[end]] as f32);
-            }
+            scalars(tile, stations[end]);
         }
         for s in 1..sides as u32 - 1 {
             if end == 0 {
-                caps_tris.extend([cap, cap + s + 1, cap + s]);
+                tris.extend([cap, cap + s + 1, cap + s]);
             } else {
-                caps_tris.extend([cap, cap + s, cap + s + 1]);
+                tris.extend([cap, cap + s, cap + s + 1]);
             }
         }
     }
-    (tris, caps_tris)
+    tris
 }
 
-/// The circumradius of a level's polygon of `sides` sides about a fine tube of `radius` and
-/// `fine_sides` sides: the one of equal perimeter, so that the level's silhouette is as wide as
-/// the fine tube's on average over directions (a polygon's mean width is its perimeter / pi);
-/// and the largest distance between the two polygons, both centred on the axis: each lies between
-/// its inscribed and circumscribed circles.
-fn level_polygon(radius: f64, fine_sides: usize, sides: usize) -> (f64, f64) {
-    use std::f64::consts::PI;
-    let half = |n: usize| PI / n as f64;
-    let r = radius * (fine_sides as f64 * half(fine_sides).sin()) / (sides as f64 * half(sides).sin());
-    let gap = (r - radius * half(fine_sides).cos()).max(radius - r * half(sides).cos());
-    (r, gap)
+/// The largest distance over every angle a between `cos a A + sin a B` and 0: the square root of
+/// the largest eigenvalue of the Gram matrix of A and B.
+fn largest_over_angles(a: DVec3, b: DVec3) -> f64 {
+    let (aa, bb, ab) = (a.length_squared(), b.length_squared(), a.dot(b));
+    let h = 0.5 * (aa - bb);
+    (0.5 * (aa + bb) + (h * h + ab * ab).sqrt()).sqrt()
 }
 
-/// Distance from `p` to the segment `a`–`b`, and the segment parameter of its closest point.
-fn to_segment(p: DVec3, a: DVec3, b: DVec3) -> (f64, f64) {
-    let ab = b - a;
-    let l2 = ab.length_squared();
-    let t = if l2 > 0.0 { ((p - a).dot(ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    ((a + t * ab - p).length(), t)
+/// How level 0's unit radials at station k differ from those the level interpolates at `t`
+/// between frames `i` and `j` (frames as (direction, axis); the radial at angle a is
+/// `cos a u + sin a v` with `v = d x u`): the largest distance over every angle between the
+/// radial and the interpolated one, and the largest chord between the radial and the normalised
+/// interpolated one. The chord is at most the distance plus how far the interpolated radial falls
+/// short of unit length, `1 - |lerp(r_i, r_j, t)| <= 1 - sqrt(1 - |r_i - r_j|^2 / 4)`.
+fn radial_gap(fi: (DVec3, DVec3), fk: (DVec3, DVec3), fj: (DVec3, DVec3), t: f64) -> (f64, f64) {
+    let uv = |(d, u): (DVec3, DVec3)| (u, d.cross(u));
+    let ((ui, vi), (uk, vk), (uj, vj)) = (uv(fi), uv(fk), uv(fj));
+    let gap = largest_over_angles(uk - ui.lerp(uj, t), vk - vi.lerp(vj, t));
+    let ends = largest_over_angles(ui - uj, vi - vj);
+    (gap, gap + 1.0 - (1.0 - 0.25 * ends * ends).max(0.0).sqrt())
 }
 
-/// What [`decimate`] kept and the bounds it measured.
+/// How a dropped station `k` between kept stations `i < k < j` differs from the level there (see
+/// the module's contract): the axis displacement, its vertical part, and the radials' gap and
+/// chord ([`radial_gap`]).
+fn station_gap(path: &[DVec3], fr: &[(DVec3, DVec3)], a: usize, (i, k, j): (usize, usize, usize)) -> [f64; 4] {
+    let t = (k - i) as f64 / (j - i) as f64;
+    let d = path[k] - path[i].lerp(path[j], t);
+    let (gap, chord) = radial_gap(fr[i - a], fr[k - a], fr[j - a], t);
+    [d.length(), d.z.abs(), gap, chord]
+}
+
+/// What [`decimate`] kept and the bounds it measured over the dropped stations.
 struct Decimated {
     /// The kept stations, in order.
     kept: Vec<usize>,
-    /// The largest distance of a dropped station from its kept segment, and the largest vertical
-    /// part of that displacement.
+    /// The largest axis displacement, the largest vertical part of one, and the largest radial
+    /// gap times the radius (world units).
     dev: f64,
     dev_z: f64,
-    /// The largest chord between a station's direction and the level's there (its segment's for
-    /// a dropped station, its ring's for a kept one).
-    chord: f64,
+    ring: f64,
+    /// The largest turn of a dropped station's normals: chord plus radial gap (see the module's
+    /// contract).
+    turn: f64,
 }
 
-/// The stations of `a..=b` kept at tolerance `tol` and normal chord `chord` (see the module's
-/// contract) and the level's bounds.
-fn decimate(spec: &TubeSpec<'_>, a: usize, b: usize, tol: f64, chord: f64) -> Decimated {
-    let (path, values) = (spec.path, spec.values);
+/// The stations of `a..=b` kept at shading error `shading` (see the module's contract), with
+/// `fr` level 0's frames of `a..=b`, and the level's bounds.
+fn decimate(spec: &TubeSpec<'_>, fr: &[(DVec3, DVec3)], (a, b): (usize, usize), shading: f64) -> Decimated {
+    let (path, radius) = (spec.path, spec.radius);
+    // A dropped station's turn of its normals and its shading error: the turn and its
+    // displacement over the radius.
+    let station = |i, k, j| {
+        let [d, dz, g, c] = station_gap(path, fr, a, (i, k, j));
+        (d, dz, g, c + g, c + g + d / radius)
+    };
     let mut keep = vec![false; b - a + 1];
     keep[0] = true;
     keep[b - a] = true;
-    // Where a log turns from no data to data or back, both stations stay.
-    if let Some(v) = values {
-        for k in a..b {
-            if v[k].is_nan() != v[k + 1].is_nan() {
-                keep[k - a] = true;
-                keep[k + 1 - a] = true;
-            }
-        }
-    }
-    let runs: Vec<usize> = (a..=b).filter(|&k| keep[k - a]).collect();
-    let mut stack: Vec<(usize, usize)> = runs.windows(2).map(|w| (w[0], w[1])).collect();
-    let (mut max_dev, mut max_dev_z) = (0.0f64, 0.0f64);
+    let mut stack = vec![(a, b)];
+    let mut out = Decimated { kept: Vec::new(), dev: 0.0, dev_z: 0.0, ring: 0.0, turn: 0.0 };
     while let Some((i, j)) = stack.pop() {
-        // The station breaking the bounds most (by its ratio to them), if any.
-        let mut worst: Option<(usize, f64)> = None;
-        for k in i + 1..j {
-            let (d, t) = to_segment(path[k], path[i], path[j]);
-            let turn = (direction(path, k) - (path[j] - path[i]).normalize()).length();
-            let mut ratio = (d / tol).max(turn / chord);
-            if let Some(v) = values {
-                let (vi, vj, vk) = (v[i], v[j], v[k]);
-                // Runs between kept stations are all data or all no data (transitions are kept).
-                if !(vi.is_nan() && vj.is_nan() && vk.is_nan()) {
-                    let dv = (vk - (vi + t * (vj - vi))).abs();
-                    ratio = ratio.max((dv / spec.value_tol.max(1e-300)).min(1e300));
-                }
-            }
-            if ratio > 1.0 && worst.is_none_or(|(_, r)| ratio > r) {
-                worst = Some((k, ratio));
-            }
-        }
+        // The station with the largest shading error, if over the budget.
+        let worst = (i + 1..j).map(|k| (k, station(i, k, j).4)).max_by(|x, y| x.1.total_cmp(&y.1));
         match worst {
-            Some((k, _)) => {
+            Some((k, sh)) if sh > shading => {
                 keep[k - a] = true;
                 stack.push((i, k));
                 stack.push((k, j));
             }
-            None => {
+            _ => {
                 for k in i + 1..j {
-                    let (d, t) = to_segment(path[k], path[i], path[j]);
-                    max_dev = max_dev.max(d);
-                    max_dev_z = max_dev_z.max((path[i].z + t * (path[j].z - path[i].z) - path[k].z).abs());
+                    let (d, dz, g, turn, _) = station(i, k, j);
+                    out.dev = out.dev.max(d);
+                    out.dev_z = out.dev_z.max(dz);
+                    out.ring = out.ring.max(radius * g);
+                    out.turn = out.turn.max(turn);
                 }
             }
         }
     }
-    let kept: Vec<usize> = (a..=b).filter(|&k| keep[k - a]).collect();
-    // The level's direction at a station: its segment's, or at a kept one the mean of its
-    // segments' (level 0's at the tile's ends).
-    let pts: Vec<DVec3> = kept.iter().map(|&k| path[k]).collect();
-    let mut max_chord = 0.0f64;
-    for (m, w) in kept.windows(2).enumerate() {
-        let seg = (path[w[1]] - path[w[0]]).normalize();
-        for k in w[0] + 1..w[1] {
-            max_chord = max_chord.max((direction(path, k) - seg).length());
-        }
-        if m > 0 {
-            max_chord = max_chord.max((direction(path, w[0]) - direction(&pts, m)).length());
-        }
-    }
-    Decimated { kept, dev: max_dev, dev_z: max_dev_z, chord: max_chord }
-}
-
-/// Frames of a level's kept stations: level 0's at both ends, parallel transport between with
-/// the twist that leaves at the last station spread evenly over the stations.
-fn level_frames(path: &[DVec3], kept: &[usize], fine: &[(DVec3, DVec3)], a: usize) -> Vec<(DVec3, DVec3)> {
-    let pts: Vec<DVec3> = kept.iter().map(|&k| path[k]).collect();
-    let mut fr = frames(&pts, Some(fine[0].1));
-    let m = fr.len();
-    fr[0] = fine[0];
-    let last = fine[kept[m - 1] - a];
-    // Twist: the angle about the last direction from the transported axis to level 0's.
-    let (d, u) = (last.0, fr[m - 1].1);
-    let u = (u - d * u.dot(d)).normalize_or(last.1);
-    let twist = d.dot(u.cross(last.1)).atan2(u.dot(last.1));
-    for (i, f) in fr.iter_mut().enumerate().take(m - 1).skip(1) {
-        let q = glam::DQuat::from_axis_angle(f.0, twist * i as f64 / (m - 1) as f64);
-        f.1 = (q * f.1).normalize();
-    }
-    fr[m - 1] = last;
-    fr
+    out.kept = (a..=b).filter(|&k| keep[k - a]).collect();
+    out
 }
 
 /// The well's tiles (see the module's contract): positions relative to `origin`, per vertex its
-/// radial normal and log value. Tiles are built in parallel; `coarse_factor` picks the proxy.
+/// radial normal, and its log value and station where coloured by a log. Tiles are built in
+/// parallel; `coarse_factor` picks the proxy.
 pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec<TileMesh> {
     let n = spec.path.len();
+    let sides = spec.sides;
     let fine_frames = frames(spec.path, None);
     let bounds: Vec<usize> = (0..n - 1).step_by(SEGMENTS_PER_TILE).chain([n - 1]).collect();
     bounds
@@ -356,38 +323,33 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
         .map(|(t, w)| {
             let (a, b) = (w[0], w[1]);
             let mut tile = TileMesh { ix: t as u32, ..Default::default() };
-            let stations: Vec<usize> = (a..=b).collect();
             let fr = &fine_frames[a..=b];
-            let ends = (a == 0, b == n - 1);
-            let fine = (spec.sides, spec.radius);
-            let (fine_sides, caps) = piece(spec, origin, &stations, fr, fine, ends, &mut tile);
-            let n_fine = (fine_sides.len() + caps.len()) / 3;
-            tile.fine = fine_sides.iter().chain(&caps).copied().collect();
+            let caps = (a == 0, b == n - 1);
+            let n_caps = 2 * (usize::from(caps.0) + usize::from(caps.1)) * (sides - 2);
+            let stations: Vec<usize> = (a..=b).collect();
+            tile.fine = piece(spec, (origin, a), &stations, fr, caps, &mut tile).into();
+            let n_fine = tile.fine.len() / 3;
             let mut prev = n_fine;
-            for l in 0..MAX_LEVELS {
-                let sides = LEVEL_SIDES[l].min(spec.sides);
-                let Decimated { kept, dev, dev_z, chord } =
-                    decimate(spec, a, b, LEVEL_TOL_RADII[l] * spec.radius, LEVEL_CHORD[l]);
-                let n_tris = 2 * (kept.len() - 1) * sides + 2 * (sides - 2);
+            let mut levels = Vec::new();
+            for shading in LEVEL_SHADING {
+                let d = decimate(spec, fr, (a, b), shading);
+                let n_tris = 2 * (d.kept.len() - 1) * sides + n_caps / 2;
                 if n_tris as f64 > 0.8 * prev as f64 {
                     continue;
                 }
                 prev = n_tris;
-                let lf = level_frames(spec.path, &kept, fr, a);
-                let (r, polygon) = level_polygon(spec.radius, spec.sides, sides);
-                let (sides_tris, caps) = piece(spec, origin, &kept, &lf, (sides, r), (true, true), &mut tile);
-                let indices: Vec<u32> = sides_tris.into_iter().chain(caps).collect();
-                let (error, error_z) = level_errors(dev, dev_z, polygon);
-                let level = Level {
+                let indices = piece(spec, (origin, a), &d.kept, fr, caps, &mut tile);
+                let (error, error_z) = level_errors(d.dev, d.dev_z, d.ring);
+                levels.push(Level {
                     indices: indices.into(),
                     error,
                     error_z,
-                    shading_error: chord as f32,
+                    shading_error: super::f32_at_least(d.turn + error as f64 / spec.radius),
                     grouped: Vec::new(),
                     grouped_error: error,
-                };
-                tile.levels.push(level);
+                });
             }
+            tile.levels = levels.into();
             let target = n_fine as f64 / coarse_factor.max(1.0) as f64;
             let proxy = tile.levels.iter().find(|l| (l.indices.len() / 3) as f64 <= target).or(tile.levels.last());
             (tile.coarse, tile.proxy_error) = match proxy {
@@ -401,18 +363,34 @@ pub fn tube_tiles(spec: &TubeSpec<'_>, origin: DVec3, coarse_factor: f32) -> Vec
         .collect()
 }
 
-/// A level's `(error, error_z)` ([`Level`]) from its path's deviation `dev` (of which `dev_z`
-/// vertical) and its polygon's gap to the fine one. Drawn with exaggeration `s >= 1` the level's
-/// path moves by `sqrt(dh^2 + s^2 dz^2) <= sqrt(dev^2 + (s^2 - 1) dev_z^2)` and its rings (not
-/// exaggerated) by at most the gap, in all by at most `sqrt(e^2 + (s^2 - 1) ez^2)` (what the
-/// level choice takes, `render::levels::exaggerated`) for `e^2 = (dev + gap)^2 + gap^2 / 8` and
-/// `ez = 3 dev_z`: with `X^2 = (s^2 - 1) dev_z^2`, `(sqrt(dev^2 + X^2) + gap)^2 <= (dev + gap)^2 +
-/// X^2 + 2 gap X` and `2 gap X <= gap^2 / 8 + 8 X^2`. Both rounded up to f32, `error_z <= error`.
-fn level_errors(dev: f64, dev_z: f64, gap: f64) -> (f32, f32) {
-    let ez = 3.0 * dev_z;
-    let e = ((dev + gap).powi(2) + gap * gap / 8.0).sqrt().max(ez);
+/// A level's `(error, error_z)` ([`Level`]) from its largest axis displacement `dev` (of which
+/// `dev_z` vertical) and its largest ring gap `ring` (world units). Drawn with exaggeration
+/// `s >= 1` the axis displacement grows to `sqrt(dh^2 + s^2 dz^2) <= sqrt(dev^2 + X^2)` with
+/// `X^2 = (s^2 - 1) dev_z^2`, the ring gap not at all (rings are not exaggerated), and
+/// `(sqrt(dev^2 + X^2) + ring)^2 <= (dev + ring)^2 + 2 ring X + X^2 <= e^2 + (s^2 - 1) ez^2` for
+/// `e^2 = (dev + ring)^2 + 8 ring^2` and `ez^2 = 9/8 dev_z^2`, as `2 ring X <= 8 ring^2 + X^2 / 8`
+/// (what the level choice takes, `render::levels::exaggerated`). Both rounded up to f32,
+/// `error_z <= error`.
+fn level_errors(dev: f64, dev_z: f64, ring: f64) -> (f32, f32) {
+    let ez = (9.0f64 / 8.0).sqrt() * dev_z;
+    let e = ((dev + ring).powi(2) + 8.0 * ring * ring).sqrt().max(ez);
     let (e, ez) = (super::f32_at_least(e), super::f32_at_least(ez));
     (e, ez.min(e))
+}
+
+/// A log-coloured tile's table as the lit pass reads it (`gpu::cell_values`): its values by
+/// station (`TileMesh::stations`, no data as NaN), one column per station and one row, as
+/// `([columns, rows, 0], values)`; None for a tile without stations.
+pub fn log_table(t: &TileMesh) -> Option<([u32; 3], Vec<f32>)> {
+    let n = t.stations.iter().fold(0.0f32, |a, &s| a.max(s + 1.0)) as usize;
+    if n == 0 || t.values.len() != t.stations.len() {
+        return None;
+    }
+    let mut table = vec![f32::NAN; n];
+    for (&s, &v) in t.stations.iter().zip(t.values.iter()) {
+        table[s as usize] = v;
+    }
+    Some(([n as u32, 1, 0], table))
 }
 
 /// Keeps every vertex's ring centre height, `z - ring_z` in f32 as the lit pass computes it,

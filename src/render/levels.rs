@@ -1,7 +1,7 @@
 //! Stage 2b of a frame: the level of detail of every tile ([`choose_levels`]), and the frame's
 //! stats per level (triangles drawn, grids' cells and faces).
 
-use super::{GridLod, Lod, RenderOutput, Renderer, MAX_SHADING_LEVELS};
+use super::{GridLod, Lod, RenderOutput, Renderer, MAX_SHADING_LEVELS, MAX_TUBE_SHADING_LEVELS};
 use crate::camera::{Camera, FrameCamera};
 use crate::cull::Stat;
 use crate::gpu::{DrawArgs, SceneGeometry};
@@ -55,15 +55,30 @@ pub(super) fn choose_levels(
     let perspective = fc.projection == crate::camera::Projection::Perspective;
     let zv = DVec3::new(1.0, 1.0, camera.z_scale);
     let objects = scene.objects();
-    // Per object, 8-bit colour levels per unit of shading error. Exaggeration turns a tube's
-    // normals by nothing (its rings are not exaggerated, draw.wgsl `drawn_normal`), yet tubes keep
-    // the exaggerated bound too: a level's chord leaves out how its fewer sides shade the pixels
-    // they cover, and exaggeration lengthens wells on screen (Reek, 8 views: without it wells took
-    // 4 sides at z_scale 5 and 10, and 0.26 % of pixels differed by more than 4/255).
-    let shade_levels: Vec<f64> = objects
+    // Per object, 8-bit colour levels per unit of shading error (unexaggerated), and whether it is
+    // a well tube (see `turn` below).
+    let shade_levels: Vec<(f64, bool)> = objects
         .iter()
-        .map(|o| crate::lod::shading::shade_levels_per_chord(o.max_color_channel() as f64, camera.z_scale))
+        .map(|o| {
+            let tube = o.tiles.iter().any(|t| !t.ring_z.is_empty());
+            (crate::lod::shading::shade_levels_per_chord(o.max_color_channel() as f64, 1.0), tube)
+        })
         .collect();
+    // How much exaggeration may multiply a level's shading error: normals turn by up to
+    // max(z_scale, 1 / z_scale). A tube's rings are not exaggerated where z_scale > 1 (draw.wgsl
+    // `drawn_normal`); its shading error is the turn of its normals plus its displacement (at most
+    // its error) over its radius (`lod::tube`), and exaggeration lengthens that displacement by
+    // `exaggerated(error) / error` at most.
+    let turn = |lv: &crate::gpu::geometry::LevelDraw, tube: bool| {
+        let z = camera.z_scale;
+        if tube && z > 1.0 && lv.error > 0.0 {
+            exaggerated(lv.error, lv.error_z, z) / lv.error as f64
+        } else if z > 0.0 {
+            z.max(1.0 / z)
+        } else {
+            1.0
+        }
+    };
     let mut args = Vec::with_capacity(g.n_tiles());
     let (mut level, mut err_px) = (Vec::with_capacity(g.n_tiles()), Vec::with_capacity(g.n_tiles()));
     let mut scales = Vec::with_capacity(g.n_tiles());
@@ -89,12 +104,13 @@ pub(super) fn choose_levels(
                 e * scale
             }
         };
-        let per_chord = shade_levels[g.tile_object_cpu[i] as usize];
+        let (per_chord, tube) = shade_levels[g.tile_object_cpu[i] as usize];
         // The coarsest level within `max_px` pixels of error and MAX_SHADING_LEVELS of colour.
         let screen = |max_px: f64| {
             let mut l = 0usize;
             for (k, lv) in g.levels[i].iter().enumerate() {
-                if px_of(lv) > max_px || lv.shading_error as f64 * per_chord > MAX_SHADING_LEVELS {
+                let most = if tube { MAX_TUBE_SHADING_LEVELS } else { MAX_SHADING_LEVELS };
+                if px_of(lv) > max_px || lv.shading_error as f64 * per_chord * turn(lv, tube) > most {
                     break;
                 }
                 if clearance.as_ref().is_some_and(|c| g.too_deep(i, k + 1, lv.error_z, c)) {

@@ -94,7 +94,9 @@ impl Scene {
         };
         let mut tiles = build.tiles;
         for t in &mut tiles {
-            t.levels.truncate(MAX_LEVELS);
+            if t.levels.len() > MAX_LEVELS {
+                t.levels = t.levels[..MAX_LEVELS].to_vec().into();
+            }
         }
         // Cell merging keeps each cell's value (a merged face takes its cells' mean), so grids
         // coloured by values keep their levels: push would drop them for other kinds.

@@ -445,7 +445,7 @@ impl Scene {
         // full resolution (coarser levels would blur its values), its coarse proxy still culls.
         if !levels_keep_values && color_by.as_ref().is_some_and(|c| c.source == ColorSource::Values) {
             for t in &mut tiles {
-                t.levels.clear();
+                t.levels = Box::default();
             }
         }
         crate::lod::share_indices(&mut tiles);
@@ -567,7 +567,13 @@ impl Scene {
         let mut list = |l: &crate::lod::Indices| if seen.insert(l.as_ptr()) { l.len() * 4 } else { 0 };
         let mut bytes = 0;
         for t in self.objects.iter().flat_map(|o| &o.tiles) {
-            bytes += (t.positions.len() * 3 + t.values.len() + t.normals.len() + t.grid_uv.len() + t.ring_z.len()) * 4;
+            bytes += (t.positions.len() * 3
+                + t.values.len()
+                + t.normals.len()
+                + t.grid_uv.len()
+                + t.ring_z.len()
+                + t.stations.len())
+                * 4;
             bytes += list(&t.fine) + list(&t.coarse);
             bytes += t.levels.iter().map(|l| list(&l.indices)).sum::<usize>();
         }

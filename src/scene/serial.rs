@@ -2,7 +2,7 @@
 //! little-endian layout of the scene's origin, its objects and their tiles, exactly as stored
 //! (f32 origin-relative positions, both index levels), so a scene read back renders the same image.
 //!
-//! Layout, version 10 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
+//! Layout, version 11 (every integer and float little-endian; `str` = u32 byte length + UTF-8;
 //! arrays = u64 element count + elements):
 //!
 //! ```text
@@ -24,6 +24,8 @@
 //!             normals [u32] (version 5: packed smooth normals, empty or one per position),
 //!             grid_uv [u32] (version 6: packed grid coordinates, empty or one per position),
 //!             ring_z [f32] (version 9: a tube's ring heights, empty or one per position),
+//!             stations [f32] (version 11: a log-coloured tube's stations, empty or one per
+//!             position),
 //!             fine [u32], coarse [u32], proxy_error f32,
 //!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
 //!             measured again on reading: `lod::shading`, 0 for height fields and grids),
@@ -47,17 +49,17 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 10;
+const VERSION: u32 = 11;
 
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
 const MIN_TILE_BYTES: usize = 8 + 24 + 8 + 8 + 8 + 4 + 4;
 
 /// The fewest bytes a tile takes in `version`: [`MIN_TILE_BYTES`] and the counts of its empty
-/// values (version 4), normals (5), grid coordinates (6) and ring heights (9): 96 bytes from
-/// version 9.
+/// values (version 4), normals (5), grid coordinates (6), ring heights (9) and stations (11): 104
+/// bytes from version 11.
 fn min_tile_bytes(version: u32) -> usize {
-    MIN_TILE_BYTES + 8 * [4, 5, 6, 9].iter().filter(|&&v| version >= v).count()
+    MIN_TILE_BYTES + 8 * [4, 5, 6, 9, 11].iter().filter(|&&v| version >= v).count()
 }
 
 /// The fewest bytes an object takes in `version`: a mesh (the smallest kind: its label's length)
@@ -260,8 +262,8 @@ impl Scene {
         self.write(VERSION)
     }
 
-    /// The bytes of format `version` 8 to 10 (8: no ring heights; before 10: no group variants), for
-    /// tests of older formats.
+    /// The bytes of format `version` 8 to 11 (8: no ring heights; before 10: no group variants;
+    /// before 11: no stations), for tests of older formats.
     #[cfg(test)]
     pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
         assert!((8..=VERSION).contains(&version));
@@ -359,6 +361,9 @@ impl Scene {
                 w.u32s(&t.grid_uv);
                 if version >= 9 {
                     w.f32s(&t.ring_z);
+                }
+                if version >= 11 {
+                    w.f32s(&t.stations);
                 }
                 w.u32s(&t.fine);
                 w.u32s(&t.coarse);
@@ -598,6 +603,10 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
     if let Some(msg) = per_vertex("ring heights", ring_z.len()) {
         return Err(r.err(msg));
     }
+    let stations: PerVertex<f32> = if version >= 11 { r.f32s()?.into() } else { PerVertex::new() };
+    if let Some(msg) = per_vertex("stations", stations.len()) {
+        return Err(r.err(msg));
+    }
     let (fine, coarse) = (indices(r.u32s()?), indices(r.u32s()?));
     let proxy_error = r.f32()?;
     let nl = r.u32()? as usize;
@@ -665,12 +674,13 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         normals,
         grid_uv,
         ring_z,
+        stations,
         fine,
         coarse,
         bbox_min,
         bbox_max,
         proxy_error,
-        levels,
+        levels: levels.into(),
     })
 }
 

@@ -15,6 +15,9 @@ use crate::error::num;
 use crate::lod::{tile_bounds, TileMesh};
 use glam::DVec3;
 
+/// The largest station a tube's vertex may carry: a tile spans at most this many segments.
+const MAX_STATION: f32 = crate::lod::tube::SEGMENTS_PER_TILE as f32;
+
 /// Ok, or what is wrong (the reader prefixes `data` and where).
 pub(super) type Check = std::result::Result<(), String>;
 
@@ -83,6 +86,15 @@ pub(super) fn tile(t: &TileMesh, origin: DVec3) -> Check {
         .find_map(|(k, (&r, p))| (!(lo[2]..=hi[2]).contains(&(p[2] - r))).then_some((k, r)))
     {
         return Err(format!("vertex {k}'s ring height {r} puts its ring's centre outside the tile's box"));
+    }
+    // A tube's stations index its log table (`gpu::cell_values`), built from its values.
+    if !t.stations.is_empty() && t.values.is_empty() {
+        return Err("its vertices carry stations but no values".into());
+    }
+    if let Some((k, s)) =
+        t.stations.iter().enumerate().find(|(_, &s)| !(0.0..=MAX_STATION).contains(&s) || s.fract() != 0.0)
+    {
+        return Err(format!("vertex {k}'s station is {s}; stations are whole numbers in 0..={MAX_STATION}"));
     }
     Ok(())
 }

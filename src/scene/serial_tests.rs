@@ -196,8 +196,8 @@ fn damaged_bytes_are_input_errors() {
         assert!(e.starts_with("data"), "{e}");
     }
     let mut v = b.clone();
-    v[8] = 11; // version 11
-    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 11"));
+    v[8] = 12; // version 12
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 12"));
     let mut extra = b.clone();
     extra.push(0);
     assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
@@ -251,8 +251,8 @@ fn a_count_reserves_only_records_the_unclaimed_bytes_hold() {
     v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
     for version in 1..=VERSION {
-        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84, 84][version as usize - 1]);
-        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96, 96][version as usize - 1]);
+        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84, 84, 84][version as usize - 1]);
+        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96, 96, 104][version as usize - 1]);
     }
 }
 
@@ -294,6 +294,35 @@ fn ring_heights_round_trip_and_a_centre_out_of_the_box_is_refused() {
     bad[at..at + 4].copy_from_slice(&(depth + 1.0).to_le_bytes());
     let e = Scene::from_bytes(&bad).unwrap_err().to_string();
     assert!(e.starts_with("data") && e.contains("ring height"), "{e}");
+}
+
+#[test]
+fn stations_round_trip_and_a_bad_one_is_refused() {
+    let path: Vec<[f64; 3]> = (0..300).map(|k| [0.5 * k as f64, 0.2 * k as f64, -0.4 * k as f64]).collect();
+    let log: Vec<f64> = (0..300).map(|k| (k % 7) as f64).collect();
+    let mut s = Scene::new();
+    let mut opts = AddOptions::new(25.0);
+    opts.color_by = Some(crate::scene::color::ColorByArg::values(log));
+    s.add_well(&path, 5.0, 8, opts).unwrap();
+    let t = &s.objects()[0].tiles[1];
+    assert_eq!(t.stations.len(), t.positions.len());
+    assert_eq!(t.stations.iter().fold(0.0f32, |a, &b| a.max(b)), 128.0);
+    let b = s.to_bytes();
+    let back = Scene::from_bytes(&b).unwrap();
+    assert_eq!(back.objects()[0].tiles[1].stations[..], t.stations[..]);
+    // Version 10 has none: the tube is coloured by its vertices' values, as it was then.
+    let v10 = Scene::from_bytes(&s.to_bytes_version(10)).unwrap();
+    assert!(v10.objects()[0].tiles.iter().all(|t| t.stations.is_empty()));
+    // A station past a tile's last, and one that is not whole.
+    let mut word = (t.stations.len() as u64).to_le_bytes().to_vec();
+    word.extend(t.stations[0].to_le_bytes());
+    let at = b.windows(word.len()).position(|w| w == word).unwrap() + 8;
+    for bad_station in [129.0f32, 0.5, f32::NAN] {
+        let mut bad = b.clone();
+        bad[at..at + 4].copy_from_slice(&bad_station.to_le_bytes());
+        let e = Scene::from_bytes(&bad).unwrap_err().to_string();
+        assert!(e.starts_with("data") && e.contains("station"), "{e}");
+    }
 }
 
 #[test]

@@ -44,23 +44,9 @@ impl Scene {
         ensure(stations.len() >= 2, "path", || {
             format!("path has {} distinct station(s); a well needs at least 2", stations.len())
         })?;
-        // Levels keep a log's colours within half a row of a 256-row colour map over its range.
-        let value_tol = color_by.as_ref().map_or(0.0, |c| {
-            let [lo, hi] = c.clim.unwrap_or_else(|| {
-                let fin = logs.iter().copied().filter(|v| v.is_finite());
-                let (lo, hi) = fin.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
-                [lo, hi]
-            });
-            if hi > lo {
-                (hi - lo) / (2.0 * crate::scene::color::LUT_SIZE as f64)
-            } else {
-                0.0
-            }
-        });
         let (lo, hi) = stations.iter().fold((stations[0], stations[0]), |(a, b), p| (a.min(*p), b.max(*p)));
         let o = self.origin_for(lo - radius, hi + radius);
-        let spec =
-            TubeSpec { path: &stations, values: values.is_some().then_some(&logs[..]), radius, sides, value_tol };
+        let spec = TubeSpec { path: &stations, values: values.is_some().then_some(&logs[..]), radius, sides };
         let tiles = opts.interrupt.run_parallel(|_stop| tube_tiles(&spec, o, cf as f32))?;
         let color_by = color_by.map(|c| c.resolve(super::tile_scalars(&tiles, o.z, &c.source))).transpose()?;
         Ok(self.push_levels(o, opts.name, ObjectKind::Mesh { kind: "well".into() }, color, color_by, tiles, true))

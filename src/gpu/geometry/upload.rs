@@ -3,8 +3,8 @@
 
 use super::plan::Plan;
 use super::{
-    check_buffer_sizes, draw_runs, normal_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words, CompactDraw,
-    LevelDraw, SceneGeometry,
+    check_buffer_sizes, draw_runs, normal_slot, scalar_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words,
+    CompactDraw, LevelDraw, SceneGeometry,
 };
 use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
@@ -206,7 +206,7 @@ impl SceneGeometry {
         let (vb, sb, ib) = mapped_buffers(ctx, nv, ni);
         let mut draws = TileDraws::default();
         if let (Some(vb), Some(sb), Some(ib)) = (&vb, &sb, &ib) {
-            write_tiles(scene, &plan, &grid_dims, [vb, sb, ib], &mut draws)?;
+            write_tiles(scene, &plan, &grid_dims, &cells.logs, [vb, sb, ib], &mut draws)?;
         } else {
             empty_tiles(scene, &mut draws);
         }
@@ -258,7 +258,8 @@ impl SceneGeometry {
             shading_z,
             shading_base,
             grid_dims,
-            cell_colors: cells.objects,
+            table_colors: cells.objects,
+            log_colors: cells.logs,
             draw_runs,
             bytes,
             clearance: Default::default(),
@@ -306,11 +307,14 @@ fn mapped_buffers(
 }
 
 /// Writes the plan's patterns, then every tile's draws, into the mapped vertex, value and index
-/// buffers (`[vb, sb, ib]`), and fills `draws`.
+/// buffers (`[vb, sb, ib]`), and fills `draws`. A well coloured by a log (`TileMesh::stations`)
+/// whose tables did not fit (`logs` false) is drawn at level 0 alone: its levels keep level 0's
+/// colours only through the tables.
 fn write_tiles(
     scene: &Scene,
     plan: &Plan,
     grid_dims: &[Option<(u32, u32)>],
+    logs: &[bool],
     [vb, sb, ib]: [&wgpu::Buffer; 3],
     draws: &mut TileDraws,
 ) -> Result<()> {
@@ -353,6 +357,7 @@ fn write_tiles(
     for (oi, o) in scene.objects().iter().enumerate() {
         for t in &o.tiles {
             let nrm = normal_slot(grid_dims[oi].is_some(), t);
+            let vals = scalar_slot(logs[oi], t);
             let tile = fine.len() as u32;
             tile_object.push(oi as u32);
             bbox.push(tile_bbox(t));
@@ -394,7 +399,7 @@ fn write_tiles(
                 base_vertex: v as i32,
                 first_instance: tile,
             });
-            put_v(&mut v, &t.positions, &t.values, nrm, &t.ring_z);
+            put_v(&mut v, &t.positions, vals, nrm, &t.ring_z);
             put_i(&mut i, &t.fine);
             // The coarse proxy and each LOD level get their own compact copy of the
             // vertices they use: software rasterisers (llvmpipe) shade every vertex in an
@@ -402,7 +407,7 @@ fn write_tiles(
             // them cost as much as a fine draw.
             let mut counts = vec![t.positions.len() as u32];
             let mut compact = |indices: &[u32], v: &mut usize, i: &mut usize| {
-                cd.build(t, nrm, indices);
+                cd.build(t, (vals, nrm), indices);
                 counts.push(cd.verts.len() as u32);
                 let args = DrawArgs {
                     index_count: cd.idx.len() as u32,
@@ -429,6 +434,9 @@ fn write_tiles(
                     })
                     .collect(),
             );
+            if !logs[oi] && !t.stations.is_empty() {
+                levels.last_mut().expect("this tile's levels").clear();
+            }
             own_vertices.push(counts);
         }
     }

@@ -18,7 +18,8 @@ struct Object {
     // x: 1 + the object's first sample in the normal map, 0: none; y: 1 when its vertices carry
     // smooth normals, 2 when they carry grid coordinates (normals in the normal map: a grid
     // mesh), 3 cell coordinates (a reservoir grid coloured per cell); with neither, facet
-    // normals; z: the depth-tie priority (priority_clip).
+    // normals; z: the depth-tie priority (priority_clip); w: 1 for a well whose vertices carry
+    // their stations, its log a table (draw.wgsl log_scalar).
     normal_map: vec4<u32>,
 }
 

@@ -217,6 +217,28 @@ fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
     return select(w, s, w > 3e38);
 }
 
+// The log value of a well's fragment at its interpolated station `s` (counted from the tile's
+// first station, lod::tube): linear between the stations about it in the tile's table
+// (`gpu::cell_values`: its stations as columns, first word in `tile_grid`), as level 0's vertex
+// values interpolate; no data (the most negative f32) spreads as there.
+fn log_scalar(tile: u32, s: f32) -> f32 {
+    let n = bitcast<u32>(tile_grid[3u * tile + 1u].x);
+    let first = bitcast<u32>(tile_grid[3u * tile + 2u].y);
+    let k = min(u32(max(s, 0.0)), n - 1u);
+    let a = sample_values[first + k];
+    let b = sample_values[first + min(k + 1u, n - 1u)];
+    return a + clamp(s - f32(k), 0.0, 1.0) * (b - a);
+}
+
+// The colouring scalar of a fragment of an object coloured from tables (`gpu::cell_values`): a
+// well's log (log_scalar) or a reservoir grid's cell value (cell_scalar).
+fn table_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
+    if (o.normal_map.w == 1u) {
+        return log_scalar(tile, s);
+    }
+    return cell_scalar(o, tile, c, s);
+}
+
 // A grid mesh's vertex's packed grid coordinates (lod::TileMesh::grid_uv: column | row << 16).
 fn grid_coords(p: u32) -> vec2<f32> {
     return vec2<f32>(f32(p & 0xffffu), f32(p >> 16u));
@@ -272,11 +294,12 @@ fn fs_mesh(v: VOutDraw) -> FOut {
     return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w)), v.tile + 1u);
 }
 
-// fs_mesh for the tiles of reservoir grids coloured per cell (gpu::geometry::DrawRun::cells).
+// fs_mesh for the tiles of objects coloured from tables: reservoir grids per cell, wells by their
+// logs (gpu::geometry::DrawRun::cells).
 @fragment
 fn fs_cells(v: VOutDraw) -> FOut {
     let o = objects[tile_object[v.tile]];
-    let s = cell_scalar(o, v.tile, v.n, v.world_s.w);
+    let s = table_scalar(o, v.tile, v.n, v.world_s.w);
     return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s)), v.tile + 1u);
 }
 
@@ -451,7 +474,7 @@ fn fs_mesh_gl(v: VOutDrawGl) -> FOutGl {
 @fragment
 fn fs_cells_gl(v: VOutDrawGl) -> FOutGl {
     let o = objects[tile_object[v.tile]];
-    let s = cell_scalar(o, v.tile, v.n, v.world_s.w);
+    let s = table_scalar(o, v.tile, v.n, v.world_s.w);
     let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
