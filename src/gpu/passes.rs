@@ -367,7 +367,8 @@ impl Passes {
             enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("histogram"), timestamp_writes: ts });
         pass.set_pipeline(&self.histogram);
         pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(16), size.1.div_ceil(16), 1);
+        // (histogram.wgsl: one invocation per 16 pixels of a row, in workgroups of 8 x 8.)
+        pass.dispatch_workgroups(size.0.div_ceil(16 * 8), size.1.div_ceil(8), 1);
     }
 
     /// Pass: `out[i] = src[i]`, switched off where `counts[i] <= threshold`, for `n` tiles.

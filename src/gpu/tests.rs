@@ -52,7 +52,13 @@ fn contexts_share_a_device_while_one_lives() {
 #[test]
 fn histogram_counts_every_pixel_once() {
     let Some((ctx, p)) = device() else { return };
-    let (w, h) = (37u32, 5u32);
+    // Rows shorter than a workgroup's 8 x 16 pixels, and several workgroups with partial ones.
+    for (w, h) in [(37u32, 5u32), (300, 19)] {
+        histogram_case(&ctx, &p, w, h);
+    }
+}
+
+fn histogram_case(ctx: &GpuContext, p: &Passes, w: u32, h: u32) {
     let ids: Vec<u32> = (0..w * h).map(|i| if i % 7 == 0 { 0 } else { 1 + (i / 3) % 4 }).collect();
     let mut want = [0u32; 4];
     for &i in &ids {
@@ -83,7 +89,7 @@ fn histogram_counts_every_pixel_once() {
     let mut enc = ctx.encoder("test");
     enc.clear_buffer(&counts, 0, None);
     p.record_histogram(&ctx.device, &mut enc, &tex.create_view(&Default::default()), (w, h), &counts, None);
-    assert_eq!(read_u32s(&ctx, enc, &counts, 4), want);
+    assert_eq!(read_u32s(ctx, enc, &counts, 4), want);
 }
 
 /// Draws whose count is at or below the threshold are switched off, the others copied as they are.
