@@ -235,8 +235,9 @@ fn scene_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: b
     // only serves blended ones).
     let (draw, draw_grid) = (lit("fs_mesh", None), lit("fs_grid", None));
     let draw_field = lit_vs(("vs_field", "vs_field_gl"), "fs_field", None);
-    // Their tiles drawn at a coarser level: the fine surface's depth (draw.wgsl `fine_depth`).
-    let draw_field_fine = lit_vs(("vs_field", "vs_field_gl"), "fs_field_fine", None);
+    // Their tiles drawn at a coarser level: the fine surface's depth (draw.wgsl `fine_depth`), the
+    // object carried flat (`vs_field_fine`).
+    let draw_field_fine = lit_vs(("vs_field_fine", "vs_field_gl"), "fs_field_fine", None);
     let draw_closed = lit("fs_mesh", Some(wgpu::Face::Back));
     let (draw_cells, draw_cells_closed) = (lit("fs_cells", None), lit("fs_cells", Some(wgpu::Face::Back)));
     // Translucent objects: the lit pass's shaders, alpha-blended over the image, depth tested
