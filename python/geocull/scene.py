@@ -295,12 +295,12 @@ class Scene(SceneColorings):
         repeat the previous one are dropped. ``values`` (n,): a log, one value per station,
         interpolated along the tube and coloured through ``cmap`` / ``clim`` / ``nan_color`` (as for
         :meth:`add_heightfield`); without values and ``color`` the well gets the palette colour.
-        Each tile has levels of detail for ``lod="screen_error"``: fewer sides (6, 4, 3) and fewer
-        stations (a station is dropped where it lies within the level's tolerance of the path
-        through the kept ones, the path turns by little there, and the log's value is within half
-        a colour-map row of the value interpolated there), each level's error in metres in
-        ``tile_table()["level_error"]``; the first level with at most 1/25 of the fine triangles
-        (else the coarsest) is the prepass proxy.
+        Each tile has levels of detail for ``lod="screen_error"``: the fine rings at fewer stations
+        (a station is dropped where the tube there moves and turns its normals by little against
+        the kept stations' rings), each level's error in metres in ``tile_table()["level_error"]``;
+        every level shows the log's colours where the fine tube shows them (each pixel looks the
+        log up at its station). The first level with at most 1/25 of the fine triangles (else the
+        coarsest) is the prepass proxy.
 
         ``path`` may be an ``xtgeo.Well`` (recognised by its attributes): its stations and, with
         ``log`` (a log name, e.g. "Poro"), that log as ``values`` (undefined samples NaN), its name;
