@@ -28,8 +28,8 @@
 //!   [`radial_gap`]), each ring vertex of level 0 lies within `dev + radius gap` of the level's
 //!   point at the same station and angle; between stations both levels are linear in the
 //!   station, so the bound holds along the path. The normal turns there by at most `chord`, the
-//!   chord between level 0's normal and the level's normalised interpolated one (bounded as
-//!   [`radial_gap`] says). A station is dropped where its shading error `chord + gap + dev /
+//!   chord between level 0's normal and the level's normalised interpolated one (at most the gap
+//!   plus [`radial_shortfall`]). A station is dropped where its shading error `chord + gap + dev /
 //!   radius` stays within the level's budget ([`LEVEL_SHADING`]): a tube displaced sideways by e
 //!   turns the normal a pixel at its middle sees by e / radius, so on a tube a few pixels wide
 //!   any displacement shows in its shade long before it shows in its outline.
@@ -232,28 +232,38 @@ fn largest_over_angles(a: DVec3, b: DVec3) -> f64 {
     (0.5 * (aa + bb) + (h * h + ab * ab).sqrt()).sqrt()
 }
 
-/// How level 0's unit radials at station k differ from those the level interpolates at `t`
-/// between frames `i` and `j` (frames as (direction, axis); the radial at angle a is
-/// `cos a u + sin a v` with `v = d x u`): the largest distance over every angle between the
-/// radial and the interpolated one, and the largest chord between the radial and the normalised
-/// interpolated one. The chord is at most the distance plus how far the interpolated radial falls
-/// short of unit length, `1 - |lerp(r_i, r_j, t)| <= 1 - sqrt(1 - |r_i - r_j|^2 / 4)`.
-fn radial_gap(fi: (DVec3, DVec3), fk: (DVec3, DVec3), fj: (DVec3, DVec3), t: f64) -> (f64, f64) {
+/// The largest distance, over every angle, between level 0's unit radial at station k and the one
+/// the level interpolates at `t` between frames `i` and `j` (frames as (direction, axis); the
+/// radial at angle a is `cos a u + sin a v` with `v = d x u`).
+fn radial_gap(fi: (DVec3, DVec3), fk: (DVec3, DVec3), fj: (DVec3, DVec3), t: f64) -> f64 {
     let uv = |(d, u): (DVec3, DVec3)| (u, d.cross(u));
     let ((ui, vi), (uk, vk), (uj, vj)) = (uv(fi), uv(fk), uv(fj));
-    let gap = largest_over_angles(uk - ui.lerp(uj, t), vk - vi.lerp(vj, t));
-    let ends = largest_over_angles(ui - uj, vi - vj);
-    (gap, gap + 1.0 - (1.0 - 0.25 * ends * ends).max(0.0).sqrt())
+    largest_over_angles(uk - ui.lerp(uj, t), vk - vi.lerp(vj, t))
+}
+
+/// How far, at most, a radial interpolated between frames `i` and `j` falls short of unit length:
+/// `1 - |lerp(r_i, r_j, t)| <= 1 - sqrt(1 - |r_i - r_j|^2 / 4)` at any t. The chord between level
+/// 0's normal at a dropped station and the level's normalised interpolated one is at most its
+/// [`radial_gap`] plus this.
+fn radial_shortfall(fi: (DVec3, DVec3), fj: (DVec3, DVec3)) -> f64 {
+    let ends = largest_over_angles(fi.1 - fj.1, fi.0.cross(fi.1) - fj.0.cross(fj.1));
+    1.0 - (1.0 - 0.25 * ends * ends).max(0.0).sqrt()
 }
 
 /// How a dropped station `k` between kept stations `i < k < j` differs from the level there (see
-/// the module's contract): the axis displacement, its vertical part, and the radials' gap and
-/// chord ([`radial_gap`]).
-fn station_gap(path: &[DVec3], fr: &[(DVec3, DVec3)], a: usize, (i, k, j): (usize, usize, usize)) -> [f64; 4] {
+/// the module's contract), given the segment's [`radial_shortfall`] `short`: the axis
+/// displacement, its vertical part, the radial gap, and the normal chord's bound.
+fn station_gap(
+    path: &[DVec3],
+    fr: &[(DVec3, DVec3)],
+    a: usize,
+    (i, k, j): (usize, usize, usize),
+    short: f64,
+) -> [f64; 4] {
     let t = (k - i) as f64 / (j - i) as f64;
     let d = path[k] - path[i].lerp(path[j], t);
-    let (gap, chord) = radial_gap(fr[i - a], fr[k - a], fr[j - a], t);
-    [d.length(), d.z.abs(), gap, chord]
+    let gap = radial_gap(fr[i - a], fr[k - a], fr[j - a], t);
+    [d.length(), d.z.abs(), gap, gap + short]
 }
 
 /// What [`decimate`] kept and the bounds it measured over the dropped stations.
@@ -274,29 +284,30 @@ struct Decimated {
 /// `fr` level 0's frames of `a..=b`, and the level's bounds.
 fn decimate(spec: &TubeSpec<'_>, fr: &[(DVec3, DVec3)], (a, b): (usize, usize), shading: f64) -> Decimated {
     let (path, radius) = (spec.path, spec.radius);
-    // A dropped station's turn of its normals and its shading error: the turn and its
-    // displacement over the radius.
-    let station = |i, k, j| {
-        let [d, dz, g, c] = station_gap(path, fr, a, (i, k, j));
-        (d, dz, g, c + g, c + g + d / radius)
-    };
     let mut keep = vec![false; b - a + 1];
     keep[0] = true;
     keep[b - a] = true;
     let mut stack = vec![(a, b)];
     let mut out = Decimated { kept: Vec::new(), dev: 0.0, dev_z: 0.0, ring: 0.0, turn: 0.0 };
+    let mut gaps = Vec::new();
     while let Some((i, j)) = stack.pop() {
+        // Per dropped station: its gaps and its shading error, the turn of its normals (chord
+        // plus radial gap) and its displacement over the radius.
+        let short = radial_shortfall(fr[i - a], fr[j - a]);
+        gaps.clear();
+        gaps.extend((i + 1..j).map(|k| {
+            let [d, dz, g, c] = station_gap(path, fr, a, (i, k, j), short);
+            (k, d, dz, g, c + g, c + g + d / radius)
+        }));
         // The station with the largest shading error, if over the budget.
-        let worst = (i + 1..j).map(|k| (k, station(i, k, j).4)).max_by(|x, y| x.1.total_cmp(&y.1));
-        match worst {
-            Some((k, sh)) if sh > shading => {
+        match gaps.iter().max_by(|x, y| x.5.total_cmp(&y.5)) {
+            Some(&(k, .., sh)) if sh > shading => {
                 keep[k - a] = true;
                 stack.push((i, k));
                 stack.push((k, j));
             }
             _ => {
-                for k in i + 1..j {
-                    let (d, dz, g, turn, _) = station(i, k, j);
+                for &(_, d, dz, g, turn, _) in &gaps {
                     out.dev = out.dev.max(d);
                     out.dev_z = out.dev_z.max(dz);
                     out.ring = out.ring.max(radius * g);

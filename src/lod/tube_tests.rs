@@ -109,7 +109,7 @@ fn every_fine_ring_vertex_lies_within_the_level_error() {
                         assert!(chord <= lv.shading_error as f64 + 1e-6, "{chord} > {}", lv.shading_error);
                     }
                     // Over every angle, not only the ring's: the radial gap is exact.
-                    let (g, _) = radial_gap(fr[w[0]], fr[k], fr[w[1]], tt);
+                    let g = radial_gap(fr[w[0]], fr[k], fr[w[1]], tt);
                     let radial = |(d, u): (DVec3, DVec3), a: f64| a.cos() * u + a.sin() * d.cross(u);
                     let most = (0..720)
                         .map(|m| m as f64 * std::f64::consts::TAU / 720.0)
