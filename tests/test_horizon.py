@@ -90,9 +90,22 @@ def test_ridge_hides_valley(renderer):
     # the ridge (tile row 2, y in 16..24) is seen across the view and drawn
     assert visible[2, 1:7].all() and drawn[2, 1:7].all()
     assert hz.stats["nodes_culled"] > 0
+    assert hz.stats["fields_unculled"] == 0
     assert 0 < hz.stats["nodes_visited"] <= 85  # 64 leaves + 16 + 4 + 1 inner nodes
     assert hz.stats["triangles_drawn"] < none.stats["triangles_drawn"]
     assert hz.stats["cull_ms"] > 0.0
+
+
+def test_a_view_from_above_is_reported_unculled(renderer):
+    # within 30 degrees of vertical the horizon cannot rise (module docs' validity rule): every
+    # tile is drawn, and the stat says which fields were left unculled
+    scene = _ridge()
+    scene.add_heightfield(np.full((9, 9), -5.0), origin=(0.0, 0.0), spacing=(8.0, 8.0), tiles=(2, 2))
+    cam = _look((32.0, 20.0, 80.0), 90.0, -80.0)
+    none, hz, oracle = _render3(renderer, scene, cam)
+    _assert_sound(none, hz, oracle)
+    assert hz.stats["fields_unculled"] == 2 and hz.stats["nodes_culled"] == 0
+    assert hz.tile_drawn.sum() == none.tile_drawn.sum()
 
 
 # --------------------------------------------------------------------------------------------

@@ -47,6 +47,7 @@ class RenderStats(TypedDict):
     count_ms: NotRequired[float]  # three_pass with GPU timestamps: ms, GPU time of the count + select passes
     nodes_visited: NotRequired[int]  # horizon: quadtree nodes visited, all height fields together
     nodes_culled: NotRequired[int]  # horizon: quadtree nodes culled, all height fields together
+    fields_unculled: NotRequired[int]  # horizon: height fields the view left unculled (e.g. within 30 deg of vertical)
     trees_built: NotRequired[int]  # horizon: quadtrees built this frame (0 when all were cached)
     cache_bytes: NotRequired[int]  # horizon: bytes of quadtrees cached after this frame (<= Renderer.cache_budget)
     tiles_outside: NotRequired[int]  # frustum: tiles whose boxes lie outside the view

@@ -1,7 +1,9 @@
 //! `culling="horizon"`: the strategy around [`HorizonTree`]: one quadtree per height field and
 //! z_scale, culled on the CPU for each frame; meshes are drawn unculled. Stats: `nodes_visited`,
-//! `nodes_culled` (all height fields together), `trees_built` (this frame), `cache_bytes` (the
-//! tree cache after this frame); array `horizon`: the final horizon of the first height field.
+//! `nodes_culled` (all height fields together), `fields_unculled` (height fields whose trees the
+//! view left unculled, every tile visible: the validity rule in the module above, e.g. a view
+//! within 30° of vertical), `trees_built` (this frame), `cache_bytes` (the tree cache after this
+//! frame); array `horizon`: the final horizon of the first height field.
 //!
 //! # The tree cache
 //!
@@ -92,7 +94,7 @@ impl CullStrategy for Horizon {
         let live: std::collections::HashSet<u64> = f.scene.objects().iter().map(|o| o.geometry_stamp).collect();
         self.trees.retain(|c| c.key.0 != uid || live.contains(&c.key.1));
         let mut mask = Vec::with_capacity(f.n_tiles());
-        let (mut visited, mut culled, mut built, mut horizon) = (0u32, 0u32, 0u64, None);
+        let (mut visited, mut culled, mut built, mut unculled, mut horizon) = (0u32, 0u32, 0u64, 0u64, None);
         for o in f.scene.objects() {
             let ObjectKind::Heightfield(hf) = &o.kind else {
                 mask.extend(std::iter::repeat_n(true, o.tiles.len()));
@@ -132,6 +134,7 @@ impl CullStrategy for Horizon {
             let r = c.tree.cull_in_frame(f.fc.view_proj, frame, f.fc.eye, f.width, f.height);
             visited += r.nodes_visited;
             culled += r.nodes_culled;
+            unculled += u64::from(!r.culling_applied);
             mask.extend_from_slice(&r.tile_visible);
             if horizon.is_none() {
                 horizon = Some(r.horizon);
@@ -142,6 +145,7 @@ impl CullStrategy for Horizon {
         v.stats = vec![
             ("nodes_visited", Stat::Count(visited as u64)),
             ("nodes_culled", Stat::Count(culled as u64)),
+            ("fields_unculled", Stat::Count(unculled)),
             ("trees_built", Stat::Count(built)),
             ("cache_bytes", Stat::Count(self.cache_bytes())),
         ];
