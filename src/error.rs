@@ -49,12 +49,14 @@ pub fn ensure(cond: bool, arg: &str, msg: impl FnOnce() -> String) -> Result<()>
 
 /// An integer argument `v` as a count in `lo..=hi` (bindings pass Python ints as i64, so range
 /// checks live here with the other value checks).
+#[cfg(feature = "python")]
 pub fn int_in(v: i64, arg: &str, lo: i64, hi: i64) -> Result<usize> {
     ensure((lo..=hi).contains(&v), arg, || format!("{v} is outside {lo}..{hi}"))?;
     Ok(v as usize)
 }
 
 /// An object id (ids are u32; anything else names no object).
+#[cfg(feature = "python")]
 pub fn object_id(v: i64) -> Result<u32> {
     u32::try_from(v).map_err(|_| input_err("id", format!("no object with id {v} in this scene")))
 }
@@ -234,6 +236,7 @@ static FIRST_PROCESS: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
 
 /// Records this process as the one whose threads rayon's global pool has (the Python module does
 /// at import; otherwise the first [`in_pool`] call does).
+#[cfg(feature = "python")]
 pub fn record_process() {
     FIRST_PROCESS.get_or_init(std::process::id);
 }

@@ -1,23 +1,24 @@
 //! geocull: occlusion-culled rendering of geoscience sub-surface scenes.
 //!
-//! The pure-Rust core: a [`scene::Scene`] of tiled objects with LOD levels ([`lod`]), an f64
-//! [`camera::Camera`], and a [`render::Renderer`] that draws a scene as a pipeline of named stages
-//! (upload → strategy → draw → read-back) with one of the culling strategies in [`cull`], on the
-//! wgpu mechanics of [`gpu`]; isosurfaces of volumes in [`iso`]. The Python bindings live in
-//! `python` (feature `python`) and only convert arrays and errors.
+//! The pure-Rust core: a [`Scene`] of tiled objects with levels of detail, an f64 [`Camera`], and
+//! a [`Renderer`] that draws a scene as a pipeline of named stages (upload → strategy → draw →
+//! read-back) with one of the culling strategies ([`culling_modes`]); isosurfaces of a [`Volume`]
+//! by an [`IsoRenderer`]. The modules are private: this page's re-exports are the crate's public
+//! surface. The Python bindings live in `python` (feature `python`) and only convert arrays and
+//! errors.
 //!
 //! Dependency rule (checked by `scripts/check_layers.py` in CI):
 //! `python → render → {cull, iso} → gpu → {scene, lod, camera, error}`; nothing imports upward.
 
-pub mod camera;
-pub mod cull;
-pub mod error;
-pub mod gpu;
-pub mod grid;
-pub mod iso;
-pub mod lod;
-pub mod render;
-pub mod scene;
+mod camera;
+mod cull;
+mod error;
+mod gpu;
+mod grid;
+mod iso;
+mod lod;
+mod render;
+mod scene;
 
 #[cfg(feature = "python")]
 mod python;
@@ -45,7 +46,29 @@ impl TestRng {
     }
 }
 
-pub use camera::{Camera, Projection};
-pub use error::{Error, Result};
-pub use render::{RenderOptions, RenderOutput, Renderer};
-pub use scene::Scene;
+// The public surface: what a Rust user builds, renders and reads a scene with. The modules are
+// private; their items are public only within the crate (and to the bindings in `python`).
+pub use camera::{Camera, Lens, Orbit, Projection};
+pub use cull::{CullOptions, Stat, DEFAULT_CACHE_BUDGET};
+pub use error::{Error, Interrupt, Result};
+pub use iso::mesh::{isosurface_mesh, isosurface_mesh_sampled, IsoMesh};
+pub use iso::render::{IsoCulling, IsoOptions, IsoOutput, IsoRenderer, IsoStats, IsoWalk};
+pub use iso::scene_object::SceneIsosurface;
+pub use iso::{BrickCache, BrickSource, MinMaxOctree, Volume};
+pub use render::{Background, GridLod, Lod, RenderOptions, RenderOutput, RenderStats, Renderer};
+pub use scene::color::{builtin_names as colormap_names, DEFAULT_CMAP, DEFAULT_NAN_COLOR};
+pub use scene::lens::LensSlice;
+pub use scene::{
+    AddOptions, CmapArg, ColorBy, ColorByArg, ColorSource, GridFrame, Object, ObjectKind, Scene, MAX_PRIORITY,
+    PRIORITY_DEPTH_STEP,
+};
+
+/// How a user's 3-D array maps onto a [`Volume`]: index order and a z axis growing up or down.
+pub mod layout {
+    pub use crate::iso::layout::{check_grid, stored_origin, AxisOrder, ZPositive};
+}
+
+/// The culling modes, by name (`RenderOptions::culling`), in the registry's order.
+pub fn culling_modes() -> Vec<&'static str> {
+    cull::names()
+}

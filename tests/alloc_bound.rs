@@ -38,10 +38,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering::SeqCst};
 use std::sync::Arc;
 
-use geocull::iso::Volume;
-use geocull::scene::lens::LensSlice;
-use geocull::scene::{AddOptions, ColorByArg, GridFrame};
-use geocull::{Camera, Projection, Scene};
+use geocull::{AddOptions, Camera, ColorByArg, GridFrame, LensSlice, Projection, Scene, Volume};
 
 // ------------------------------------------------------------------------ counting allocator
 

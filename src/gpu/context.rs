@@ -29,7 +29,8 @@ struct Shared {
     depth_reader: Arc<DepthReader>,
     /// Objects built once per device ([`GpuContext::per_device`]), by type.
     objects: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
-    /// The device's number among those this process opened.
+    /// The device's number among those this process opened (the tests tell devices apart by it).
+    #[cfg_attr(not(test), allow(dead_code))]
     serial: u64,
 }
 
@@ -181,6 +182,7 @@ impl GpuContext {
 
     /// The number of this context's device among those the process opened: equal for contexts
     /// that share it.
+    #[cfg(test)]
     pub fn device_serial(&self) -> u64 {
         self.shared.serial
     }

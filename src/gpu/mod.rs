@@ -18,13 +18,14 @@ pub mod slab_test;
 pub mod targets;
 pub mod timing;
 
-pub use context::{GpuContext, BACKEND_ENV, INSTALL_HINT};
-pub use depth_read::DepthReadback;
-pub use geometry::{check_buffer_sizes, SceneGeometry};
+pub use context::GpuContext;
+pub use geometry::SceneGeometry;
 pub use layout::{DrawArgs, Globals, GpuObject};
 pub use passes::Passes;
 pub use readback::{map_err, ReadbackTexture};
-pub use targets::{Targets, BACKGROUND};
+pub use targets::Targets;
+#[cfg(test)]
+pub use targets::BACKGROUND;
 pub use timing::Timestamps;
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ pub const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// Reverse-Z depth (1 = near, 0 = far or empty).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Background colour of the image (opaque black).
+#[cfg(test)]
 pub const BACKGROUND: [u8; 4] = [0, 0, 0, 255];
 
 /// Textures of one size: an optional colour target, the tile-id target and depth.

@@ -1,6 +1,7 @@
 //! Tests of the GPU mechanics on inputs whose answer is known by construction (lavapipe on
 //! machines without a GPU).
 
+use super::geometry::check_buffer_sizes;
 use super::passes::{args_buffer, counts_buffer, empty_args_buffer};
 use super::*;
 use crate::error::Error;

@@ -14,7 +14,9 @@
 
 use rayon::prelude::*;
 
-use super::octree::{classify_range, Class, MinMaxOctree, NodeInfo};
+#[cfg(test)]
+use super::octree::NodeInfo;
+use super::octree::{classify_range, Class, MinMaxOctree};
 
 /// Node classes of the map pass (iso.wgsl).
 pub(super) const CLASS_PASS: u8 = 0;
@@ -55,6 +57,7 @@ pub fn node_classes(tree: &MinMaxOctree, w: f32, depth: u32) -> Vec<u8> {
 
 /// The occluders of depth `depth`: maximal Below and Above nodes of depth <= `depth` (see
 /// `super::render`'s module docs). Returned in octree order (deterministic).
+#[cfg(test)]
 pub fn occluder_nodes(tree: &MinMaxOctree, w: f32, depth: u32) -> (Vec<NodeInfo>, Vec<NodeInfo>) {
     let depth = depth.min(tree.max_depth());
     let (mut below, mut above) = (Vec::new(), Vec::new());

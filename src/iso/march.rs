@@ -54,18 +54,22 @@ pub struct SurfacePatch {
 }
 
 impl SurfacePatch {
+    #[cfg(test)]
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }
 
+    #[cfg(test)]
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
 
+    #[cfg(test)]
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
 
+    #[cfg(test)]
     /// Concatenates patches (no welding; shared boundary vertices appear once
     /// per patch with bit-identical positions).
     pub fn concat<'a, I: IntoIterator<Item = &'a SurfacePatch>>(patches: I) -> SurfacePatch {
@@ -608,6 +612,7 @@ impl PatchCache {
         self.evict();
     }
 
+    #[cfg(test)]
     pub fn budget(&self) -> usize {
         self.budget
     }
@@ -617,11 +622,13 @@ impl PatchCache {
         self.bytes
     }
 
+    #[cfg(test)]
     /// The cached patch for `(w, node)`, if any.
     pub fn get(&self, w: f32, node: &NodeInfo) -> Option<Arc<SurfacePatch>> {
         self.map.get(&patch_key(w, node)).map(|e| e.patch.clone())
     }
 
+    #[cfg(test)]
     /// Drops every patch not extracted at isovalue `w`.
     pub fn retain_isovalue(&mut self, w: f32) {
         let bits = if w == 0.0 { 0.0f32 } else { w }.to_bits();
@@ -633,6 +640,7 @@ impl PatchCache {
         self.map.len()
     }
 
+    #[cfg(test)]
     pub fn is_empty(&self) -> bool {
         self.map.is_empty()
     }

@@ -41,14 +41,12 @@ mod oracle;
 mod passes;
 mod pool;
 pub mod render;
+pub mod scene_object;
 mod seen;
 pub mod store;
 mod walk;
-/// The extraction's former name (marching tetrahedra), kept for paths that use it.
-pub use march as tetra;
 
-pub use march::{extract, extract_nodes, PatchCache, SurfacePatch};
-pub use octree::{Class, MinMaxOctree, NodeInfo, NodeRef};
+pub use octree::MinMaxOctree;
 pub use store::{BrickCache, BrickSource, Window};
 
 /// Identity of the volume a cache was filled from: its `values` allocation (the `Weak` keeps the
@@ -537,6 +535,7 @@ impl Volume {
 
 /// The paper's synthetic field `f(x,y,z) = sin(x*y*z/8) + cos((x-2)(y-2)(z-2))`
 /// on `[-5,5]^3`, sampled at `n^3` points (`n >= 2`). Extract it at isovalue 0.
+#[cfg(test)]
 pub fn pesco_synthetic(n: usize) -> Volume {
     let n = n.max(2);
     let h = 10.0 / (n - 1) as f64;
@@ -549,6 +548,7 @@ pub fn pesco_synthetic(n: usize) -> Volume {
 /// Signed distance to a sphere for tests: `value = |p - c| - radius`, with
 /// `c = (0,0,0)`, sampled at `n^3` points (`n >= 2`) on the cube `[-1,1]^3`.
 /// Use `radius < 1` for a closed surface; extract at isovalue 0.
+#[cfg(test)]
 pub fn sphere_field(n: usize, radius: f64) -> Volume {
     let n = n.max(2);
     let h = 2.0 / (n - 1) as f64;

@@ -70,9 +70,6 @@ pub struct NodeInfo {
     pub bbox_max: [f64; 3],
 }
 
-/// The octree hands out plain node copies.
-pub type NodeRef = NodeInfo;
-
 impl NodeInfo {
     /// Classifies the node against isovalue `w` (see [`Class`]).
     #[inline]

@@ -150,7 +150,7 @@ pub use options::{IsoCulling, IsoOptions, IsoOutput, IsoStats, IsoWalk};
 use std::sync::Arc;
 use std::time::Instant;
 
-pub use super::bricks::{node_classes, occluder_nodes};
+pub use super::bricks::node_classes;
 use super::march::PatchCache;
 use super::octree::{MinMaxOctree, NodeInfo};
 use super::oracle::{widen_where_wrong, OracleCells, ORACLE_TRIES};

@@ -28,9 +28,6 @@ use crate::error::{ensure, input_err, Result};
 /// Samples per axis of a cached brick.
 pub const BRICK: usize = 32;
 
-/// Default byte budget of a [`BrickCache`]: 512 MiB.
-pub const DEFAULT_CACHE_BYTES: usize = 512 << 20;
-
 /// Sample layers per slab of a streaming pass over a grid of `layer` samples per z layer: about
 /// `bytes` per slab, at least 2 layers.
 pub fn slab_layers(layer: usize, bytes: usize) -> usize {
@@ -57,12 +54,14 @@ pub trait BrickSource: Send + Sync {
     fn read(&self, lo: [usize; 3], hi: [usize; 3], out: &mut [f32]) -> Result<()>;
 }
 
+#[cfg(test)]
 /// Samples in memory, as a source (for tests and for comparing the lazy path with the resident one).
 pub struct Resident {
     pub values: Arc<[f32]>,
     pub dims: [usize; 3],
 }
 
+#[cfg(test)]
 impl BrickSource for Resident {
     fn read(&self, lo: [usize; 3], hi: [usize; 3], out: &mut [f32]) -> Result<()> {
         copy_box(&self.values, self.dims, lo, hi, out);

@@ -84,6 +84,7 @@ fn lattice_steps(n: usize, k: usize) -> Option<Vec<usize>> {
 /// level's stride when it is drawn in a group of depth d ([`super::groups::side_masks`]; empty:
 /// no groups). Empty when the tile is too small to coarsen. [`LatticeShape::new`] then
 /// [`LatticeShape::levels`]; tiles of one size and masks share the shape.
+#[cfg(test)]
 pub fn lattice_levels(
     w: usize,
     h: usize,

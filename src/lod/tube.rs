@@ -125,6 +125,7 @@ fn ring(p: DVec3, d: DVec3, u: DVec3, radius: f64, sides: usize) -> impl Iterato
 
 /// The tube around `path` (see the module's contract): (vertices, faces, the station of each
 /// vertex). `path` must be finite with at least two distinct consecutive stations.
+#[cfg(test)]
 pub fn tube(path: &[DVec3], radius: f64, sides: usize) -> (Vec<[f64; 3]>, Vec<[i64; 3]>, Vec<usize>) {
     let n = path.len();
     let mut verts = Vec::with_capacity(n * sides);

@@ -73,7 +73,7 @@ impl PyRenderer {
             let (w, h) = (int_in(width, "width", 1, max)? as u32, int_in(height, "height", 1, max)? as u32);
             Renderer::new(w, h, &backend).map(|r| Self {
                 inner: Mutex::new(r),
-                iso_cache_budget: AtomicU64::new(crate::iso::tetra::DEFAULT_CACHE_BUDGET as u64),
+                iso_cache_budget: AtomicU64::new(crate::iso::march::DEFAULT_CACHE_BUDGET as u64),
             })
         })
     }

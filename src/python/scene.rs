@@ -3,6 +3,7 @@
 use super::{lock, run, run_interruptible, with_lock};
 use crate::error::input_err;
 use crate::error::{int_in, object_id};
+use crate::iso::scene_object::SceneIsosurface;
 use crate::scene::{AddOptions, CmapArg, ColorByArg, ColorSource, GridFrame, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
@@ -261,39 +262,17 @@ impl PyScene {
         values: Option<PyRef<'_, super::iso::PyVolume>>,
     ) -> PyResult<u32> {
         let what = "none (an isosurface's values come from a volume on its grid: `values`)";
-        let mut color_by = self::coloring(coloring, &[], what)?;
+        let color_by = self::coloring(coloring, &[], what)?;
         let tree = volume.tree(py)?;
         let vol = &volume.inner;
         let other = values.as_ref().map(|v| &v.inner);
         let color = color.map(|c| [c.0, c.1, c.2]);
         let scene = &self.inner;
         run_interruptible(py, move |interrupt| {
-            let m = match (other, color_by.as_mut()) {
-                (Some(other), Some(c)) => {
-                    let (m, sampled) = crate::iso::mesh::isosurface_mesh_sampled(vol, &tree, isovalue, other)?;
-                    c.values = Some(sampled);
-                    if c.source == ColorSource::Values {
-                        volume_clim(c, other)?;
-                    }
-                    m
-                }
-                _ => crate::iso::mesh::isosurface_mesh(vol, &tree, isovalue)?,
-            };
-            let faces: Vec<[i64; 3]> = m.faces.iter().map(|f| f.map(|k| k as i64)).collect();
-            let n = faces.len();
-            let tiles = match tiles {
-                Some(t) => Some(int_in(t, "tiles", 1, MAX_INT)?),
-                None => Some(n.div_ceil(4096).max(1)),
-            };
+            let tiles = tiles.map(|t| int_in(t, "tiles", 1, MAX_INT)).transpose()?;
+            let surface = SceneIsosurface::extract(vol, &tree, isovalue, other)?;
             let opts = AddOptions { coarse_factor, name, color, color_by, interrupt };
-            // The enclosed occluder boxes (`culling = "implicit"`), behind this very mesh.
-            let boxes = crate::iso::enclosed::enclosed_boxes(vol, isovalue)?;
-            let mut s = lock(scene);
-            let id = s.add_mesh(&m.vertices, &faces, "isosurface", tiles, opts)?;
-            if let (Some(bounds), false) = (crate::iso::enclosed::mesh_bounds(&m.vertices), boxes.is_empty()) {
-                s.set_occluders(id, &boxes, bounds)?;
-            }
-            Ok(id)
+            surface.add_to(&mut lock(scene), tiles, opts)
         })
     }
 

@@ -23,7 +23,7 @@ pub mod slice;
 pub mod well;
 
 pub use color::{CmapArg, ColorBy, ColorByArg, ColorSource};
-pub use heightfield::{GridAxes, GridFrame, HeightfieldInfo, TileLattice};
+pub use heightfield::{GridAxes, GridFrame, HeightfieldInfo};
 
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 

@@ -132,8 +132,8 @@ mod tests;
 mod tree;
 mod view;
 
-pub use strategy::{make, Horizon};
-pub use tree::{HeightGrid, HorizonResult, HorizonTree};
+pub use strategy::make;
+pub use tree::{HeightGrid, HorizonTree};
 
 /// Safety margin in pixels against floating-point round-off (of this module's f64 arithmetic).
 const PIX_EPS: f64 = 1e-4;

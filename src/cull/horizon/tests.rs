@@ -1,7 +1,8 @@
 //! Tests of horizon culling against the CPU reference rasterizer (`crate::cull::reference`): no
 //! tile with a visible pixel may be culled.
 
-use super::{HeightGrid, HorizonResult, HorizonTree};
+use super::tree::HorizonResult;
+use super::{HeightGrid, HorizonTree};
 use crate::cull::reference::{self, Depth, RefOut};
 use glam::dcamera::rh::proj::{directx as dx_proj, opengl as gl_proj};
 use glam::dcamera::rh::view::look_at_mat4;

@@ -223,6 +223,7 @@ impl HorizonTree {
     /// (OpenGL/wgpu style: clip.w > 0 in front; NDC x,y in [-1,1], y up). Both perspective and
     /// orthographic work, with standard or reverse-Z depth. `eye` (render space) is only used
     /// to orient orthographic views (see the module doc).
+    #[cfg(test)]
     pub fn cull(&self, view_proj: DMat4, eye: DVec3, width: u32, height: u32) -> HorizonResult {
         self.cull_in_frame(view_proj, DMat4::IDENTITY, eye, width, height)
     }
@@ -235,6 +236,7 @@ impl HorizonTree {
     /// transforms (see `View::new`). `eye` is in render space, as for `cull`.
     /// [`HorizonTree::cull`] of the tree moved by `offset` (render space) without rebuilding it:
     /// `cull_in_frame` with the translation as the frame.
+    #[cfg(test)]
     pub fn cull_translated(
         &self,
         view_proj: DMat4,
