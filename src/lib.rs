@@ -59,8 +59,7 @@ pub use render::{Background, GridLod, Lod, RenderOptions, RenderOutput, RenderSt
 pub use scene::color::{builtin_names as colormap_names, DEFAULT_CMAP, DEFAULT_NAN_COLOR};
 pub use scene::lens::LensSlice;
 pub use scene::{
-    AddOptions, CmapArg, ColorBy, ColorByArg, ColorSource, GridFrame, Object, ObjectKind, Scene, MAX_PRIORITY,
-    PRIORITY_DEPTH_STEP,
+    AddOptions, CmapArg, ColorBy, ColorByArg, ColorSource, GridFrame, Object, Scene, MAX_PRIORITY, PRIORITY_DEPTH_STEP,
 };
 
 /// How a user's 3-D array maps onto a [`Volume`]: index order and a z axis growing up or down.

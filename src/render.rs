@@ -35,7 +35,7 @@ use crate::gpu::{
 use crate::iso::render::{IsoOptions, IsoOutput, IsoRenderer};
 use crate::iso::{MinMaxOctree, Volume};
 use crate::lod::cos_sin_deg;
-use crate::scene::{ColorSource, ObjectKind, Scene};
+use crate::scene::{ColorSource, Scene};
 use glam::{DVec3, Mat4};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -513,7 +513,7 @@ fn frame_state(
                 }
             };
             let (mut grid, mut grid_rows, mut normal_map) = ([0.0; 4], [0.0; 4], [0; 4]);
-            if let (ObjectKind::Heightfield(hf), Some(base)) = (&o.kind, geom.shading_base[oi]) {
+            if let (Some(hf), Some(base)) = (o.heightfield(), geom.shading_base[oi]) {
                 let (c, s) = cos_sin_deg(hf.rotation);
                 grid = [hf.x0 as f32, hf.y0 as f32, (c / hf.dx) as f32, (s / hf.dx) as f32];
                 grid_rows = [(-s / hf.dy) as f32, (c / hf.dy) as f32, hf.nx as f32, hf.ny as f32];

@@ -92,3 +92,27 @@ def test_priorities_survive_pickling():
     s = two_planes(9)
     t = pickle.loads(pickle.dumps(s))
     assert [t.object_info(i)["priority"] for i in t.object_ids()] == [4, 9]
+
+
+def test_every_kind_has_its_registered_default_priority():
+    # the registry (src/scene/kinds.rs), one object of each kind through the Python API; a mesh
+    # given a label of its user's behaves as "mesh"
+    s = gc.Scene()
+    v, f = plane_mesh()
+    vals = np.linspace(0.0, 1.0, 9 * 9 * 9, dtype=np.float32).reshape(9, 9, 9)
+    ball = np.fromfunction(lambda k, j, i: np.sqrt((i - 4) ** 2 + (j - 4) ** 2 + (k - 4) ** 2) - 2.5, (9, 9, 9))
+    vol = gc.Volume(vals, origin=(0, 0, -80), spacing=(5, 5, 5))
+    ids = {
+        "heightfield": s.add_heightfield(np.zeros((13, 13)), spacing=(5, 5), tiles=(2, 2)),
+        "fault": s.add_mesh(v, f, kind="fault"),
+        "salt body": s.add_mesh(v, f, kind="salt body"),
+        "well": s.add_well([[10, 10, 0], [10, 10, -50], [20, 15, -90]], radius=2.0),
+        "grid": s.add_grid(box_corners(3, 2, 2)),
+        "slice": s.add_slice(vol, axis="inline", index=4),
+        "lens": s.add_lens(vol, ((1, 6), (1, 6), (1, 6))),
+        "isosurface": s.add_isosurface(gc.Volume(ball.astype(np.float32), spacing=(5, 5, 5)), 0.0),
+    }
+    expected = {"well": 5, "heightfield": 4, "fault": 3, "salt body": 3, "isosurface": 3, "grid": 2, "slice": 1,
+                "lens": 0}
+    got = {k: (s.object_info(i)["kind"], s.object_info(i)["priority"]) for k, i in ids.items()}
+    assert got == {k: (k, p) for k, p in expected.items()}

@@ -6,7 +6,7 @@
 //!   (`lod::tube::log_table`), read at the fragment's interpolated station (draw.wgsl
 //!   `log_scalar`).
 
-use crate::scene::{ObjectKind, Scene};
+use crate::scene::Scene;
 
 /// Where each tile's table went.
 pub(super) struct CellTables {
@@ -31,10 +31,12 @@ pub(super) fn append(scene: &Scene, words: &mut Vec<f32>, max_words: u64, word: 
     let mut logs = Vec::new();
     for o in scene.objects() {
         let logged = o.tiles.iter().any(|t| !t.stations.is_empty());
-        let tables: Vec<Option<([u32; 3], Vec<f32>)>> = match o.kind {
-            ObjectKind::Grid(_) => o.tiles.iter().map(crate::grid::cells::cell_table).collect(),
-            _ if logged => o.tiles.iter().map(crate::lod::tube::log_table).collect(),
-            _ => vec![None; o.tiles.len()],
+        let tables: Vec<Option<([u32; 3], Vec<f32>)>> = if o.grid().is_some() {
+            o.tiles.iter().map(crate::grid::cells::cell_table).collect()
+        } else if logged {
+            o.tiles.iter().map(crate::lod::tube::log_table).collect()
+        } else {
+            vec![None; o.tiles.len()]
         };
         let need: u64 = tables.iter().flatten().map(|(_, t)| t.len() as u64).sum();
         let fits = need > 0 && words.len() as u64 + need <= max_words;

@@ -8,7 +8,7 @@ mod upload;
 use super::layout::DrawArgs;
 use super::GpuContext;
 use crate::error::{Error, Result};
-use crate::scene::{ObjectKind, Scene};
+use crate::scene::Scene;
 use glam::DVec3;
 use plan::compact_indices;
 use rayon::prelude::*;
@@ -304,7 +304,7 @@ impl SceneGeometry {
             let first = self.tile_object_cpu.iter().position(|&x| x as usize == oi).unwrap_or(0);
             let n = self.tile_object_cpu.iter().skip(first).take_while(|&&x| x as usize == oi).count();
             // (An object coloured from tables has them in `sample_values`: uploaded afresh.)
-            if n != o.tiles.len() || matches!(o.kind, ObjectKind::Heightfield(_)) || self.table_colors[oi] {
+            if n != o.tiles.len() || o.heightfield().is_some() || self.table_colors[oi] {
                 return Ok(false);
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
@@ -496,9 +496,9 @@ fn draw_runs(
     for (k, &oi) in tile_object.iter().enumerate() {
         let o = oi as usize;
         let grid_mesh = grid_dims[o].is_some();
-        let field =
-            !grid_mesh && shading_base[o].is_some() && matches!(scene.objects()[o].kind, ObjectKind::Heightfield(_));
-        let closed = matches!(scene.objects()[o].kind, ObjectKind::Grid(_)).then_some(o);
+        let object = &scene.objects()[o];
+        let field = !grid_mesh && shading_base[o].is_some() && object.heightfield().is_some();
+        let closed = object.grid().is_some().then_some(o);
         let cells = table_colors.get(o).copied().unwrap_or(false);
         let run = DrawRun { tiles: k..k + 1, grid_mesh, field, closed, cells, fine_depth: false };
         match runs.last_mut() {

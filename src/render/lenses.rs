@@ -60,7 +60,7 @@ pub(super) fn draw_lenses(f: &FrameInputs<'_>, enc: &mut wgpu::CommandEncoder) -
         }
         let axis = (0..3).max_by(|&a, &b| best[a].total_cmp(&best[b])).unwrap_or(2) as u32;
         // A lens draws one of its three stacks; any other translucent object (a slice) all its tiles.
-        let lens = o.kind_name() == "lens";
+        let lens = o.kind().one_stack;
         let off = o.placement(f.origin);
         for (ti, t) in range.zip(&o.tiles) {
             if (!lens || t.ix == axis) && !t.fine.is_empty() {

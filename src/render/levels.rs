@@ -5,7 +5,7 @@ use super::{GridLod, Lod, RenderOutput, Renderer, MAX_SHADING_LEVELS, MAX_TUBE_S
 use crate::camera::{Camera, FrameCamera};
 use crate::cull::Stat;
 use crate::gpu::{DrawArgs, SceneGeometry};
-use crate::scene::{ObjectKind, Scene};
+use crate::scene::Scene;
 use glam::DVec3;
 
 /// Names of the per-level triangle counts in the stats (`triangles_level{l}`).
@@ -41,9 +41,9 @@ pub(super) fn choose_levels(
     // Per tile: the grid block's leaf cell size, None for tiles of other objects.
     let mut grid_cell: Vec<Option<(f64, f64)>> = Vec::with_capacity(g.n_tiles());
     for o in scene.objects() {
-        match &o.kind {
-            ObjectKind::Grid(info) => grid_cell.extend(info.cell_size.iter().map(|&c| Some(c))),
-            _ => grid_cell.extend(std::iter::repeat_n(None, o.tiles.len())),
+        match o.grid() {
+            Some(info) => grid_cell.extend(info.cell_size.iter().map(|&c| Some(c))),
+            None => grid_cell.extend(std::iter::repeat_n(None, o.tiles.len())),
         }
     }
     let any_grid = grid_cell.iter().any(|c| c.is_some());
@@ -209,7 +209,7 @@ pub(super) fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[
         (interior.iter().zip(&out.tile_drawn).filter(|(_, &d)| d).map(|(&n, _)| n as u64).sum::<u64>()) / 3;
     let (mut any, mut t) = (false, 0usize);
     for o in scene.objects() {
-        let ObjectKind::Grid(info) = &o.kind else {
+        let Some(info) = o.grid() else {
             t += o.tiles.len();
             continue;
         };

@@ -382,7 +382,7 @@ impl Object {
     /// (as every tile built by this crate), so a damaged scene never gets a slab that does not
     /// hold what it draws.
     pub fn slabs(&self) -> &[Option<Slab>] {
-        let ObjectKind::Heightfield(hf) = &self.kind else { return &[] };
+        let Some(hf) = self.heightfield() else { return &[] };
         hf.slabs.get_or_build(|| self.build_slabs())
     }
 
@@ -419,9 +419,9 @@ impl Object {
     /// Per tile of a height field, its height blocks (`lod::blocks`, built with its slab: see
     /// [`Self::slabs`]), for tiles with a slab; None for other tiles and kinds.
     pub fn height_blocks(&self) -> Vec<Option<std::sync::Arc<lod::blocks::HeightBlocks>>> {
-        match &self.kind {
-            ObjectKind::Heightfield(_) => self.slabs().iter().map(|s| s.as_ref().map(|s| s.blocks.clone())).collect(),
-            _ => vec![None; self.tiles.len()],
+        match self.heightfield() {
+            Some(_) => self.slabs().iter().map(|s| s.as_ref().map(|s| s.blocks.clone())).collect(),
+            None => vec![None; self.tiles.len()],
         }
     }
 
@@ -429,8 +429,7 @@ impl Object {
     /// tile counts fit its grid and its tiles; None otherwise and for other kinds.
     pub fn tile_sample_bounds(&self) -> Option<(Vec<usize>, Vec<usize>)> {
         let g = self.grid_axes()?;
-        let ObjectKind::Heightfield(hf) = &self.kind else { return None };
-        let (tx, ty) = hf.tiles;
+        let (tx, ty) = self.heightfield()?.tiles;
         let fits = |n: usize, t: usize| t >= 1 && t < n && n <= 1 << 31;
         (fits(g.nx, tx) && fits(g.ny, ty) && self.tiles.len() == tx * ty)
             .then(|| (lod::tile_bounds(g.nx, tx), lod::tile_bounds(g.ny, ty)))
@@ -458,8 +457,7 @@ impl Object {
     /// Holds only the (ny, nx) f32 height grid meanwhile (the upload writes straight into the
     /// GPU buffer). None, without a call, for other kinds.
     pub fn for_each_shading_sample(&self, mut out: impl FnMut([f32; 3])) -> Option<()> {
-        let ObjectKind::Heightfield(hf) = &self.kind else { return None };
-        let HeightfieldInfo { nx, ny, dx, dy, rotation, .. } = **hf;
+        let HeightfieldInfo { nx, ny, dx, dy, rotation, .. } = *self.heightfield()?;
         let z = self.height_grid()?;
         let at = |i: usize, j: usize| z[j * nx + i];
         // One axis' derivative per sample step, from the neighbours before and after.

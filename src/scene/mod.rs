@@ -14,6 +14,7 @@ mod cmaps;
 pub mod color;
 pub mod grid;
 mod heightfield;
+pub mod kinds;
 pub mod lens;
 mod mesh;
 mod occluders;
@@ -28,7 +29,7 @@ pub use heightfield::{GridAxes, GridFrame, HeightfieldInfo};
 static NEXT_SCENE_UID: AtomicU64 = AtomicU64::new(1);
 
 #[derive(Clone, Debug)]
-pub enum ObjectKind {
+pub(crate) enum ObjectKind {
     /// A height field: its grid layout in the grid's own frame and its tiles' slabs (boxed: an
     /// object of another kind, which may be an empty record of some 84 bytes, stays small).
     Heightfield(Box<HeightfieldInfo>),
@@ -42,7 +43,7 @@ pub enum ObjectKind {
 pub struct Object {
     pub id: u32,
     pub name: String,
-    pub kind: ObjectKind,
+    pub(in crate::scene) kind: ObjectKind,
     /// The flat colour (used when `color_by` is None).
     pub color: [f32; 3],
     /// Colour through a colour map by z or by the tiles' values (None: the flat `color`; boxed:
@@ -90,22 +91,34 @@ pub const MAX_PRIORITY: u8 = 15;
 pub const PRIORITY_DEPTH_STEP: f64 = 1.0 / (1u64 << 21) as f64;
 
 impl Object {
-    /// The object's depth-tie priority: its own, or by kind: wells 5, horizons 4, meshes (faults,
-    /// isosurfaces) 3, reservoir grids 2, seismic slices 1, volume lenses 0. Every pass draws an
-    /// object as if a fraction (priority - 4) x 2^-21 of its distance nearer
-    /// ([`PRIORITY_DEPTH_STEP`]), so of two coincident surfaces the higher priority is seen, in
-    /// every culling mode, whatever the draw order.
+    /// The object's depth-tie priority: its own, or its kind's ([`kinds::KINDS`]: wells 5,
+    /// horizons 4, meshes (faults, isosurfaces) 3, reservoir grids 2, seismic slices 1, volume
+    /// lenses 0). Every pass draws an object as if a fraction (priority - 4) x 2^-21 of its
+    /// distance nearer ([`PRIORITY_DEPTH_STEP`]), so of two coincident surfaces the higher
+    /// priority is seen, in every culling mode, whatever the draw order.
     pub fn priority(&self) -> u8 {
-        self.priority.unwrap_or(match &self.kind {
-            ObjectKind::Heightfield(_) => 4,
-            ObjectKind::Grid(_) => 2,
-            ObjectKind::Mesh { kind } => match kind.as_str() {
-                "well" => 5,
-                "slice" => 1,
-                "lens" => 0,
-                _ => 3,
-            },
-        })
+        self.priority.unwrap_or_else(|| self.kind().priority)
+    }
+
+    /// What is decided by this object's kind ([`kinds::KINDS`]).
+    pub fn kind(&self) -> &'static kinds::Kind {
+        kinds::of(self.kind_name())
+    }
+
+    /// A height field's grid layout and tiles' slabs; None for objects of other kinds.
+    pub fn heightfield(&self) -> Option<&HeightfieldInfo> {
+        match &self.kind {
+            ObjectKind::Heightfield(hf) => Some(hf),
+            _ => None,
+        }
+    }
+
+    /// A reservoir grid's blocks and levels; None for objects of other kinds.
+    pub fn grid(&self) -> Option<&grid::GridInfo> {
+        match &self.kind {
+            ObjectKind::Grid(g) => Some(g),
+            _ => None,
+        }
     }
 
     pub fn kind_name(&self) -> &str {

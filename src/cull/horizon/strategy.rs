@@ -29,7 +29,7 @@ use super::{HeightGrid, HorizonTree};
 use crate::cull::{CullStrategy, Draw, FrameInputs, Pixels, Stat, Visible, DEFAULT_CACHE_BUDGET};
 use crate::error::Result;
 use crate::lod::cos_sin_deg;
-use crate::scene::{HeightfieldInfo, ObjectKind};
+use crate::scene::HeightfieldInfo;
 use glam::{DMat4, DVec3, DVec4};
 
 /// Tree cache key: (scene uid, the object's geometry stamp, z_scale bits): a tree stays valid
@@ -96,11 +96,11 @@ impl CullStrategy for Horizon {
         let mut mask = Vec::with_capacity(f.n_tiles());
         let (mut visited, mut culled, mut built, mut unculled, mut horizon) = (0u32, 0u32, 0u64, 0u64, None);
         for o in f.scene.objects() {
-            let ObjectKind::Heightfield(hf) = &o.kind else {
+            let Some(hf) = o.heightfield() else {
                 mask.extend(std::iter::repeat_n(true, o.tiles.len()));
                 continue;
             };
-            let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles, .. } = &**hf;
+            let HeightfieldInfo { nx, ny, x0, y0, dx, dy, rotation, tiles, .. } = hf;
             let tk: TreeKey = (uid, o.geometry_stamp, zs.to_bits());
             let idx = match self.trees.iter().position(|c| c.key == tk) {
                 Some(i) => i,

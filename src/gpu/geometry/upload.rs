@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
 use crate::gpu::readback::map_err;
 use crate::gpu::GpuContext;
-use crate::scene::{ObjectKind, Scene};
+use crate::scene::Scene;
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
@@ -35,9 +35,9 @@ fn upload_shading(
         .iter()
         .enumerate()
         .map(|(oi, o)| {
-            let (n, normals) = match o.kind {
-                ObjectKind::Heightfield(ref hf) => ((hf.nx * hf.ny) as u64, None),
-                _ => {
+            let (n, normals) = match o.heightfield() {
+                Some(hf) => ((hf.nx * hf.ny) as u64, None),
+                None => {
                     let (nu, nv, normals) = o.grid_normals()?;
                     dims[oi] = Some((nu as u32, nv as u32));
                     ((nu * nv) as u64, Some(normals))
