@@ -6,7 +6,7 @@
 //! hand). Same layout, vertex stage and bind group as the regular box test; `record_box_test`
 //! binds the image's depth read-only as the depth attachment when it uses this pipeline.
 
-use super::passes::{box_pipeline, shader, with_box_wgsl, BOX_TEST_WGSL};
+use super::shader::{box_pipeline, shader, with_box_wgsl, BOX_TEST_WGSL};
 use super::targets::DEPTH_FORMAT;
 
 /// The early-depth box-test pipeline (`layout`: the regular box test's), or None where the device

@@ -17,8 +17,8 @@
 //! lavapipe: 8192 rows of 4096 texels) are copied in bands of rows, each bound at an offset that
 //! is a multiple of 256 bytes (bands are multiples of 64 rows).
 
-use super::passes::{depth_texture_entry, storage_entry, uniform_entry};
 use super::readback::ReadbackTexture;
+use super::shader::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::error::Result;
 use wgpu::util::DeviceExt;
 

@@ -14,6 +14,7 @@ pub mod layout;
 pub mod occluder_depth;
 pub mod passes;
 pub mod readback;
+pub mod shader;
 pub mod slab_test;
 pub mod targets;
 pub mod timing;

@@ -5,7 +5,8 @@
 //! farther. No colour, no ids. What the boxes mean is the caller's business (`cull::implicit`).
 
 use super::layout::BoxInstance;
-use super::passes::{box_vertex_layout, boxes_buffer, depth_texture_entry, shader, with_box_wgsl};
+use super::passes::boxes_buffer;
+use super::shader::{box_vertex_layout, depth_texture_entry, shader, with_box_wgsl};
 use super::targets::DEPTH_FORMAT;
 
 /// The pipelines and bind-group layout of the pass.

@@ -19,80 +19,10 @@ mod pipelines;
 
 use super::geometry::SceneGeometry;
 use super::layout::{DrawArgs, SelectParams};
-use super::targets::{Targets, ID_FORMAT};
+use super::targets::Targets;
 use super::timing::Timestamps;
 use super::GpuContext;
 use wgpu::util::DeviceExt;
-
-/// The scene passes' uniforms (`Globals`, `g`): prepended to common.wgsl and to the box passes.
-const GLOBALS_WGSL: &str = include_str!("shaders/globals.wgsl");
-/// What the scene passes share, after their uniforms.
-const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
-const BOX_WGSL: &str = include_str!("shaders/box.wgsl");
-const SELECT_WGSL: &str = include_str!("shaders/select_common.wgsl");
-/// Depth-tie priorities: appended to the scene passes' and the box tests' sources.
-const PRIORITY_WGSL: &str = include_str!("shaders/priority.wgsl");
-
-/// `source` with the scene's uniforms (globals.wgsl: `Globals`, `g`), the shared box geometry
-/// (box.wgsl: `CUBE`, `box_corner`) and the depth-tie priorities prepended.
-pub fn with_box_wgsl(source: &str) -> String {
-    format!("{GLOBALS_WGSL}\n{BOX_WGSL}\n{PRIORITY_WGSL}\n{source}")
-}
-
-/// The box test's shader (box.wgsl is prepended): vertex stage and the hand-compared fragment.
-pub const BOX_TEST_WGSL: &str = include_str!("shaders/box_test.wgsl");
-
-/// A box-test pipeline of `layout` (scene bind group, then the box test's: depth texture, counts,
-/// skip): front faces of the box instances, fragment entry `fs` of `module` writing nothing to the
-/// id target it needs as an attachment; `depth`: the depth attachment's state, if any.
-pub fn box_pipeline(
-    d: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    fs: &str,
-    depth: Option<wgpu::DepthStencilState>,
-) -> wgpu::RenderPipeline {
-    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(fs),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_box"),
-            compilation_options: Default::default(),
-            buffers: &[Some(box_vertex_layout())],
-        },
-        // Front faces only: one fragment per pixel of a convex box.
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            cull_mode: Some(wgpu::Face::Back),
-            front_face: wgpu::FrontFace::Ccw,
-            ..Default::default()
-        },
-        depth_stencil: depth,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some(fs),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: ID_FORMAT,
-                blend: None,
-                write_mask: wgpu::ColorWrites::empty(),
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
-/// Vertex layout of [`BoxInstance`](super::layout::BoxInstance) instances (two vec4s).
-pub fn box_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
-    const ATTRS: [wgpu::VertexAttribute; 2] = [
-        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
-        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
-    ];
-    wgpu::VertexBufferLayout { array_stride: 32, step_mode: wgpu::VertexStepMode::Instance, attributes: &ATTRS }
-}
 
 /// Usage of every indirect-args buffer: drawn from, written by compute, copied for read-back.
 pub const ARGS_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::INDIRECT
@@ -136,55 +66,6 @@ pub struct Passes {
     box_early: Option<wgpu::RenderPipeline>,
     /// The box test's count with height-field tiles' slabs as occludees.
     pub slab_test: super::slab_test::SlabTest,
-}
-
-pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: vis,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// A depth image bound as an unfilterable float texture: shaders read it with `textureLoad`
-/// (naga's GLSL cannot load a `texture_depth_2d`), as the box and slab tests and the depth
-/// read-back do.
-pub fn depth_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: vis,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-pub fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: vis,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-pub fn shader(d: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
-    d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    })
 }
 
 /// A render pass over `targets`, cleared (colour to the background, ids to 0, depth to far = 0)

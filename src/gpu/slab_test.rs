@@ -4,7 +4,7 @@
 //! `place` holds for the tile, and counts per tile the fragments at or in front of the depth
 //! image; which tiles, and by how much, is the caller's (`cull::phases`).
 
-use super::passes::{depth_texture_entry, shader, storage_entry, with_box_wgsl, BOX_TEST_WGSL};
+use super::shader::{depth_texture_entry, shader, storage_entry, with_box_wgsl, BOX_TEST_WGSL};
 use super::targets::{Targets, DEPTH_FORMAT, ID_FORMAT};
 
 /// The slab-test pipeline and its bind-group layout.

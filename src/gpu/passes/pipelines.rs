@@ -2,9 +2,10 @@
 //! the layouts, the scene pipelines (lit passes, blended, prepass), the compute pipelines
 //! (histogram, select, select_rest, slab_gate), the box test's.
 
-use super::{
-    box_pipeline, depth_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, Passes, BOX_TEST_WGSL,
-    COMMON_WGSL, GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
+use super::Passes;
+use crate::gpu::shader::{
+    box_pipeline, depth_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, BOX_TEST_WGSL, COMMON_WGSL,
+    GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
 };
 use crate::gpu::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
 use wgpu::util::DeviceExt;
