@@ -1,46 +1,9 @@
 //! Occluder coverage: the covered set of a drawn tile, from the boundary edges of its hole-free
 //! surface (see "Occluders" in the module documentation), raises the horizon.
 
-use super::tree::{HorizonTree, NodeProj};
+use super::tree::{boundary_edges, HorizonTree, NodeProj, Scratch};
 use super::view::View;
 use super::PIX_EPS;
-
-/// Emits the oriented boundary edges of the union of good cells in the cell range
-/// [i0,i1) x [j0,j1). Edges are CCW in index space (reversed when `flip`).
-pub(super) fn boundary_edges(
-    (i0, i1): (usize, usize),
-    (j0, j1): (usize, usize),
-    good: impl Fn(usize, usize) -> bool,
-    flip: bool,
-    mut emit: impl FnMut((usize, usize), (usize, usize)),
-) {
-    for j in j0..j1 {
-        for i in i0..i1 {
-            if !good(i, j) {
-                continue;
-            }
-            let mut e = |a: (usize, usize), b: (usize, usize)| {
-                if flip {
-                    emit(b, a)
-                } else {
-                    emit(a, b)
-                }
-            };
-            if j == j0 || !good(i, j - 1) {
-                e((i, j), (i + 1, j));
-            }
-            if i + 1 == i1 || !good(i + 1, j) {
-                e((i + 1, j), (i + 1, j + 1));
-            }
-            if j + 1 == j1 || !good(i, j + 1) {
-                e((i + 1, j + 1), (i, j + 1));
-            }
-            if i == i0 || !good(i - 1, j) {
-                e((i, j + 1), (i, j));
-            }
-        }
-    }
-}
 
 impl HorizonTree {
     pub(super) fn add_occluder(
@@ -208,23 +171,6 @@ impl HorizonTree {
             k[c] = kk;
         }
     }
-}
-
-#[derive(Default)]
-pub(super) struct Scratch {
-    /// (column, y, sign)
-    pub(super) cross: Vec<(u32, f64, i8)>,
-    pub(super) iv: Vec<(f64, f64)>,
-    /// (column, lo, hi): rows within the margin of a boundary edge
-    pub(super) unc: Vec<(u32, f64, f64)>,
-    /// robustly covered intervals of one column, bottom up
-    pub(super) pieces: Vec<(f64, f64)>,
-    pub(super) valid: Vec<bool>,
-    /// boundary edges (global sample indices) of the current occluder union
-    pub(super) ue: Vec<[u32; 2]>,
-    /// per tile: range in `pool` of the boundary edges it was credited with (empty = not drawn)
-    pub(super) tile_edges: Vec<(u32, u32)>,
-    pub(super) pool: Vec<[u32; 2]>,
 }
 
 /// For each pixel column whose centre may be within the margin of the projected edge a-b: the
