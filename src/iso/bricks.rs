@@ -14,9 +14,30 @@
 
 use rayon::prelude::*;
 
-#[cfg(test)]
-use super::octree::NodeInfo;
-use super::octree::{classify_range, Class, MinMaxOctree};
+use super::octree::{classify_range, Class, MinMaxOctree, NodeInfo};
+
+impl MinMaxOctree {
+    /// The map pass's class and low faces of every single cell at isovalue `w` ([`leaf_nodes`]),
+    /// straight from the samples; `None` when the leaves are stored levels or the volume is lazy
+    /// (then use [`MinMaxOctree::map_at_depth`]: a lazy volume's classes come from the stored
+    /// levels, where this would read every sample).
+    pub fn leaf_nodes(&self, w: f32) -> Option<Vec<u8>> {
+        self.leaves_from_samples().then(|| {
+            let (values, samples) = self.all_samples();
+            leaf_nodes(&values, samples, w)
+        })
+    }
+
+    /// The walk's contour bricks ([`contour_bricks`]) with a block for each of `bricks`, the
+    /// nodes 2 levels above the cells that straddle the isovalue: a brick with a passable cell has
+    /// samples on both sides of it or at it, so its node straddles. (At most 4 cells per axis: the
+    /// root, brick 0.) A lazy volume has no leaf classes, so no contours: correct, but reads all.
+    pub fn contour_bricks(&self, bricks: &[NodeInfo]) -> (Vec<u32>, usize) {
+        let blocks: Vec<[u32; 3]> = bricks.iter().map(|n| [n.ix, n.iy, n.iz]).collect();
+        let (values, samples) = self.all_samples();
+        contour_bricks(&values, samples, &blocks)
+    }
+}
 
 /// Node classes of the map pass (iso.wgsl).
 pub(super) const CLASS_PASS: u8 = 0;

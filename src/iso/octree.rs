@@ -376,30 +376,21 @@ impl MinMaxOctree {
             .collect()
     }
 
-    /// The map pass's class and low faces of every single cell at isovalue `w`
-    /// ([`super::bricks::leaf_nodes`]), straight from the samples; `None` when the leaves are
-    /// stored levels (then use [`Self::map_at_depth`]).
-    pub fn leaf_nodes(&self, w: f32) -> Option<Vec<u8>> {
-        // (A lazy volume's classes come from the stored levels: this would read every sample.)
-        (self.levels.len() as u32 <= self.depth && self.store.is_none())
-            .then(|| super::bricks::leaf_nodes(&self.values, self.samples, w))
+    /// The samples the tree was built from, all of them (x fastest), and their count per axis: the
+    /// resident volume's, or read whole through a lazy volume's cache (`super::bricks`' scans of
+    /// every cell; a lazy volume only reaches them where nothing else answers).
+    pub(super) fn all_samples(&self) -> (std::borrow::Cow<'_, [f32]>, [usize; 3]) {
+        let values = match &self.store {
+            None => std::borrow::Cow::Borrowed(&self.values[..]),
+            Some(s) => s.window([0; 3], self.samples.map(|n| n - 1)).data,
+        };
+        (values, self.samples)
     }
 
-    /// The walk's contour bricks ([`super::bricks::contour_bricks`]) with a block for each of
-    /// `bricks`, the nodes 2 levels above the cells that straddle the isovalue: a brick with a
-    /// passable cell has samples on both sides of it or at it, so its node straddles. (At most 4
-    /// cells per axis: the root, brick 0.)
-    pub fn contour_bricks(&self, bricks: &[NodeInfo]) -> (Vec<u32>, usize) {
-        let blocks: Vec<[u32; 3]> = bricks.iter().map(|n| [n.ix, n.iy, n.iz]).collect();
-        match &self.store {
-            None => super::bricks::contour_bricks(&self.values, self.samples, &blocks),
-            // (Not reached: a lazy volume has no leaf classes, so no contours. Correct, but reads all.)
-            Some(s) => super::bricks::contour_bricks(
-                &s.window([0; 3], self.samples.map(|n| n - 1)).data,
-                self.samples,
-                &blocks,
-            ),
-        }
+    /// Whether single cells are answered straight from resident samples: the finest depth is
+    /// not a stored level and the volume is not lazy.
+    pub(super) fn leaves_from_samples(&self) -> bool {
+        self.levels.len() as u32 <= self.depth && self.store.is_none()
     }
 
     /// `f(min, max, has_nan)` of every node at `depth` (x fastest, then y, z), in parallel, without
