@@ -539,7 +539,7 @@ pub(super) fn offset_triangles(p: &SurfacePatch, ranges: Option<&[[u32; 2]]>, ba
 }
 
 /// Triangles per patch: all, or those of its `ranges`.
-fn triangle_counts(patches: &[Arc<SurfacePatch>], ranges: Option<&[Vec<[u32; 2]>]>) -> Vec<usize> {
+pub(super) fn triangle_counts(patches: &[Arc<SurfacePatch>], ranges: Option<&[Vec<[u32; 2]>]>) -> Vec<usize> {
     match ranges {
         Some(r) => r.iter().map(|r| r.iter().map(|[a, b]| (b - a) as usize).sum()).collect(),
         None => patches.iter().map(|p| p.triangles.len()).collect(),
@@ -548,7 +548,7 @@ fn triangle_counts(patches: &[Arc<SurfacePatch>], ranges: Option<&[Vec<[u32; 2]>
 
 /// Records into `enc` the lit surface pass (clearing colour and depth) drawing the index `runs` of
 /// `buffers` (vertices, indices; nothing when None), submits it and waits for the GPU.
-fn submit_surface(
+pub(super) fn submit_surface(
     ctx: &GpuContext,
     iso: &IsoPasses,
     globals_bg: &wgpu::BindGroup,
@@ -574,7 +574,7 @@ fn submit_surface(
     ctx.take_error()
 }
 
-fn index_buffer(d: &wgpu::Device, idx: &[[u32; 3]]) -> wgpu::Buffer {
+pub(super) fn index_buffer(d: &wgpu::Device, idx: &[[u32; 3]]) -> wgpu::Buffer {
     d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("iso_indices"),
         contents: bytemuck::cast_slice(idx),
@@ -614,52 +614,4 @@ pub(super) fn draw_surface(
     let all = 0..3 * nt as u32;
     submit_surface(ctx, iso, globals_bg, tg, enc, buffers.as_ref().map(|(v, i)| (v, i)), std::slice::from_ref(&all))?;
     Ok((nt as u64, nv as u64))
-}
-
-/// [`draw_surface`] from the renderer's pool ([`super::pool::SurfacePool`]): `patches` are put
-/// in the pool (only those not there yet are uploaded), then drawn whole (`ranges` None: runs of
-/// patches consecutive in the pool, one draw each) or, with `ranges`, only those triangle ranges
-/// of each patch (their indices uploaded). Returns (triangles drawn, vertices of the patches).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn draw_pooled(
-    ctx: &GpuContext,
-    iso: &IsoPasses,
-    pool: &mut super::pool::SurfacePool,
-    globals_bg: &wgpu::BindGroup,
-    tg: &Targets,
-    patches: &[Arc<SurfacePatch>],
-    ranges: Option<&[Vec<[u32; 2]>]>,
-    space: &Space,
-) -> Result<(u64, u64)> {
-    let d = &ctx.device;
-    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
-    let bases = pool.ensure(ctx, &mut enc, patches, space)?;
-    let nv: u64 = patches.iter().map(|p| p.positions.len() as u64).sum();
-    let counts = triangle_counts(patches, ranges);
-    let nt = counts.iter().sum::<usize>() as u64;
-    // Triangle runs of the pool's index buffer, or this frame's own indices.
-    let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
-    let own = match ranges {
-        None => {
-            let mut order: Vec<(u32, u32)> =
-                patches.iter().zip(&bases).map(|(p, &(_, t))| (t, t + p.triangles.len() as u32)).collect();
-            order.sort_unstable();
-            for (a, b) in order {
-                match runs.last_mut() {
-                    Some(r) if r.end == 3 * a => r.end = 3 * b,
-                    _ if a < b => runs.push(3 * a..3 * b),
-                    _ => {}
-                }
-            }
-            None
-        }
-        Some(ranges) => {
-            let idx = fill_parts(&counts, |i, out| offset_triangles(&patches[i], Some(&ranges[i]), bases[i].0, out));
-            runs.push(0..3 * nt as u32);
-            (nt > 0).then(|| index_buffer(d, &idx))
-        }
-    };
-    let buffers = pool.buffers().map(|(vb, pool_ib)| (vb, own.as_ref().unwrap_or(pool_ib)));
-    submit_surface(ctx, iso, globals_bg, tg, enc, buffers, &runs)?;
-    Ok((nt, nv))
 }

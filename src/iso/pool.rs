@@ -16,7 +16,8 @@
 
 use super::march::SurfacePatch;
 use super::passes::{
-    check_surface_size, fill_parts, offset_triangles, pack_vertices, Space, TRIANGLE_BYTES, VERTEX_BYTES,
+    check_surface_size, fill_parts, index_buffer, offset_triangles, pack_vertices, submit_surface, triangle_counts,
+    IsoPasses, Space, Targets, TRIANGLE_BYTES, VERTEX_BYTES,
 };
 use crate::error::Result;
 use crate::gpu::GpuContext;
@@ -158,4 +159,52 @@ impl SurfacePool {
         (self.nv, self.nt) = (nv, nt);
         Ok(())
     }
+}
+
+/// [`super::passes::draw_surface`] from the renderer's pool ([`SurfacePool`]): `patches` are put
+/// in the pool (only those not there yet are uploaded), then drawn whole (`ranges` None: runs of
+/// patches consecutive in the pool, one draw each) or, with `ranges`, only those triangle ranges
+/// of each patch (their indices uploaded). Returns (triangles drawn, vertices of the patches).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn draw_pooled(
+    ctx: &GpuContext,
+    iso: &IsoPasses,
+    pool: &mut SurfacePool,
+    globals_bg: &wgpu::BindGroup,
+    tg: &Targets,
+    patches: &[Arc<SurfacePatch>],
+    ranges: Option<&[Vec<[u32; 2]>]>,
+    space: &Space,
+) -> Result<(u64, u64)> {
+    let d = &ctx.device;
+    let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("iso_surface") });
+    let bases = pool.ensure(ctx, &mut enc, patches, space)?;
+    let nv: u64 = patches.iter().map(|p| p.positions.len() as u64).sum();
+    let counts = triangle_counts(patches, ranges);
+    let nt = counts.iter().sum::<usize>() as u64;
+    // Triangle runs of the pool's index buffer, or this frame's own indices.
+    let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
+    let own = match ranges {
+        None => {
+            let mut order: Vec<(u32, u32)> =
+                patches.iter().zip(&bases).map(|(p, &(_, t))| (t, t + p.triangles.len() as u32)).collect();
+            order.sort_unstable();
+            for (a, b) in order {
+                match runs.last_mut() {
+                    Some(r) if r.end == 3 * a => r.end = 3 * b,
+                    _ if a < b => runs.push(3 * a..3 * b),
+                    _ => {}
+                }
+            }
+            None
+        }
+        Some(ranges) => {
+            let idx = fill_parts(&counts, |i, out| offset_triangles(&patches[i], Some(&ranges[i]), bases[i].0, out));
+            runs.push(0..3 * nt as u32);
+            (nt > 0).then(|| index_buffer(d, &idx))
+        }
+    };
+    let buffers = pool.buffers().map(|(vb, pool_ib)| (vb, own.as_ref().unwrap_or(pool_ib)));
+    submit_surface(ctx, iso, globals_bg, tg, enc, buffers, &runs)?;
+    Ok((nt, nv))
 }

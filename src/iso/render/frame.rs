@@ -20,9 +20,8 @@ use crate::iso::bricks::{contour_grid, dilate_nan, CONTOUR_SHIFT};
 use crate::iso::march::SurfacePatch;
 use crate::iso::octree::{MinMaxOctree, NodeInfo};
 use crate::iso::oracle::{visible_cells, OracleCells};
-use crate::iso::passes::{
-    draw_pooled, draw_surface, march, pixel_rays, ClassGrid, Globals, MapParams, Space, Targets, WalkData,
-};
+use crate::iso::passes::{draw_surface, march, pixel_rays, ClassGrid, Globals, MapParams, Space, Targets, WalkData};
+use crate::iso::pool::draw_pooled;
 use crate::iso::seen::{cells_seen, seen_cells, visible_ranges};
 use crate::iso::walk::{walk, WalkGrid};
 use crate::iso::Volume;
