@@ -133,7 +133,7 @@ pub(crate) fn drift(
     let ax = along(dir);
     let uv = |v: u32| lat(v).map(unpack).map(|c| DVec2::new(c[ax[0]] as f64, c[ax[1]] as f64));
     let mut err = 0.0f64;
-    for (w, a, c) in super::merge::removed_spans(outline, drop) {
+    for (w, a, c) in super::poly::removed_spans(outline, drop) {
         let (Some(la), Some(lc), Some(lv)) = (uv(outline[a]), uv(outline[c]), uv(outline[w])) else { continue };
         let d = lc - la;
         let t = if d.length_squared() > 0.0 { ((lv - la).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };

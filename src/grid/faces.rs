@@ -313,10 +313,6 @@ impl<'c, 'a> Level0<'c, 'a> {
             kind,
             lat: Vec::new(),
         });
-        if self.ctx.cells {
-            let f = self.faces.last_mut().expect("pushed");
-            f.lat = super::cells::level0(f, &self.verts, (self.b.i0 as u32, self.b.j0 as u32), self.ctx.g.ni);
-        }
     }
 
     /// Builds every face of the block.

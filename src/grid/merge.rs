@@ -28,7 +28,7 @@
 //! the rows) stays as the strips of the level below.
 
 use super::faces::{kind, Block, Face};
-use super::poly::{convex, ear_clip, newell, triangulate, FastMap, Verts, STRAIGHT};
+use super::poly::{convex, ear_clip, newell, removed_spans, triangulate, FastMap, Verts, STRAIGHT};
 
 /// Node key at some height: (node i, node j, layer, direction).
 type Key = (u32, u32, u32, u8);
@@ -565,27 +565,6 @@ fn fault_groups(
             }
         }
     }
-}
-
-/// Each vertex of the ring `outline` that the merge removes (`drop`) with the kept vertices
-/// around it, before and after: (removed, before, after) as positions in `outline`.
-pub(super) fn removed_spans<'a>(
-    outline: &'a [u32],
-    drop: &'a [bool],
-) -> impl Iterator<Item = (usize, usize, usize)> + 'a {
-    let m = outline.len();
-    let dropped = move |k: usize| drop[outline[k] as usize];
-    (0..m).filter(move |&w| dropped(w)).map(move |w| {
-        let mut a = (w + m - 1) % m;
-        while dropped(a) && a != w {
-            a = (a + m - 1) % m;
-        }
-        let mut c = (w + 1) % m;
-        while dropped(c) && c != w {
-            c = (c + 1) % m;
-        }
-        (w, a, c)
-    })
 }
 
 /// The largest distance of a vertex the merge removes from the merged face: outline vertices

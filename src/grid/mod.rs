@@ -360,7 +360,13 @@ fn build_block(ctx: &Ctx, b: Block, (bx, by): (usize, usize)) -> BlockOut {
     let cell_size = if nc > 0 { (sl / nc as f64, sw / nc as f64) } else { (0.0, 0.0) };
     let mut l0 = Level0::new(ctx, b);
     l0.build();
-    let Level0 { mut verts, faces, .. } = l0;
+    let Level0 { mut verts, mut faces, .. } = l0;
+    if ctx.cells {
+        // Each face's vertices' cell coordinates (`Face::lat`), for colouring per cell.
+        for f in &mut faces {
+            f.lat = cells::level0(f, &verts, (b.i0 as u32, b.j0 as u32), g.ni);
+        }
+    }
     let mut tile = TileMesh { ix: bx as u32, iy: by as u32, ..Default::default() };
     let has_values = g.values.is_some();
     // A vertex per position, value and cell coordinates.

@@ -363,3 +363,24 @@ pub(crate) fn ear_clip(poly: &[u32], verts: &Verts) -> Option<Vec<[u32; 3]>> {
 
 /// The least turn (sine of the angle) of an ear's corner in [`ear_clip`].
 pub(crate) const EAR_MIN: f64 = 1e-6;
+
+/// Each vertex of the ring `outline` that the merge removes (`drop`) with the kept vertices
+/// around it, before and after: (removed, before, after) as positions in `outline`.
+pub(super) fn removed_spans<'a>(
+    outline: &'a [u32],
+    drop: &'a [bool],
+) -> impl Iterator<Item = (usize, usize, usize)> + 'a {
+    let m = outline.len();
+    let dropped = move |k: usize| drop[outline[k] as usize];
+    (0..m).filter(move |&w| dropped(w)).map(move |w| {
+        let mut a = (w + m - 1) % m;
+        while dropped(a) && a != w {
+            a = (a + m - 1) % m;
+        }
+        let mut c = (w + 1) % m;
+        while dropped(c) && c != w {
+            c = (c + 1) % m;
+        }
+        (w, a, c)
+    })
+}
