@@ -30,7 +30,7 @@
 //! [`BorderErrors::coarse`] (those diagonal pairs and corner triangles) of the fine surface:
 //! `Level::grouped_error`, for every depth.
 
-use super::levels::{cell_triangles, lattice_error};
+use super::lattice::{cell_triangles, lattice_error, square_cell_error};
 use super::Indices;
 
 /// The deepest group: 2^6 = 64 tiles a side.
@@ -143,7 +143,7 @@ pub fn border_errors(
                 across.extend((0..4).filter(|&s| on[s]).map(|s| [c, ring[s], ring[(s + 1) % 4]]));
             }
             let e_split = if a1 - a == b1 - b {
-                super::levels::square_cell_error((a, b), a1 - a, z)
+                square_cell_error((a, b), a1 - a, z)
             } else {
                 split.clear();
                 cell_triangles((a, b), (a1, b1), size, BOTTOM | RIGHT | TOP | LEFT, &mut split);

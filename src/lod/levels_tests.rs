@@ -2,6 +2,7 @@
 
 use super::shading::Shading;
 use super::*;
+use crate::lod::lattice::fine_height;
 use std::collections::HashMap;
 
 fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f64) -> (Vec<Level>, Vec<f64>) {
@@ -293,4 +294,18 @@ pub(in crate::lod) fn distance_sampled(
         }
     }
     seen
+}
+
+#[test]
+fn exaggeration_stretches_only_the_vertical_part_of_an_error() {
+    // A vertical error grows by the exaggeration, a horizontal one not at all, and flattening
+    // shrinks nothing; between, the length of (e_xy, s e_z) at its largest.
+    assert!((exaggerated(2.0, 2.0, 5.0) - 10.0).abs() < 1e-12);
+    assert_eq!(exaggerated(2.0, 0.0, 10.0), 2.0);
+    assert_eq!(exaggerated(2.0, 2.0, 0.5), 2.0);
+    let (e, ez, s) = (5.0f32, 3.0f32, 4.0f64);
+    let want = (4.0f64 * 4.0 + (s * 3.0).powi(2)).sqrt(); // e_xy = 4 when e_z = 3 takes the rest
+    assert!((exaggerated(e, ez, s) - want).abs() < 1e-9);
+    // An error_z above the error (damaged) counts as the error.
+    assert!((exaggerated(1.0, 7.0, 3.0) - 3.0).abs() < 1e-12);
 }

@@ -16,6 +16,7 @@
 pub mod blocks;
 pub mod clearance;
 pub mod groups;
+mod lattice;
 pub mod levels;
 pub mod normals;
 pub mod per_vertex;

@@ -4,6 +4,7 @@
 
 use crate::gpu::{DrawArgs, SceneGeometry};
 use crate::lod::groups::MAX_GROUP_DEPTH;
+use crate::lod::levels::exaggerated;
 use crate::scene::Scene;
 
 /// What [`group_levels`] decides with: per tile, pixels per world unit at its box's nearest point
@@ -91,5 +92,5 @@ fn px(b: &Budget<'_>, k: usize, e: f32) -> f64 {
     if e == 0.0 {
         return 0.0;
     }
-    super::levels::exaggerated(e, e, b.z_scale) * b.scale[k]
+    exaggerated(e, e, b.z_scale) * b.scale[k]
 }

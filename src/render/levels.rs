@@ -5,6 +5,7 @@ use super::{GridLod, Lod, RenderOutput, Renderer, MAX_SHADING_LEVELS, MAX_TUBE_S
 use crate::camera::{Camera, FrameCamera};
 use crate::cull::Stat;
 use crate::gpu::{DrawArgs, SceneGeometry};
+use crate::lod::levels::exaggerated;
 use crate::scene::Scene;
 use glam::DVec3;
 
@@ -23,7 +24,7 @@ pub(super) type ChosenLevels = (Vec<u8>, Vec<f32>);
 
 /// Stage 2b: the level of detail of every tile for this frame, and with `Lod::ScreenError` each
 /// tile's chosen level and its error in pixels. The error of a level (world units) is exaggerated
-/// where that enlarges it ([`exaggerated`]: only its vertical part stretches) and projected at the
+/// where that enlarges it ([`exaggerated`](crate::lod::levels::exaggerated): only its vertical part stretches) and projected at the
 /// tile box's nearest point (perspective) or with the orthographic scale; a box that contains the
 /// eye gets level 0. Cheap on the CPU (one pass over the tiles), so it runs there, before the
 /// strategy, with no read-back.
@@ -145,17 +146,6 @@ pub(super) fn choose_levels(
     (args, Some((level, err_px)))
 }
 
-/// The length, after exaggerating z by `z_scale`, of a displacement of length at most `error`
-/// whose z part is at most `error_z` (world units): `sqrt(error² + (z_scale² - 1) error_z²)`, as
-/// `z_scale` stretches only the z part; `error` where `z_scale` <= 1 (nothing grows).
-pub(super) fn exaggerated(error: f32, error_z: f32, z_scale: f64) -> f64 {
-    let (e, ez) = (error as f64, (error_z.min(error)) as f64);
-    if z_scale <= 1.0 {
-        return e;
-    }
-    (e * e + (z_scale * z_scale - 1.0) * ez * ez).sqrt()
-}
-
 impl Renderer {
     /// LOD stats of a frame: triangles drawn per level, the largest error used (pixels, metres),
     /// the tiles drawn in groups (`tiles_grouped`). `draw_args`: the frame's draws, one per tile.
@@ -231,24 +221,5 @@ pub(super) fn grid_stats(scene: &Scene, out: &mut RenderOutput, level: Option<&[
             out.stats.extra.push((names[1], Stat::Count(v[1])));
         }
         out.stats.extra.push(("grid_interior_triangles_skipped", Stat::Count(skipped)));
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::exaggerated;
-
-    #[test]
-    fn exaggeration_stretches_only_the_vertical_part_of_an_error() {
-        // A vertical error grows by the exaggeration, a horizontal one not at all, and flattening
-        // shrinks nothing; between, the length of (e_xy, s e_z) at its largest.
-        assert!((exaggerated(2.0, 2.0, 5.0) - 10.0).abs() < 1e-12);
-        assert_eq!(exaggerated(2.0, 0.0, 10.0), 2.0);
-        assert_eq!(exaggerated(2.0, 2.0, 0.5), 2.0);
-        let (e, ez, s) = (5.0f32, 3.0f32, 4.0f64);
-        let want = (4.0f64 * 4.0 + (s * 3.0).powi(2)).sqrt(); // e_xy = 4 when e_z = 3 takes the rest
-        assert!((exaggerated(e, ez, s) - want).abs() < 1e-9);
-        // An error_z above the error (damaged) counts as the error.
-        assert!((exaggerated(1.0, 7.0, 3.0) - 3.0).abs() < 1e-12);
     }
 }
