@@ -22,6 +22,7 @@ mod iso;
 mod lazy;
 mod renderer;
 mod scene;
+mod volume;
 
 /// [`run`] with a cancellation hook for `f` (see `crate::error::Interrupt`): Ctrl-C during a long
 /// render or build raises KeyboardInterrupt within about `Interrupt::POLL`, not at the end. The
@@ -125,6 +126,7 @@ fn _geocull(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<renderer::PyRenderer>()?;
     m.add_function(wrap_pyfunction!(renderer::culling_modes, m)?)?;
+    m.add_class::<volume::PyVolume>()?;
     iso::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

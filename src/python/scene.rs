@@ -195,7 +195,7 @@ impl PyScene {
     fn add_slice(
         &self,
         py: Python<'_>,
-        volume: PyRef<'_, super::iso::PyVolume>,
+        volume: PyRef<'_, super::volume::PyVolume>,
         axis: i64,
         index: i64,
         name: Option<String>,
@@ -252,14 +252,14 @@ impl PyScene {
     fn add_isosurface(
         &self,
         py: Python<'_>,
-        volume: PyRef<'_, super::iso::PyVolume>,
+        volume: PyRef<'_, super::volume::PyVolume>,
         isovalue: f64,
         tiles: Option<i64>,
         coarse_factor: f64,
         name: Option<String>,
         color: Option<(f64, f64, f64)>,
         coloring: Option<ColoringArgs<'_>>,
-        values: Option<PyRef<'_, super::iso::PyVolume>>,
+        values: Option<PyRef<'_, super::volume::PyVolume>>,
     ) -> PyResult<u32> {
         let what = "none (an isosurface's values come from a volume on its grid: `values`)";
         let color_by = self::coloring(coloring, &[], what)?;
@@ -282,7 +282,7 @@ impl PyScene {
     fn add_lens(
         &self,
         py: Python<'_>,
-        volume: PyRef<'_, super::iso::PyVolume>,
+        volume: PyRef<'_, super::volume::PyVolume>,
         bx: [(i64, i64); 3],
         opacity: f64,
         name: Option<String>,
