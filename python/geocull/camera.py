@@ -14,7 +14,7 @@ looking west. ``elevation`` is the eye's angle above the horizontal plane throug
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Literal, cast
+from typing import Any, Literal, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,13 +23,19 @@ from . import _convert as cv
 from . import _geocull
 from ._errors import InputError
 
-if TYPE_CHECKING:
-    from .scene import Scene
-
-__all__ = ["Camera", "Projection", "Bounds"]
+__all__ = ["Camera", "Projection", "Bounds", "HasBounds"]
 
 #: ``((xmin, ymin, zmin), (xmax, ymax, zmax))`` world coordinates (metres), as :attr:`Scene.bounds`.
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
+
+
+class HasBounds(Protocol):
+    """What :meth:`Camera.fit` frames besides a box: an object with ``bounds`` as
+    :attr:`Scene.bounds` (a :class:`Scene`; None when it has no triangle)."""
+
+    @property
+    def bounds(self) -> Bounds | None: ...
+
 
 #: The projections of :meth:`Camera.look_at`.
 Projection = Literal["perspective", "orthographic"]
@@ -104,7 +110,7 @@ class Camera:
 
     @staticmethod
     def fit(
-        scene_or_bounds: Scene | Bounds | ArrayLike,
+        scene_or_bounds: HasBounds | Bounds | ArrayLike,
         azimuth: float = 30.0,
         elevation: float = 30.0,
         fov_y: float = 45.0,

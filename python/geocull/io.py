@@ -53,7 +53,7 @@ from ._errors import InputError
 from ._segy_survey import fit_survey
 
 if TYPE_CHECKING:
-    from .scene import Scene
+    from .pyvista import SceneLike
 
 __all__ = [
     "from_xtgeo_surface",
@@ -652,7 +652,7 @@ def _segy_kwargs(
 # --------------------------------------------------------------------------------------------- meshes
 
 
-def to_pyvista(scene: Scene, id: int) -> Any:
+def to_pyvista(scene: SceneLike, id: int) -> Any:
     """Object ``id`` of ``scene`` as a ``pyvista.PolyData`` (fine triangles, world coordinates, offset
     applied; ``field_data``: name, kind, color, object_id), which ``Scene.add_mesh`` takes back."""
     from . import pyvista as gpv
@@ -660,7 +660,7 @@ def to_pyvista(scene: Scene, id: int) -> Any:
     return gpv.to_polydata(scene, id)
 
 
-def to_trimesh(scene: Scene, id: int) -> Any:
+def to_trimesh(scene: SceneLike, id: int) -> Any:
     """Object ``id`` of ``scene`` as a ``trimesh.Trimesh`` (fine triangles, world coordinates, offset
     applied, vertices kept as they are: ``process=False``); ``metadata`` holds name, kind and
     object_id, the face colours the object's colour. ``Scene.add_mesh`` takes it back."""
