@@ -9,7 +9,10 @@ or to a lower layer:
 (`grid` sits at the level of `lod` and may use it; `camera` and `grid` do not use each other.)
 
 (`cull` and `iso` do not use each other; `crate::TestRng`, `crate::Result`, `crate::Error` are the
-crate root's re-exports and allowed everywhere.)
+crate root's re-exports and allowed everywhere.) Nor do files import one another in a circle, within a
+layer or across (a file and the modules it declares, its ancestors and descendants, aside: a parent
+that names its child's functions while the child takes its parent's types is Rust's module idiom).
+Inline test modules (`#[cfg(test)] mod tests`, `*tests*.rs` files) are left out.
 
 Python (python/geocull/ and its subpackages, such as geocull.bench): no import cycle among the
 package's modules at import time (module-level imports), and no module imports another module's
@@ -74,6 +77,75 @@ def check_rust() -> list[str]:
     return errors
 
 
+def rust_file_modules() -> dict[tuple[str, ...], Path]:
+    """Every product file of src/ by its module path: src/a/b.rs and src/a/b/mod.rs are ("a", "b")."""
+    files = {}
+    for path in sorted((ROOT / "src").rglob("*.rs")):
+        parts = path.relative_to(ROOT / "src").with_suffix("").parts
+        if re.fullmatch(r"tests|tests_\w+|\w+_tests", parts[-1]) or parts == ("lib",):
+            continue
+        files[tuple(parts[:-1]) if parts[-1] == "mod" else tuple(parts)] = path
+    return files
+
+
+def use_paths(tree: str, prefix: list[str]) -> list[list[str]]:
+    """The paths of a `use` tree (`a::{b, c::{d, e}}`, whitespace removed), each as segments."""
+    out, depth, start, i = [], 0, 0, 0
+    brace = tree.find("{")
+    if brace < 0:
+        return [prefix + [p for p in tree.split("::") if p and p != "*"]]
+    head = prefix + [p for p in tree[:brace].split("::") if p]
+    inner = tree[brace + 1: tree.rfind("}")]
+    for i, ch in enumerate(inner + ","):
+        if ch == "{":
+            depth += 1
+        elif ch == "}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            part = inner[start:i]
+            if part:
+                out += use_paths(part, head)
+            start = i + 1
+    return out
+
+
+def check_rust_cycles() -> list[str]:
+    files = rust_file_modules()
+    graph: dict[tuple[str, ...], set[tuple[str, ...]]] = {m: set() for m in files}
+    for mod, path in files.items():
+        code = strip_comments(path.read_text())
+        code = code.split("#[cfg(test)]\nmod tests {")[0]
+        here = list(mod)
+        children = set(re.findall(r"^\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+(\w+)\s*;", code, re.M))
+        paths = [use_paths(re.sub(r"\s+", "", m.group(1)), []) for m in re.finditer(r"\buse\s+([^;]+);", code)]
+        paths = [p for group in paths for p in group]
+        paths += [m.group(0).split("::") for m in re.finditer(r"\b(?:crate|super|self)(?:::[A-Za-z_]\w*)+", code)]
+        paths += [m.group(0).split("::") for c in children for m in re.finditer(rf"\b{c}(?:::[A-Za-z_]\w*)+", code)]
+        for segs in paths:
+            if segs[0] == "crate":
+                target = segs[1:]
+            elif segs[0] in ("super", "self"):
+                base = here[:]
+                while segs and segs[0] in ("super", "self"):
+                    if segs[0] == "super":
+                        base = base[:-1]
+                    segs = segs[1:]
+                target = base + segs
+            elif segs[0] in children:
+                target = here + segs
+            else:
+                continue
+            hit = max((k for k in range(len(target) + 1) if tuple(target[:k]) in files), default=None)
+            if hit is None:
+                continue
+            dest = tuple(target[:hit])
+            if dest[: len(mod)] == mod or mod[: len(dest)] == dest:
+                continue  # itself, an ancestor or a descendant
+            graph[mod].add(dest)
+    named = {m: str(files[m].relative_to(ROOT)) for m in files}
+    return cycles({named[m]: {named[n] for n in v} for m, v in graph.items()}, "rust file cycle")
+
+
 def python_modules(pkg: Path) -> dict[str, Path]:
     """The package's modules by dotted name below ``geocull``: ``scene``, ``bench`` (bench/__init__.py),
     ``bench.report``; the package's own ``__init__.py`` is ``__init__``."""
@@ -90,7 +162,8 @@ def check_python() -> list[str]:
     pkg = ROOT / "python" / "geocull"
     modules = python_modules(pkg)
     errors = []
-    graph: dict[str, set[str]] = {m: set() for m in modules}
+    graph: dict[str, set[str]] = {m: set() for m in modules}  # module-level imports, as Python runs them
+    anywhere: dict[str, set[str]] = {m: set() for m in modules}  # every import: in functions, for type hints
     for name, path in modules.items():
         tree = ast.parse(path.read_text(), filename=str(path))
         top_level = set(id(n) for n in tree.body)
@@ -123,6 +196,8 @@ def check_python() -> list[str]:
                 for n in names:
                     if n.startswith("_") and not n.startswith("__") and f"{mod}.{n}" not in modules:
                         errors.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports private name {mod}.{n}")
+                if mod in modules and mod != name and not name.startswith(mod + "."):
+                    anywhere[name].add(mod)
                 if id(node) not in top_level:
                     continue
                 # importing a.b imports the package a first, unless this module is inside a already
@@ -131,7 +206,17 @@ def check_python() -> list[str]:
                     m = ".".join(chain[:i])
                     if m in modules and m != name and not name.startswith(m + "."):
                         graph[name].add(m)
-    # cycles among module-level imports
+    # cycles among module-level imports (an import error at run time), then among all imports (a
+    # design that no module can be understood without the others: none either)
+    errors += cycles(graph, "python import cycle")
+    if not errors:
+        errors += cycles(anywhere, "python import cycle (imports in functions or for type hints included)")
+    return errors
+
+
+def cycles(graph: dict[str, set[str]], what: str) -> list[str]:
+    """One line per cycle found by a depth-first walk of ``graph`` (module -> the modules it imports)."""
+    errors = []
     state: dict[str, int] = {}
     stack: list[str] = []
 
@@ -141,7 +226,7 @@ def check_python() -> list[str]:
         for n in sorted(graph[m]):
             if state.get(n) == 1:
                 cycle = stack[stack.index(n):] + [n]
-                errors.append("python import cycle: " + " -> ".join(cycle))
+                errors.append(f"{what}: " + " -> ".join(cycle))
             elif n not in state:
                 visit(n)
         stack.pop()
@@ -154,13 +239,14 @@ def check_python() -> list[str]:
 
 
 def main() -> int:
-    errors = check_rust() + check_python()
+    errors = check_rust() + check_rust_cycles() + check_python()
     for e in errors:
         print(e)
     if errors:
         print(f"check_layers: {len(errors)} violation(s)")
         return 1
-    print("check_layers: dependency rule holds (Rust layers, Python: no cycle, no private cross-imports)")
+    print("check_layers: dependency rule holds (Rust layers, no circle of files; Python: no cycle, "
+          "no private cross-imports)")
     return 0
 
 
