@@ -68,7 +68,7 @@ pub const SEGMENTS_PER_TILE: usize = 128;
 /// Per level l = 1.. the largest shading error a dropped station may cause (see the module's
 /// contract), doubling from level to level: 0.001 moves the lit pass's shade by at most
 /// 0.001 x 0.8 x 255 = 0.2 8-bit levels (`super::shading`); `render::MAX_TUBE_SHADING_LEVELS`
-/// (2 levels) takes a level whose error reaches 0.0098 unexaggerated.
+/// (4 levels) takes a level whose error reaches 0.0196 unexaggerated.
 const LEVEL_SHADING: [f64; MAX_LEVELS] = [1e-3, 2e-3, 4e-3, 8e-3, 1.6e-2];
 
 /// Direction of the path at station `k`: the mean of its segments' unit directions (the
