@@ -57,10 +57,17 @@ pub use iso::scene_object::SceneIsosurface;
 pub use iso::{BrickCache, BrickSource, MinMaxOctree, Volume};
 pub use render::{Background, GridLod, Lod, RenderOptions, RenderOutput, RenderStats, Renderer};
 pub use scene::color::{builtin_names as colormap_names, DEFAULT_CMAP, DEFAULT_NAN_COLOR};
+pub use scene::grid::GridInfo;
 pub use scene::lens::LensSlice;
 pub use scene::{
-    AddOptions, CmapArg, ColorBy, ColorByArg, ColorSource, GridFrame, Object, Scene, MAX_PRIORITY, PRIORITY_DEPTH_STEP,
+    AddOptions, CmapArg, ColorBy, ColorByArg, ColorSource, GridFrame, HeightfieldInfo, Object, Scene, MAX_PRIORITY,
+    PRIORITY_DEPTH_STEP,
 };
+
+/// The object kinds' registry ([`Object::kind`]): each kind's name and what is decided by it.
+pub mod kinds {
+    pub use crate::scene::kinds::{of, Kind, KINDS};
+}
 
 /// How a user's 3-D array maps onto a [`Volume`]: index order and a z axis growing up or down.
 pub mod layout {
