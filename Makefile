@@ -83,12 +83,14 @@ browser: $(VENV)/.deps
 test-browser: setup browser
 	GEOCULL_BROWSER_TEST=1 timeout -k 10 240 $(PY) -m pytest -q -p no:cacheprovider tests/test_browser.py
 
-# The gates (CI runs them after the tests): formatting, lints, the type stub against the built
-# extension, and the dependency rule of the code (docs/DESIGN.md).
+# The gates (CI runs them after the tests): formatting, lints, the public API docs without a broken
+# or private link, the type stub against the built extension, and the dependency rule of the code
+# (docs/DESIGN.md).
 lint: setup
 	cargo fmt --check
 	cargo clippy --release --all-targets -- -D warnings
 	cargo clippy --release --all-targets --features python -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps --lib
 	$(VENV)/bin/ruff check python tests examples scripts
 	PYTHONPATH=python $(PY) -m mypy python/geocull
 	PYTHONPATH=python $(PY) -m mypy --strict examples

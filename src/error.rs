@@ -85,8 +85,8 @@ pub fn object_id(v: i64) -> Result<u32> {
 ///
 /// Progress rides along: a hook may carry a progress callback ([`Interrupt::with_progress`]),
 /// which [`Interrupt::run_parallel`]'s polling loop calls on the same calling thread with the
-/// number of items the job's workers have finished so far ([`Work::item_done`]) and their total
-/// where the job has said it ([`Work::set_total`]; 0 = not said); it returns true to stop the
+/// number of items the job's workers have finished so far (`Work::item_done`) and their total
+/// where the job has said it (`Work::set_total`; 0 = not said); it returns true to stop the
 /// work, like the hook (the binding's callback raised).
 #[derive(Clone, Default)]
 pub struct Interrupt(
@@ -196,7 +196,7 @@ impl Interrupt {
         }
     }
 
-    /// Runs `job` (which may use rayon; on this process's pool, [`in_pool`]) while this thread
+    /// Runs `job` (which may use rayon; on this process's pool, `in_pool`) while this thread
     /// polls the hook, once before and then every [`Self::POLL`]; when it says stop, the flag
     /// passed to `job` is set, `job` should return soon (skipping work not started) and the
     /// result is `Err(Error::Interrupted)`.

@@ -258,7 +258,7 @@ impl Visible {
 }
 
 /// Bytes a strategy's cache may keep between frames unless the renderer says otherwise
-/// ([`CullStrategy::set_cache_budget`]).
+/// (`CullStrategy::set_cache_budget`).
 pub const DEFAULT_CACHE_BUDGET: u64 = 256 << 20;
 
 /// A culling strategy. One instance lives in each renderer, so it may cache between frames

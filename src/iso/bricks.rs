@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use super::octree::{classify_range, Class, MinMaxOctree, NodeInfo};
 
 impl MinMaxOctree {
-    /// The map pass's class and low faces of every single cell at isovalue `w` ([`leaf_nodes`]),
+    /// The map pass's class and low faces of every single cell at isovalue `w` (`leaf_nodes`),
     /// straight from the samples; `None` when the leaves are stored levels or the volume is lazy
     /// (then use [`MinMaxOctree::map_at_depth`]: a lazy volume's classes come from the stored
     /// levels, where this would read every sample).
@@ -28,7 +28,7 @@ impl MinMaxOctree {
         })
     }
 
-    /// The walk's contour bricks ([`contour_bricks`]) with a block for each of `bricks`, the
+    /// The walk's contour bricks (`contour_bricks`) with a block for each of `bricks`, the
     /// nodes 2 levels above the cells that straddle the isovalue: a brick with a passable cell has
     /// samples on both sides of it or at it, so its node straddles. (At most 4 cells per axis: the
     /// root, brick 0.) A lazy volume has no leaf classes, so no contours: correct, but reads all.

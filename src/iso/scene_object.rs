@@ -48,7 +48,7 @@ impl SceneIsosurface {
     }
 
     /// Adds the surface to `scene` as a mesh of kind "isosurface" in `tiles` tiles (None: one per
-    /// [`TRIANGLES_PER_TILE`] triangles), with its occluder boxes. With a values volume and
+    /// `TRIANGLES_PER_TILE` triangles), with its occluder boxes. With a values volume and
     /// `opts.color_by`, the colouring's values are that volume's at the vertices, and coloured by
     /// them its clim defaults to that volume's finite range, as a slice of that volume's does
     /// (coloured by z, the scene refuses the values, naming `values`); colouring by values without

@@ -318,7 +318,7 @@ impl BrickCache {
     /// The samples of a plane's box `lo..hi` (one sample thick along some axis; inside the
     /// grid). When the bricks it crosses take at most a quarter of the budget, it is read through
     /// the cache: the missing bricks in a few large reads (rows of bricks, at most
-    /// [`PLANE_BATCH_BYTES`] each: a chunked source decodes whole chunks however thin the box),
+    /// `PLANE_BATCH_BYTES` each: a chunked source decodes whole chunks however thin the box),
     /// so that the next planes within the same bricks (a slice moved by a few samples) read
     /// nothing. Otherwise straight from the source, not cached. A failed read is NaN and kept.
     pub fn read_plane(&self, lo: [usize; 3], hi: [usize; 3]) -> Vec<f32> {
@@ -419,7 +419,7 @@ impl BrickCache {
         out
     }
 
-    /// The box `lo ..= hi_incl` (inside the grid) as a [`Window`].
+    /// The box `lo ..= hi_incl` (inside the grid) as a `Window`.
     pub fn window(&self, lo: [usize; 3], hi_incl: [usize; 3]) -> Window<'static> {
         let hi = hi_incl.map(|v| v + 1);
         Window { data: Cow::Owned(self.read_box(lo, hi)), lo, dims: [0, 1, 2].map(|a| hi[a] - lo[a]) }
@@ -451,7 +451,7 @@ impl BrickCache {
 /// A volume's access to its samples, resident or in a store.
 impl Volume {
     /// A volume whose samples (f32 residuals about `offset`) stay in `store` and are read on
-    /// demand (see [`store`]): its `values` are empty. Checked as by [`Volume::with_offset`];
+    /// demand (see `store`): its `values` are empty. Checked as by `Volume::with_offset`;
     /// `store`'s grid must be `dims`.
     pub fn lazy(
         store: Arc<BrickCache>,
@@ -484,7 +484,7 @@ impl Volume {
         self.store.as_ref().map_or(0, |s| s.bytes_read())
     }
 
-    /// The first read error of a lazy volume's store since the last call (see [`store`]).
+    /// The first read error of a lazy volume's store since the last call (see `store`).
     pub fn take_error(&self) -> Result<()> {
         self.store.as_ref().map_or(Ok(()), |s| s.take_error())
     }

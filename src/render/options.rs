@@ -11,7 +11,7 @@ pub enum Lod {
     Full,
     /// The coarsest level whose geometric error projects to at most `max_pixel_error` pixels at
     /// the tile's nearest point (`crate::lod::levels`) and whose shading error changes the lit
-    /// colour by at most [`MAX_SHADING_LEVELS`].
+    /// colour by at most `MAX_SHADING_LEVELS`.
     ScreenError { max_pixel_error: f64 },
 }
 

@@ -32,7 +32,7 @@ pub struct GridInfo {
 impl Scene {
     /// Adds a corner-point grid (see `crate::grid::CornerGrid` for the layout): `corners`
     /// (nk, nj, ni, 8, 3) world coordinates, `active` / `region` per cell, `opts.color_by` values
-    /// one per cell; `blocks` = (bi, bj) cells per block, each in 1..=[`MAX_BLOCK`].
+    /// one per cell; `blocks` = (bi, bj) cells per block, each in 1..=`MAX_BLOCK`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_grid(
         &mut self,

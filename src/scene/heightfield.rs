@@ -17,7 +17,7 @@ use crate::lod::{self, cos_sin_deg, GridSpec, TileMesh};
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// What a height-field object keeps besides its tiles ([`ObjectKind::Heightfield`]): its grid
+/// What a height-field object keeps besides its tiles (`ObjectKind::Heightfield`): its grid
 /// layout in the grid's own frame, and its tiles' slabs. Sample (i, j) lies at `(x0, y0) +
 /// R(rotation) (i dx, j dy)` (x0, y0 relative to the object's origin; `dy < 0` for a yflipped
 /// grid; R counter-clockwise by `rotation` degrees, see `lod::cos_sin_deg`). The heights live only

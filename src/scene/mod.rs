@@ -64,7 +64,7 @@ pub struct Object {
     /// None: by kind ([`Object::priority`]).
     pub priority: Option<u8>,
     /// Identifies this object's geometry (kind and tiles): a fresh number whenever they are built
-    /// or replaced ([`new_geometry_stamp`]), kept by copies of the scene (the same geometry).
+    /// or replaced (`new_geometry_stamp`), kept by copies of the scene (the same geometry).
     /// Caches of what is derived from one object's geometry key by it, so changes to other
     /// objects leave them valid.
     pub geometry_stamp: u64,
@@ -210,7 +210,7 @@ pub struct AddOptions {
     pub coarse_factor: f64,
     pub name: Option<String>,
     pub color: Option<[f64; 3]>,
-    /// Colour by z or by values (see [`color`]); None: the flat `color`, except for height fields
+    /// Colour by z or by values (see `color`); None: the flat `color`, except for height fields
     /// given no `color`, which are coloured by z (what users of horizons expect).
     pub color_by: Option<ColorByArg>,
     /// Polled while the tiles are built (between tiles); when it fires the add returns

@@ -96,7 +96,7 @@ pub struct IsoOptions {
     /// right behind the surface (module docs, "Contours"): `Some(true)` always, `Some(false)` never
     /// (it knows only uniform faces), `None` (default) always for the host's walk ([`IsoWalk`]),
     /// and for the compute walk where the surface is dense: where the nodes of 4³ cells that
-    /// straddle the isovalue are at least [`super::CONTOUR_MIN_DENSITY`] of them. All give the unculled
+    /// straddle the isovalue are at least `super::CONTOUR_MIN_DENSITY` of them. All give the unculled
     /// image; contours draw fewer triangles.
     pub face_contours: Option<bool>,
     /// Where the walk runs (`IsoWalk::Auto`: on the host when the adapter is a CPU). Both walks
