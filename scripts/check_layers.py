@@ -12,7 +12,8 @@ or to a lower layer:
 crate root's re-exports and allowed everywhere.) Nor do files import one another in a circle, within a
 layer or across (a file and the modules it declares, its ancestors and descendants, aside: a parent
 that names its child's functions while the child takes its parent's types is Rust's module idiom).
-Inline test modules (`#[cfg(test)] mod tests`, `*tests*.rs` files) are left out.
+Test modules (`#[cfg(test)] mod tests { .. }` at a file's end; `tests.rs`, `tests_*.rs`, `*_tests.rs`)
+are left out.
 
 Python (python/geocull/ and its subpackages, such as geocull.bench): no import cycle among the
 package's modules at import time (module-level imports), and no module imports another module's
@@ -90,7 +91,8 @@ def rust_file_modules() -> dict[tuple[str, ...], Path]:
 
 def use_paths(tree: str, prefix: list[str]) -> list[list[str]]:
     """The paths of a `use` tree (`a::{b, c::{d, e}}`, whitespace removed), each as segments."""
-    out, depth, start, i = [], 0, 0, 0
+    out: list[list[str]] = []
+    depth, start = 0, 0
     brace = tree.find("{")
     if brace < 0:
         return [prefix + [p for p in tree.split("::") if p and p != "*"]]
