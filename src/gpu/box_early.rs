@@ -6,8 +6,7 @@
 //! hand). Same layout, vertex stage and bind group as the regular box test; `record_box_test`
 //! binds the image's depth read-only as the depth attachment when it uses this pipeline.
 
-use super::shader::{box_pipeline, shader, with_box_wgsl, BOX_TEST_WGSL};
-use super::targets::DEPTH_FORMAT;
+use super::shader::{box_pipeline, early_test_depth, shader, with_box_wgsl, BOX_TEST_WGSL};
 
 /// The early-depth box-test pipeline (`layout`: the regular box test's), or None where the device
 /// cannot run it exactly.
@@ -18,14 +17,5 @@ pub fn early_box_pipeline(d: &wgpu::Device, layout: &wgpu::PipelineLayout) -> Op
     }
     let source = format!("{}\n{}", with_box_wgsl(BOX_TEST_WGSL), include_str!("shaders/box_test_early.wgsl"));
     let module = shader(d, "box_test_early.wgsl", source);
-    // The image's depth, read only: at or in front of it (reverse-Z) passes, the comparison
-    // box_test.wgsl makes by hand.
-    let depth = wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(false),
-        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-        stencil: wgpu::StencilState::default(),
-        bias: wgpu::DepthBiasState::default(),
-    };
-    Some(box_pipeline(d, layout, &module, "fs_box_early", Some(depth)))
+    Some(box_pipeline(d, layout, &module, "fs_box_early", Some(early_test_depth())))
 }

@@ -3,7 +3,7 @@
 //! layout entries, and the box-test pipeline every box or slab pass builds on. No pass lives here;
 //! `passes`, `slab_test`, `box_early`, `occluder_depth` and `depth_read` build theirs from it.
 
-use super::targets::ID_FORMAT;
+use super::targets::{DEPTH_FORMAT, ID_FORMAT};
 
 /// The scene passes' uniforms (`Globals`, `g`): prepended to common.wgsl and to the box passes.
 pub(super) const GLOBALS_WGSL: &str = include_str!("shaders/globals.wgsl");
@@ -33,16 +33,42 @@ pub fn box_pipeline(
     fs: &str,
     depth: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
+    test_pipeline(d, layout, module, ("vs_box", box_vertex_layout()), fs, depth)
+}
+
+/// The depth attachment of a test on the hardware's early depth test: the image's depth, read
+/// only, at or in front of it (reverse-Z) passing, the comparison box_test.wgsl makes by hand.
+pub fn early_test_depth() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// A pipeline that counts occludee fragments (boxes, slabs): vertex entry `vs` of `module` over
+/// `buffer`, front faces only (a convex box, or a slab's outward-wound prisms: a ray enters each
+/// through one of them, one fragment per pixel), fragment entry `fs` writing nothing to the id
+/// target it needs as an attachment; `depth`: the depth attachment's state, if any.
+pub fn test_pipeline(
+    d: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vs, buffer): (&str, wgpu::VertexBufferLayout<'_>),
+    fs: &str,
+    depth: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
     d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(fs),
         layout: Some(layout),
         vertex: wgpu::VertexState {
             module,
-            entry_point: Some("vs_box"),
+            entry_point: Some(vs),
             compilation_options: Default::default(),
-            buffers: &[Some(box_vertex_layout())],
+            buffers: &[Some(buffer)],
         },
-        // Front faces only: one fragment per pixel of a convex box.
         primitive: wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
             cull_mode: Some(wgpu::Face::Back),

@@ -4,8 +4,10 @@
 //! `place` holds for the tile, and counts per tile the fragments at or in front of the depth
 //! image; which tiles, and by how much, is the caller's (`cull::phases`).
 
-use super::shader::{depth_texture_entry, shader, storage_entry, with_box_wgsl, BOX_TEST_WGSL};
-use super::targets::{Targets, DEPTH_FORMAT, ID_FORMAT};
+use super::shader::{
+    depth_texture_entry, early_test_depth, shader, storage_entry, test_pipeline, with_box_wgsl, BOX_TEST_WGSL,
+};
+use super::targets::Targets;
 
 /// The slab-test pipeline and its bind-group layout.
 pub struct SlabTest {
@@ -72,45 +74,8 @@ impl SlabTest {
         } else {
             "fs_box"
         };
-        let depth_stencil = early.then(|| wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        });
-        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("slab_test"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_slab"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX)],
-            },
-            // Front faces only: a slab's prisms are wound outwards, so a ray enters each through
-            // one of them (counted as a box's front faces are).
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: Some(wgpu::Face::Back),
-                front_face: wgpu::FrontFace::Ccw,
-                ..Default::default()
-            },
-            depth_stencil,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(fs_entry),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ID_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::empty(),
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let depth = early.then(early_test_depth);
+        let pipeline = test_pipeline(d, &pl, &module, ("vs_slab", VERTEX), fs_entry, depth);
         Self { layout, pipeline, early }
     }
 
