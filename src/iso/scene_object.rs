@@ -54,13 +54,14 @@ impl SceneIsosurface {
     /// (coloured by z, the scene refuses the values, naming `values`); colouring by values without
     /// a values volume is an error naming `values`. Returns the object's id.
     pub fn add_to(self, scene: &mut Scene, tiles: Option<usize>, mut opts: AddOptions) -> Result<u32> {
+        let Self { mesh, values, boxes } = self;
         if let Some(c) = opts.color_by.as_mut() {
-            match &self.values {
+            match values {
                 // Given to a colouring by z too, whose check then names `values`.
                 Some((sampled, range)) => {
-                    c.values = Some(sampled.clone());
+                    c.values = Some(sampled);
                     if c.source == ColorSource::Values && c.clim.is_none() {
-                        c.clim = Some(resolve_clim(None, range.iter().flatten().copied())?);
+                        c.clim = Some(resolve_clim(None, range.into_iter().flatten())?);
                     }
                 }
                 None if c.source == ColorSource::Values => {
@@ -69,11 +70,11 @@ impl SceneIsosurface {
                 None => {}
             }
         }
-        let faces: Vec<[i64; 3]> = self.mesh.faces.iter().map(|f| f.map(i64::from)).collect();
+        let faces: Vec<[i64; 3]> = mesh.faces.iter().map(|f| f.map(i64::from)).collect();
         let tiles = tiles.unwrap_or_else(|| faces.len().div_ceil(TRIANGLES_PER_TILE).max(1));
-        let id = scene.add_mesh(&self.mesh.vertices, &faces, "isosurface", Some(tiles), opts)?;
-        if let (Some(bounds), false) = (mesh_bounds(&self.mesh.vertices), self.boxes.is_empty()) {
-            scene.set_occluders(id, &self.boxes, bounds)?;
+        let id = scene.add_mesh(&mesh.vertices, &faces, "isosurface", Some(tiles), opts)?;
+        if let (Some(bounds), false) = (mesh_bounds(&mesh.vertices), boxes.is_empty()) {
+            scene.set_occluders(id, &boxes, bounds)?;
         }
         Ok(id)
     }
