@@ -199,12 +199,12 @@ impl Walk<'_> {
     }
 }
 
-/// The fields of scene bytes, version 11 (src/scene/serial.rs's module docs): every integer of
+/// The fields of scene bytes, version 12 (src/scene/serial.rs's module docs): every integer of
 /// every object and tile; floats and array elements of each object and its first tile.
 fn scene_fields(b: &[u8]) -> Vec<Field> {
     assert_eq!(&b[..8], b"GCSCENE\0");
     let mut p = Walk { b, pos: 8, out: Vec::new(), all: true };
-    assert_eq!(p.get("version", Ty::U32), 11, "the scene format changed: update scene_fields");
+    assert_eq!(p.get("version", Ty::U32), 12, "the scene format changed: update scene_fields");
     p.get("has_origin", Ty::U8);
     for a in "xyz".chars() {
         p.get(&format!("origin.{a}"), Ty::F64);

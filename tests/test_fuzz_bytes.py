@@ -89,11 +89,11 @@ class _Fields:
 
 
 def scene_fields(b: bytes) -> list[Field]:
-    """The fields of scene bytes, version 11 (layout: src/scene/serial.rs's module docs)."""
+    """The fields of scene bytes, version 12 (layout: src/scene/serial.rs's module docs)."""
     p = _Fields(b)
     assert b[:8] == b"GCSCENE\0"
     p.pos = 8
-    assert p.get("version", "<I") == 11, "the scene format changed: update scene_fields"
+    assert p.get("version", "<I") == 12, "the scene format changed: update scene_fields"
     p.get("has_origin", "<B")
     for a in "xyz":
         p.get(f"origin.{a}", "<d")

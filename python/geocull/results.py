@@ -73,7 +73,7 @@ class RenderStats(TypedDict):
     lod_max_error_px: NotRequired[float]  # lod="screen_error": largest projected error drawn, pixels
     lod_max_error_m: NotRequired[float]  # lod="screen_error": largest geometric error drawn, world units
     tiles_fine_depth: NotRequired[int]  # lod: height-field tiles writing the fine depth (an object within their error)
-    tiles_grouped: NotRequired[int]  # lod: height-field tiles drawn in groups sharing coarse sides (lod::groups)
+    tiles_grouped: NotRequired[int]  # lod: height-field tiles drawing sides shared coarse with neighbours (lod::groups)
     lens_slices_tested: NotRequired[int]  # scenes with a visible lens or translucent slice: slices whose box was tested
     lens_slices_drawn: NotRequired[int]  # ... of which in front of the opaque image somewhere (drawn)
     lenses_hidden: NotRequired[int]  # ... lenses wholly hidden (nothing drawn)

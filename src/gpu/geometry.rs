@@ -48,6 +48,8 @@ pub struct SceneGeometry {
     /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
     /// vertex copy) and their errors.
     pub levels: Vec<Vec<LevelDraw>>,
+    /// The levels' variants by side mask ([`LevelDraw::grouped`]), one per distinct set.
+    pub variant_sets: Vec<VariantSet>,
     /// Origin-relative tile bounds (no offset, no exaggeration), for front-to-back ordering.
     pub bbox: Vec<(DVec3, DVec3)>,
     /// Per tile, boxes whose union holds its fine triangles ([`tile_sub_boxes`]), origin-relative
@@ -135,28 +137,19 @@ pub struct LevelDraw {
     pub error_z: f32,
     /// Shading error, a normal chord (unitless; `lod::shading`).
     pub shading_error: f32,
-    /// The level's draws in groups of depth 1..=`lod::groups::MAX_GROUP_DEPTH` (`Level::grouped`;
-    /// entry d - 1; index_count 0 where the tile has none: only lattice tiles drawn from the normal
-    /// map have them), and their error (vertical, world units).
-    pub grouped: [DrawArgs; crate::lod::groups::MAX_GROUP_DEPTH],
+    /// The level's draws with sides shared coarse (`Level::grouped`, by side mask): an entry of
+    /// `SceneGeometry::variant_sets`, [`NO_VARIANTS`] where the tile has none (only lattice tiles
+    /// drawn from the normal map have them), and their error (vertical, world units).
+    pub grouped: u32,
     pub grouped_error: f32,
 }
 
-impl LevelDraw {
-    /// Whether `d` is this level's draw or one of its group draws.
-    pub fn draws(&self, d: &DrawArgs) -> bool {
-        self.args == *d || self.grouped.iter().any(|g| g.index_count > 0 && g == d)
-    }
-    /// The errors (world units: all, vertical) of draw `d` of this level: the group error for a
-    /// group draw.
-    pub fn errors_of(&self, d: &DrawArgs) -> (f32, f32) {
-        if self.args == *d {
-            (self.error, self.error_z)
-        } else {
-            (self.grouped_error, self.grouped_error)
-        }
-    }
-}
+/// [`LevelDraw::grouped`] of a level without variants.
+pub const NO_VARIANTS: u32 = u32::MAX;
+
+/// One level's draws by side mask (entry mask - 1, `lod::groups`), shared by the tiles of one
+/// shape; `first_instance` is the tile's ([`SceneGeometry::variant`]).
+pub type VariantSet = [DrawArgs; crate::lod::groups::VARIANTS];
 
 /// The scalar uploaded for a NaN value (no data): WGSL may assume no NaN at run time, so no data
 /// travels as the most negative f32, which the lit pass tests for (`s < -1e31`). The other
@@ -414,9 +407,32 @@ impl SceneGeometry {
     }
 
     /// The errors (world units: all, vertical) of tile `k`'s draw `d` when it is one of its levels
-    /// or their group draws; None for its fine draw or a proxy.
+    /// or their variants (the group error: vertical); None for its fine draw or a proxy.
     pub fn drawn_errors(&self, k: usize, d: &DrawArgs) -> Option<(f32, f32)> {
-        self.levels.get(k)?.iter().find(|l| l.draws(d)).map(|l| l.errors_of(d))
+        let levels = self.levels.get(k)?;
+        if let Some(l) = levels.iter().find(|l| l.args == *d) {
+            return Some((l.error, l.error_z));
+        }
+        (1..=levels.len())
+            .find(|&l| self.is_variant(k, l, d))
+            .map(|l| (levels[l - 1].grouped_error, levels[l - 1].grouped_error))
+    }
+
+    /// Tile `k`'s level `l` (1..) with the sides of `mask` (1..=15) shared coarse
+    /// (`lod::groups`); None where the level has no variants.
+    pub fn variant(&self, k: usize, l: usize, mask: u8) -> Option<DrawArgs> {
+        let set = self.levels.get(k)?.get(l.checked_sub(1)?)?.grouped;
+        let args = self.variant_sets.get(set as usize)?.get((mask as usize).checked_sub(1)?)?;
+        Some(DrawArgs { first_instance: k as u32, ..*args })
+    }
+
+    /// Whether `d` is one of tile `k`'s level `l`'s variants other than the level's own list.
+    pub fn is_variant(&self, k: usize, l: usize, d: &DrawArgs) -> bool {
+        let level = &self.levels[k][l - 1];
+        let Some(set) = self.variant_sets.get(level.grouped as usize) else { return false };
+        *d != level.args
+            && d.first_instance == k as u32
+            && set.iter().any(|a| DrawArgs { first_instance: d.first_instance, ..*a } == *d)
     }
 
     /// Every tile's clearance (`lod::clearance`) with `scene`'s objects where they are now: a

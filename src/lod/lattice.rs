@@ -7,9 +7,10 @@
 /// tile of `size` samples: two if no side lies on a tile side drawn at full resolution, else a fan
 /// from the cell's centre sample to every sample of those sides and the corners of its other
 /// sides. `coarse`: the tile's sides drawn at the lattice's stride (bits 1 bottom, row 0; 2 right;
-/// 4 top; 8 left, column 0), 0 for a tile whose whole border is at full resolution; a cell at a
-/// corner of the tile draws a coarse side there at full resolution when the other side there is
-/// at full resolution (the neighbour across the coarse side has the same: `lod::groups`).
+/// 4 top; 8 left, column 0), 0 for a tile whose whole border is at full resolution. Each side is
+/// drawn as its bit says along its whole length, corner cells included (so that two tiles that
+/// agree on their shared side's bit draw the same edges there, whatever their other sides are:
+/// `lod::groups`).
 pub(super) fn cell_triangles(
     lo: (usize, usize),
     hi: (usize, usize),
@@ -20,10 +21,7 @@ pub(super) fn cell_triangles(
     let (a, b) = lo;
     let (a1, b1) = hi;
     let on = [b == 0, a1 == size.0 - 1, b1 == size.1 - 1, a == 0];
-    // A coarse side of the tile is drawn at full resolution in a cell that also lies on a side
-    // at right angles to it that is.
-    let full_side = |s: usize| on[s] && coarse & (1 << s) == 0;
-    let full = |s: usize| on[s] && (full_side(s) || full_side((s + 1) % 4) || full_side((s + 3) % 4));
+    let full = |s: usize| on[s] && coarse & (1 << s) == 0;
     let (bottom, right, top, left) = (full(0), full(1), full(2), full(3));
     if !(bottom || right || top || left) {
         out.push([(a, b), (a1, b), (a1, b1)]);

@@ -2,9 +2,9 @@
 //! with about a quarter of the triangles of the one before and its geometric error in world
 //! units (level 0 is the tile's fine triangles, error 0).
 //!
-//! Every level of every tile keeps the tile's border at full resolution (its group variants
-//! aside, [`super::groups`]), so neighbouring tiles
-//! drawn at different levels share the same border vertices and meet without cracks, by
+//! Every level of every tile keeps the tile's border at full resolution (its variants with sides
+//! shared coarse with a neighbour at the same level aside, [`super::groups`]), so neighbouring
+//! tiles drawn at different levels share the same border vertices and meet without cracks, by
 //! construction (no skirts: skirts hide cracks with extra geometry that the full-resolution image
 //! does not have, visible from below and at grazing angles; a locked border costs triangles on
 //! the border instead, about 4 × the tile's side, which bounds the reduction of small tiles).
@@ -30,7 +30,7 @@
 //!
 //! The chain stops when a level would not reach 0.6 × the triangles of the one before (the border
 //! then dominates), or after [`MAX_LEVELS`] levels; a hole-free height-field tile's goes on while
-//! the level drawn in a group ([`super::groups`], whose shared sides are coarse) would.
+//! the level with its shared sides coarse ([`super::groups`]) would.
 
 use super::lattice::{cell_triangles, lattice_error, square_cell_error};
 use super::{shading, simplify};
@@ -57,10 +57,10 @@ pub struct Level {
     /// levels (shaded from the fine surface); reservoir-grid levels bound it by summing each
     /// level's chord to the triangles of the faces it merges (`grid::merge`).
     pub shading_error: f32,
-    /// Hole-free height-field tiles, levels 3..: this level drawn as one of a group of 2^d x 2^d
-    /// tiles at the same level, for d = 1..=[`super::groups::MAX_GROUP_DEPTH`] (entry d - 1): the
-    /// sides the tile shares with the group's other tiles at the level's stride instead of full
-    /// resolution ([`super::groups`]). Empty for other tiles and levels.
+    /// Hole-free height-field tiles, levels 3..: this level with the sides of side mask m at the
+    /// level's stride instead of full resolution, for m = 1..=[`super::groups::VARIANTS`] (entry
+    /// m - 1; sides on the object's outline stay full), drawn where the neighbours across those
+    /// sides are at the same level ([`super::groups`]). Empty for other tiles and levels.
     pub grouped: Vec<super::Indices>,
     /// The geometric error of every entry of `grouped`, vertical, world units: at least `error`.
     pub grouped_error: f32,
@@ -81,9 +81,8 @@ fn lattice_steps(n: usize, k: usize) -> Option<Vec<usize>> {
 }
 
 /// Levels of a hole-free height-field tile of `w` × `h` samples: `vid(li, lj)` is the vertex of
-/// local sample (li, lj), `z(li, lj)` its height; `masks[d - 1]`: the tile's sides drawn at the
-/// level's stride when it is drawn in a group of depth d ([`super::groups::side_masks`]; empty:
-/// no groups). Empty when the tile is too small to coarsen. [`LatticeShape::new`] then
+/// local sample (li, lj), `z(li, lj)` its height; `masks`: the side masks of each level's variants
+/// ([`super::groups::masks`]; empty: none). Empty when the tile is too small to coarsen. [`LatticeShape::new`] then
 /// [`LatticeShape::levels`]; tiles of one size and masks share the shape.
 /// The length, after exaggerating z by `z_scale`, of a displacement of length at most `error`
 /// whose z part is at most `error_z` (world units): `sqrt(error² + (z_scale² - 1) error_z²)`, as
@@ -171,14 +170,14 @@ impl LatticeShape {
             let coarse = 2 * (xs.len() - 1) * (ys.len() - 1);
             let fewer = |n: usize, before: usize| n as f64 <= 0.6 * before as f64;
             chain &= fewer(tris.len(), prev);
-            let for_groups = !masks.is_empty() && fewer(coarse, prev_coarse);
+            let for_groups = masks.iter().any(|&m| m != 0) && fewer(coarse, prev_coarse);
             if !chain && !for_groups {
                 break;
             }
             (prev, prev_coarse) = (tris.len(), coarse);
             let indices = tris.iter().flat_map(|t| t.iter().map(|&(i, j)| vid(i, j))).collect();
-            // Groups from level 3 on (below, the border is a smaller part of the tile's triangles, and
-            // the variants, uploaded once per tile size and masks, would cost more than they save).
+            // Variants from level 3 on (below, the border is a smaller part of the tile's triangles,
+            // and the variants, uploaded once per tile size and masks, would cost more than they save).
             let grouped = if masks.is_empty() || l < 3 {
                 Vec::new()
             } else {

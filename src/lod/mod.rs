@@ -429,7 +429,7 @@ pub fn tile_heightfield(
                 let zl = |li: usize, lj: usize| at(i0 + li, j0 + lj);
                 // Hole-free tiles of one size number their vertices alike (the loop above), so
                 // tiles of one size and masks share a shape.
-                let masks = groups::side_masks(ix, iy, tx, ty);
+                let masks = groups::masks(groups::open_sides(ix, iy, tx, ty));
                 let shape = levels::LatticeShape::shared(&shapes, w, h, &|li, lj| map[lj * w + li], &masks);
                 tile.levels = shape.levels(&zl).into();
                 debug_assert_eq!(tile.fine, shape.fine);

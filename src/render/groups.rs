@@ -1,9 +1,7 @@
-//! Stage 2c of a frame: height-field tiles drawn in groups (`lod::groups`), where a group of
-//! 2^d × 2^d tiles at one level costs fewer triangles than its tiles each with a full-resolution
-//! border.
+//! Stage 2c of a frame: height-field tiles whose neighbours are drawn at the same level share
+//! those sides at the level's stride (`lod::groups`) instead of drawing them at full resolution.
 
 use crate::gpu::{DrawArgs, SceneGeometry};
-use crate::lod::groups::MAX_GROUP_DEPTH;
 use crate::lod::levels::exaggerated;
 use crate::scene::Scene;
 
@@ -15,18 +13,15 @@ pub(super) struct Budget<'a> {
     pub max_px: f64,
 }
 
-/// Regroups this frame's choice (`level`, `args`, `err_px`, one per tile, as
-/// `levels::choose_levels` made it): bottom-up over depths d = 1..=[`MAX_GROUP_DEPTH`], every
-/// aligned block of 2^d × 2^d tiles of one height field whose non-empty tiles all have group draws
-/// is drawn as a group at the finest level among its tiles' current ones, where that level's group
-/// error stays within the budget on every tile and the group's triangles are fewer than its tiles'
-/// current ones (which may already be groups of depth d - 1), and below every tile's clearance
-/// (`lod::clearance`): a grouped tile never writes the fine depth (`SceneGeometry::frame_runs`),
+/// Turns this frame's choice (`level`, `args`, `err_px`, one per tile, as
+/// `levels::choose_levels` made it) into variants with shared sides: per height field,
+/// `lod::groups::stitch` over the tiles that may draw one — a non-empty tile at a level with
+/// variants whose group error stays within the budget and below the tile's clearance
+/// (`lod::clearance`: a tile so drawn never writes the fine depth, `SceneGeometry::frame_runs`,
 /// whose search along the pixel's ray stays within the tile's own samples, where a coarse shared
-/// side parts from the fine surface. A group's tiles then share their
-/// inner sides at that level's stride (no crack) and keep its outline at full resolution (none
-/// with whatever lies beyond). Tiles without triangles take part in any group (they draw
-/// nothing); a tile with holes (no group draws) keeps every group it lies in from forming.
+/// side parts from the fine surface) — and each such tile with a non-empty mask draws that
+/// variant, its error the group error. Levels are not changed, so a tile draws no more
+/// triangles than before; a side is coarse on both of its tiles or on neither (no crack).
 pub(super) fn group_levels(
     g: &SceneGeometry,
     scene: &Scene,
@@ -38,51 +33,32 @@ pub(super) fn group_levels(
     for o in scene.objects() {
         let range = first..first + o.tiles.len();
         first = range.end;
-        let has_groups = |k: usize| g.levels[k].iter().any(|l| l.grouped[0].index_count > 0);
-        if !range.clone().any(has_groups) {
+        let has_variants = |k: usize| g.levels[k].iter().any(|l| l.grouped != crate::gpu::geometry::NO_VARIANTS);
+        if !range.clone().any(has_variants) {
             continue;
         }
         let clearance = clearance.get_or_insert_with(|| g.clearances(scene));
         let tx = o.tiles.iter().map(|t| t.ix as usize + 1).max().unwrap_or(0);
         let ty = o.tiles.iter().map(|t| t.iy as usize + 1).max().unwrap_or(0);
         let mut slot = vec![None; tx * ty];
+        let mut may = vec![None; tx * ty];
         for (k, t) in range.clone().zip(&o.tiles) {
-            slot[t.iy as usize * tx + t.ix as usize] = Some(k);
+            let s = t.iy as usize * tx + t.ix as usize;
+            slot[s] = Some(k);
+            let m = level[k];
+            let Some(lv) = (m > 0).then(|| &g.levels[k][m as usize - 1]) else { continue };
+            let ok = g.fine[k].index_count > 0
+                && g.variant(k, m as usize, 15).is_some()
+                && px(budget, k, lv.grouped_error) <= budget.max_px
+                && lv.grouped_error < clearance[k];
+            may[s] = ok.then_some(m);
         }
-        let mut cost: Vec<u64> = range.clone().map(|k| args[k].index_count as u64 / 3).collect();
-        for d in 1..=MAX_GROUP_DEPTH {
-            let side = 1usize << d;
-            if side / 2 >= tx.max(ty) {
-                break; // the last depth's groups held the whole object
-            }
-            for gy in 0..ty.div_ceil(side) {
-                for gx in 0..tx.div_ceil(side) {
-                    let members: Vec<usize> = (gy * side..((gy + 1) * side).min(ty))
-                        .flat_map(|iy| (gx * side..((gx + 1) * side).min(tx)).map(move |ix| iy * tx + ix))
-                        .filter_map(|s| slot[s])
-                        .filter(|&k| g.fine[k].index_count > 0)
-                        .collect();
-                    let Some(m) = members.iter().map(|&k| level[k]).min().filter(|&m| m > 0) else { continue };
-                    let (mut merged, mut now) = (0u64, 0u64);
-                    let fits = members.iter().all(|&k| {
-                        let Some(lv) = g.levels[k].get(m as usize - 1) else { return false };
-                        let a = lv.grouped[d - 1];
-                        merged += a.index_count as u64 / 3;
-                        now += cost[k - range.start];
-                        a.index_count > 0
-                            && px(budget, k, lv.grouped_error) <= budget.max_px
-                            && lv.grouped_error < clearance[k]
-                    });
-                    if !fits || merged >= now {
-                        continue;
-                    }
-                    for &k in &members {
-                        let lv = &g.levels[k][m as usize - 1];
-                        (level[k], args[k], err_px[k]) = (m, lv.grouped[d - 1], px(budget, k, lv.grouped_error) as f32);
-                        cost[k - range.start] = args[k].index_count as u64 / 3;
-                    }
-                }
-            }
+        let masks = crate::lod::groups::stitch(tx, ty, &may);
+        for (s, &mask) in masks.iter().enumerate() {
+            let (Some(k), true) = (slot[s], mask != 0) else { continue };
+            let m = level[k] as usize;
+            let v = g.variant(k, m, mask).expect("a tile that may stitch has variants");
+            (args[k], err_px[k]) = (v, px(budget, k, g.levels[k][m - 1].grouped_error) as f32);
         }
     }
 }

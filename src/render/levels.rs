@@ -148,7 +148,7 @@ pub(super) fn choose_levels(
 
 impl Renderer {
     /// LOD stats of a frame: triangles drawn per level, the largest error used (pixels, metres),
-    /// the tiles drawn in groups (`tiles_grouped`). `draw_args`: the frame's draws, one per tile.
+    /// the tiles drawn with sides shared coarse (`tiles_grouped`). `draw_args`: the frame's draws, one per tile.
     pub(super) fn lod_stats(&self, out: &mut RenderOutput, level: &[u8], err_px: &[f32], draw_args: &[DrawArgs]) {
         let g = self.geometry.as_ref().expect("uploaded");
         let mut tris = [0u64; LEVEL_STATS.len()];
@@ -160,8 +160,8 @@ impl Renderer {
             let l = level[i] as usize;
             let (args, err) = match (l, draw_args.get(i)) {
                 (0, _) => (g.fine[i], 0.0),
-                // A group draw (`render::groups`), with its error.
-                (_, Some(d)) if g.levels[i][l - 1].args != *d && g.levels[i][l - 1].draws(d) => {
+                // A variant with shared coarse sides (`render::groups`), with its group error.
+                (_, Some(d)) if g.is_variant(i, l, d) => {
                     grouped += 1;
                     (*d, g.levels[i][l - 1].grouped_error)
                 }

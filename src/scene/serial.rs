@@ -30,8 +30,10 @@
 //!             levels: n u32, then per level error f32, shading_error f32 (version 6; before,
 //!             measured again on reading: `lod::shading`, 0 for height fields and grids),
 //!             error_z f32 (version 8; before, the error), indices [u32], then (version 10;
-//!             none before) grouped_error f32, n_grouped u32, per group depth indices [u32]
-//!             (`lod::groups`)
+//!             none before) grouped_error f32, n_grouped u32 (version 12: 0 or 15), that many
+//!             indices [u32]: version 12, the variants by side mask (`lod::groups`); versions 10
+//!             and 11, at most 6 variants by group depth, which reading drops (their levels then
+//!             draw with full borders, the group error their error)
 //! ```
 //!
 //! Reading checks what later stages rely on (index bounds, finite positions, whole triangles) and
@@ -49,7 +51,7 @@ use std::sync::atomic::Ordering;
 mod check;
 
 const MAGIC: &[u8; 8] = b"GCSCENE\0";
-const VERSION: u32 = 11;
+const VERSION: u32 = 12;
 
 /// The fewest bytes a tile takes in any version (version 1: ix, iy, box, positions, fine and
 /// coarse empty, proxy error, no levels).
@@ -262,8 +264,9 @@ impl Scene {
         self.write(VERSION)
     }
 
-    /// The bytes of format `version` 8 to 11 (8: no ring heights; before 10: no group variants;
-    /// before 11: no stations), for tests of older formats.
+    /// The bytes of format `version` 8 to 12 (8: no ring heights; before 10: no group variants;
+    /// before 11: no stations; 10 and 11: the first 6 variants in place of those by group depth),
+    /// for tests of older formats.
     #[cfg(test)]
     pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
         assert!((8..=VERSION).contains(&version));
@@ -376,8 +379,9 @@ impl Scene {
                     w.u32s(&l.indices);
                     if version >= 10 {
                         w.f32(l.grouped_error);
-                        w.u32(l.grouped.len() as u32);
-                        for g in &l.grouped {
+                        let n = if version >= 12 { l.grouped.len() } else { l.grouped.len().min(6) };
+                        w.u32(n as u32);
+                        for g in &l.grouped[..n] {
                             w.u32s(g);
                         }
                     }
@@ -624,9 +628,12 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         let (grouped_error, mut grouped) = (if version >= 10 { r.f32()? } else { error }, Vec::new());
         if version >= 10 {
             let ng = r.u32()? as usize;
-            if ng > crate::lod::groups::MAX_GROUP_DEPTH {
-                let most = crate::lod::groups::MAX_GROUP_DEPTH;
-                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; at most {most}")));
+            let variants = crate::lod::groups::VARIANTS;
+            if version >= 12 && ng != 0 && ng != variants {
+                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; 0 or {variants}")));
+            }
+            if version < 12 && ng > 6 {
+                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; at most 6")));
             }
             for _ in 0..ng {
                 grouped.push(indices(r.u32s()?));
@@ -636,6 +643,8 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         if version >= 10 && grouped_error.partial_cmp(&error).is_none_or(|o| o.is_lt()) {
             return Err(r.err(format!("object {id}: a tile's level has a group error below its error")));
         }
+        // Variants by group depth (versions 10, 11) mean nothing to today's stitching.
+        let (grouped, grouped_error) = if version >= 12 { (grouped, grouped_error) } else { (Vec::new(), error) };
         levels.push(crate::lod::levels::Level {
             error,
             error_z,

@@ -196,8 +196,8 @@ fn damaged_bytes_are_input_errors() {
         assert!(e.starts_with("data"), "{e}");
     }
     let mut v = b.clone();
-    v[8] = 12; // version 12
-    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 12"));
+    v[8] = 13; // version 13
+    assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("version 13"));
     let mut extra = b.clone();
     extra.push(0);
     assert!(Scene::from_bytes(&extra).unwrap_err().to_string().contains("trailing"));
@@ -251,8 +251,8 @@ fn a_count_reserves_only_records_the_unclaimed_bytes_hold() {
     v[b.len() - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(Scene::from_bytes(&v).unwrap_err().to_string().contains("truncated"));
     for version in 1..=VERSION {
-        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84, 84, 84][version as usize - 1]);
-        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96, 96, 104][version as usize - 1]);
+        assert_eq!(min_object_bytes(version), [54, 54, 78, 83, 83, 83, 84, 84, 84, 84, 84, 84][version as usize - 1]);
+        assert_eq!(min_tile_bytes(version), [64, 64, 64, 72, 80, 88, 88, 88, 96, 96, 104, 104][version as usize - 1]);
     }
 }
 
@@ -327,7 +327,7 @@ fn stations_round_trip_and_a_bad_one_is_refused() {
 
 #[test]
 fn group_variants_round_trip_and_older_versions_read_without_them() {
-    // A 41 x 41 field in 2 x 2 tiles: levels from 2 on have group variants (`lod::groups`).
+    // A 41 x 41 field in 2 x 2 tiles: levels from 3 on have variants by side mask (`lod::groups`).
     let mut s = Scene::new();
     let z: Vec<f64> = (0..41 * 41).map(|k| ((k % 41) as f64 * 0.4).sin() * 3.0 + (k / 41) as f64 * 0.1).collect();
     s.add_heightfield(&z, 41, 41, GridFrame::new([0.0; 2], [10.0; 2]), (2, 2), None, AddOptions::new(4.0)).unwrap();
@@ -341,9 +341,14 @@ fn group_variants_round_trip_and_older_versions_read_without_them() {
     for (a, b) in back.iter().zip(&before) {
         assert_eq!((&a.grouped, a.grouped_error.to_bits()), (&b.grouped, b.grouped_error.to_bits()));
     }
-    // Version 9 has none: its levels draw with full borders, the group error their error.
-    let old = levels(&Scene::from_bytes(&s.to_bytes_version(9)).unwrap());
-    assert!(old.iter().all(|l| l.grouped.is_empty() && l.grouped_error == l.error));
+    assert!(before.iter().all(|l| l.grouped.is_empty() || l.grouped.len() == crate::lod::groups::VARIANTS));
+    // Version 9 has none, and versions 10 and 11 had variants by group depth, which reading drops:
+    // their levels draw with full borders, the group error their error.
+    for version in [9, 10, 11] {
+        let old = levels(&Scene::from_bytes(&s.to_bytes_version(version)).unwrap());
+        assert_eq!(old.len(), before.len());
+        assert!(old.iter().all(|l| l.grouped.is_empty() && l.grouped_error == l.error), "version {version}");
+    }
     // A group error below the level's error is damage.
     let mut bad = s.clone();
     let l = bad.objects[0].tiles[0].levels.iter_mut().find(|l| !l.grouped.is_empty()).unwrap();

@@ -41,7 +41,7 @@ __all__ = ["run", "format_table", "scene_tiles", "surface_distance", "level_erro
 #: benchmark scene hold 3,500).
 TRIS_PER_TILE = 4000
 METHODS = ("meshoptimizer (geocull)", "fast-simplification, border kept", "fast-simplification, border free")
-_SERIAL_VERSION = 11  # Scene.to_bytes's layout read by scene_tiles (src/scene/serial.rs)
+_SERIAL_VERSION = 12  # Scene.to_bytes's layout read by scene_tiles (src/scene/serial.rs)
 
 
 def _say(msg: str) -> None:
@@ -93,7 +93,7 @@ class _Reader:
 
 def scene_tiles(scene: Any) -> list[dict[str, Any]]:
     """Every tile of ``scene``'s mesh objects as stored, read from ``scene.to_bytes()`` (its layout,
-    version 11, is documented in the core's ``scene/serial.rs``): dicts with object (id), kind (the
+    version 12, is documented in the core's ``scene/serial.rs``): dicts with object (id), kind (the
     mesh's label), positions (n, 3) float32 (relative to the scene's origin), fine (m, 3) uint32 and
     levels, a list of (error in metres, (k, 3) uint32 indices into positions) for levels 1, 2, ...
     Height-field and grid tiles (whose levels are lattices, not meshoptimizer's) are skipped."""

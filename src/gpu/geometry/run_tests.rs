@@ -95,7 +95,7 @@ fn tiles_of_one_shape_share_the_patterns_each_would_compact_to() {
     s.add_heightfield(&z, ny, nx, frame, (4, 3), None, AddOptions::new(4.0)).unwrap();
     let plan = plan::Plan::new(&s, &[Some(0)], &[None]);
     let o = &s.objects()[0];
-    // Hole-free tiles of one size and group masks (`lod::groups`) have the same lists.
+    // Hole-free tiles of one size and side masks (`lod::groups`) have the same lists.
     let mut ids_by_shape: std::collections::HashMap<(usize, usize, Vec<u8>), Vec<usize>> = Default::default();
     for (k, t) in o.tiles.iter().enumerate() {
         let local = o.tile_lattice(t).unwrap().local;
@@ -107,7 +107,7 @@ fn tiles_of_one_shape_share_the_patterns_each_would_compact_to() {
         let shape =
             (local.iter().map(|p| p[0]).max().unwrap() as usize, local.iter().map(|p| p[1]).max().unwrap() as usize);
         if t.fine_triangles() == 2 * shape.0 * shape.1 {
-            let masks = crate::lod::groups::side_masks(t.ix as usize, t.iy as usize, 4, 3);
+            let masks = crate::lod::groups::masks(crate::lod::groups::open_sides(t.ix as usize, t.iy as usize, 4, 3));
             let seen = ids_by_shape.entry((shape.0, shape.1, masks)).or_insert_with(|| run.clone());
             assert_eq!(seen, run, "tile {k} of shape {shape:?}");
         }

@@ -4,7 +4,7 @@
 use super::plan::Plan;
 use super::{
     check_buffer_sizes, draw_runs, normal_slot, scalar_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words,
-    CompactDraw, LevelDraw, SceneGeometry,
+    CompactDraw, LevelDraw, SceneGeometry, VariantSet, NO_VARIANTS,
 };
 use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
@@ -185,6 +185,7 @@ struct TileDraws {
     coarse: Vec<DrawArgs>,
     occluder: Vec<DrawArgs>,
     levels: Vec<Vec<LevelDraw>>,
+    variant_sets: Vec<VariantSet>,
     tile_object: Vec<u32>,
     bbox: Vec<(glam::DVec3, glam::DVec3)>,
     own_vertices: Vec<Vec<u32>>,
@@ -213,7 +214,7 @@ impl SceneGeometry {
         for b in vb.iter().chain(sb.iter()).chain(ib.iter()) {
             b.unmap();
         }
-        let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
+        let TileDraws { fine, coarse, occluder, levels, variant_sets, tile_object, bbox, own_vertices } = draws;
         // Storage buffers may not be empty: pad with one element.
         let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
         let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -249,6 +250,7 @@ impl SceneGeometry {
             coarse,
             occluder,
             levels,
+            variant_sets,
             bbox,
             sub_boxes,
             height_blocks,
@@ -318,7 +320,8 @@ fn write_tiles(
     [vb, sb, ib]: [&wgpu::Buffer; 3],
     draws: &mut TileDraws,
 ) -> Result<()> {
-    let TileDraws { fine, coarse, occluder, levels, tile_object, bbox, own_vertices } = draws;
+    let TileDraws { fine, coarse, occluder, levels, variant_sets, tile_object, bbox, own_vertices } = draws;
+    let mut sets: std::collections::HashMap<Vec<usize>, u32> = std::collections::HashMap::new();
     let mut vmap = vb.slice(..).get_mapped_range_mut().map_err(map_err)?;
     let mut smap = sb.slice(..).get_mapped_range_mut().map_err(map_err)?;
     let mut imap = ib.slice(..).get_mapped_range_mut().map_err(map_err)?;
@@ -367,16 +370,24 @@ fn write_tiles(
                 coarse.push(args(ids[1]));
                 occluder.push(args(*ids.last().expect("fine, coarse, levels, occluder")));
                 let mut next = ids[2..].iter();
-                let mut take = || args(*next.next().expect("a pattern per level list"));
                 levels.push(
                     t.levels
                         .iter()
                         .map(|l| {
-                            let level = take();
-                            let mut grouped = [DrawArgs::default(); crate::lod::groups::MAX_GROUP_DEPTH];
-                            for g in grouped.iter_mut().take(l.grouped.len()) {
-                                *g = take();
-                            }
+                            let level = args(*next.next().expect("a pattern per level list"));
+                            let ids: Vec<usize> =
+                                (0..l.grouped.len()).map(|_| *next.next().expect("a pattern per variant")).collect();
+                            let grouped = match ids.len() {
+                                0 => NO_VARIANTS,
+                                _ => *sets.entry(ids).or_insert_with_key(|ids| {
+                                    let mut set = VariantSet::default();
+                                    for (a, &p) in set.iter_mut().zip(ids) {
+                                        *a = DrawArgs { first_instance: 0, ..pattern_args[p] };
+                                    }
+                                    variant_sets.push(set);
+                                    variant_sets.len() as u32 - 1
+                                }),
+                            };
                             LevelDraw {
                                 args: level,
                                 error: l.error,
@@ -429,7 +440,7 @@ fn write_tiles(
                         error: l.error,
                         error_z: l.error_z,
                         shading_error: l.shading_error,
-                        grouped: Default::default(),
+                        grouped: NO_VARIANTS,
                         grouped_error: l.error,
                     })
                     .collect(),
