@@ -264,15 +264,6 @@ impl Scene {
         self.write(VERSION)
     }
 
-    /// The bytes of format `version` 8 to 12 (8: no ring heights; before 10: no group variants;
-    /// before 11: no stations; 10 and 11: the first 6 variants in place of those by group depth),
-    /// for tests of older formats.
-    #[cfg(test)]
-    pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
-        assert!((8..=VERSION).contains(&version));
-        self.write(version)
-    }
-
     fn write(&self, version: u32) -> Vec<u8> {
         let mut w = Writer::default();
         w.bytes(MAGIC);
@@ -628,12 +619,10 @@ fn read_tile(r: &mut Reader, version: u32, id: u32, kind: &ObjectKind) -> Result
         let (grouped_error, mut grouped) = (if version >= 10 { r.f32()? } else { error }, Vec::new());
         if version >= 10 {
             let ng = r.u32()? as usize;
-            let variants = crate::lod::groups::VARIANTS;
-            if version >= 12 && ng != 0 && ng != variants {
-                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; 0 or {variants}")));
-            }
-            if version < 12 && ng > 6 {
-                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; at most 6")));
+            let (variants, now) = (crate::lod::groups::VARIANTS, version >= 12);
+            if if now { ng != 0 && ng != variants } else { ng > 6 } {
+                let want = if now { format!("0 or {variants}") } else { "at most 6".into() };
+                return Err(r.err(format!("object {id}: a tile's level has {ng} group variants; {want}")));
             }
             for _ in 0..ng {
                 grouped.push(indices(r.u32s()?));

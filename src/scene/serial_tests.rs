@@ -356,3 +356,13 @@ fn group_variants_round_trip_and_older_versions_read_without_them() {
     let e = Scene::from_bytes(&bad.to_bytes()).unwrap_err().to_string();
     assert!(e.contains("group error below its error"), "{e}");
 }
+
+impl Scene {
+    /// The bytes of format `version` 8 to 12 (8: no ring heights; before 10: no group variants;
+    /// before 11: no stations; 10 and 11: the first 6 variants in place of those by group depth),
+    /// for tests of older formats.
+    pub(super) fn to_bytes_version(&self, version: u32) -> Vec<u8> {
+        assert!((8..=VERSION).contains(&version));
+        self.write(version)
+    }
+}
