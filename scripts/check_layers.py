@@ -20,6 +20,11 @@ package's modules at import time (module-level imports), and no module imports a
 underscore-prefixed name (``from .x import _y``, ``from ..x import _y``), anywhere in the file.
 Private *modules* with public names (``_convert``, ``_errors``, ``_geocull``) are the package's
 internal API and may be imported.
+
+Sizes: no source file of src/ or python/geocull over MAX_FILE_LINES lines without its tests (a
+Rust file's `#[cfg(test)] mod tests { .. }` at its end and test files left out), and no function
+over MAX_FN_LINES lines (Rust: from its `fn` line to the closing brace at its indent, as rustfmt
+lays it out; Python: the function's statement).
 """
 
 from __future__ import annotations
@@ -45,6 +50,9 @@ BELOW: dict[str, set[str]] = {
     "python": {"error", "camera", "lod", "grid", "scene", "gpu", "cull", "iso", "render"},
 }
 ROOT_ITEMS = {"TestRng", "Result", "Error"}
+MAX_FILE_LINES = 700
+MAX_FN_LINES = 150
+RUST_FN = re.compile(r"^(\s*)(pub(\([^)]*\))?\s+)?(const\s+)?(async\s+)?(unsafe\s+)?fn\s+(\w+)")
 
 
 def rust_module(path: Path) -> str | None:
@@ -240,15 +248,52 @@ def cycles(graph: dict[str, set[str]], what: str) -> list[str]:
     return errors
 
 
+def is_test_file(path: Path) -> bool:
+    name = path.stem
+    return name == "tests" or name.startswith("tests_") or name.endswith("_tests")
+
+
+def check_sizes() -> list[str]:
+    errors = []
+    for path in sorted((ROOT / "src").rglob("*.rs")):
+        if is_test_file(path):
+            continue
+        lines = path.read_text().splitlines()
+        end = next((i for i, line in enumerate(lines) if line.startswith("#[cfg(test)]")
+                    and i + 1 < len(lines) and lines[i + 1].startswith("mod tests {")), len(lines))
+        rel = path.relative_to(ROOT)
+        if end > MAX_FILE_LINES:
+            errors.append(f"{rel}: {end} lines without its tests (at most {MAX_FILE_LINES})")
+        for i, line in enumerate(lines[:end]):
+            m = RUST_FN.match(line)
+            if not m or line.rstrip().endswith(";"):
+                continue
+            close = m.group(1) + "}"
+            n = next((j - i + 1 for j in range(i + 1, end) if lines[j].rstrip() == close), 1)
+            if n > MAX_FN_LINES:
+                errors.append(f"{rel}:{i + 1}: fn {m.group(7)} has {n} lines (at most {MAX_FN_LINES})")
+    for path in sorted((ROOT / "python" / "geocull").rglob("*.py")):
+        text = path.read_text()
+        rel = path.relative_to(ROOT)
+        if len(text.splitlines()) > MAX_FILE_LINES:
+            errors.append(f"{rel}: {len(text.splitlines())} lines (at most {MAX_FILE_LINES})")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = (node.end_lineno or node.lineno) - node.lineno + 1
+                if n > MAX_FN_LINES:
+                    errors.append(f"{rel}:{node.lineno}: def {node.name} has {n} lines (at most {MAX_FN_LINES})")
+    return errors
+
+
 def main() -> int:
-    errors = check_rust() + check_rust_cycles() + check_python()
+    errors = check_rust() + check_rust_cycles() + check_python() + check_sizes()
     for e in errors:
         print(e)
     if errors:
         print(f"check_layers: {len(errors)} violation(s)")
         return 1
     print("check_layers: dependency rule holds (Rust layers, no circle of files; Python: no cycle, "
-          "no private cross-imports)")
+          f"no private cross-imports; files <= {MAX_FILE_LINES} lines, functions <= {MAX_FN_LINES})")
     return 0
 
 
