@@ -1,6 +1,7 @@
 //! Stage 2c of a frame: height-field tiles whose neighbours are drawn at the same level share
 //! those sides at the level's stride (`lod::groups`) instead of drawing them at full resolution.
 
+use crate::gpu::geometry::NO_VARIANTS;
 use crate::gpu::{DrawArgs, SceneGeometry};
 use crate::lod::levels::exaggerated;
 use crate::scene::Scene;
@@ -26,14 +27,14 @@ pub(super) fn group_levels(
     g: &SceneGeometry,
     scene: &Scene,
     budget: &Budget<'_>,
-    (level, args, err_px): (&mut [u8], &mut [DrawArgs], &mut [f32]),
+    (level, args, err_px): (&[u8], &mut [DrawArgs], &mut [f32]),
 ) {
     let mut clearance = None; // measured on first use (cached per placement)
     let mut first = 0;
     for o in scene.objects() {
         let range = first..first + o.tiles.len();
         first = range.end;
-        let has_variants = |k: usize| g.levels[k].iter().any(|l| l.grouped != crate::gpu::geometry::NO_VARIANTS);
+        let has_variants = |k: usize| g.levels[k].iter().any(|l| l.grouped != NO_VARIANTS);
         if !range.clone().any(has_variants) {
             continue;
         }
@@ -48,7 +49,7 @@ pub(super) fn group_levels(
             let m = level[k];
             let Some(lv) = (m > 0).then(|| &g.levels[k][m as usize - 1]) else { continue };
             let ok = g.fine[k].index_count > 0
-                && g.variant(k, m as usize, 15).is_some()
+                && lv.grouped != NO_VARIANTS
                 && px(budget, k, lv.grouped_error) <= budget.max_px
                 && lv.grouped_error < clearance[k];
             may[s] = ok.then_some(m);

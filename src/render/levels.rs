@@ -141,7 +141,7 @@ pub(super) fn choose_levels(
     }
     if let Lod::ScreenError { max_pixel_error } = lod {
         let budget = super::groups::Budget { scale: &scales, z_scale: camera.z_scale, max_px: max_pixel_error };
-        super::groups::group_levels(g, scene, &budget, (&mut level, &mut args, &mut err_px));
+        super::groups::group_levels(g, scene, &budget, (&level, &mut args, &mut err_px));
     }
     (args, Some((level, err_px)))
 }
