@@ -192,6 +192,14 @@ def number(x: Any, arg: str) -> float:
     return float(x)
 
 
+def z_sign(z_positive: Any) -> float:
+    """-1.0 for ``z_positive="down"`` (depths, drawn at z = -depth), 1.0 for "up"; else an
+    InputError naming ``z_positive``."""
+    if z_positive not in ("up", "down"):
+        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
+    return -1.0 if z_positive == "down" else 1.0
+
+
 def integer(x: Any, arg: str) -> int:
     """Python int of an integer (``numbers.Integral``, not bool) that fits a signed 64-bit integer
     (the core's argument type; it checks the range)."""

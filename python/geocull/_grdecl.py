@@ -22,7 +22,7 @@ from typing import Any, Literal, TypedDict
 
 import numpy as np
 
-from ._convert import float_array, integer
+from ._convert import float_array, integer, z_sign
 from ._errors import GeocullWarning, InputError
 
 __all__ = ["GrdeclDeck", "read_deck", "numbers", "deck_grid", "check_mapaxes", "GRID_KEYWORDS", "CornerArrays",
@@ -325,12 +325,6 @@ class CornerArrays(TypedDict):
     active: np.ndarray
 
 
-def _zsign(z_positive: str) -> float:
-    if z_positive not in ("up", "down"):
-        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
-    return -1.0 if z_positive == "down" else 1.0
-
-
 def from_grdecl(
     coord: Any,
     zcorn: Any,
@@ -364,7 +358,7 @@ def from_grdecl(
     Returns ``dict(corners=(nz, ny, nx, 8, 3), active=(nz, ny, nx))`` in the corner order of the
     :mod:`geocull.grid` docstring, world metres, z = -depth for ``z_positive="down"``.
     """
-    sign = _zsign(z_positive)
+    sign = z_sign(z_positive)
     axes = None if mapaxes is None else mapaxes_transform(mapaxes)
     nx = integer(nx, "nx")
     ny = integer(ny, "ny")

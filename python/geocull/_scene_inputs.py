@@ -19,11 +19,7 @@ __all__ = ["z_down", "heightfield_inputs", "mesh_inputs", "well_inputs", "grid_i
 
 def z_down(z_positive: Any, default_down: bool) -> bool:
     """True for z_positive="down", False for "up", ``default_down`` for None; else InputError."""
-    if z_positive is None:
-        return default_down
-    if z_positive not in ("up", "down"):
-        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
-    return z_positive == "down"
+    return default_down if z_positive is None else cv.z_sign(z_positive) < 0
 
 
 def heightfield_inputs(

@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict
 import numpy as np
 
 from . import _lazy
+from ._convert import z_sign
 from ._errors import InputError
 from ._segy_survey import fit_survey
 
@@ -133,12 +134,6 @@ def _import(name: str) -> Any:
         raise ImportError(f"geocull.io needs the optional package {name!r} here: pip install {name}") from e
 
 
-def _zsign(z_positive: str) -> float:
-    if z_positive not in ("up", "down"):
-        raise InputError(f"z_positive: {z_positive!r}; expected 'up' or 'down'")
-    return -1.0 if z_positive == "down" else 1.0
-
-
 def _undefined_masked(values: Any) -> np.ma.MaskedArray:
     """A float64 masked array with the undefined values (:data:`XTGEO_UNDEF_LIMIT`, NaN) masked."""
     v = np.ma.asarray(values)
@@ -209,7 +204,7 @@ def from_xtgeo_surface(surf: Any, z_positive: Literal["up", "down"] = "down") ->
     Node (i, j) of the surface lies at ``(xori, yori) + R(rotation) @ (i*xinc, j*yinc*yflip)``, as in
     ``surf.get_xyz_values()``.
     """
-    sign = _zsign(z_positive)
+    sign = z_sign(z_positive)
     z = _undefined_masked(surf.values).T * sign
     yflip = int(surf.yflip)
     if yflip not in (1, -1):
@@ -239,7 +234,7 @@ def from_xtgeo_cube(cube: Any, z_positive: Literal["up", "down"] | None = None) 
     """
     zflip = int(getattr(cube, "zflip", 1))
     zp: Literal["up", "down"] = z_positive if z_positive is not None else ("down" if zflip == 1 else "up")
-    _zsign(zp)
+    z_sign(zp)
     raw = cube.values
     values = np.ma.getdata(raw)
     if not isinstance(values, np.ndarray) or values.dtype.kind != "f":
@@ -308,7 +303,7 @@ def from_xtgeo_grid(grid: Any, values: Any = None, z_positive: Literal["up", "do
     values: (nk, nj, ni) float64 of ``values`` (an ``xtgeo.GridProperty`` or a property name of the
         grid; masked / inactive / undefined cells NaN, see :func:`xtgeo_property`), or None.
     """
-    sign = _zsign(z_positive)
+    sign = z_sign(z_positive)
     ni, nj, nk = _grid_dims(grid)
     parts = grid.get_xyz_corners()  # 24 GridProperty: x, y, z of corner 1, then corner 2, ...
     if len(parts) != 24:
@@ -341,7 +336,7 @@ def from_xtgeo_well(
     max_stations: at most this many stations (>= 2), evenly spaced in station order, first and
         last kept (RMS well files hold a station every ~0.15 m: thousands per well); None keeps all.
     """
-    sign = _zsign(z_positive)
+    sign = z_sign(z_positive)
     df = well.get_dataframe()
     cols = [str(well.xname), str(well.yname), str(well.zname)]
     for c in cols:
@@ -418,7 +413,7 @@ def read_grdecl(
     """
     from . import _grdecl
 
-    _zsign(z_positive)
+    z_sign(z_positive)
     if isinstance(path, str | os.PathLike):
         paths = [os.fspath(path)]
     elif isinstance(path, Sequence) and path and all(isinstance(p, str | os.PathLike) for p in path):
@@ -515,7 +510,7 @@ def from_segy(
     ``geocull._lazy.SegyCube`` reading the traces of a box when sliced (a path stays open while it lives).
     """
     segyio = _import("segyio")
-    _zsign(z_positive)
+    z_sign(z_positive)
     tol = None
     if tolerance is not None:
         if isinstance(tolerance, bool) or not isinstance(tolerance, int | float | np.floating | np.integer):
