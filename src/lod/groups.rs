@@ -42,20 +42,20 @@ pub const LEFT: u8 = 8;
 /// The sides of tile (`ix`, `iy`) of a height field of `tx` × `ty` tiles that it shares with a
 /// neighbouring tile: the others lie on the object's outline.
 pub fn open_sides(ix: usize, iy: usize, tx: usize, ty: usize) -> u8 {
-    let mut m = 0;
-    if iy > 0 {
-        m |= BOTTOM;
+    [(BOTTOM, iy > 0), (RIGHT, ix + 1 < tx), (TOP, iy + 1 < ty), (LEFT, ix > 0)]
+        .into_iter()
+        .filter(|&(_, open)| open)
+        .fold(0, |m, (side, _)| m | side)
+}
+
+/// The tile across `side` (one bit) of tile (`ix`, `iy`), which must be open ([`open_sides`]).
+fn across(ix: usize, iy: usize, side: u8) -> (usize, usize) {
+    match side {
+        BOTTOM => (ix, iy - 1),
+        RIGHT => (ix + 1, iy),
+        TOP => (ix, iy + 1),
+        _ => (ix - 1, iy),
     }
-    if ix + 1 < tx {
-        m |= RIGHT;
-    }
-    if iy + 1 < ty {
-        m |= TOP;
-    }
-    if ix > 0 {
-        m |= LEFT;
-    }
-    m
 }
 
 /// The side masks of a level's variants (`Level::grouped`) for a tile whose `open` sides
@@ -81,21 +81,16 @@ pub fn stitch(tx: usize, ty: usize, level: &[Option<u8>]) -> Vec<u8> {
     for iy in 0..ty {
         for ix in 0..tx {
             let Some(l) = at(ix, iy) else { continue };
-            let same = |x: usize, y: usize| at(x, y) == Some(l);
-            let mut m = 0;
-            if iy > 0 && same(ix, iy - 1) {
-                m |= BOTTOM;
-            }
-            if ix + 1 < tx && same(ix + 1, iy) {
-                m |= RIGHT;
-            }
-            if iy + 1 < ty && same(ix, iy + 1) {
-                m |= TOP;
-            }
-            if ix > 0 && same(ix - 1, iy) {
-                m |= LEFT;
-            }
-            out[iy * tx + ix] = m;
+            let open = open_sides(ix, iy, tx, ty);
+            out[iy * tx + ix] = [BOTTOM, RIGHT, TOP, LEFT]
+                .into_iter()
+                .filter(|&side| {
+                    open & side != 0 && {
+                        let (x, y) = across(ix, iy, side);
+                        at(x, y) == Some(l)
+                    }
+                })
+                .fold(0, |m, side| m | side);
         }
     }
     out

@@ -170,7 +170,7 @@ impl LatticeShape {
             let coarse = 2 * (xs.len() - 1) * (ys.len() - 1);
             let fewer = |n: usize, before: usize| n as f64 <= 0.6 * before as f64;
             chain &= fewer(tris.len(), prev);
-            let for_groups = masks.iter().any(|&m| m != 0) && fewer(coarse, prev_coarse);
+            let for_groups = !masks.is_empty() && fewer(coarse, prev_coarse);
             if !chain && !for_groups {
                 break;
             }
