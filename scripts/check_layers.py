@@ -52,6 +52,7 @@ BELOW: dict[str, set[str]] = {
 ROOT_ITEMS = {"TestRng", "Result", "Error"}
 MAX_FILE_LINES = 700
 MAX_FN_LINES = 150
+TEST_MODULE = "#[cfg(test)]\nmod tests {"  # a Rust file's own tests, at its end
 RUST_FN = re.compile(r"^(\s*)(pub(\([^)]*\))?\s+)?(const\s+)?(async\s+)?(unsafe\s+)?fn\s+(\w+)")
 
 
@@ -91,7 +92,7 @@ def rust_file_modules() -> dict[tuple[str, ...], Path]:
     files = {}
     for path in sorted((ROOT / "src").rglob("*.rs")):
         parts = path.relative_to(ROOT / "src").with_suffix("").parts
-        if re.fullmatch(r"tests|tests_\w+|\w+_tests", parts[-1]) or parts == ("lib",):
+        if is_test_file(path) or parts == ("lib",):
             continue
         files[tuple(parts[:-1]) if parts[-1] == "mod" else tuple(parts)] = path
     return files
@@ -124,7 +125,7 @@ def check_rust_cycles() -> list[str]:
     graph: dict[tuple[str, ...], set[tuple[str, ...]]] = {m: set() for m in files}
     for mod, path in files.items():
         code = strip_comments(path.read_text())
-        code = code.split("#[cfg(test)]\nmod tests {")[0]
+        code = code.split(TEST_MODULE)[0]
         here = list(mod)
         children = set(re.findall(r"^\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+(\w+)\s*;", code, re.M))
         paths = [use_paths(re.sub(r"\s+", "", m.group(1)), []) for m in re.finditer(r"\buse\s+([^;]+);", code)]
@@ -249,8 +250,8 @@ def cycles(graph: dict[str, set[str]], what: str) -> list[str]:
 
 
 def is_test_file(path: Path) -> bool:
-    name = path.stem
-    return name == "tests" or name.startswith("tests_") or name.endswith("_tests")
+    """A Rust file of tests only: tests.rs, tests_*.rs, *_tests.rs."""
+    return re.fullmatch(r"tests|tests_\w+|\w+_tests", path.stem) is not None
 
 
 def check_sizes() -> list[str]:
@@ -258,9 +259,8 @@ def check_sizes() -> list[str]:
     for path in sorted((ROOT / "src").rglob("*.rs")):
         if is_test_file(path):
             continue
-        lines = path.read_text().splitlines()
-        end = next((i for i, line in enumerate(lines) if line.startswith("#[cfg(test)]")
-                    and i + 1 < len(lines) and lines[i + 1].startswith("mod tests {")), len(lines))
+        lines = path.read_text().split(TEST_MODULE)[0].splitlines()
+        end = len(lines)
         rel = path.relative_to(ROOT)
         if end > MAX_FILE_LINES:
             errors.append(f"{rel}: {end} lines without its tests (at most {MAX_FILE_LINES})")
