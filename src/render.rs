@@ -492,8 +492,8 @@ fn frame_state(
     geom: &SceneGeometry,
 ) -> (wgpu::BindGroup, Vec<bool>) {
     let objects = scene.objects();
-    // Colour maps: 256 rows per coloured object, then its NaN colour.
-    let mut lut: Vec<[f32; 4]> = Vec::new();
+    // Colour maps: tables of 256 rows, then the NaN colour, one per distinct map.
+    let mut lut = crate::gpu::ColorTables::default();
     let gpu_objects: Vec<GpuObject> = objects
         .iter()
         .enumerate()
@@ -502,14 +502,13 @@ fn frame_state(
             let cmap = match &o.color_by {
                 None => [0.0; 4],
                 Some(c) => {
-                    let base = lut.len() as f32;
-                    lut.extend(c.lut.iter().chain(std::iter::once(&c.nan_color)).map(|r| [r[0], r[1], r[2], 1.0]));
+                    let table = lut.table(&c.lut, c.nan_color) as f32;
                     let (lo, mode) = match c.source {
                         // z relative to the object's origin, as the vertices are.
                         ColorSource::Z => (c.clim[0] - o.origin.z, 2.0),
                         ColorSource::Values => (c.clim[0], 1.0),
                     };
-                    [lo as f32, (1.0 / (c.clim[1] - c.clim[0])) as f32, mode, base]
+                    [lo as f32, (1.0 / (c.clim[1] - c.clim[0])) as f32, mode, table]
                 }
             };
             let (mut grid, mut grid_rows, mut normal_map) = ([0.0; 4], [0.0; 4], [0; 4]);
@@ -566,7 +565,7 @@ fn frame_state(
         .iter()
         .map(|&oi| objects[oi as usize].visible && objects[oi as usize].opacity >= 1.0)
         .collect();
-    (passes.scene_bind_group(&ctx.device, &globals, &gpu_objects, &lut, geom), visible)
+    (passes.scene_bind_group(ctx, &globals, &gpu_objects, &lut, geom), visible)
 }
 
 /// Stage 4: records the lit fine pass of the visible set; returns the args it draws.

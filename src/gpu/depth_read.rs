@@ -18,7 +18,7 @@
 //! is a multiple of 256 bytes (bands are multiples of 64 rows).
 
 use super::readback::ReadbackTexture;
-use super::shader::{depth_texture_entry, storage_entry, uniform_entry};
+use super::shader::{float_texture_entry, storage_entry, uniform_entry};
 use crate::error::Result;
 use wgpu::util::DeviceExt;
 
@@ -45,7 +45,7 @@ impl DepthReader {
         let cs = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("depth_copy"),
-            entries: &[depth_texture_entry(0, cs), storage_entry(1, false, cs), uniform_entry(2, cs)],
+            entries: &[float_texture_entry(0, cs), storage_entry(1, false, cs), uniform_entry(2, cs)],
         });
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("depth_copy.wgsl"),

@@ -50,8 +50,8 @@ pub struct Globals {
 /// Per-object state read every frame (`Object` in common.wgsl): translation (world units,
 /// before exaggeration), flat colour, and colour map: `cmap = (lo, 1 / (hi - lo), mode, base)`
 /// with mode 0 = flat, 1 = by the vertex scalar, 2 = by the vertex's object-relative z (then lo
-/// is relative to the object's origin too), and `base` the object's first row in the frame's
-/// colour-map table (256 rows, then the NaN colour).
+/// is relative to the object's origin too), and `table` the object's table in the frame's
+/// colour-map texture ([`ColorTables`]).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct GpuObject {
@@ -102,3 +102,86 @@ const _: () = assert!(std::mem::size_of::<BoxInstance>() == 32);
 const _: () = assert!(std::mem::size_of::<Globals>() == 112);
 const _: () = assert!(std::mem::size_of::<GpuObject>() == 96);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);
+
+/// The frame's colour maps as the lit pass reads them: one table per distinct map (256 rows, then
+/// the NaN colour: [`TABLE_TEXELS`] texels), [`TABLES_PER_ROW`] tables side by side in each row
+/// of an RGBA32F texture (draw.wgsl `base_color`), so that a texture no wider than WebGPU's
+/// guaranteed 8192 texels holds them. A texture, not a storage buffer: a CPU rasteriser gathers
+/// a texel fetch in one vector operation, where it loads storage lane by lane behind a branch
+/// (lavapipe: a tenth of a Reek LOD frame went to the table's storage loads).
+#[derive(Clone, Debug, Default)]
+pub struct ColorTables {
+    /// The tables' texels, table after table.
+    pub texels: Vec<[f32; 4]>,
+    /// The tables' rows (colours, NaN colour), bit for bit, to find a table already held.
+    index: std::collections::HashMap<Vec<u32>, u32>,
+}
+
+/// Texels of one colour-map table: 256 rows and the NaN colour.
+pub const TABLE_TEXELS: u32 = 257;
+/// Tables side by side in one texture row: 31 x 257 = 7967 texels.
+pub const TABLES_PER_ROW: u32 = 31;
+
+impl ColorTables {
+    /// The number of the table of map `rows` (256 RGB rows) with NaN colour `nan`, added if
+    /// no table so far has the same colours.
+    pub fn table(&mut self, rows: &[[f32; 3]], nan: [f32; 3]) -> u32 {
+        debug_assert_eq!(rows.len() + 1, TABLE_TEXELS as usize);
+        let key: Vec<u32> = rows.iter().chain(std::iter::once(&nan)).flatten().map(|v| v.to_bits()).collect();
+        let next = self.index.len() as u32;
+        *self.index.entry(key).or_insert_with(|| {
+            let texels = rows.iter().chain(std::iter::once(&nan)).map(|r| [r[0], r[1], r[2], 1.0]);
+            self.texels.extend(texels.take(TABLE_TEXELS as usize));
+            next
+        })
+    }
+
+    /// The texture's size (width, height) in texels; at least one texel.
+    pub fn extent(&self) -> (u32, u32) {
+        let n = (self.index.len() as u32).max(1);
+        (n.min(TABLES_PER_ROW) * TABLE_TEXELS, n.div_ceil(TABLES_PER_ROW))
+    }
+
+    /// The texture's texels, row by row ([`Self::extent`]), tables past the last one zero.
+    pub fn image(&self) -> Vec<[f32; 4]> {
+        let (w, h) = self.extent();
+        let mut image = vec![[0.0f32; 4]; (w * h) as usize];
+        for (t, table) in self.texels.chunks(TABLE_TEXELS as usize).enumerate() {
+            let t = t as u32;
+            let at = ((t / TABLES_PER_ROW) * w + (t % TABLES_PER_ROW) * TABLE_TEXELS) as usize;
+            image[at..at + table.len()].copy_from_slice(table);
+        }
+        image
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map(v: f32) -> Vec<[f32; 3]> {
+        (0..256).map(|i| [v, i as f32 / 255.0, 0.5]).collect()
+    }
+
+    #[test]
+    fn tables_are_shared_by_equal_maps_and_placed_31_to_a_row() {
+        let mut t = ColorTables::default();
+        assert_eq!(t.extent(), (257, 1), "an empty set still makes a texture");
+        assert_eq!(t.table(&map(0.0), [1.0, 0.0, 0.0]), 0);
+        assert_eq!(t.table(&map(0.0), [1.0, 0.0, 0.0]), 0, "the same map and NaN colour: one table");
+        assert_eq!(t.table(&map(0.0), [0.0, 1.0, 0.0]), 1, "another NaN colour: another table");
+        for k in 2..40 {
+            assert_eq!(t.table(&map(k as f32), [0.0; 3]), k);
+        }
+        assert_eq!(t.extent(), (31 * 257, 2));
+        let image = t.image();
+        let (w, _) = t.extent();
+        // Table 33 (map 33.0): row 1, third table of it; its row 7 and its NaN colour.
+        let at = (w + 2 * 257) as usize;
+        assert_eq!(image[at + 7], [33.0, 7.0 / 255.0, 0.5, 1.0]);
+        assert_eq!(image[at + 256], [0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(image[257 + 256], [0.0, 1.0, 0.0, 1.0], "table 1's NaN colour");
+        // Past the last table (39 = row 1, table 8): zero.
+        assert_eq!(image[(w + 9 * 257) as usize], [0.0; 4]);
+    }
+}

@@ -21,7 +21,7 @@ pub mod timing;
 
 pub use context::GpuContext;
 pub use geometry::SceneGeometry;
-pub use layout::{DrawArgs, Globals, GpuObject};
+pub use layout::{ColorTables, DrawArgs, Globals, GpuObject};
 pub use passes::Passes;
 pub use readback::{map_err, ReadbackTexture};
 pub use targets::Targets;

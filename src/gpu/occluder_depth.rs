@@ -6,7 +6,7 @@
 
 use super::layout::BoxInstance;
 use super::passes::boxes_buffer;
-use super::shader::{box_vertex_layout, depth_texture_entry, shader, with_box_wgsl};
+use super::shader::{box_vertex_layout, float_texture_entry, shader, with_box_wgsl};
 use super::targets::DEPTH_FORMAT;
 
 /// The pipelines and bind-group layout of the pass.
@@ -59,7 +59,7 @@ impl OccluderDepth {
     pub fn new(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout) -> Self {
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("occluder_depth"),
-            entries: &[depth_texture_entry(0, wgpu::ShaderStages::FRAGMENT)],
+            entries: &[float_texture_entry(0, wgpu::ShaderStages::FRAGMENT)],
         });
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("occluder_depth"),

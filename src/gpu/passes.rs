@@ -474,26 +474,37 @@ impl GpuContext {
 
 impl Passes {
     /// The scene bind group of one frame: uniforms, per-object state, the tile → object table,
-    /// the colour-map rows the objects' `cmap.w` point into (RGBA), the height fields' normal
+    /// the colour-map tables the objects' `cmap.w` name (`layout::ColorTables`), the height fields' normal
     /// map (`SceneGeometry::shading`), the lattice tiles' grids (`SceneGeometry::tile_grid`) and
     /// values (`SceneGeometry::sample_values`).
     pub fn scene_bind_group(
         &self,
-        d: &wgpu::Device,
+        ctx: &GpuContext,
         globals: &super::layout::Globals,
         objects: &[super::layout::GpuObject],
-        lut: &[[f32; 4]],
+        lut: &super::layout::ColorTables,
         geom: &SceneGeometry,
     ) -> wgpu::BindGroup {
+        let d = &ctx.device;
         let zero = [bytemuck::Zeroable::zeroed()];
         let objects = if objects.is_empty() { &zero[..] } else { objects };
-        let zero_row = [[0.0f32; 4]];
-        let lut = if lut.is_empty() { &zero_row[..] } else { lut };
-        let lut_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lut"),
-            contents: bytemuck::cast_slice(lut),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let (width, height) = lut.extent();
+        let lut_tex = d.create_texture_with_data(
+            &ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("colour maps"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&lut.image()),
+        );
+        let lut_view = lut_tex.create_view(&Default::default());
         let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("globals"),
             contents: bytemuck::bytes_of(globals),
@@ -511,7 +522,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 0, resource: globals_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: objects_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: geom.tile_object.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: lut_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&lut_view) },
                 wgpu::BindGroupEntry { binding: 4, resource: geom.shading.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: geom.tile_grid.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 6, resource: geom.sample_values.as_entire_binding() },

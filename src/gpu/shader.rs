@@ -114,10 +114,10 @@ pub fn storage_entry(binding: u32, read_only: bool, vis: wgpu::ShaderStages) -> 
     }
 }
 
-/// A depth image bound as an unfilterable float texture: shaders read it with `textureLoad`
-/// (naga's GLSL cannot load a `texture_depth_2d`), as the box and slab tests and the depth
-/// read-back do.
-pub fn depth_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+/// A 2D float texture bound unfilterable, read with `textureLoad`: a depth image (naga's GLSL
+/// cannot load a `texture_depth_2d`), as the box and slab tests and the depth read-back read
+/// it, or a table (the lit pass's colour maps, `layout::ColorTables`).
+pub fn float_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: vis,

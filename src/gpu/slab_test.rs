@@ -5,7 +5,7 @@
 //! image; which tiles, and by how much, is the caller's (`cull::phases`).
 
 use super::shader::{
-    depth_texture_entry, early_test_depth, shader, storage_entry, test_pipeline, with_box_wgsl, BOX_TEST_WGSL,
+    early_test_depth, float_texture_entry, shader, storage_entry, test_pipeline, with_box_wgsl, BOX_TEST_WGSL,
 };
 use super::targets::Targets;
 
@@ -47,7 +47,7 @@ impl SlabTest {
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("slab_test"),
             entries: &[
-                depth_texture_entry(0, fs),
+                float_texture_entry(0, fs),
                 storage_entry(1, false, fs),
                 storage_entry(2, true, vs),
                 storage_entry(3, true, vs),

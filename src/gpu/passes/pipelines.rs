@@ -4,7 +4,7 @@
 
 use super::Passes;
 use crate::gpu::shader::{
-    box_pipeline, depth_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, BOX_TEST_WGSL, COMMON_WGSL,
+    box_pipeline, float_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, BOX_TEST_WGSL, COMMON_WGSL,
     GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
 };
 use crate::gpu::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
@@ -105,7 +105,7 @@ fn layouts(d: &wgpu::Device) -> Layouts {
             uniform_entry(0, vf),
             storage_entry(1, true, vf),
             storage_entry(2, true, vf),
-            storage_entry(3, true, wgpu::ShaderStages::FRAGMENT),
+            float_texture_entry(3, wgpu::ShaderStages::FRAGMENT),
             storage_entry(4, true, vf),
             storage_entry(5, true, vf),
             storage_entry(6, true, vf),
@@ -316,7 +316,7 @@ fn box_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: boo
     let box_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("box_test"),
         entries: &[
-            depth_texture_entry(0, fs),
+            float_texture_entry(0, fs),
             storage_entry(1, false, fs),
             storage_entry(2, true, wgpu::ShaderStages::VERTEX),
             storage_entry(3, true, wgpu::ShaderStages::VERTEX),

@@ -2,8 +2,14 @@
 // Its vertex entry points are vs_main / vs_gl's transform, word for word (so that depths agree
 // with the prepass), plus the vertex's scalar for colour by data.
 
-// Colour maps of this frame's objects: 256 rows each, then the object's NaN colour.
-@group(0) @binding(3) var<storage, read> lut: array<vec4<f32>>;
+// Colour maps of this frame's objects (gpu::layout::ColorTables): tables of 256 rows, then the
+// NaN colour, 31 side by side in each row of the texture.
+@group(0) @binding(3) var lut: texture_2d<f32>;
+
+// Row `row` (0..=256) of colour-map table `table`.
+fn lut_row(table: u32, row: u32) -> vec3<f32> {
+    return textureLoad(lut, vec2<u32>((table % 31u) * 257u + row, table / 31u), 0).rgb;
+}
 
 // Height fields coloured by data that are drawn as lattice tiles: their values per grid sample
 // (gpu::geometry::SceneGeometry::sample_values; no data as the most negative f32).
@@ -252,12 +258,12 @@ fn base_color(o: Object, s: f32) -> vec3<f32> {
     if (o.cmap.z < 0.5) {
         return o.color.rgb;
     }
-    let base = u32(o.cmap.w);
+    let table = u32(o.cmap.w);
     if (s < -1e31) {
-        return lut[base + 256u].rgb;
+        return lut_row(table, 256u);
     }
     let t = clamp((s - o.cmap.x) * o.cmap.y, 0.0, 1.0);
-    return lut[base + min(u32(t * 256.0), 255u)].rgb;
+    return lut_row(table, min(u32(t * 256.0), 255u));
 }
 
 // The lit colour of object `o` at a fragment with shading normal and colouring scalar `ns`
