@@ -66,11 +66,12 @@ pub struct SceneGeometry {
     /// The slabs' vertices (x, y, z, side) and u32 indices; None when no tile has one.
     pub slabs: Option<(wgpu::Buffer, wgpu::Buffer)>,
     /// The fine surfaces of the height fields as the lit pass samples them
-    /// (`Object::shading_samples`), object after object, one word per sample: the gradient as
-    /// two f16 (x in the low half); a structured grid mesh's packed fine normal.
-    pub shading: wgpu::Buffer,
-    /// The heights of those samples (f32 bits, 0 for a grid mesh's normals), in the same order.
-    pub shading_z: wgpu::Buffer,
+    /// (`Object::shading_samples`), object after object, [`SHADING_ROW`] samples to a row of an
+    /// RG32Uint texture, per sample the gradient as two f16 (x in the low half) or a structured
+    /// grid mesh's packed fine normal, then the height (f32 bits; 0 for a normal). A texture, not
+    /// storage: a CPU rasteriser gathers a texel fetch in one vector operation, where it loads
+    /// storage lane by lane behind a branch.
+    pub shading: wgpu::Texture,
     /// Per object (scene order), the first sample of its gradients in `shading`; None for objects
     /// without (meshes, grids; height fields past the device's storage-binding limit), which the
     /// lit pass shades with their facets' normals.
@@ -126,6 +127,33 @@ pub struct DrawRun {
     /// surface's depth on their pixel's ray (draw.wgsl `fine_depth`), so that they hide and are
     /// hidden by that object as the fine tile is. Never set in `SceneGeometry::draw_runs`.
     pub fine_depth: bool,
+}
+
+/// Samples in one row of the normal map's texture ([`SceneGeometry::shading`], common.wgsl
+/// `surface_sample`): WebGPU's guaranteed 2D texture width.
+pub const SHADING_ROW: u32 = 8192;
+
+/// Writes `words` (per sample: gradients or normal, height) into the normal map's texture from
+/// sample `first` on, row by row.
+pub(crate) fn write_shading(queue: &wgpu::Queue, texture: &wgpu::Texture, first: u64, words: &[[u32; 2]]) {
+    let row = SHADING_ROW as u64;
+    let mut done = 0usize;
+    while done < words.len() {
+        let k = first + done as u64;
+        let n = ((row - k % row) as usize).min(words.len() - done);
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: (k % row) as u32, y: (k / row) as u32, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&words[done..done + n]),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: None, rows_per_image: None },
+            wgpu::Extent3d { width: n as u32, height: 1, depth_or_array_layers: 1 },
+        );
+        done += n;
+    }
 }
 
 /// The draw of one LOD level of a tile and its errors (`lod::levels::Level`).
@@ -288,6 +316,7 @@ impl SceneGeometry {
         }
         // Everything is checked and packed before anything is written.
         let mut writes: Vec<(&wgpu::Buffer, u64, Vec<u8>)> = Vec::new();
+        let mut normal_writes = Vec::new();
         let mut tiles_done = Vec::new();
         let mut cd = CompactDraw::default();
         let mut words = Vec::new();
@@ -302,7 +331,7 @@ impl SceneGeometry {
             }
             match (self.grid_dims[oi], self.shading_base[oi], o.grid_normals()) {
                 (Some(dims), Some(base), Some((nu, nv, normals))) if dims == (nu as u32, nv as u32) => {
-                    writes.push((&self.shading, base as u64 * 4, bytemuck::cast_slice(&normals).to_vec()));
+                    normal_writes.push((base as u64, normals.iter().map(|&n| [n, 0]).collect::<Vec<_>>()));
                 }
                 (None, _, None) => {}
                 _ => return Ok(false),
@@ -342,6 +371,9 @@ impl SceneGeometry {
             if !data.is_empty() {
                 ctx.queue.write_buffer(buffer, offset, &data);
             }
+        }
+        for (first, words) in normal_writes {
+            write_shading(&ctx.queue, &self.shading, first, &words);
         }
         for (k, t) in tiles_done {
             self.bbox[k] = tile_bbox(t);

@@ -117,6 +117,25 @@ pub struct ColorTables {
     index: std::collections::HashMap<Vec<u32>, u32>,
 }
 
+/// Objects in one row of the fragment stage's object texture (draw.wgsl `fragment_object`):
+/// 1365 x 6 = 8190 texels, within WebGPU's guaranteed 8192.
+pub const OBJECTS_PER_ROW: usize = 1365;
+
+/// The frame's objects as the fragment stage reads them (draw.wgsl `fragment_object`): an
+/// RGBA32Uint texture's size (width, height) and texels, row by row, each object six texels (its
+/// fields' bits in order), [`OBJECTS_PER_ROW`] to a row; at least one object (zero).
+pub fn object_texels(objects: &[GpuObject]) -> ((u32, u32), Vec<[u32; 4]>) {
+    const TEXELS: usize = std::mem::size_of::<GpuObject>() / 16;
+    let n = objects.len().max(1);
+    let (width, height) = (n.min(OBJECTS_PER_ROW) * TEXELS, n.div_ceil(OBJECTS_PER_ROW));
+    let mut texels = vec![[0u32; 4]; width * height];
+    for (i, o) in objects.iter().enumerate() {
+        let at = (i / OBJECTS_PER_ROW) * width + (i % OBJECTS_PER_ROW) * TEXELS;
+        texels[at..at + TEXELS].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(o)));
+    }
+    ((width as u32, height as u32), texels)
+}
+
 /// Texels of one colour-map table: 256 rows and the NaN colour.
 pub const TABLE_TEXELS: u32 = 257;
 /// Tables side by side in one texture row: 31 x 257 = 7967 texels.

@@ -130,6 +130,19 @@ pub fn float_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindG
     }
 }
 
+/// A 2D unsigned-integer texture, read with `textureLoad` (the lit pass's objects,
+/// `layout::object_texels`).
+pub fn uint_texture_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        ..float_texture_entry(binding, vis)
+    }
+}
+
 pub fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,

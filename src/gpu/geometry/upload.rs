@@ -4,7 +4,7 @@
 use super::plan::Plan;
 use super::{
     check_buffer_sizes, draw_runs, normal_slot, scalar_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words,
-    CompactDraw, LevelDraw, SceneGeometry, VariantSet, NO_VARIANTS,
+    write_shading, CompactDraw, LevelDraw, SceneGeometry, VariantSet, NO_VARIANTS, SHADING_ROW,
 };
 use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
@@ -15,16 +15,18 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 /// The normal map of the lit pass: every height field's shading samples and every structured
-/// grid mesh's fine normals, as long as they fit one storage binding of 4 bytes a sample (later
-/// height fields fall back to facet normals and vertex heights, later grid meshes to their vertex
-/// normals). Returns the gradients (or normals) and the heights (0 for normals), each object's
-/// first sample, and each grid mesh's grid size.
+/// grid mesh's fine normals, as long as they fit the texture ([`SHADING_ROW`] samples a row, as
+/// many rows as the device's 2D textures take; later height fields fall back to facet normals and
+/// vertex heights, later grid meshes to their vertex normals). Returns the texture (per sample
+/// the gradients or the normal, then the height or 0), each object's first sample, and each grid
+/// mesh's grid size.
 #[allow(clippy::type_complexity)]
 fn upload_shading(
     ctx: &GpuContext,
     scene: &Scene,
-) -> Result<([wgpu::Buffer; 2], Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
-    let max_samples = ctx.limits.max_storage_buffer_binding_size / 4;
+) -> Result<(wgpu::Texture, Vec<Option<u32>>, Vec<Option<(u32, u32)>>)> {
+    let max_rows = ctx.limits.max_texture_dimension_2d.max(1) as u64;
+    let max_samples = (SHADING_ROW as u64 * max_rows).min(u32::MAX as u64);
     let mut total = 0u64;
     let mut dims = vec![None; scene.objects().len()];
     // Per object in the map: its sample count and, for a grid mesh, its fine normals (small:
@@ -52,53 +54,44 @@ fn upload_shading(
             Some((total - n) as u32)
         })
         .collect();
-    // Written in place (no staging copy where the device maps storage buffers), a few objects at
-    // a time: no host copy of the whole map.
-    let direct = if ctx.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS) {
-        wgpu::BufferUsages::MAP_WRITE
-    } else {
-        wgpu::BufferUsages::empty()
-    };
-    let bufs = ["shading", "shading_z"].map(|label| {
-        ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: 4 * total.max(1),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | direct,
-            mapped_at_creation: true,
-        })
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("shading"),
+        size: wgpu::Extent3d {
+            width: SHADING_ROW,
+            height: total.div_ceil(SHADING_ROW as u64).max(1) as u32,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rg32Uint,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
     });
-    {
-        let mut gmap = bufs[0].slice(..).get_mapped_range_mut().map_err(map_err)?;
-        let mut zmap = bufs[1].slice(..).get_mapped_range_mut().map_err(map_err)?;
-        let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
-        let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
-            match normals {
-                // A grid mesh: its packed fine normal, then 0.
-                Some(normals) => normals.iter().map(|&n| [n, 0]).collect(),
-                None => {
-                    let mut out = Vec::new();
-                    scene.objects()[*oi]
-                        .for_each_shading_sample(|[gx, gy, z]| out.push([h(gx) | (h(gy) << 16), z.to_bits()]));
-                    out
-                }
-            }
-        };
-        // As many objects at a time as there are threads, each into a vector of its own, then
-        // copied (mapped memory is write-only and stays on this thread).
-        let mut at = 0usize;
-        for batch in parts.chunks(rayon::current_num_threads().max(1)) {
-            for words in batch.par_iter().map(samples).collect::<Vec<_>>() {
-                let (g, z): (Vec<u32>, Vec<u32>) = words.iter().map(|w| (w[0], w[1])).unzip();
-                gmap.slice(at * 4..(at + words.len()) * 4).copy_from_slice(bytemuck::cast_slice(&g));
-                zmap.slice(at * 4..(at + words.len()) * 4).copy_from_slice(bytemuck::cast_slice(&z));
-                at += words.len();
+    let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
+    let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
+        match normals {
+            // A grid mesh: its packed fine normal, then 0.
+            Some(normals) => normals.iter().map(|&n| [n, 0]).collect(),
+            None => {
+                let mut out = Vec::new();
+                scene.objects()[*oi]
+                    .for_each_shading_sample(|[gx, gy, z]| out.push([h(gx) | (h(gy) << 16), z.to_bits()]));
+                out
             }
         }
+    };
+    // As many objects at a time as there are threads, each into a vector of its own, then
+    // written and submitted (the driver's staging copies are freed batch by batch).
+    let mut at = 0u64;
+    for batch in parts.chunks(rayon::current_num_threads().max(1)) {
+        for words in batch.par_iter().map(samples).collect::<Vec<_>>() {
+            write_shading(&ctx.queue, &texture, at, &words);
+            at += words.len() as u64;
+        }
+        ctx.queue.submit(std::iter::empty());
     }
-    for b in &bufs {
-        b.unmap();
-    }
-    Ok((bufs, base, dims))
+    Ok((texture, base, dims))
 }
 
 /// The per-sample values of the height fields coloured by data (`SceneGeometry::sample_values`)
@@ -198,7 +191,7 @@ impl SceneGeometry {
     /// temporaries beyond the patterns.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self> {
         let d = &ctx.device;
-        let ([shading, shading_z], shading_base, grid_dims) = upload_shading(ctx, scene)?;
+        let (shading, shading_base, grid_dims) = upload_shading(ctx, scene)?;
         let (sample_values, values_base, cells) = upload_values(ctx, scene, &shading_base);
         let mut plan = Plan::new(scene, &shading_base, &values_base);
         cell_table_grid(&mut plan, &cells);
@@ -234,7 +227,8 @@ impl SceneGeometry {
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size();
-        let bytes = bytes + shading.size() + shading_z.size() + sample_values.size() + slab_bytes;
+        let shading_bytes = 8 * SHADING_ROW as u64 * shading.height() as u64;
+        let bytes = bytes + shading_bytes + sample_values.size() + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
         Ok(Self {
@@ -257,7 +251,6 @@ impl SceneGeometry {
             slab_draws,
             slabs,
             shading,
-            shading_z,
             shading_base,
             grid_dims,
             table_colors: cells.objects,

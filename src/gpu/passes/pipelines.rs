@@ -4,8 +4,8 @@
 
 use super::Passes;
 use crate::gpu::shader::{
-    box_pipeline, float_texture_entry, shader, storage_entry, uniform_entry, with_box_wgsl, BOX_TEST_WGSL, COMMON_WGSL,
-    GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
+    box_pipeline, float_texture_entry, shader, storage_entry, uint_texture_entry, uniform_entry, with_box_wgsl,
+    BOX_TEST_WGSL, COMMON_WGSL, GLOBALS_WGSL, PRIORITY_WGSL, SELECT_WGSL,
 };
 use crate::gpu::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT};
 use wgpu::util::DeviceExt;
@@ -103,13 +103,12 @@ fn layouts(d: &wgpu::Device) -> Layouts {
         label: Some("scene"),
         entries: &[
             uniform_entry(0, vf),
-            storage_entry(1, true, vf),
+            uint_texture_entry(1, vf),
             storage_entry(2, true, vf),
             float_texture_entry(3, wgpu::ShaderStages::FRAGMENT),
-            storage_entry(4, true, vf),
+            uint_texture_entry(4, vf),
             storage_entry(5, true, vf),
             storage_entry(6, true, vf),
-            storage_entry(7, true, vf),
         ],
     });
     let cs = wgpu::ShaderStages::COMPUTE;

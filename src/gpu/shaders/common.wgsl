@@ -23,14 +23,33 @@ struct Object {
     normal_map: vec4<u32>,
 }
 
-@group(0) @binding(1) var<storage, read> objects: array<Object>;
 @group(0) @binding(2) var<storage, read> tile_object: array<u32>;
-// Height fields' fine surfaces (scene::Object::shading_samples), object after object, per
-// sample: the gradient (dz/dx, dz/dy) as two f16 in `surface_g` (a grid mesh's packed fine
-// normal), the object-relative height in `surface_z` (two bindings of 4 bytes a sample, so that
-// twice the samples fit a device's storage-binding limit).
-@group(0) @binding(4) var<storage, read> surface_g: array<u32>;
-@group(0) @binding(7) var<storage, read> surface_z: array<u32>;
+// The frame's objects (gpu::layout::object_texels): six texels an object, 1365 objects to a row.
+// A texture, not storage: a CPU rasteriser gathers a texel fetch in one vector operation, where it
+// loads storage lane by lane behind a branch.
+@group(0) @binding(1) var objects: texture_2d<u32>;
+
+// The object of `tile`.
+fn object_at(tile: u32) -> Object {
+    let i = tile_object[tile];
+    let x = (i % 1365u) * 6u;
+    let y = i / 1365u;
+    return Object(bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x, y), 0)),
+                  bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x + 1u, y), 0)),
+                  bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x + 2u, y), 0)),
+                  bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x + 3u, y), 0)),
+                  bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x + 4u, y), 0)),
+                  textureLoad(objects, vec2<u32>(x + 5u, y), 0));
+}
+// Height fields' fine surfaces (scene::Object::shading_samples), object after object, 8192
+// samples to a row (gpu::geometry::SHADING_ROW), per sample: the gradient (dz/dx, dz/dy) as two
+// f16 (a grid mesh's packed fine normal), then the object-relative height (f32 bits).
+@group(0) @binding(4) var surface: texture_2d<u32>;
+
+// Sample `k` of `surface`: (gradients or normal, height bits).
+fn surface_sample(k: u32) -> vec2<u32> {
+    return textureLoad(surface, vec2<u32>(k % 8192u, k / 8192u), 0).xy;
+}
 // Per tile three vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
 // object-relative (x, y) and the grid's column axis; its row axis, the first sample's index in
 // `surface` and the grid's row length (u32 bits); the first sample's index in `sample_values`
@@ -48,7 +67,7 @@ fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
     }
     let a = tile_grid[3u * tile];
     let k = k0 + u32(pos.y) * bitcast<u32>(b.w) + u32(pos.x);
-    return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface_z[k]));
+    return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface_sample(k).y));
 }
 
 // Clip position `clip` of a vertex of object `o` with its depth-tie priority applied
@@ -79,7 +98,7 @@ fn ring_lift(rz: f32) -> vec3<f32> {
 
 @vertex
 fn vs_main(@location(0) vpos: vec3<f32>, @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOut {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let p = (tile_position(vpos, tile) - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     var out: VOut;
     out.clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
@@ -108,7 +127,7 @@ struct VOutGl {
 // The same transform as vs_main (kept apart so that vs_main's code is what it always was).
 @vertex
 fn vs_gl(@location(0) vpos: vec3<f32>, @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutGl {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let p = (tile_position(vpos, tile) - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     let clip = priority_clip(g.view_proj * vec4<f32>(p, 1.0), o);
     return VOutGl(clip, p, tile, clip.zw);

@@ -46,11 +46,14 @@ fn surface_cell(o: Object, w: vec3<f32>) -> SurfaceCell {
     let c = min(floor(q), n - 2.0);
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    return SurfaceCell(q0, c, q - c,
-                       vec3<f32>(unpack2x16float(surface_g[k]), bitcast<f32>(surface_z[k])),
-                       vec3<f32>(unpack2x16float(surface_g[k + 1u]), bitcast<f32>(surface_z[k + 1u])),
-                       vec3<f32>(unpack2x16float(surface_g[k + nx]), bitcast<f32>(surface_z[k + nx])),
-                       vec3<f32>(unpack2x16float(surface_g[k + nx + 1u]), bitcast<f32>(surface_z[k + nx + 1u])));
+    return SurfaceCell(q0, c, q - c, gradient_height(k), gradient_height(k + 1u), gradient_height(k + nx),
+                       gradient_height(k + nx + 1u));
+}
+
+// Sample `k` of a height field's normal map: (dz/dx, dz/dy, z).
+fn gradient_height(k: u32) -> vec3<f32> {
+    let s = surface_sample(k);
+    return vec3<f32>(unpack2x16float(s.x), bitcast<f32>(s.y));
 }
 
 // The fine surface under render-space point `w` of a height field with a normal map:
@@ -82,13 +85,13 @@ fn grid_mesh_normal(o: Object, uv: vec2<f32>) -> vec3<f32> {
     let f = q - c;
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let a = vertex_normal(surface_g[k]);
-    let d = vertex_normal(surface_g[k + nx + 1u]);
+    let a = vertex_normal(surface_sample(k).x);
+    let d = vertex_normal(surface_sample(k + nx + 1u).x);
     var v: vec3<f32>;
     if (f.x >= f.y) {
-        v = (1.0 - f.x) * a + (f.x - f.y) * vertex_normal(surface_g[k + 1u]) + f.y * d;
+        v = (1.0 - f.x) * a + (f.x - f.y) * vertex_normal(surface_sample(k + 1u).x) + f.y * d;
     } else {
-        v = (1.0 - f.y) * a + (f.y - f.x) * vertex_normal(surface_g[k + nx]) + f.x * d;
+        v = (1.0 - f.y) * a + (f.y - f.x) * vertex_normal(surface_sample(k + nx).x) + f.x * d;
     }
     return v;
 }
@@ -181,7 +184,7 @@ fn drawn_normal(o: Object, nrm: u32, rz: f32) -> vec3<f32> {
 @vertex
 fn vs_draw(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
            @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutDraw {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
@@ -286,7 +289,7 @@ struct FOut {
 
 @fragment
 fn fs_main(v: VOutDraw) -> FOut {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ns = shading(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
@@ -296,7 +299,7 @@ fn fs_main(v: VOutDraw) -> FOut {
 // field branch, which a CPU rasteriser would run for every fragment (gpu::geometry::DrawRun).
 @fragment
 fn fs_mesh(v: VOutDraw) -> FOut {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w)), v.tile + 1u);
 }
 
@@ -304,7 +307,7 @@ fn fs_mesh(v: VOutDraw) -> FOut {
 // logs (gpu::geometry::DrawRun::cells).
 @fragment
 fn fs_cells(v: VOutDraw) -> FOut {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let s = table_scalar(o, v.tile, v.n, v.world_s.w);
     return FOut(lit_color(o, mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s)), v.tile + 1u);
 }
@@ -312,7 +315,7 @@ fn fs_cells(v: VOutDraw) -> FOut {
 // fs_main for the tiles of grid meshes (gpu::geometry::SceneGeometry::draw_runs).
 @fragment
 fn fs_grid(v: VOutDraw) -> FOut {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ns = shading_grid(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOut(lit_color(o, ns), v.tile + 1u);
 }
@@ -330,7 +333,7 @@ struct VOutField {
 
 @vertex
 fn vs_field(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @builtin(instance_index) tile: u32) -> VOutField {
-    return field_vertex(vpos, vvalue, tile, objects[tile_object[tile]]);
+    return field_vertex(vpos, vvalue, tile, object_at(tile));
 }
 
 // vs_field's output for vertex `vpos` (its scalar `vvalue`) of `tile` of object `o`.
@@ -343,7 +346,7 @@ fn field_vertex(vpos: vec3<f32>, vvalue: f32, tile: u32, o: Object) -> VOutField
 
 @fragment
 fn fs_field(v: VOutField) -> FOut {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     return FOut(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u);
 }
 
@@ -381,9 +384,9 @@ fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, 
     f = q - c;
     let nx = u32(n.x);
     let k = o.normal_map.x - 1u + u32(c.y) * nx + u32(c.x);
-    let z00 = bitcast<f32>(surface_z[k]);
-    let z11 = bitcast<f32>(surface_z[k + nx + 1u]);
-    let zo = bitcast<f32>(surface_z[select(k + nx, k + 1u, f.x >= f.y)]);
+    let z00 = bitcast<f32>(surface_sample(k).y);
+    let z11 = bitcast<f32>(surface_sample(k + nx + 1u).y);
+    let zo = bitcast<f32>(surface_sample(select(k + nx, k + 1u, f.x >= f.y)).y);
     a = select(vec2<f32>(z11 - zo, zo - z00), vec2<f32>(zo - z00, z11 - zo), f.x >= f.y);
     gap = zs * (o.offset.z + z00 + dot(a, q0 - c)) - w.z;
     den = r.z - zs * dot(a, qr);
@@ -446,7 +449,7 @@ struct VOutFieldFine {
 
 @vertex
 fn vs_field_fine(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @builtin(instance_index) tile: u32) -> VOutFieldFine {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let v = field_vertex(vpos, vvalue, tile, o);
     return VOutFieldFine(v.clip, v.world_s, tile, o.offset, o.color, o.cmap, o.grid, o.grid_rows, o.normal_map);
 }
@@ -472,7 +475,7 @@ struct VOutDrawGl {
 @vertex
 fn vs_draw_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32, @location(2) nrm: u32,
               @location(3) rz: f32, @builtin(instance_index) tile: u32) -> VOutDrawGl {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos - ring_lift(rz) + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
@@ -491,7 +494,7 @@ struct FOutGl {
 // frag_depth written (see VOutGl in common.wgsl).
 @fragment
 fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ns = shading(o, v.world_s.xyz, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
@@ -499,7 +502,7 @@ fn fs_main_gl(v: VOutDrawGl) -> FOutGl {
 // fs_mesh with frag_depth written.
 @fragment
 fn fs_mesh_gl(v: VOutDrawGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
@@ -507,7 +510,7 @@ fn fs_mesh_gl(v: VOutDrawGl) -> FOutGl {
 // fs_cells with frag_depth written.
 @fragment
 fn fs_cells_gl(v: VOutDrawGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let s = table_scalar(o, v.tile, v.n, v.world_s.w);
     let ns = mesh_shading(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, s);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
@@ -516,7 +519,7 @@ fn fs_cells_gl(v: VOutDrawGl) -> FOutGl {
 // fs_main_gl for the tiles of grid meshes.
 @fragment
 fn fs_grid_gl(v: VOutDrawGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ns = shading_grid(o, cross(dpdx(v.world_s.xyz), dpdy(v.world_s.xyz)), v.n, v.world_s.w);
     return FOutGl(lit_color(o, ns), v.tile + 1u, v.zw.x / v.zw.y);
 }
@@ -532,7 +535,7 @@ struct VOutFieldGl {
 @vertex
 fn vs_field_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32,
                @builtin(instance_index) tile: u32) -> VOutFieldGl {
-    let o = objects[tile_object[tile]];
+    let o = object_at(tile);
     let pos = tile_position(vpos, tile);
     let value = tile_value(vpos, tile, vvalue);
     let p = (pos + o.offset.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
@@ -542,14 +545,14 @@ fn vs_field_gl(@location(0) vpos: vec3<f32>, @location(1) vvalue: f32,
 
 @fragment
 fn fs_field_gl(v: VOutFieldGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     return FOutGl(lit_color(o, field_shading(o, v.world_s.xyz, v.world_s.w)), v.tile + 1u, v.zw.x / v.zw.y);
 }
 
 // GL: fs_field_fine as it is (it writes frag_depth already).
 @fragment
 fn fs_field_fine_gl(v: VOutFieldGl) -> FOutGl {
-    let o = objects[tile_object[v.tile]];
+    let o = object_at(v.tile);
     let ff = field_fine(o, v.tile, v.world_s.xyz, v.world_s.w);
     return FOutGl(lit_color(o, ff.ns), v.tile + 1u, ff.depth);
 }
