@@ -23,15 +23,15 @@ pub struct SceneGeometry {
     /// a grid-shaded mesh (`grid_dims`) the packed grid coordinates (`TileMesh::grid_uv`).
     pub values: Option<wgpu::Buffer>,
     pub indices: Option<wgpu::Buffer>,
-    /// Object index (position in `scene.objects()`) of every tile.
-    pub tile_object: wgpu::Buffer,
-    pub tile_object_cpu: Vec<u32>,
-    /// Per tile three vec4 for the vertex stage (`tile_grid` in common.wgsl): for a lattice tile
-    /// (see [`plan::Plan`]) the object-relative (x, y) of its first sample and the grid's column axis;
+    /// Per tile, four texels of an RGBA32Uint texture (`layout::tile_texels`, common.wgsl
+    /// `tile_texel`): three for the vertex stage (`tile_grid_at`): for a lattice tile (see
+    /// [`plan::Plan`]) the object-relative (x, y) of its first sample and the grid's column axis;
     /// its row axis, the first sample's index in `shading` and the grid's row length (u32 bits);
-    /// the first sample's index in `sample_values` (u32::MAX: no values). For other tiles u32::MAX
-    /// in place of the `shading` index.
-    pub tile_grid: wgpu::Buffer,
+    /// the first sample's index in `sample_values` (u32::MAX: no values); for other tiles
+    /// u32::MAX in place of the `shading` index. Then its object (`object_at`).
+    pub tiles: wgpu::Texture,
+    /// Object index (position in `scene.objects()`) of every tile.
+    pub tile_object_cpu: Vec<u32>,
     /// The values (colour by data) of the height fields that have them and are drawn as lattice
     /// tiles, per grid sample (`Object::value_grid`; no data as [`NO_DATA`]), object after object:
     /// what the lit pass's vertex stage reads in place of the vertex scalar (`sample_values` in

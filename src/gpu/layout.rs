@@ -136,6 +136,56 @@ pub fn object_texels(objects: &[GpuObject]) -> ((u32, u32), Vec<[u32; 4]>) {
     ((width as u32, height as u32), texels)
 }
 
+/// A 2D texture of `format` (four 32-bit channels) and size `(width, height)` holding `texels`
+/// row by row, for shaders to read with `textureLoad`: the tables of the lit pass and of every
+/// scene pass (colour maps, objects, tiles).
+pub fn table_texture<T: bytemuck::Pod>(
+    ctx: &super::GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    (width, height): (u32, u32),
+    texels: &[T],
+) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(texels),
+    )
+}
+
+/// Tiles in one row of the scene passes' tile texture (common.wgsl `tile_texel`): 2048 x 4 =
+/// 8192 texels, WebGPU's guaranteed 2D texture width.
+pub const TILES_PER_ROW: usize = 2048;
+
+/// Every tile's four texels as the scene passes read them (common.wgsl `tile_texel`): its grid
+/// (`grid`, three vec4 a tile: `SceneGeometry::tile_grid`'s words, bit for bit), then its object
+/// (`object`, in x); RGBA32Uint, [`TILES_PER_ROW`] tiles to a row. Returns the texture's size and
+/// texels; at least one tile (zero).
+pub fn tile_texels(grid: &[[f32; 4]], object: &[u32]) -> ((u32, u32), Vec<[u32; 4]>) {
+    let n = object.len().max(1);
+    let (width, height) = (n.min(TILES_PER_ROW) * 4, n.div_ceil(TILES_PER_ROW));
+    let mut texels = vec![[0u32; 4]; width * height];
+    for (t, &o) in object.iter().enumerate() {
+        let at = (t / TILES_PER_ROW) * width + (t % TILES_PER_ROW) * 4;
+        for (i, g) in grid[3 * t..3 * t + 3].iter().enumerate() {
+            texels[at + i] = g.map(f32::to_bits);
+        }
+        texels[at + 3] = [o, 0, 0, 0];
+    }
+    ((width as u32, height as u32), texels)
+}
+
 /// Texels of one colour-map table: 256 rows and the NaN colour.
 pub const TABLE_TEXELS: u32 = 257;
 /// Tables side by side in one texture row: 31 x 257 = 7967 texels.

@@ -487,9 +487,19 @@ impl Passes {
     ) -> wgpu::BindGroup {
         let d = &ctx.device;
         let shading_view = geom.shading.create_view(&Default::default());
-        let lut_view = table_texture(ctx, "colour maps", wgpu::TextureFormat::Rgba32Float, lut.extent(), &lut.image());
+        let tiles_view = geom.tiles.create_view(&Default::default());
+        let lut_view = super::layout::table_texture(
+            ctx,
+            "colour maps",
+            wgpu::TextureFormat::Rgba32Float,
+            lut.extent(),
+            &lut.image(),
+        )
+        .create_view(&Default::default());
         let (extent, texels) = super::layout::object_texels(objects);
-        let object_view = table_texture(ctx, "objects", wgpu::TextureFormat::Rgba32Uint, extent, &texels);
+        let object_view =
+            super::layout::table_texture(ctx, "objects", wgpu::TextureFormat::Rgba32Uint, extent, &texels)
+                .create_view(&Default::default());
         let globals_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("globals"),
             contents: bytemuck::bytes_of(globals),
@@ -501,41 +511,13 @@ impl Passes {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: globals_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&object_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: geom.tile_object.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&tiles_view) },
                 wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&lut_view) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&shading_view) },
-                wgpu::BindGroupEntry { binding: 5, resource: geom.tile_grid.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 6, resource: geom.sample_values.as_entire_binding() },
             ],
         })
     }
-}
-
-/// A 2D texture of `format` (four 32-bit channels) and size `(width, height)` holding `texels`
-/// row by row, for shaders to read with `textureLoad`.
-fn table_texture<T: bytemuck::Pod>(
-    ctx: &GpuContext,
-    label: &str,
-    format: wgpu::TextureFormat,
-    (width, height): (u32, u32),
-    texels: &[T],
-) -> wgpu::TextureView {
-    let texture = ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(texels),
-    );
-    texture.create_view(&Default::default())
 }
 
 /// Where to break a lit draw into render passes of at most `max_triangles` triangles each

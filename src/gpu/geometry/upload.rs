@@ -208,25 +208,23 @@ impl SceneGeometry {
             b.unmap();
         }
         let TileDraws { fine, coarse, occluder, levels, variant_sets, tile_object, bbox, own_vertices } = draws;
-        // Storage buffers may not be empty: pad with one element.
-        let to = if tile_object.is_empty() { vec![0u32] } else { tile_object.clone() };
-        let tob = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tile_object"),
-            contents: bytemuck::cast_slice(&to),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let grid = if plan.tile_grid.is_empty() { vec![[0.0f32; 4]; 3] } else { plan.tile_grid };
-        let tile_grid = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tile_grid"),
-            contents: bytemuck::cast_slice(&grid),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let max_tiles = crate::gpu::layout::TILES_PER_ROW as u64 * ctx.limits.max_texture_dimension_2d as u64;
+        if tile_object.len() as u64 > max_tiles {
+            return Err(crate::error::Error::Device(format!(
+                "scene has {} tiles, more than this device's tile table holds ({max_tiles}); split it into several scenes \
+                 or reduce its resolution",
+                tile_object.len()
+            )));
+        }
+        let (extent, texels) = crate::gpu::layout::tile_texels(&plan.tile_grid, &tile_object);
+        let tile_texture =
+            crate::gpu::layout::table_texture(ctx, "tiles", wgpu::TextureFormat::Rgba32Uint, extent, &texels);
         let tiles: Vec<&crate::lod::TileMesh> = scene.objects().iter().flat_map(|o| &o.tiles).collect();
         let height_blocks: Vec<_> = scene.objects().iter().flat_map(|o| o.height_blocks()).collect();
         let sub_boxes = tiles.par_iter().zip(&height_blocks).map(|(t, b)| tile_sub_boxes(t, b.as_deref())).collect();
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
-        let bytes = nv * 24 + ni * 4 + to.len() as u64 * 4 + tile_grid.size();
+        let bytes = nv * 24 + ni * 4 + texels.len() as u64 * 16;
         let shading_bytes = 8 * SHADING_ROW as u64 * shading.height() as u64;
         let bytes = bytes + shading_bytes + sample_values.size() + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
@@ -236,9 +234,8 @@ impl SceneGeometry {
             vertices: vb,
             values: sb,
             indices: ib,
-            tile_object: tob,
+            tiles: tile_texture,
             tile_object_cpu: tile_object,
-            tile_grid,
             sample_values,
             fine,
             coarse,

@@ -104,10 +104,9 @@ fn layouts(d: &wgpu::Device) -> Layouts {
         entries: &[
             uniform_entry(0, vf),
             uint_texture_entry(1, vf),
-            storage_entry(2, true, vf),
+            uint_texture_entry(2, vf),
             float_texture_entry(3, wgpu::ShaderStages::FRAGMENT),
             uint_texture_entry(4, vf),
-            storage_entry(5, true, vf),
             storage_entry(6, true, vf),
         ],
     });

@@ -23,7 +23,23 @@ struct Object {
     normal_map: vec4<u32>,
 }
 
-@group(0) @binding(2) var<storage, read> tile_object: array<u32>;
+// Per tile four texels (gpu::layout::tile_texels), 2048 tiles to a row: its grid (tile_grid_at),
+// then its object.
+@group(0) @binding(2) var tiles: texture_2d<u32>;
+
+// Texel `i` (0..=3) of `tile` in `tiles`.
+fn tile_texel(tile: u32, i: u32) -> vec4<u32> {
+    return textureLoad(tiles, vec2<u32>((tile % 2048u) * 4u + i, tile / 2048u), 0);
+}
+
+// Vector `i` (0..=2) of `tile`'s grid (gpu::geometry::SceneGeometry::tiles): a lattice tile's
+// first sample's object-relative (x, y) and the grid's column axis; its row axis, the first
+// sample's index in `surface` and the grid's row length (u32 bits); the first sample's index in
+// `sample_values` (draw.wgsl; 0xffffffff: none). 0xffffffff in place of the `surface` index for
+// a tile with vertices of its own.
+fn tile_grid_at(tile: u32, i: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(tile_texel(tile, i));
+}
 // The frame's objects (gpu::layout::object_texels): six texels an object, 1365 objects to a row.
 // A texture, not storage: a CPU rasteriser gathers a texel fetch in one vector operation, where it
 // loads storage lane by lane behind a branch.
@@ -31,7 +47,7 @@ struct Object {
 
 // The object of `tile`.
 fn object_at(tile: u32) -> Object {
-    let i = tile_object[tile];
+    let i = tile_texel(tile, 3u).x;
     let x = (i % 1365u) * 6u;
     let y = i / 1365u;
     return Object(bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x, y), 0)),
@@ -50,22 +66,16 @@ fn object_at(tile: u32) -> Object {
 fn surface_sample(k: u32) -> vec2<u32> {
     return textureLoad(surface, vec2<u32>(k % 8192u, k / 8192u), 0).xy;
 }
-// Per tile three vec4 (gpu::geometry::SceneGeometry::tile_grid): a lattice tile's first sample's
-// object-relative (x, y) and the grid's column axis; its row axis, the first sample's index in
-// `surface` and the grid's row length (u32 bits); the first sample's index in `sample_values`
-// (draw.wgsl; 0xffffffff: none). 0xffffffff in place of the `surface` index for a tile with
-// vertices of its own.
-@group(0) @binding(5) var<storage, read> tile_grid: array<vec4<f32>>;
 
 // The object-relative position of vertex `pos` of `tile`: `pos` itself, or for a lattice tile the
 // sample at column pos.x, row pos.y from the tile's first, with its height from `surface`.
 fn tile_position(pos: vec3<f32>, tile: u32) -> vec3<f32> {
-    let b = tile_grid[3u * tile + 1u];
+    let b = tile_grid_at(tile, 1u);
     let k0 = bitcast<u32>(b.z);
     if (k0 == 0xffffffffu) {
         return pos;
     }
-    let a = tile_grid[3u * tile];
+    let a = tile_grid_at(tile, 0u);
     let k = k0 + u32(pos.y) * bitcast<u32>(b.w) + u32(pos.x);
     return vec3<f32>(a.xy + pos.x * a.zw + pos.y * b.xy, bitcast<f32>(surface_sample(k).y));
 }

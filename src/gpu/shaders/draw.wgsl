@@ -18,11 +18,11 @@ fn lut_row(table: u32, row: u32) -> vec3<f32> {
 // The colouring scalar of vertex `vpos` of `tile`: the vertex's own `value`, or for a lattice tile
 // with values the value of its sample (tile_position's column and row).
 fn tile_value(vpos: vec3<f32>, tile: u32, value: f32) -> f32 {
-    let v0 = bitcast<u32>(tile_grid[3u * tile + 2u].x);
+    let v0 = bitcast<u32>(tile_grid_at(tile, 2u).x);
     if (v0 == 0xffffffffu) {
         return value;
     }
-    return sample_values[v0 + u32(vpos.y) * bitcast<u32>(tile_grid[3u * tile + 1u].w) + u32(vpos.x)];
+    return sample_values[v0 + u32(vpos.y) * bitcast<u32>(tile_grid_at(tile, 1u).w) + u32(vpos.x)];
 }
 
 // The four fine samples of a height field with a normal map about render-space point `w`, each
@@ -216,9 +216,9 @@ fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
     if (o.normal_map.y != 3u || c.z > 65534.5) {
         return s;
     }
-    let b = tile_grid[3u * tile + 1u];
+    let b = tile_grid_at(tile, 1u);
     let dims = vec2<u32>(bitcast<u32>(b.x), bitcast<u32>(b.y));
-    let first = bitcast<u32>(tile_grid[3u * tile + 2u].y);
+    let first = bitcast<u32>(tile_grid_at(tile, 2u).y);
     let q = max(floor(c * 0.5), vec3<f32>(0.0));
     let i = min(u32(q.x), dims.x - 1u);
     let j = min(u32(q.y), dims.y - 1u);
@@ -231,8 +231,8 @@ fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
 // (`gpu::cell_values`: its stations as columns, first word in `tile_grid`), as level 0's vertex
 // values interpolate; no data (the most negative f32) spreads as there.
 fn log_scalar(tile: u32, s: f32) -> f32 {
-    let n = bitcast<u32>(tile_grid[3u * tile + 1u].x);
-    let first = bitcast<u32>(tile_grid[3u * tile + 2u].y);
+    let n = bitcast<u32>(tile_grid_at(tile, 1u).x);
+    let first = bitcast<u32>(tile_grid_at(tile, 2u).y);
     let k = min(u32(max(s, 0.0)), n - 1u);
     let a = sample_values[first + k];
     let b = sample_values[first + min(k + 1u, n - 1u)];
@@ -398,7 +398,7 @@ fn fine_depth(o: Object, tile: u32, w: vec3<f32>, q0: vec2<f32>, c0: vec2<f32>, 
     let e = 1e-3;
     let side = select(fx.y - fx.x, fx.x - fx.y, f.x >= f.y);
     var on = all(fx >= vec2<f32>(-e)) && all(fx <= vec2<f32>(1.0 + e)) && side >= -e;
-    let dom = vec2<u32>(bitcast<u32>(tile_grid[3u * tile + 2u].z), bitcast<u32>(tile_grid[3u * tile + 2u].w));
+    let dom = vec2<u32>(bitcast<u32>(tile_grid_at(tile, 2u).z), bitcast<u32>(tile_grid_at(tile, 2u).w));
     let lo = vec2<f32>(vec2<u32>(dom.x & 0xffffu, dom.y & 0xffffu));
     let hi = vec2<f32>(vec2<u32>((dom.x >> 16u) & 0x7fffu, dom.y >> 16u));
     let qx = c + fx;
