@@ -35,8 +35,10 @@ pub struct SceneGeometry {
     /// The values (colour by data) of the height fields that have them and are drawn as lattice
     /// tiles, per grid sample (`Object::value_grid`; no data as [`NO_DATA`]), object after object:
     /// what the lit pass's vertex stage reads in place of the vertex scalar (`sample_values` in
-    /// draw.wgsl). One zero word when there are none.
-    pub sample_values: wgpu::Buffer,
+    /// draw.wgsl `sample_value`); then the tables of objects coloured per fragment
+    /// (`gpu::cell_values`). f32 bits in an R32Uint texture, [`SHADING_ROW`] words to a row; one
+    /// row of zeros when there are none.
+    pub sample_values: wgpu::Texture,
     /// The fine (level 0) draw of every tile, in tile order.
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).

@@ -488,6 +488,7 @@ impl Passes {
         let d = &ctx.device;
         let shading_view = geom.shading.create_view(&Default::default());
         let tiles_view = geom.tiles.create_view(&Default::default());
+        let values_view = geom.sample_values.create_view(&Default::default());
         let lut_view = super::layout::table_texture(
             ctx,
             "colour maps",
@@ -514,7 +515,7 @@ impl Passes {
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&tiles_view) },
                 wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&lut_view) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&shading_view) },
-                wgpu::BindGroupEntry { binding: 6, resource: geom.sample_values.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&values_view) },
             ],
         })
     }

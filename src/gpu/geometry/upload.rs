@@ -96,15 +96,15 @@ fn upload_shading(
 
 /// The per-sample values of the height fields coloured by data (`SceneGeometry::sample_values`)
 /// and each object's first sample in them, for those whose heights are in the normal map
-/// (`shading_base`), as long as they fit one storage binding (later ones keep vertices of their
-/// own).
+/// (`shading_base`), as long as they fit the texture ([`SHADING_ROW`] words a row, as many rows
+/// as the device's 2D textures take; later ones keep vertices of their own).
 /// Then the cell values of grids coloured per fragment ([`crate::gpu::cell_values`]).
 fn upload_values(
     ctx: &GpuContext,
     scene: &Scene,
     shading_base: &[Option<u32>],
-) -> (wgpu::Buffer, Vec<Option<u32>>, crate::gpu::cell_values::CellTables) {
-    let max_words = ctx.limits.max_storage_buffer_binding_size / 4;
+) -> (wgpu::Texture, Vec<Option<u32>>, crate::gpu::cell_values::CellTables) {
+    let max_words = (SHADING_ROW as u64 * ctx.limits.max_texture_dimension_2d.max(1) as u64).min(u32::MAX as u64);
     let mut words: Vec<f32> = Vec::new();
     let base = scene
         .objects()
@@ -122,15 +122,11 @@ fn upload_values(
         })
         .collect();
     let cells = crate::gpu::cell_values::append(scene, &mut words, max_words, scalar_word);
-    if words.is_empty() {
-        words.push(0.0);
-    }
-    let buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("sample_values"),
-        contents: bytemuck::cast_slice(&words),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    (buf, base, cells)
+    let rows = words.len().div_ceil(SHADING_ROW as usize).max(1);
+    words.resize(rows * SHADING_ROW as usize, 0.0);
+    let extent = (SHADING_ROW, rows as u32);
+    let texture = crate::gpu::layout::table_texture(ctx, "sample_values", wgpu::TextureFormat::R32Uint, extent, &words);
+    (texture, base, cells)
 }
 
 /// The slabs of `scene`'s tiles (`Object::slabs`: built here for a scene read from bytes) in one
@@ -226,7 +222,7 @@ impl SceneGeometry {
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 24 + ni * 4 + texels.len() as u64 * 16;
         let shading_bytes = 8 * SHADING_ROW as u64 * shading.height() as u64;
-        let bytes = bytes + shading_bytes + sample_values.size() + slab_bytes;
+        let bytes = bytes + shading_bytes + 4 * SHADING_ROW as u64 * sample_values.height() as u64 + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
         Ok(Self {

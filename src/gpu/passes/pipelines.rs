@@ -107,7 +107,7 @@ fn layouts(d: &wgpu::Device) -> Layouts {
             uint_texture_entry(2, vf),
             float_texture_entry(3, wgpu::ShaderStages::FRAGMENT),
             uint_texture_entry(4, vf),
-            storage_entry(6, true, vf),
+            uint_texture_entry(6, vf),
         ],
     });
     let cs = wgpu::ShaderStages::COMPUTE;

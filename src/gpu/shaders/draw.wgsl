@@ -13,7 +13,13 @@ fn lut_row(table: u32, row: u32) -> vec3<f32> {
 
 // Height fields coloured by data that are drawn as lattice tiles: their values per grid sample
 // (gpu::geometry::SceneGeometry::sample_values; no data as the most negative f32).
-@group(0) @binding(6) var<storage, read> sample_values: array<f32>;
+// (f32 bits, 8192 words to a row: gpu::geometry::SHADING_ROW.)
+@group(0) @binding(6) var sample_values: texture_2d<u32>;
+
+// Word `k` of `sample_values`.
+fn sample_value(k: u32) -> f32 {
+    return bitcast<f32>(textureLoad(sample_values, vec2<u32>(k % 8192u, k / 8192u), 0).x);
+}
 
 // The colouring scalar of vertex `vpos` of `tile`: the vertex's own `value`, or for a lattice tile
 // with values the value of its sample (tile_position's column and row).
@@ -22,7 +28,7 @@ fn tile_value(vpos: vec3<f32>, tile: u32, value: f32) -> f32 {
     if (v0 == 0xffffffffu) {
         return value;
     }
-    return sample_values[v0 + u32(vpos.y) * bitcast<u32>(tile_grid_at(tile, 1u).w) + u32(vpos.x)];
+    return sample_value(v0 + u32(vpos.y) * bitcast<u32>(tile_grid_at(tile, 1u).w) + u32(vpos.x));
 }
 
 // The four fine samples of a height field with a normal map about render-space point `w`, each
@@ -222,7 +228,7 @@ fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
     let q = max(floor(c * 0.5), vec3<f32>(0.0));
     let i = min(u32(q.x), dims.x - 1u);
     let j = min(u32(q.y), dims.y - 1u);
-    let w = sample_values[first + (u32(q.z) * dims.y + j) * dims.x + i];
+    let w = sample_value(first + (u32(q.z) * dims.y + j) * dims.x + i);
     return select(w, s, w > 3e38);
 }
 
@@ -234,8 +240,8 @@ fn log_scalar(tile: u32, s: f32) -> f32 {
     let n = bitcast<u32>(tile_grid_at(tile, 1u).x);
     let first = bitcast<u32>(tile_grid_at(tile, 2u).y);
     let k = min(u32(max(s, 0.0)), n - 1u);
-    let a = sample_values[first + k];
-    let b = sample_values[first + min(k + 1u, n - 1u)];
+    let a = sample_value(first + k);
+    let b = sample_value(first + min(k + 1u, n - 1u));
     return a + clamp(s - f32(k), 0.0, 1.0) * (b - a);
 }
 
