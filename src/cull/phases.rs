@@ -44,7 +44,6 @@ use crate::gpu::layout::BoxInstance;
 use crate::gpu::slab_test::SlabDraws;
 use crate::gpu::DrawArgs;
 use crate::gpu::{passes, Targets};
-use wgpu::util::DeviceExt;
 
 /// What the prepass phase recorded.
 pub struct FirstSet {
@@ -335,13 +334,12 @@ pub fn test_the_rest(
         let draws = passes::empty_args_buffer(d, "slab_open", t.slabs.len());
         let gate_ts = f.timestamps.and_then(|t| t.compute("count_ms"));
         f.passes.record_slab_gate(d, enc, &gate, &all, first, &draws, t.slabs.len(), gate_ts);
-        let place = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("slab_place"),
-            contents: bytemuck::cast_slice(&t.place),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let (extent, place) = crate::gpu::layout::rows(&t.place, crate::gpu::slab_test::PLACE_ROW);
+        let place =
+            crate::gpu::layout::table_texture(f.ctx, "slab_place", wgpu::TextureFormat::Rgba32Float, extent, &place)
+                .create_view(&Default::default());
         let slabs = SlabDraws { vertices, indices, draws: &draws, n: t.slabs.len() as u32, place: &place };
-        f.passes.slab_test.record(d, enc, bg, main, &slabs, first, &gate, &box_counts, ts("test_ms"));
+        f.passes.slab_test.record(d, enc, bg, main, &slabs, &box_counts, ts("test_ms"));
     }
     let draw = if add {
         let rest = passes::empty_args_buffer(d, "rest_args", n);

@@ -1,5 +1,5 @@
 //! Values the lit pass looks up per fragment, appended to the per-sample values
-//! (`SceneGeometry::sample_values`), each tile's first word and columns in its `tile_grid` entry:
+//! (`SceneGeometry::sample_values`), each tile's first word and columns in its grid (`SceneGeometry::tiles`):
 //! * the cell values of reservoir grids coloured per cell (`grid::cells`): each tile's table
 //!   (`grid::cells::cell_table`);
 //! * the logs of well tubes coloured by a log (`lod::tube`): each tile's values by station

@@ -75,7 +75,7 @@ pub struct SceneGeometry {
     /// storage lane by lane behind a branch.
     pub shading: wgpu::Texture,
     /// Per object (scene order), the first sample of its gradients in `shading`; None for objects
-    /// without (meshes, grids; height fields past the device's storage-binding limit), which the
+    /// without (meshes, grids; height fields past the normal map texture's capacity), which the
     /// lit pass shades with their facets' normals.
     pub shading_base: Vec<Option<u32>>,
     /// Per object, (columns, rows) of a structured grid mesh whose fine normals are in `shading`

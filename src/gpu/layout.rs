@@ -164,12 +164,22 @@ pub fn table_texture<T: bytemuck::Pod>(
     )
 }
 
+/// `items` laid out in rows of `row` for a texture: its size (width, height) and the items, the
+/// last row filled with zeros; at least one item.
+pub fn rows<T: Pod + Zeroable>(items: &[T], row: usize) -> ((u32, u32), Vec<T>) {
+    let n = items.len().max(1);
+    let (width, height) = (n.min(row), n.div_ceil(row));
+    let mut out = items.to_vec();
+    out.resize(width * height, T::zeroed());
+    ((width as u32, height as u32), out)
+}
+
 /// Tiles in one row of the scene passes' tile texture (common.wgsl `tile_texel`): 2048 x 4 =
 /// 8192 texels, WebGPU's guaranteed 2D texture width.
 pub const TILES_PER_ROW: usize = 2048;
 
 /// Every tile's four texels as the scene passes read them (common.wgsl `tile_texel`): its grid
-/// (`grid`, three vec4 a tile: `SceneGeometry::tile_grid`'s words, bit for bit), then its object
+/// (`grid`, three vec4 a tile: the plan's lattice words, bit for bit), then its object
 /// (`object`, in x); RGBA32Uint, [`TILES_PER_ROW`] tiles to a row. Returns the texture's size and
 /// texels; at least one tile (zero).
 pub fn tile_texels(grid: &[[f32; 4]], object: &[u32]) -> ((u32, u32), Vec<[u32; 4]>) {

@@ -473,10 +473,10 @@ impl GpuContext {
 }
 
 impl Passes {
-    /// The scene bind group of one frame: uniforms, per-object state, the tile → object table,
-    /// the colour-map tables the objects' `cmap.w` name (`layout::ColorTables`), the height fields' normal
-    /// map (`SceneGeometry::shading`), the lattice tiles' grids (`SceneGeometry::tile_grid`) and
-    /// values (`SceneGeometry::sample_values`).
+    /// The scene bind group of one frame: uniforms, the objects (`layout::object_texels`), the
+    /// tiles' grids and objects (`SceneGeometry::tiles`), the colour-map tables the objects'
+    /// `cmap.w` name (`layout::ColorTables`), the height fields' normal map
+    /// (`SceneGeometry::shading`) and the sample values and tables (`SceneGeometry::sample_values`).
     pub fn scene_bind_group(
         &self,
         ctx: &GpuContext,

@@ -27,16 +27,21 @@ const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 }],
 };
 
+/// Tiles in one row of [`SlabDraws::place`] (slab_test.wgsl).
+pub const PLACE_ROW: usize = 8192;
+
 /// What a slab test draws and where it counts.
 pub struct SlabDraws<'a> {
     /// All slabs' vertices ([`VERTEX`]) and indices (u32).
     pub vertices: &'a wgpu::Buffer,
     pub indices: &'a wgpu::Buffer,
-    /// `n` indexed indirect draws, one per slab, each one instance whose first_instance is its tile.
+    /// `n` indexed indirect draws, one per slab, each one instance whose first_instance is its
+    /// tile, none for a tile not to test (`Passes::record_slab_gate`).
     pub draws: &'a wgpu::Buffer,
     pub n: u32,
-    /// Per tile (x, y, z, grow): its object's render-space placement and its slab's growth.
-    pub place: &'a wgpu::Buffer,
+    /// Per tile (x, y, z, grow): its object's render-space placement and its slab's growth, an
+    /// RGBA32F texture of [`PLACE_ROW`] tiles to a row (`layout::rows`).
+    pub place: &'a wgpu::TextureView,
 }
 
 impl SlabTest {
@@ -46,13 +51,7 @@ impl SlabTest {
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("slab_test"),
-            entries: &[
-                float_texture_entry(0, fs),
-                storage_entry(1, false, fs),
-                storage_entry(2, true, vs),
-                storage_entry(3, true, vs),
-                storage_entry(4, true, vs),
-            ],
+            entries: &[float_texture_entry(0, fs), storage_entry(1, false, fs), float_texture_entry(4, vs)],
         });
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("slab_test"),
@@ -79,9 +78,9 @@ impl SlabTest {
         Self { layout, pipeline, early }
     }
 
-    /// Pass: for every slab of `slabs` whose tile's draw in `skip` is off and whose `gate` count is
-    /// above 0, adds to `counts[tile]` the fragments of the slab at or in front of the depth of
-    /// `targets` (drawn by an earlier pass, reverse-Z). Writes nothing to `targets`.
+    /// Pass: for every slab `slabs` draws, adds to `counts[tile]` the fragments of the slab at
+    /// or in front of the depth of `targets` (drawn by an earlier pass, reverse-Z). Writes
+    /// nothing to `targets`.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -90,8 +89,6 @@ impl SlabTest {
         scene_bg: &wgpu::BindGroup,
         targets: &Targets,
         slabs: &SlabDraws<'_>,
-        skip: &wgpu::Buffer,
-        gate: &wgpu::Buffer,
         counts: &wgpu::Buffer,
         ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
@@ -101,9 +98,7 @@ impl SlabTest {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
                 wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: gate.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: slabs.place.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(slabs.place) },
             ],
         });
         let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };

@@ -72,7 +72,7 @@ pub(super) struct Plan {
     /// its own (which draws no group variants).
     pub(super) runs: Vec<Option<Vec<usize>>>,
     pub(super) patterns: Vec<Pattern>,
-    /// Three vec4 per tile (`tile_grid` in common.wgsl).
+    /// Three vec4 per tile (`tile_grid_at` in common.wgsl; `SceneGeometry::tiles`).
     pub(super) tile_grid: Vec<[f32; 4]>,
     pub(super) nv: u64,
     pub(super) ni: u64,

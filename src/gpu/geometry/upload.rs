@@ -257,7 +257,7 @@ impl SceneGeometry {
 }
 
 /// Grid tiles with cell tables (drawn from vertices of their own): the table's columns and
-/// first word where the vertex stage would look for a lattice (common.wgsl `tile_grid`).
+/// first word where the vertex stage would look for a lattice (common.wgsl `tile_grid_at`).
 fn cell_table_grid(plan: &mut Plan, cells: &crate::gpu::cell_values::CellTables) {
     let none = f32::from_bits(u32::MAX);
     for (t, c) in cells.tiles.iter().enumerate() {

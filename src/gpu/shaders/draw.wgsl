@@ -214,7 +214,7 @@ fn normal_slot(o: Object, nrm: u32) -> vec3<f32> {
 
 // The colouring scalar of a fragment of a reservoir grid coloured per cell: the value of the cell
 // its interpolated cell coordinates `c` fall in, from the tile's table in `sample_values`
-// (`gpu::cell_values`: columns bw, bh and first word in `tile_grid`); the vertex scalar `s` where
+// (`gpu::cell_values`: columns bw, bh and first word in its grid, `tile_grid_at`); the vertex scalar `s` where
 // the grid is coloured otherwise, the face is flat or the table holds no value for that cell
 // (f32::MAX).
 fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
@@ -234,7 +234,7 @@ fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
 
 // The log value of a well's fragment at its interpolated station `s` (counted from the tile's
 // first station, lod::tube): linear between the stations about it in the tile's table
-// (`gpu::cell_values`: its stations as columns, first word in `tile_grid`), as level 0's vertex
+// (`gpu::cell_values`: its stations as columns, first word in its grid, `tile_grid_at`), as level 0's vertex
 // values interpolate; no data (the most negative f32) spreads as there.
 fn log_scalar(tile: u32, s: f32) -> f32 {
     let n = bitcast<u32>(tile_grid_at(tile, 1u).x);
@@ -366,7 +366,7 @@ fn fs_field(v: VOutField) -> FOut {
 // change moves by far more than that error on screen; with the fine depth they hide each other
 // as at level 0, and only the level's outline moves (gpu::geometry::DrawRun::fine_depth). The
 // meeting point is kept only where it lies on the fine triangle whose plane gave it and inside
-// `tile`'s samples (`tile_grid`, gpu::geometry::plan), in a tile with holes on the fine triangle
+// `tile`'s samples (`tile_grid_at`, gpu::geometry::plan), in a tile with holes on the fine triangle
 // under `w` itself, so that every depth written is a point of the tile's own fine surface or,
 // else, of its drawn level (`w`: a ray grazing the surface, an outline the fine surface does not
 // reach): both lie where the culling tests (cull::phases, cull::hidden) take the tile to lie, the

@@ -2,13 +2,14 @@
 // globals, bindings, `BoxOut` and fragment entry points fs_box / fs_box_gl, and fs_box_early
 // where that is appended) with a height-field tile's slab (lod/slab.rs: closed prisms, wound
 // outwards, that hold the tile's surface) in place of its boxes: per tile, the pixels where the
-// slab's front faces are at or in front of the depth image. Tiles whose draw is already on
-// (`skip`), or whose `gate` count is 0, are not tested.
+// slab's front faces are at or in front of the depth image. Tiles whose draw is already on, or
+// whose gate count is 0, are not drawn (slab_gate.wgsl switched their draws off).
 
 // Per tile: its object's placement in render space before exaggeration (xyz, as the lit pass's
 // `offset`), and how far its slab grows along z, up on the top surface and down on the bottom
-// one (w: the drawn level's error and a margin against round-off, world units).
-@group(1) @binding(4) var<storage, read> place: array<vec4<f32>>;
+// one (w: the drawn level's error and a margin against round-off, world units). 8192 tiles to a
+// row (gpu::slab_test::PLACE_ROW).
+@group(1) @binding(4) var place: texture_2d<f32>;
 
 // A slab vertex: origin-relative x, y, z and its side (+1 top, -1 bottom); the instance is the
 // tile (each slab is drawn as one instance whose first_instance is its tile).
@@ -16,12 +17,7 @@
 fn vs_slab(@location(0) v: vec4<f32>, @builtin(instance_index) tile: u32) -> BoxOut {
     var out: BoxOut;
     out.tile = tile;
-    if (skip[tile].instance_count > 0u || gate[tile] == 0u) {
-        out.clip = vec4<f32>(0.0, 0.0, 0.0, 1.0); // all corners equal: nothing rasterised
-        out.zw = vec2<f32>(0.0, 1.0);
-        return out;
-    }
-    let p = place[tile];
+    let p = textureLoad(place, vec2<u32>(tile % 8192u, tile / 8192u), 0);
     let pos = vec3<f32>(v.xy, v.z + v.w * p.w);
     out.clip = nearest(g.view_proj * vec4<f32>((pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale), 1.0));
     out.zw = out.clip.zw;
