@@ -243,6 +243,52 @@ mod tests {
     }
 
     #[test]
+    fn tiles_take_four_texels_2048_to_a_row_bit_for_bit() {
+        let n = TILES_PER_ROW + 3;
+        let grid: Vec<[f32; 4]> = (0..3 * n).map(|i| [i as f32, -0.0, f32::from_bits(u32::MAX), 1e-40]).collect();
+        let object: Vec<u32> = (0..n as u32).map(|t| t * 7).collect();
+        let ((w, h), texels) = tile_texels(&grid, &object);
+        assert_eq!((w, h), (8192, 2));
+        assert_eq!(texels.len(), (w * h) as usize);
+        for t in [0, 1, TILES_PER_ROW - 1, TILES_PER_ROW, n - 1] {
+            let at = (t / TILES_PER_ROW) * w as usize + (t % TILES_PER_ROW) * 4;
+            for i in 0..3 {
+                assert_eq!(texels[at + i], grid[3 * t + i].map(f32::to_bits), "tile {t} vector {i}");
+            }
+            assert_eq!(texels[at + 3], [7 * t as u32, 0, 0, 0]);
+        }
+        assert_eq!(tile_texels(&[], &[]).0, (4, 1), "no tiles: one zero tile");
+    }
+
+    #[test]
+    fn objects_take_six_texels_1365_to_a_row() {
+        let o = |i: u32| GpuObject {
+            offset: [i as f32, 0.0, 0.0, 0.0],
+            color: [0.5; 4],
+            cmap: [0.0, 1.0, 2.0, i as f32],
+            grid: [0.0; 4],
+            grid_rows: [0.0; 4],
+            normal_map: [i + 1, 2, 3, 4],
+        };
+        let objects: Vec<GpuObject> = (0..OBJECTS_PER_ROW as u32 + 1).map(o).collect();
+        let ((w, h), texels) = object_texels(&objects);
+        assert_eq!((w, h), (8190, 2));
+        let last = &texels[w as usize..w as usize + 6];
+        assert_eq!(last[0][0], (OBJECTS_PER_ROW as f32).to_bits());
+        assert_eq!(last[5], [OBJECTS_PER_ROW as u32 + 1, 2, 3, 4]);
+        assert_eq!(texels[6 + 5], [2, 2, 3, 4], "object 1's normal_map");
+        assert_eq!(object_texels(&[]).0, (6, 1));
+    }
+
+    #[test]
+    fn rows_pad_the_last_row_with_zeros() {
+        let ((w, h), v) = rows(&[1u32, 2, 3, 4, 5], 2);
+        assert_eq!((w, h), (2, 3));
+        assert_eq!(v, vec![1, 2, 3, 4, 5, 0]);
+        assert_eq!(rows::<u32>(&[], 8).0, (1, 1));
+    }
+
+    #[test]
     fn tables_are_shared_by_equal_maps_and_placed_31_to_a_row() {
         let mut t = ColorTables::default();
         assert_eq!(t.extent(), (257, 1), "an empty set still makes a texture");

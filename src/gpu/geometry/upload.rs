@@ -57,7 +57,7 @@ fn upload_shading(
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("shading"),
         size: wgpu::Extent3d {
-            width: SHADING_ROW,
+            width: total.clamp(1, SHADING_ROW as u64) as u32,
             height: total.div_ceil(SHADING_ROW as u64).max(1) as u32,
             depth_or_array_layers: 1,
         },
@@ -122,9 +122,7 @@ fn upload_values(
         })
         .collect();
     let cells = crate::gpu::cell_values::append(scene, &mut words, max_words, scalar_word);
-    let rows = words.len().div_ceil(SHADING_ROW as usize).max(1);
-    words.resize(rows * SHADING_ROW as usize, 0.0);
-    let extent = (SHADING_ROW, rows as u32);
+    let (extent, words) = crate::gpu::layout::rows(&words, SHADING_ROW as usize);
     let texture = crate::gpu::layout::table_texture(ctx, "sample_values", wgpu::TextureFormat::R32Uint, extent, &words);
     (texture, base, cells)
 }
@@ -221,8 +219,8 @@ impl SceneGeometry {
         let (slabs, slab_draws) = upload_slabs(d, scene);
         let slab_bytes = slabs.as_ref().map_or(0, |(v, i)| v.size() + i.size());
         let bytes = nv * 24 + ni * 4 + texels.len() as u64 * 16;
-        let shading_bytes = 8 * SHADING_ROW as u64 * shading.height() as u64;
-        let bytes = bytes + shading_bytes + 4 * SHADING_ROW as u64 * sample_values.height() as u64 + slab_bytes;
+        let texel_count = |t: &wgpu::Texture| t.width() as u64 * t.height() as u64;
+        let bytes = bytes + 8 * texel_count(&shading) + 4 * texel_count(&sample_values) + slab_bytes;
         let draw_runs = draw_runs(scene, &tile_object, &shading_base, &grid_dims, &cells.objects);
         ctx.take_error()?;
         Ok(Self {
