@@ -214,9 +214,9 @@ fn normal_slot(o: Object, nrm: u32) -> vec3<f32> {
 
 // The colouring scalar of a fragment of a reservoir grid coloured per cell: the value of the cell
 // its interpolated cell coordinates `c` fall in, from the tile's table in `sample_values`
-// (`gpu::cell_values`: columns bw, bh and first word in its grid, `tile_grid_at`); the vertex scalar `s` where
-// the grid is coloured otherwise, the face is flat or the table holds no value for that cell
-// (f32::MAX).
+// (`gpu::cell_values`: columns bw, bh and first word in its grid, `tile_grid_at`); the vertex
+// scalar `s` where the grid is coloured otherwise, the face is flat or the table holds no value
+// for that cell (f32::MAX).
 fn cell_scalar(o: Object, tile: u32, c: vec3<f32>, s: f32) -> f32 {
     // (k = 0xffff: a face coloured flat, grid::cells::FLAT.)
     if (o.normal_map.y != 3u || c.z > 65534.5) {
