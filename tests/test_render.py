@@ -205,14 +205,19 @@ def test_height_fields_cost_their_heights_not_their_triangles():
     np.testing.assert_array_equal(res.depth, res_m.depth)
 
 
-def test_height_fields_coloured_by_data_are_lattice_tiles_too():
+@pytest.mark.parametrize("n, lead", [(61, False), (121, True)])
+def test_height_fields_coloured_by_data_are_lattice_tiles_too(n, lead):
     # A flat plane seen from above shades the same from its fine surface (height field) as from
     # its facets (mesh), so the two images agree: the lattice tiles' values per sample
-    # (gpu::geometry::SceneGeometry::sample_values, no data included) are the vertices'.
-    n = 61
+    # (gpu::geometry::SceneGeometry::sample_values, no data included) are the vertices'. With
+    # 121 x 121 samples behind a small field out of view, the plane's heights and values start
+    # mid-row and run over into the next row of their textures (8192 words a row).
     vals = np.add.outer(np.linspace(0.0, 1.0, n), np.linspace(0.0, 2.0, n))
     vals[20:25, 30:40] = np.nan
     s = gc.Scene()
+    if lead:
+        s.add_heightfield(np.zeros((7, 7)), origin=(500, 500), spacing=(1, 1), values=np.ones((7, 7)),
+                          cmap="viridis", clim=(0.0, 3.0))
     d = 100 / (n - 1)
     s.add_heightfield(np.zeros((n, n)), origin=(-50, -50), spacing=(d, d), tiles=(3, 3), values=vals,
                       cmap="viridis", clim=(0.0, 3.0))
@@ -220,7 +225,7 @@ def test_height_fields_coloured_by_data_are_lattice_tiles_too():
     res = r.render(s, top_down())
     tris = res.stats["triangles_fine_total"]
     assert r.gpu_bytes < 12 * tris
-    v, f = s.geometry(s.object_ids()[0])
+    v, f = s.geometry(s.object_ids()[-1])
     m = gc.Scene()
     m.add_mesh(v, f, values=vals.ravel()[np.ravel_multi_index(
         (np.rint((v[:, 1] + 50) / d).astype(int), np.rint((v[:, 0] + 50) / d).astype(int)), (n, n))],
