@@ -103,27 +103,13 @@ const _: () = assert!(std::mem::size_of::<Globals>() == 112);
 const _: () = assert!(std::mem::size_of::<GpuObject>() == 96);
 const _: () = assert!(std::mem::size_of::<SelectParams>() == 16);
 
-/// The frame's colour maps as the lit pass reads them: one table per distinct map (256 rows, then
-/// the NaN colour: [`TABLE_TEXELS`] texels), [`TABLES_PER_ROW`] tables side by side in each row
-/// of an RGBA32F texture (draw.wgsl `base_color`), so that a texture no wider than WebGPU's
-/// guaranteed 8192 texels holds them. A texture, not a storage buffer: a CPU rasteriser gathers
-/// a texel fetch in one vector operation, where it loads storage lane by lane behind a branch
-/// (lavapipe: a tenth of a Reek LOD frame went to the table's storage loads).
-#[derive(Clone, Debug, Default)]
-pub struct ColorTables {
-    /// The tables' texels, table after table.
-    pub texels: Vec<[f32; 4]>,
-    /// The tables' rows (colours, NaN colour), bit for bit, to find a table already held.
-    index: std::collections::HashMap<Vec<u32>, u32>,
-}
-
-/// Objects in one row of the fragment stage's object texture (draw.wgsl `fragment_object`):
-/// 1365 x 6 = 8190 texels, within WebGPU's guaranteed 8192.
+/// Objects in one row of the scene passes' object texture (common.wgsl `object_at`): 1365 x 6 =
+/// 8190 texels, within WebGPU's guaranteed 8192.
 pub const OBJECTS_PER_ROW: usize = 1365;
 
-/// The frame's objects as the fragment stage reads them (draw.wgsl `fragment_object`): an
-/// RGBA32Uint texture's size (width, height) and texels, row by row, each object six texels (its
-/// fields' bits in order), [`OBJECTS_PER_ROW`] to a row; at least one object (zero).
+/// The frame's objects as the scene passes read them (common.wgsl `object_at`): an RGBA32Uint
+/// texture's size (width, height) and texels, row by row, each object six texels (its fields'
+/// bits in order), [`OBJECTS_PER_ROW`] to a row; at least one object (zero).
 pub fn object_texels(objects: &[GpuObject]) -> ((u32, u32), Vec<[u32; 4]>) {
     const TEXELS: usize = std::mem::size_of::<GpuObject>() / 16;
     let n = objects.len().max(1);
@@ -194,6 +180,20 @@ pub fn tile_texels(grid: &[[f32; 4]], object: &[u32]) -> ((u32, u32), Vec<[u32; 
         texels[at + 3] = [o, 0, 0, 0];
     }
     ((width as u32, height as u32), texels)
+}
+
+/// The frame's colour maps as the lit pass reads them: one table per distinct map (256 rows, then
+/// the NaN colour: [`TABLE_TEXELS`] texels), [`TABLES_PER_ROW`] tables side by side in each row
+/// of an RGBA32F texture (draw.wgsl `base_color`), so that a texture no wider than WebGPU's
+/// guaranteed 8192 texels holds them. A texture, not a storage buffer: a CPU rasteriser gathers
+/// a texel fetch in one vector operation, where it loads storage lane by lane behind a branch
+/// (lavapipe: a tenth of a Reek LOD frame went to the table's storage loads).
+#[derive(Clone, Debug, Default)]
+pub struct ColorTables {
+    /// The tables' texels, table after table.
+    texels: Vec<[f32; 4]>,
+    /// The tables' rows (colours, NaN colour), bit for bit, to find a table already held.
+    index: std::collections::HashMap<Vec<u32>, u32>,
 }
 
 /// Texels of one colour-map table: 256 rows and the NaN colour.

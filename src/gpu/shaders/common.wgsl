@@ -40,12 +40,13 @@ fn tile_texel(tile: u32, i: u32) -> vec4<u32> {
 fn tile_grid_at(tile: u32, i: u32) -> vec4<f32> {
     return bitcast<vec4<f32>>(tile_texel(tile, i));
 }
+
 // The frame's objects (gpu::layout::object_texels): six texels an object, 1365 objects to a row.
 // A texture, not storage: a CPU rasteriser gathers a texel fetch in one vector operation, where it
 // loads storage lane by lane behind a branch.
 @group(0) @binding(1) var objects: texture_2d<u32>;
 
-// The object of `tile`.
+// The object of `tile` (every vertex and fragment stage of the scene passes reads it so).
 fn object_at(tile: u32) -> Object {
     let i = tile_texel(tile, 3u).x;
     let x = (i % 1365u) * 6u;
@@ -57,6 +58,7 @@ fn object_at(tile: u32) -> Object {
                   bitcast<vec4<f32>>(textureLoad(objects, vec2<u32>(x + 4u, y), 0)),
                   textureLoad(objects, vec2<u32>(x + 5u, y), 0));
 }
+
 // Height fields' fine surfaces (scene::Object::shading_samples), object after object, 8192
 // samples to a row (gpu::geometry::SHADING_ROW), per sample: the gradient (dz/dx, dz/dy) as two
 // f16 (a grid mesh's packed fine normal), then the object-relative height (f32 bits).
