@@ -8,7 +8,7 @@ struct Object {
     // Translation (world units) applied before exaggeration.
     offset: vec4<f32>,
     color: vec4<f32>,
-    // Colour map (draw.wgsl): lo, 1 / (hi - lo), mode (0 flat, 1 vertex scalar, 2 z), first row.
+    // Colour map (draw.wgsl): lo, 1 / (hi - lo), mode (0 flat, 1 vertex scalar, 2 z), its table.
     cmap: vec4<f32>,
     // A height field's normal map (draw.wgsl): object-relative (x, y) of sample (0, 0), then
     // (cos, sin) / dx: the column of a point; (-sin, cos) / dy: its row, then nx, ny (a grid
