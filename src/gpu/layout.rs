@@ -111,15 +111,9 @@ pub const OBJECTS_PER_ROW: usize = 1365;
 /// texture's size (width, height) and texels, row by row, each object six texels (its fields'
 /// bits in order), [`OBJECTS_PER_ROW`] to a row; at least one object (zero).
 pub fn object_texels(objects: &[GpuObject]) -> ((u32, u32), Vec<[u32; 4]>) {
-    const TEXELS: usize = std::mem::size_of::<GpuObject>() / 16;
-    let n = objects.len().max(1);
-    let (width, height) = (n.min(OBJECTS_PER_ROW) * TEXELS, n.div_ceil(OBJECTS_PER_ROW));
-    let mut texels = vec![[0u32; 4]; width * height];
-    for (i, o) in objects.iter().enumerate() {
-        let at = (i / OBJECTS_PER_ROW) * width + (i % OBJECTS_PER_ROW) * TEXELS;
-        texels[at..at + TEXELS].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(o)));
-    }
-    ((width as u32, height as u32), texels)
+    let items: Vec<[[u32; 4]; 6]> = objects.iter().map(|o| bytemuck::cast(*o)).collect();
+    let ((width, height), items) = rows(&items, OBJECTS_PER_ROW);
+    ((width * 6, height), items.into_iter().flatten().collect())
 }
 
 /// A 2D texture of `format` (four 32-bit channels) and size `(width, height)` holding `texels`
@@ -132,22 +126,16 @@ pub fn table_texture<T: bytemuck::Pod>(
     (width, height): (u32, u32),
     texels: &[T],
 ) -> wgpu::Texture {
-    use wgpu::util::DeviceExt;
-    ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let texture = super::targets::texture(&ctx.device, label, width, height, format, usage);
+    let texel_bytes = format.block_copy_size(None).unwrap_or(16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
         bytemuck::cast_slice(texels),
-    )
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(width * texel_bytes), rows_per_image: None },
+        texture.size(),
+    );
+    texture
 }
 
 /// `items` laid out in rows of `row` for a texture: its size (width, height) and the items, the
@@ -169,17 +157,13 @@ pub const TILES_PER_ROW: usize = 2048;
 /// (`object`, in x); RGBA32Uint, [`TILES_PER_ROW`] tiles to a row. Returns the texture's size and
 /// texels; at least one tile (zero).
 pub fn tile_texels(grid: &[[f32; 4]], object: &[u32]) -> ((u32, u32), Vec<[u32; 4]>) {
-    let n = object.len().max(1);
-    let (width, height) = (n.min(TILES_PER_ROW) * 4, n.div_ceil(TILES_PER_ROW));
-    let mut texels = vec![[0u32; 4]; width * height];
-    for (t, &o) in object.iter().enumerate() {
-        let at = (t / TILES_PER_ROW) * width + (t % TILES_PER_ROW) * 4;
-        for (i, g) in grid[3 * t..3 * t + 3].iter().enumerate() {
-            texels[at + i] = g.map(f32::to_bits);
-        }
-        texels[at + 3] = [o, 0, 0, 0];
-    }
-    ((width as u32, height as u32), texels)
+    let items: Vec<[[u32; 4]; 4]> = object
+        .iter()
+        .zip(grid.chunks_exact(3))
+        .map(|(&o, g)| [g[0].map(f32::to_bits), g[1].map(f32::to_bits), g[2].map(f32::to_bits), [o, 0, 0, 0]])
+        .collect();
+    let ((width, height), items) = rows(&items, TILES_PER_ROW);
+    ((width * 4, height), items.into_iter().flatten().collect())
 }
 
 /// The frame's colour maps as the lit pass reads them: one table per distinct map (256 rows, then

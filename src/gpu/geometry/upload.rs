@@ -54,20 +54,10 @@ fn upload_shading(
             Some((total - n) as u32)
         })
         .collect();
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shading"),
-        size: wgpu::Extent3d {
-            width: total.clamp(1, SHADING_ROW as u64) as u32,
-            height: total.div_ceil(SHADING_ROW as u64).max(1) as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rg32Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let (width, height) = (total.clamp(1, SHADING_ROW as u64) as u32, total.div_ceil(SHADING_ROW as u64).max(1) as u32);
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let texture =
+        crate::gpu::targets::texture(&ctx.device, "shading", width, height, wgpu::TextureFormat::Rg32Uint, usage);
     let h = |v: f32| u32::from(half::f16::from_f32(v).to_bits());
     let samples = |(oi, _, normals): &(usize, u64, Option<Vec<u32>>)| -> Vec<[u32; 2]> {
         match normals {
