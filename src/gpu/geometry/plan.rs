@@ -27,30 +27,52 @@ pub(super) fn compact_indices(indices: &[u32], n: usize, remap: &mut Vec<u32>, o
 /// theirs.
 pub(super) type Pattern = (Vec<[u32; 2]>, Vec<u32>);
 
-/// The occluder of a hole-free lattice tile (`local`: its vertices' (column, row)): its corner,
-/// mid-side and centre samples as 2 × 2 cells, 8 triangles wound as the tile's (1 × 1 cells on a
-/// side of 2 samples); the empty pattern for a tile with holes. A first guess for prepasses whose
-/// frame does not rest on their proxies ([`SceneGeometry::occluder`]).
+/// The occluder of a lattice tile (`local`: its vertices' (column, row)): a coarse lattice of its
+/// samples, wound as the tile's. A hole-free tile's corner, mid-side and centre
+/// samples as 2 × 2 cells, 8 triangles (1 × 1 cells on a side of 2 samples); a tile with holes a lattice of
+/// 4 × 4 cells, of which those whose four corners are samples of the tile (not holes) are drawn:
+/// at most 32 triangles that stop short of its holes, where its coarse proxy would have ~100 or
+/// more. A first guess for prepasses whose frame does not rest on their proxies
+/// ([`SceneGeometry::occluder`]).
 fn occluder_pattern(t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Pattern {
     let w = local.iter().map(|p| p[0]).max().unwrap_or(0) as usize + 1;
     let h = local.iter().map(|p| p[1]).max().unwrap_or(0) as usize + 1;
-    if w < 2 || h < 2 || t.fine_triangles() != 2 * (w - 1) * (h - 1) {
+    if w < 2 || h < 2 {
         return (Vec::new(), Vec::new());
     }
+    let holes = t.fine_triangles() != 2 * (w - 1) * (h - 1);
+    let cells = if holes { 4 } else { 2 };
     let steps = |n: usize| -> Vec<u32> {
-        let mut s = vec![0, ((n - 1) / 2) as u32, (n - 1) as u32];
+        let mut s: Vec<u32> = (0..=cells).map(|k| (k * (n - 1) / cells) as u32).collect();
         s.dedup();
         s
     };
     let (xs, ys) = (steps(w), steps(h));
-    let verts: Vec<[u32; 2]> = ys.iter().flat_map(|&y| xs.iter().map(move |&x| [x, y])).collect();
-    let k = |i: usize, j: usize| (j * xs.len() + i) as u32;
+    let present: std::collections::HashSet<[u32; 2]> =
+        if holes { local.iter().copied().collect() } else { Default::default() };
+    let at = |i: usize, j: usize| !holes || present.contains(&[xs[i], ys[j]]);
+    let mut verts: Vec<[u32; 2]> = Vec::new();
+    let mut slot = vec![u32::MAX; xs.len() * ys.len()];
+    let mut k = |i: usize, j: usize| {
+        let s = &mut slot[j * xs.len() + i];
+        if *s == u32::MAX {
+            *s = verts.len() as u32;
+            verts.push([xs[i], ys[j]]);
+        }
+        *s
+    };
     let mut idx = Vec::new();
     for j in 0..ys.len() - 1 {
         for i in 0..xs.len() - 1 {
+            if !(at(i, j) && at(i + 1, j) && at(i + 1, j + 1) && at(i, j + 1)) {
+                continue;
+            }
             let (a, b, c, d) = (k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1));
             idx.extend_from_slice(&[a, b, c, a, c, d]);
         }
+    }
+    if idx.is_empty() {
+        verts.clear();
     }
     (verts, idx)
 }

@@ -114,3 +114,42 @@ fn tiles_of_one_shape_share_the_patterns_each_would_compact_to() {
     }
     assert!(ids_by_shape.len() >= 2);
 }
+
+#[test]
+fn occluders_are_coarse_lattices_that_stop_short_of_holes() {
+    // A 41 x 29 field in 2 x 2 tiles, a hole in one of them and a corner of no data in another:
+    // a hole-free tile's occluder is its 8 triangles of corner, mid-side and centre samples; a
+    // tile with holes gets at most 32 over samples it has (none on a hole), still far fewer than
+    // its coarse proxy, and none at all for a tile too ragged to have a whole coarse cell.
+    let (nx, ny) = (41, 29);
+    let mut z: Vec<f64> = (0..nx * ny).map(|k| ((k % nx) as f64 * 0.3).sin() + (k / nx) as f64 * 0.05).collect();
+    z[5 * nx + 6] = f64::NAN;
+    for j in 15..ny {
+        for i in 20..nx {
+            if i + j > 50 {
+                z[j * nx + i] = f64::NAN;
+            }
+        }
+    }
+    let mut s = Scene::new();
+    let frame = GridFrame::new([0.0, 0.0], [10.0, 10.0]).rotated(25.0, false);
+    s.add_heightfield(&z, ny, nx, frame, (2, 2), None, AddOptions::new(4.0)).unwrap();
+    let o = &s.objects()[0];
+    let mut holed = 0;
+    for (k, t) in o.tiles.iter().enumerate() {
+        let local = o.tile_lattice(t).unwrap().local;
+        let (verts, idx) = plan::tile_patterns(t, &local, &mut Vec::new(), &mut Vec::new()).pop().unwrap().1;
+        let (w, h) = (local.iter().map(|p| p[0]).max().unwrap(), local.iter().map(|p| p[1]).max().unwrap());
+        if t.fine_triangles() == 2 * (w * h) as usize {
+            assert_eq!(idx.len(), 24, "tile {k}: 8 triangles");
+            continue;
+        }
+        holed += 1;
+        assert!(idx.len() <= 96 && idx.len() % 6 == 0, "tile {k}: {} indices", idx.len());
+        assert!(!idx.is_empty(), "tile {k}: most of it has data");
+        assert!(idx.len() / 3 < t.coarse_triangles(), "tile {k}");
+        assert!(idx.iter().all(|&v| (v as usize) < verts.len()));
+        assert!(verts.iter().all(|v| local.contains(v)), "tile {k}: a vertex on a hole");
+    }
+    assert_eq!(holed, 2);
+}
