@@ -128,13 +128,12 @@ impl CullStrategy for Implicit {
             pass.record(d, enc, f.scene_bg, &f.main_targets.depth, &test.depth, &boxes);
             test_the_rest(f, enc, &first, &fine, threshold, true, None, test)
         };
+        let rest_stats = rest.stats();
         let mut v = Visible::new(rest.draw, Pixels::Gpu { counts, scale: ratio });
         v.predrawn = Some(first);
         v.tile_counts.push(("box_pixels", rest.box_counts));
         v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
-        v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
-        v.stats.push(("tiles_slab_tested", Stat::Count(rest.slab_tiles as u64)));
-        v.stats.push(("triangles_slab_test", Stat::Count(rest.slab_triangles)));
+        v.stats.extend(rest_stats);
         v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
         v.stats.push(("implicit_occluder_boxes", Stat::Count(boxes.len() as u64)));
         v.stats.push(("implicit_objects", Stat::Count(objects)));

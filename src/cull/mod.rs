@@ -163,7 +163,7 @@ impl FrameInputs<'_> {
         if d == g.fine[i] {
             return Some(0.0);
         }
-        let exact = g.slab_draws[i].is_some_and(|(_, exact)| exact);
+        let exact = g.slab_draws[i].is_some_and(|s| s.exact);
         g.drawn_errors(i, &d).filter(|_| exact).map(|e| e.0 as f64)
     }
 

@@ -94,7 +94,7 @@ impl CullStrategy for Temporal {
             let mut v = Visible::new(super::Draw::Mask(seen.to_vec()), Pixels::FinalImage);
             let reused = seen.iter().filter(|&&s| s).count() as u64;
             v.stats.extend([("tiles_reused", Stat::Count(reused)), ("frame_repeated", Stat::Count(1))]);
-            for name in ["tiles_box_tested", "tiles_slab_tested", "triangles_slab_test", "tiles_proven_hidden"] {
+            for name in super::phases::Rest::STATS.into_iter().chain(["tiles_proven_hidden"]) {
                 v.stats.push((name, Stat::Count(0)));
             }
             return Ok(v);
@@ -124,14 +124,13 @@ impl CullStrategy for Temporal {
         };
         let rest = draw_and_test_the_rest(f, enc, &first, &fine, threshold, true, seen);
         self.current = Some(key);
+        let rest_stats = rest.stats();
         let mut v = Visible::new(rest.draw, Pixels::FinalImage);
         v.predrawn = Some(first);
         v.tile_counts.push(("box_pixels", rest.box_counts));
         v.stats.extend(stats);
         v.stats.push(("frame_repeated", Stat::Count(0)));
-        v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
-        v.stats.push(("tiles_slab_tested", Stat::Count(rest.slab_tiles as u64)));
-        v.stats.push(("triangles_slab_test", Stat::Count(rest.slab_triangles)));
+        v.stats.extend(rest_stats);
         v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
         Ok(v)
     }

@@ -140,15 +140,14 @@ impl CullStrategy for ThreePass {
         // Conservative second phase (or the predictor): draw the first set now, test every other
         // tile's box against its depth at full resolution, draw (or report) those that show.
         let rest = draw_and_test_the_rest(f, enc, &first, &fine, threshold as f32, !self.predicting, None);
+        let rest_stats = rest.stats();
         let (draw, box_counts) = (rest.draw, rest.box_counts);
         let mut v = Visible::new(draw, pixels);
         v.arrays.push(error_px);
         v.predrawn = Some(first);
         v.tile_counts.push(("box_pixels", box_counts));
         v.stats.push(("triangles_prepass", Stat::Count(prepass_tris)));
-        v.stats.push(("tiles_box_tested", Stat::Count(rest.tested as u64)));
-        v.stats.push(("tiles_slab_tested", Stat::Count(rest.slab_tiles as u64)));
-        v.stats.push(("triangles_slab_test", Stat::Count(rest.slab_triangles)));
+        v.stats.extend(rest_stats);
         if !self.predicting {
             v.stats.push(("tiles_proven_hidden", Stat::Count(proven_hidden)));
         }

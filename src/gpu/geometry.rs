@@ -13,6 +13,22 @@ use glam::DVec3;
 use plan::compact_indices;
 use rayon::prelude::*;
 
+/// A tile's slab as the box tests draw it (from `SceneGeometry::slabs`, one instance whose
+/// first_instance is the tile).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlabDraw {
+    /// The slab (`lod::slab::Slab`).
+    pub args: DrawArgs,
+    /// Its gate (`lod::slab::Slab::gate`), where it has one.
+    pub gate: Option<DrawArgs>,
+    /// Whether the tile's levels of detail lie within their errors of the fine surface everywhere
+    /// (lattice levels), so that the slab (and its gate) grown by a level's error holds that level.
+    pub exact: bool,
+    /// The box of the slab's and its gate's vertices (origin-relative, as `bbox`): they may
+    /// reach out of the tile's box by their thickness, so the test's near-plane check uses this.
+    pub bounds: (DVec3, DVec3),
+}
+
 /// GPU copy of a scene's geometry, keyed by [`Scene::geometry_key`].
 pub struct SceneGeometry {
     pub key: (u64, u64),
@@ -43,9 +59,10 @@ pub struct SceneGeometry {
     pub fine: Vec<DrawArgs>,
     /// The coarse proxy's draw of every tile (its own compact vertex copy).
     pub coarse: Vec<DrawArgs>,
-    /// Every tile's occluder draw: for hole-free height-field tiles drawn as lattice patterns, the
-    /// 8 triangles of their corner, mid-side and centre samples (a shared pattern); switched off
-    /// (no indices) for the others. Cheaper than any proxy; for prepasses that only guess.
+    /// Every tile's occluder draw: for height-field tiles drawn as lattice patterns, a coarse
+    /// lattice of their samples (`plan::occluder_pattern`: 8 triangles of a hole-free tile, a
+    /// shared pattern; at most 32 that stop short of the holes of another); switched off (no
+    /// indices) for the others. Cheaper than any proxy; for prepasses that only guess.
     pub occluder: Vec<DrawArgs>,
     /// Per tile, the draws of its LOD levels 1.. (`TileMesh::levels`, each with its own compact
     /// vertex copy) and their errors.
@@ -61,10 +78,8 @@ pub struct SceneGeometry {
     /// like `bbox`): what the CPU proof of hidden tiles (`cull::hidden`) reads; None for others.
     pub height_blocks: Vec<Option<std::sync::Arc<crate::lod::blocks::HeightBlocks>>>,
     /// Every height-field tile's slab (`TileMesh::slab`, `lod::slab`), the box tests' occludee of
-    /// such tiles: its draw in `slabs` (one instance, first_instance = the tile) and whether its
-    /// levels of detail lie within their errors of the fine surface everywhere (lattice levels),
-    /// so that the slab grown by a level's error holds that level; None for other tiles.
-    pub slab_draws: Vec<Option<(DrawArgs, bool)>>,
+    /// such tiles, with its gate ([`SlabDraw`]); None for other tiles.
+    pub slab_draws: Vec<Option<SlabDraw>>,
     /// The slabs' vertices (x, y, z, side) and u32 indices; None when no tile has one.
     pub slabs: Option<(wgpu::Buffer, wgpu::Buffer)>,
     /// The fine surfaces of the height fields as the lit pass samples them

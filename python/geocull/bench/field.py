@@ -379,8 +379,8 @@ def _diff_summary(res: Any, ref: Any, visible: np.ndarray) -> dict[str, Any]:
 
 
 STAT_KEYS = ("triangles_drawn", "triangles_prepass", "tiles_drawn", "tiles_total", "tiles_proven_hidden",
-             "tiles_box_tested", "tiles_slab_tested", "triangles_slab_test", "tiles_reused", "tiles_drawn_first",
-             "tiles_drawn_second", "lod_max_error_px",
+             "tiles_box_tested", "tiles_slab_tested", "triangles_slab_test", "triangles_slab_gates", "tiles_reused",
+             "tiles_drawn_first", "tiles_drawn_second", "lod_max_error_px",
              "grid_interior_triangles_skipped", *(f"triangles_level{i}" for i in range(6)),
              *(f"grid_faces_level{i}" for i in range(6)))
 

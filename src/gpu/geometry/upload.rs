@@ -4,7 +4,7 @@
 use super::plan::Plan;
 use super::{
     check_buffer_sizes, draw_runs, normal_slot, scalar_slot, scalar_word, tile_bbox, tile_sub_boxes, vertex_words,
-    write_shading, CompactDraw, LevelDraw, SceneGeometry, VariantSet, NO_VARIANTS, SHADING_ROW,
+    write_shading, CompactDraw, LevelDraw, SceneGeometry, SlabDraw, VariantSet, NO_VARIANTS, SHADING_ROW,
 };
 use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
@@ -117,31 +117,38 @@ fn upload_values(
     (texture, base, cells)
 }
 
-/// The slabs of `scene`'s tiles (`Object::slabs`: built here for a scene read from bytes) in one
-/// vertex and one index buffer, and per tile its slab's draw with whether its levels are lattice
-/// levels (`SceneGeometry::slab_draws`).
-#[allow(clippy::type_complexity)]
-fn upload_slabs(
-    d: &wgpu::Device,
-    scene: &Scene,
-) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<(DrawArgs, bool)>>) {
+/// The slabs of `scene`'s tiles and their gates (`Object::slabs`: built here for a scene read from
+/// bytes) in one vertex and one index buffer, and per tile its slab's draws
+/// (`SceneGeometry::slab_draws`).
+fn upload_slabs(d: &wgpu::Device, scene: &Scene) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<SlabDraw>>) {
     let (mut verts, mut idx): (Vec<[f32; 4]>, Vec<u32>) = (Vec::new(), Vec::new());
+    let mut push = |tile: usize, v: &[[f32; 4]], ix: &[u32]| {
+        let args = DrawArgs {
+            index_count: ix.len() as u32,
+            instance_count: 1,
+            first_index: idx.len() as u32,
+            base_vertex: verts.len() as i32,
+            first_instance: tile as u32,
+        };
+        verts.extend_from_slice(v);
+        idx.extend_from_slice(ix);
+        args
+    };
     let slabs = scene.objects().iter().flat_map(|o| (0..o.tiles.len()).map(|t| o.slab(t)));
-    let draws: Vec<Option<(DrawArgs, bool)>> = slabs
+    let draws: Vec<Option<SlabDraw>> = slabs
         .enumerate()
         .map(|(i, s)| {
             let s = s?;
-            let (v, ix) = (&s.vertices, &s.indices);
-            let args = DrawArgs {
-                index_count: ix.len() as u32,
-                instance_count: 1,
-                first_index: idx.len() as u32,
-                base_vertex: verts.len() as i32,
-                first_instance: i as u32,
-            };
-            verts.extend_from_slice(v);
-            idx.extend_from_slice(ix);
-            Some((args, s.levels_exact))
+            let args = push(i, &s.vertices, &s.indices);
+            let gate = (!s.gate.indices.is_empty()).then(|| push(i, &s.gate.vertices, &s.gate.indices));
+            let corners = s
+                .vertices
+                .iter()
+                .chain(&s.gate.vertices)
+                .map(|v| glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()));
+            let bounds =
+                corners.fold((glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+            Some(SlabDraw { args, gate, exact: s.levels_exact, bounds })
         })
         .collect();
     if idx.is_empty() {
