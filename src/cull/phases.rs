@@ -355,36 +355,49 @@ pub fn test_the_rest(
     let d = &f.ctx.device;
     let n = f.n_tiles();
     let t = tile_boxes(f, drawn);
-    // The gates first (every gate open for them), then the boxes behind open gates.
+    // Two test passes: the gates (whole boxes, and slabs' gates, every gate open for them), then
+    // the sub-boxes and slabs behind open gates. Each pass rasterises its tests together.
     let gate = passes::counts_buffer_init(d, &t.gate_init);
     let open = passes::counts_buffer_init(d, &vec![1; n]);
+    let box_counts = passes::counts_buffer_init(d, &t.init);
     let gates_buf = passes::boxes_buffer(d, &t.gates);
+    let boxes_buf = passes::boxes_buffer(d, &t.boxes);
     let ts = |name| f.timestamps.and_then(|t| t.render(name));
     let (main, bg) = (test, f.scene_bg);
-    f.passes.record_box_test(d, enc, bg, main, &gates_buf, t.gates.len(), first, &open, &gate, ts("test_ms"));
-    let box_counts = passes::counts_buffer_init(d, &t.init);
-    if let (Some((vertices, indices)), false) = (&f.geometry.slabs, t.slabs.is_empty()) {
+    let slabs = f.geometry.slabs.as_ref().filter(|_| !t.slabs.is_empty()).map(|(vertices, indices)| {
         let (extent, place) = crate::gpu::layout::rows(&t.place, crate::gpu::slab_test::PLACE_ROW);
         let place =
             crate::gpu::layout::table_texture(f.ctx, "slab_place", wgpu::TextureFormat::Rgba32Float, extent, &place)
                 .create_view(&Default::default());
-        // Each slab's draw switched on where its gate is open (the first set's draws off), then
-        // drawn, counting into `counts`.
-        let mut slab_pass = |draws: &[DrawArgs], gate: &wgpu::Buffer, counts: &wgpu::Buffer| {
-            let all = passes::args_buffer(d, "slab_args", draws);
-            let open = passes::empty_args_buffer(d, "slab_open", draws.len());
-            let gate_ts = f.timestamps.and_then(|t| t.compute("count_ms"));
-            f.passes.record_slab_gate(d, enc, gate, &all, first, &open, draws.len(), gate_ts);
-            let slabs = SlabDraws { vertices, indices, draws: &open, n: draws.len() as u32, place: &place };
-            f.passes.slab_test.record(d, enc, bg, main, &slabs, counts, ts("test_ms"));
-        };
-        if !t.slab_gates.is_empty() {
-            slab_pass(&t.slab_gates, &open, &gate);
+        (vertices, indices, place)
+    });
+    // Each slab's draw switched on where its gate is open (the first set's draws off).
+    let slab_draws = |enc: &mut wgpu::CommandEncoder, draws: &[DrawArgs], gate: &wgpu::Buffer| {
+        let all = passes::args_buffer(d, "slab_args", draws);
+        let on = passes::empty_args_buffer(d, "slab_open", draws.len());
+        let gate_ts = f.timestamps.and_then(|t| t.compute("count_ms"));
+        f.passes.record_slab_gate(d, enc, gate, &all, first, &on, draws.len(), gate_ts);
+        on
+    };
+    let gate_slabs = slabs.as_ref().filter(|_| !t.slab_gates.is_empty()).map(|_| slab_draws(enc, &t.slab_gates, &open));
+    {
+        let mut pass = f.passes.begin_test_pass(enc, main, ts("test_ms"));
+        f.passes.draw_boxes(d, &mut pass, bg, main, (&gates_buf, t.gates.len()), first, &open, &gate);
+        if let (Some((vertices, indices, place)), Some(draws)) = (&slabs, &gate_slabs) {
+            let n = t.slab_gates.len() as u32;
+            let s = SlabDraws { vertices, indices, draws, n, place };
+            f.passes.slab_test.draw(d, &mut pass, bg, main, &s, &gate);
         }
-        slab_pass(&t.slabs, &gate, &box_counts);
     }
-    let boxes_buf = passes::boxes_buffer(d, &t.boxes);
-    f.passes.record_box_test(d, enc, bg, main, &boxes_buf, t.boxes.len(), first, &gate, &box_counts, ts("test_ms"));
+    let fine_slabs = slabs.as_ref().map(|_| slab_draws(enc, &t.slabs, &gate));
+    {
+        let mut pass = f.passes.begin_test_pass(enc, main, ts("test_ms"));
+        f.passes.draw_boxes(d, &mut pass, bg, main, (&boxes_buf, t.boxes.len()), first, &gate, &box_counts);
+        if let (Some((vertices, indices, place)), Some(draws)) = (&slabs, &fine_slabs) {
+            let s = SlabDraws { vertices, indices, draws, n: t.slabs.len() as u32, place };
+            f.passes.slab_test.draw(d, &mut pass, bg, main, &s, &box_counts);
+        }
+    }
     let draw = if add {
         let rest = passes::empty_args_buffer(d, "rest_args", n);
         let ts = f.timestamps.and_then(|t| t.compute("count_ms"));

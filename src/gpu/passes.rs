@@ -274,7 +274,8 @@ impl Passes {
     /// Pass: for every box of `boxes` (render space; its `id` is a tile index) whose tile's draw in
     /// `skip` is off and whose `gate` count is above 0, adds to `counts[id]` the pixels where the
     /// front faces of the box are at or in front of the depth of `targets` (drawn by an earlier
-    /// pass, reverse-Z). Writes nothing to `targets`.
+    /// pass, reverse-Z). Writes nothing to `targets`. ([`Self::begin_test_pass`] with
+    /// [`Self::draw_boxes`].)
     #[allow(clippy::too_many_arguments)]
     pub fn record_box_test(
         &self,
@@ -289,16 +290,21 @@ impl Passes {
         counts: &wgpu::Buffer,
         ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("box_test"),
-            layout: &self.box_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
-                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: gate.as_entire_binding() },
-            ],
-        });
+        let mut pass = self.begin_test_pass(enc, targets, ts);
+        self.draw_boxes(d, &mut pass, scene_bg, targets, (boxes, n), skip, gate, counts);
+    }
+
+    /// A render pass for box and slab tests ([`Self::draw_boxes`], `SlabTest::draw`) against
+    /// the depth of `targets`: its id image as the attachment (writes masked off) and, where the
+    /// tests run on the early depth test (`box_early.rs`; the slab test runs there exactly when
+    /// the box test does), its depth bound read-only. Tests drawn into one pass are rasterised
+    /// together: a CPU rasteriser then waits once for their counts, not once per test.
+    pub fn begin_test_pass<'e>(
+        &self,
+        enc: &'e mut wgpu::CommandEncoder,
+        targets: &'e Targets,
+        ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
         // Without the early-depth pipeline there is no depth attachment: the fragment shader reads
         // the depth texture and counts by hand. With it, the same depth is also bound read-only
         // as the attachment the rasteriser tests against (both uses are reads).
@@ -308,7 +314,7 @@ impl Passes {
             stencil_ops: None,
         });
         let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("box_test"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: &targets.id,
@@ -320,15 +326,42 @@ impl Passes {
             timestamp_writes: ts,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
-        if n > 0 {
-            pass.set_pipeline(self.box_early.as_ref().unwrap_or(&self.box_test));
-            pass.set_bind_group(0, scene_bg, &[]);
-            pass.set_bind_group(1, &bg, &[]);
-            pass.set_vertex_buffer(0, boxes.slice(..));
-            pass.set_index_buffer(self.box_indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..36, 0, 0..n as u32);
+        })
+    }
+
+    /// Into `pass` ([`Self::begin_test_pass`] of `targets`): the box test of [`Self::record_box_test`]
+    /// for the `n` boxes of `boxes`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw_boxes(
+        &self,
+        d: &wgpu::Device,
+        pass: &mut wgpu::RenderPass<'_>,
+        scene_bg: &wgpu::BindGroup,
+        targets: &Targets,
+        (boxes, n): (&wgpu::Buffer, usize),
+        skip: &wgpu::Buffer,
+        gate: &wgpu::Buffer,
+        counts: &wgpu::Buffer,
+    ) {
+        if n == 0 {
+            return;
         }
+        let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("box_test"),
+            layout: &self.box_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&targets.depth) },
+                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: skip.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: gate.as_entire_binding() },
+            ],
+        });
+        pass.set_pipeline(self.box_early.as_ref().unwrap_or(&self.box_test));
+        pass.set_bind_group(0, scene_bg, &[]);
+        pass.set_bind_group(1, &bg, &[]);
+        pass.set_vertex_buffer(0, boxes.slice(..));
+        pass.set_index_buffer(self.box_indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..36, 0, 0..n as u32);
     }
 
     /// Pass: `out[i] = src[i]` where `done[i]` is off and `counts[i] > threshold`, else switched

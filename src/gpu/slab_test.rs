@@ -13,11 +13,6 @@ use super::targets::Targets;
 pub struct SlabTest {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
-    /// Whether `pipeline` tests on the hardware's early depth test (the image's depth bound
-    /// read-only as the depth attachment, compared GreaterEqual before the fragment runs, as
-    /// `box_early.rs` does for boxes): where the device has SHADER_EARLY_DEPTH_TEST and is not GL.
-    /// Hidden slab fragments, most of them, then never reach the shader.
-    early: bool,
 }
 
 /// One slab vertex: origin-relative (x, y, z) and its side (+1 top, -1 bottom).
@@ -45,8 +40,13 @@ pub struct SlabDraws<'a> {
 }
 
 impl SlabTest {
-    /// The pipeline for `scene_layout` (group 0: the globals); `gl` compares z / w by hand.
-    pub fn new(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: bool) -> Self {
+    /// The pipeline for `scene_layout` (group 0: the globals); `gl` compares z / w by hand;
+    /// `early`: the pipeline tests on the hardware's early depth test (the image's depth bound
+    /// read-only as the depth attachment, compared GreaterEqual before the fragment runs), as the
+    /// box test does where it has `box_early.rs`'s pipeline, so that both draw into one pass
+    /// (`Passes::begin_test_pass`). Hidden slab fragments, most of them, then never reach the
+    /// shader.
+    pub fn new(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: bool, early: bool) -> Self {
         let fs = wgpu::ShaderStages::FRAGMENT;
         let vs = wgpu::ShaderStages::VERTEX;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -58,7 +58,6 @@ impl SlabTest {
             bind_group_layouts: &[Some(scene_layout), Some(&layout)],
             immediate_size: 0,
         });
-        let early = !gl && d.features().contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
         // box_test.wgsl (with box.wgsl) gives the bindings and the fragment entry points; the
         // early-depth one (box_test_early.wgsl) where the device runs it exactly, as box_early.rs.
         let mut source = format!("{}\n{}", with_box_wgsl(BOX_TEST_WGSL), include_str!("shaders/slab_test.wgsl"));
@@ -75,23 +74,24 @@ impl SlabTest {
         };
         let depth = early.then(early_test_depth);
         let pipeline = test_pipeline(d, &pl, &module, ("vs_slab", VERTEX), fs_entry, depth);
-        Self { layout, pipeline, early }
+        Self { layout, pipeline }
     }
 
-    /// Pass: for every slab `slabs` draws, adds to `counts[tile]` the fragments of the slab at
-    /// or in front of the depth of `targets` (drawn by an earlier pass, reverse-Z). Writes
-    /// nothing to `targets`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
+    /// Into `pass` (`Passes::begin_test_pass` of `targets`): for every slab `slabs` draws, adds to
+    /// `counts[tile]` the fragments of the slab at or in front of the depth of `targets` (drawn by
+    /// an earlier pass, reverse-Z). Writes nothing to `targets`.
+    pub fn draw(
         &self,
         d: &wgpu::Device,
-        enc: &mut wgpu::CommandEncoder,
+        pass: &mut wgpu::RenderPass<'_>,
         scene_bg: &wgpu::BindGroup,
         targets: &Targets,
         slabs: &SlabDraws<'_>,
         counts: &wgpu::Buffer,
-        ts: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        if slabs.n == 0 {
+            return;
+        }
         let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("slab_test"),
             layout: &self.layout,
@@ -101,32 +101,11 @@ impl SlabTest {
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(slabs.place) },
             ],
         });
-        let keep = wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("slab_test"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &targets.id,
-                depth_slice: None,
-                resolve_target: None,
-                ops: keep,
-            })],
-            // The early-depth pipeline tests against the image's depth, bound read-only.
-            depth_stencil_attachment: self.early.then_some(wgpu::RenderPassDepthStencilAttachment {
-                view: &targets.depth,
-                depth_ops: None,
-                stencil_ops: None,
-            }),
-            timestamp_writes: ts,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        if slabs.n > 0 {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, scene_bg, &[]);
-            pass.set_bind_group(1, &bg, &[]);
-            pass.set_vertex_buffer(0, slabs.vertices.slice(..));
-            pass.set_index_buffer(slabs.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.multi_draw_indexed_indirect(slabs.draws, 0, slabs.n);
-        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, scene_bg, &[]);
+        pass.set_bind_group(1, &bg, &[]);
+        pass.set_vertex_buffer(0, slabs.vertices.slice(..));
+        pass.set_index_buffer(slabs.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.multi_draw_indexed_indirect(slabs.draws, 0, slabs.n);
     }
 }

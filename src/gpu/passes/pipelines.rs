@@ -328,7 +328,7 @@ fn box_pipelines(d: &wgpu::Device, scene_layout: &wgpu::BindGroupLayout, gl: boo
     let box_shader = shader(d, "box_test.wgsl", with_box_wgsl(BOX_TEST_WGSL));
     let box_test = box_pipeline(d, &box_pl, &box_shader, if gl { "fs_box_gl" } else { "fs_box" }, None);
     let box_early = crate::gpu::box_early::early_box_pipeline(d, &box_pl);
-    let slab_test = crate::gpu::slab_test::SlabTest::new(d, scene_layout, gl);
+    let slab_test = crate::gpu::slab_test::SlabTest::new(d, scene_layout, gl, box_early.is_some());
     let cube: [u32; 36] =
         [0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6];
     let box_indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
