@@ -75,8 +75,9 @@ pub enum Proxies {
     /// culling rests on it.
     Built,
     /// Whichever of the coarse proxy, the coarsest level of detail and the occluder
-    /// (`SceneGeometry::occluder`: a coarse lattice of a height-field tile's samples, 8 to 32 triangles) has the fewest
-    /// triangles: for frames whose second phase finds whatever the first set misses.
+    /// (`SceneGeometry::occluder`: a coarse lattice of a height-field tile's samples, 8 to 32
+    /// triangles) has the fewest triangles: for frames whose second phase finds whatever the
+    /// first set misses.
     Cheapest,
 }
 
@@ -253,8 +254,9 @@ pub fn tile_boxes(f: &FrameInputs<'_>, drawn: Option<&[bool]>) -> TileBoxes {
 /// Tile `i`'s slab draw and how far its slab grows along z when the box test uses its slab: a
 /// height-field tile with a slab, drawn at level 0 or at a lattice level (whose error bounds its
 /// vertical distance to the fine surface, so the slab grown by it holds the level), whose whole
-/// box (gate) does not reach the near plane (`near`). The growth adds a margin against f32
-/// round-off as `FrameInputs::render_box` grows boxes.
+/// box does not reach the near plane (`near`), nor does the box of its slab and its gate so
+/// grown (`SlabDraw::bounds`). The growth adds a margin against f32 round-off as
+/// `FrameInputs::render_box` grows boxes.
 fn slab_test(f: &FrameInputs<'_>, i: usize, near: bool) -> Option<(SlabDraw, f64)> {
     let g = f.geometry;
     let slab = g.slab_draws[i]?;

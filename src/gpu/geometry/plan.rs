@@ -28,11 +28,11 @@ pub(super) fn compact_indices(indices: &[u32], n: usize, remap: &mut Vec<u32>, o
 pub(super) type Pattern = (Vec<[u32; 2]>, Vec<u32>);
 
 /// The occluder of a lattice tile (`local`: its vertices' (column, row)): a coarse lattice of its
-/// samples, wound as the tile's. A hole-free tile's corner, mid-side and centre
-/// samples as 2 × 2 cells, 8 triangles (1 × 1 cells on a side of 2 samples); a tile with holes a lattice of
-/// 4 × 4 cells, of which those whose four corners are samples of the tile (not holes) are drawn:
-/// at most 32 triangles that stop short of its holes, where its coarse proxy would have ~100 or
-/// more. A first guess for prepasses whose frame does not rest on their proxies
+/// samples, wound as the tile's. A hole-free tile's corner, mid-side and centre samples as 2 × 2
+/// cells, 8 triangles (1 × 1 cells on a side of 2 samples); a tile with holes a lattice of 4 × 4
+/// cells, of which those whose four corners are samples of the tile (not holes) are drawn: at most
+/// 32 triangles that stop short of its holes, where its coarse proxy would have ~100 or more. A
+/// first guess for prepasses whose frame does not rest on their proxies
 /// ([`SceneGeometry::occluder`]).
 fn occluder_pattern(t: &crate::lod::TileMesh, local: &[[u32; 2]]) -> Pattern {
     let w = local.iter().map(|p| p[0]).max().unwrap_or(0) as usize + 1;
