@@ -54,7 +54,7 @@ class RenderStats(TypedDict):
     tiles_box_tested: NotRequired[int]  # three_pass conservative / predict_errors, temporal: boxes tested
     tiles_slab_tested: NotRequired[int]  # of those, height-field tiles tested with their slabs
     triangles_slab_test: NotRequired[int]  # the tested slabs' triangles (those behind an open gate are rasterised)
-    triangles_slab_gates: NotRequired[int]  # the triangles of those slabs' gates (coarser slabs, all rasterised)
+    triangles_slab_gates: NotRequired[int]  # their gates' triangles (coarser slabs; not drawn for first-set tiles)
     tiles_reused: NotRequired[int]  # temporal: tiles drawn first because they were visible in the last frame
     frame_repeated: NotRequired[int]  # temporal: 1 when it repeated the last frame (its visible tiles, untested)
     tiles_proven_hidden: NotRequired[int]  # three_pass conservative, temporal: hidden by a height field (CPU proof)
