@@ -385,7 +385,8 @@ impl Passes {
 
     /// Pass: `out[k] = slabs[k]` (`n` draws, one per slab, its tile in `first_instance`) where the
     /// tile's draw in `done` is off and its `gate` count is above 0, else switched off: the slab
-    /// test then runs no vertex work for the slabs of tiles whose whole box counted nothing.
+    /// test then runs no vertex work for the slabs of tiles whose gate (their slab's gate or whole
+    /// box) counted nothing.
     #[allow(clippy::too_many_arguments)]
     pub fn record_slab_gate(
         &self,

@@ -1,8 +1,9 @@
 // Slab gate: the slab test's draws (one per slab, its tile in first_instance) switched off where
-// the tile's draw is already on (`done_args`) or its gate count (its whole box's pixels at or in
-// front of the image) is 0, so the slab test's vertex stage never runs for the slabs of tiles
-// whose box is hidden. The test's count is the same as drawing every slab with the gate checked
-// in its vertex stage; only the work differs.
+// the tile's draw is already on (`done_args`) or its gate count (the pixels of its gate at or in
+// front of the image: its slab's gate or its whole box; every gate open for the gates' own draws)
+// is 0, so the slab test's vertex stage never runs for the slabs of tiles whose gate is hidden.
+// The test's count is the same as drawing every slab with the gate checked in its vertex stage;
+// only the work differs.
 
 // Params (n_tiles: here the number of slab draws) and DrawArgs come from select_common.wgsl.
 
