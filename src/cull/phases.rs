@@ -218,7 +218,7 @@ pub fn tile_boxes(f: &FrameInputs<'_>, drawn: Option<&[bool]>) -> TileBoxes {
         // (levels use the tile's own vertices, and a box is convex).
         let subs = &g.sub_boxes[i];
         let whole = f.render_box(i, g.bbox[i].0, g.bbox[i].1);
-        if let Some((slab, grow)) = slab_test(f, i, whole.2) {
+        if let Some((slab, grow)) = slab_test(f, i) {
             match slab.gate {
                 Some(gate) => t.slab_gates.push(gate),
                 None => t.gates.push(instance(i, whole)),
@@ -253,16 +253,13 @@ pub fn tile_boxes(f: &FrameInputs<'_>, drawn: Option<&[bool]>) -> TileBoxes {
 
 /// Tile `i`'s slab draw and how far its slab grows along z when the box test uses its slab: a
 /// height-field tile with a slab, drawn at level 0 or at a lattice level (whose error bounds its
-/// vertical distance to the fine surface, so the slab grown by it holds the level), whose whole
-/// box does not reach the near plane (`near`), nor does the box of its slab and its gate so
-/// grown (`SlabDraw::bounds`). The growth adds a margin against f32 round-off as
-/// `FrameInputs::render_box` grows boxes.
-fn slab_test(f: &FrameInputs<'_>, i: usize, near: bool) -> Option<(SlabDraw, f64)> {
+/// vertical distance to the fine surface, so the slab grown by it holds the level), where the
+/// box of the tile, its slab and its gate so grown (`SlabDraw::bounds`) does not reach the near
+/// plane (nor then does the tile's own box, which it holds). The growth adds a margin against f32
+/// round-off as `FrameInputs::render_box` grows boxes.
+fn slab_test(f: &FrameInputs<'_>, i: usize) -> Option<(SlabDraw, f64)> {
     let g = f.geometry;
     let slab = g.slab_draws[i]?;
-    if near {
-        return None;
-    }
     let error = f.exact_level_error(i)?;
     let (lo, hi) = g.bbox[i];
     let off = f.placement(g.tile_object_cpu[i] as usize);

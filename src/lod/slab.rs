@@ -112,6 +112,15 @@ impl std::fmt::Debug for TileSlabs {
     }
 }
 
+/// What [`Sampled::census`] finds of a piece's samples.
+struct Census {
+    fill: Fill,
+    lo: f64,
+    hi: f64,
+    finite: usize,
+    samples: usize,
+}
+
 /// A cell's samples: all finite, none, or some.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Fill {
@@ -210,40 +219,25 @@ where
     Z: Fn(usize, usize) -> f64,
     X: Fn(usize, usize) -> [f32; 2],
 {
-    /// Whether the samples of `a..=b` are all finite, none, or some.
-    fn fill(&self, a: (usize, usize), b: (usize, usize)) -> Fill {
-        let (mut some, mut all) = (false, true);
-        for lj in a.1..=b.1 {
-            for li in a.0..=b.0 {
-                if (self.z)(li, lj).is_finite() {
-                    some = true;
-                } else {
-                    all = false;
-                }
-            }
-        }
-        if all {
-            Fill::Full
-        } else if some {
-            Fill::Partial
-        } else {
-            Fill::Empty
-        }
-    }
-
-    /// The lowest and highest finite height of `a..=b`, and whether at least half its samples
-    /// are finite.
-    fn range(&self, a: (usize, usize), b: (usize, usize)) -> (f64, f64, bool) {
-        let (mut lo, mut hi, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0);
+    /// The samples of `a..=b`, in one pass: whether all, none or some are finite, and the lowest
+    /// and highest finite height.
+    fn census(&self, a: (usize, usize), b: (usize, usize)) -> Census {
+        let (mut lo, mut hi, mut finite) = (f64::INFINITY, f64::NEG_INFINITY, 0);
         for lj in a.1..=b.1 {
             for li in a.0..=b.0 {
                 let z = (self.z)(li, lj);
                 if z.is_finite() {
-                    (lo, hi, n) = (lo.min(z), hi.max(z), n + 1);
+                    (lo, hi, finite) = (lo.min(z), hi.max(z), finite + 1);
                 }
             }
         }
-        (lo, hi, 2 * n >= (b.0 - a.0 + 1) * (b.1 - a.1 + 1))
+        let samples = (b.0 - a.0 + 1) * (b.1 - a.1 + 1);
+        let fill = match finite {
+            0 => Fill::Empty,
+            n if n == samples => Fill::Full,
+            _ => Fill::Partial,
+        };
+        Census { fill, lo, hi, finite, samples }
     }
 
     /// The prisms of a `w` × `h` tile's pieces, halved until each is full and within `tol`
@@ -258,26 +252,26 @@ where
         let mut out = Shell::default();
         let mut stack = vec![((0usize, 0usize), (w - 1, h - 1))];
         while let Some((a, b)) = stack.pop() {
-            let f = self.fill(a, b);
+            let c = self.census(a, b);
             let corners = [(a.0, a.1), (b.0, a.1), (b.0, b.1), (a.0, b.1)];
             let single = b.0 - a.0 <= 1 && b.1 - a.1 <= 1;
             // A full piece's error, computed once: it decides whether the piece stands, and bounds it.
-            let error = (f == Fill::Full).then(|| cell_error(a, b, z));
-            let flat = (gate && f == Fill::Partial).then(|| self.range(a, b));
-            match (f, error) {
+            let error = (c.fill == Fill::Full).then(|| cell_error(a, b, z));
+            // A gate's piece with holes that stands as one flat prism.
+            let flat = gate && (single || (2 * c.finite >= c.samples && c.hi - c.lo <= 2.0 * tol));
+            match (c.fill, error) {
                 (Fill::Empty, _) => {}
                 (Fill::Full, Some(e)) if single || e <= tol => {
                     let half = e + thick;
                     let bounds = corners.map(|(i, j)| (z(i, j) - half, z(i, j) + half));
                     prism(&mut out, &corners.map(|(i, j)| xy(i, j)), &bounds, self.flip)
                 }
-                (Fill::Partial, _) if flat.is_some_and(|(lo, hi, most)| single || (most && hi - lo <= 2.0 * tol)) => {
+                (Fill::Partial, _) if flat => {
                     // (A fine cell with fewer than three finite corners has no fine triangle.)
-                    if single && corners.iter().filter(|&&(i, j)| z(i, j).is_finite()).count() < 3 {
+                    if single && c.finite < 3 {
                         continue;
                     }
-                    let (lo, hi, _) = flat.unwrap_or_default();
-                    let bounds = [(lo - thick, hi + thick); 4];
+                    let bounds = [(c.lo - thick, c.hi + thick); 4];
                     prism(&mut out, &corners.map(|(i, j)| xy(i, j)), &bounds, self.flip)
                 }
                 // One fine cell with a hole at a corner: a prism over each of its fine triangles
