@@ -223,7 +223,8 @@ impl Renderer {
             ..
         } = self;
         let geometry = geometry.as_ref().expect("uploaded above");
-        let (scene_bg, object_visible) = frame_state(ctx, passes, scene, camera, &fc, origin, geometry);
+        let (scene_bg, object_visible) =
+            frame_state(ctx, passes, scene, camera, &fc, origin, geometry, (*width, *height));
         let tile_dist2 = geometry.eye_distances(scene, origin, fc.eye, camera.z_scale);
         let (mut draw_args, chosen) =
             choose_levels(geometry, scene, camera, &fc, &tile_dist2, *height, (opts.lod, opts.grid_lod), origin);
@@ -490,6 +491,7 @@ fn frame_state(
     fc: &FrameCamera,
     origin: DVec3,
     geom: &SceneGeometry,
+    (width, height): (u32, u32),
 ) -> (wgpu::BindGroup, Vec<bool>) {
     let objects = scene.objects();
     // Colour maps: tables of 256 rows, then the NaN colour, one per distinct map.
@@ -550,7 +552,7 @@ fn frame_state(
             crate::camera::Projection::Orthographic => (fc.near / (fc.far - fc.near)) as f32,
             crate::camera::Projection::Perspective => -1.0,
         },
-        _pad: [0.0; 2],
+        pixel: [2.0 / width as f32, 2.0 / height as f32],
         eye: match fc.projection {
             crate::camera::Projection::Orthographic => {
                 [fc.forward.x as f32, fc.forward.y as f32, fc.forward.z as f32, 0.0]

@@ -41,7 +41,9 @@ pub struct Globals {
     /// Orthographic views: near / (far - near), what turns a depth into a distance for the
     /// depth-tie priorities (common.wgsl `priority_clip`); -1 for perspective views.
     pub ortho_near: f32,
-    pub _pad: [f32; 2],
+    /// The size of a pixel of the frame's image in NDC, (2 / width, 2 / height): how far the box
+    /// tests push their occludees out on screen (box_test.wgsl `dilated`).
+    pub pixel: [f32; 2],
     /// The pixel rays of the lit pass's fine depth (draw.wgsl `fine_depth`): perspective, the
     /// eye in render space and w = 1; orthographic, the unit view direction and w = 0.
     pub eye: [f32; 4],

@@ -15,11 +15,15 @@ pub struct SlabTest {
     pipeline: wgpu::RenderPipeline,
 }
 
-/// One slab vertex: origin-relative (x, y, z) and its side (+1 top, -1 bottom).
+/// One slab vertex (`lod::slab::ShellVertex`): origin-relative (x, y, z), then the direction
+/// from its prism's centre and its side (+1 top, -1 bottom) as snorm8.
 const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: 16,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 }],
+    attributes: &[
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 },
+        wgpu::VertexAttribute { format: wgpu::VertexFormat::Snorm8x4, offset: 12, shader_location: 1 },
+    ],
 };
 
 /// Tiles in one row of [`SlabDraws::place`] (slab_test.wgsl).

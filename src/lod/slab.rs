@@ -50,21 +50,42 @@ pub const TOLERANCE: f64 = 0.25;
 /// and 4 more: the gates' own triangles against the slabs they let through.
 pub const GATE_TOLERANCE: f64 = 1.0;
 
-/// Closed prisms: vertices (x, y, z, side), origin-relative, side +1 on top surfaces and -1 on
-/// bottom ones, and triangles over them, each prism's faces wound outwards (as [`Slab`]'s).
+/// A vertex of a shell's prism as the box test draws it (slab_test.wgsl): its origin-relative
+/// position, then `out` as snorm8: its corner's miter across the prism's walls (x, y: the vector
+/// that moves both walls at the corner out by 1, over 4), the steepest slope of its prism's top
+/// and bottom over 8, rounded up (z), and its side (+127 on top surfaces, -127 on bottom ones). The test grows each prism by a fraction of a pixel along the
+/// miters and z (box_test.wgsl `grown`), so that the snapping of vertices to the rasteriser's
+/// sub-pixel grid cannot uncover a pixel the fine surface covers where a prism's wall stands on
+/// the surface's edge (a hole's, or the tile's outline).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShellVertex {
+    pub pos: [f32; 3],
+    pub out: [i8; 4],
+}
+
+impl ShellVertex {
+    /// +1 on a top surface, -1 on a bottom one.
+    pub fn side(&self) -> f32 {
+        f32::from(self.out[3].signum())
+    }
+}
+
+/// Closed prisms: vertices ([`ShellVertex`]) and triangles over them, each prism's faces wound
+/// outwards (as [`Slab`]'s).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Shell {
-    pub vertices: Vec<[f32; 4]>,
+    pub vertices: Vec<ShellVertex>,
     pub indices: Vec<u32>,
 }
 
-/// A tile's slab (see the module's contract) as the box test draws it: vertices (x, y, z, side),
-/// origin-relative, side +1 on top surfaces and -1 on bottom ones, and triangles over them, each
-/// prism's faces wound outwards (counter-clockwise seen from outside), so that the test counts
-/// front faces only: the ray's entry into the solid, one per pixel per prism, as a box's.
+/// A tile's slab (see the module's contract) as the box test draws it: vertices
+/// ([`ShellVertex`]) and triangles over them, each prism's faces wound outwards
+/// (counter-clockwise seen from outside), so that the test counts front faces only: the ray's
+/// entry into the solid, one per pixel per prism, as a box's.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Slab {
-    pub vertices: Vec<[f32; 4]>,
+    pub vertices: Vec<ShellVertex>,
     pub indices: Vec<u32>,
     /// A coarser slab of the same tile ([`GATE_TOLERANCE`]; pieces with holes bounded by a flat
     /// prism over their finite heights): it too holds every fine triangle, in a few dozen
@@ -314,11 +335,16 @@ where
 fn prism(slab: &mut Shell, corners: &[[f32; 2]], bounds: &[(f64, f64)], flip: bool) {
     let base = slab.vertices.len() as u32;
     let m = corners.len() as u32;
-    for (c, b) in corners.iter().zip(bounds) {
-        slab.vertices.push([c[0], c[1], bound_f32(b.1, 1.0), 1.0]);
-    }
-    for (c, b) in corners.iter().zip(bounds) {
-        slab.vertices.push([c[0], c[1], bound_f32(b.0, -1.0), -1.0]);
+    let miters = miters(corners);
+    let tops: Vec<f32> = bounds.iter().map(|b| bound_f32(b.1, 1.0)).collect();
+    let bottoms: Vec<f32> = bounds.iter().map(|b| bound_f32(b.0, -1.0)).collect();
+    // The steepest slope of the top's and the bottom's triangles, over 8, rounded up.
+    let slope = steepest(corners, &tops).max(steepest(corners, &bottoms));
+    let slope = ((slope / 8.0 * 127.0).ceil()).min(127.0) as i8;
+    for (side, z) in [(127, &tops), (-127, &bottoms)] {
+        for ((c, z), mi) in corners.iter().zip(z).zip(&miters) {
+            slab.vertices.push(ShellVertex { pos: [c[0], c[1], *z], out: [mi[0], mi[1], slope, side] });
+        }
     }
     let mut tri = |a: u32, b: u32, c: u32| slab.indices.extend_from_slice(&if flip { [a, c, b] } else { [a, b, c] });
     let (t, u) = (base, base + m);
@@ -332,6 +358,50 @@ fn prism(slab: &mut Shell, corners: &[[f32; 2]], bounds: &[(f64, f64)], flip: bo
         tri(e0, e1 + m, e1);
         tri(e0, e0 + m, e1 + m);
     }
+}
+
+/// Per corner of the convex polygon `corners` (either winding), its miter over 4 as snorm8: the
+/// vector `m` with `m . n = 1` for the outward unit normals `n` of both edges at the corner, so
+/// that moving every corner by `t m` moves every edge out by `t`. Clamped to length 4 (a corner
+/// sharper than 29 degrees moves its edges out by less).
+fn miters(corners: &[[f32; 2]]) -> Vec<[i8; 2]> {
+    let p: Vec<DVec2> = corners.iter().map(|c| DVec2::new(c[0].into(), c[1].into())).collect();
+    let n = p.len();
+    let area: f64 = (0..n).map(|k| p[k].perp_dot(p[(k + 1) % n])).sum();
+    // The outward normal of edge a -> b: to its right on a counter-clockwise polygon.
+    let normal = |a: DVec2, b: DVec2| {
+        let d = (b - a).normalize_or_zero();
+        if area >= 0.0 {
+            DVec2::new(d.y, -d.x)
+        } else {
+            DVec2::new(-d.y, d.x)
+        }
+    };
+    (0..n)
+        .map(|k| {
+            let (prev, at, next) = (p[(k + n - 1) % n], p[k], p[(k + 1) % n]);
+            let (n1, n2) = (normal(prev, at), normal(at, next));
+            let m = (n1 + n2) / (1.0 + n1.dot(n2)).max(1.0 / 16.0);
+            let m = m.clamp_length_max(4.0) / 4.0;
+            [m.x, m.y].map(|c| (c * 127.0).round().clamp(-127.0, 127.0) as i8)
+        })
+        .collect()
+}
+
+/// The steepest slope (rise over run) of the triangles (0, k, k + 1) over the polygon `corners`
+/// at heights `z`.
+fn steepest(corners: &[[f32; 2]], z: &[f32]) -> f64 {
+    let p = |k: usize| glam::DVec3::new(corners[k][0].into(), corners[k][1].into(), z[k].into());
+    (1..corners.len() - 1)
+        .map(|k| {
+            let n = (p(k) - p(0)).cross(p(k + 1) - p(0));
+            if n.z == 0.0 {
+                f64::INFINITY
+            } else {
+                n.truncate().length() / n.z.abs()
+            }
+        })
+        .fold(0.0, f64::max)
 }
 
 /// `exact` as f32, rounded up for a top (`side` > 0) and down for a bottom, so that the f32 still
@@ -437,10 +507,10 @@ mod tests {
         let (mut tops, mut bottoms) = (Vec::new(), Vec::new());
         for t in s.indices.chunks_exact(3) {
             let v = [t[0], t[1], t[2]].map(|k| s.vertices[k as usize]);
-            if v[0][3] != v[1][3] || v[1][3] != v[2][3] {
+            if v[0].side() != v[1].side() || v[1].side() != v[2].side() {
                 continue; // a wall
             }
-            let p = v.map(|q| DVec2::new(q[0] as f64, q[1] as f64));
+            let p = v.map(|q| DVec2::new(q.pos[0] as f64, q.pos[1] as f64));
             let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
             if area.abs() < 1e-12 {
                 continue;
@@ -453,8 +523,8 @@ mod tests {
             if l1 < -1e-5 || l2 < -1e-5 || l3 < -1e-5 {
                 continue;
             }
-            let zz = l1 * v[0][2] as f64 + l2 * v[1][2] as f64 + l3 * v[2][2] as f64;
-            if v[0][3] > 0.0 {
+            let zz = l1 * v[0].pos[2] as f64 + l2 * v[1].pos[2] as f64 + l3 * v[2].pos[2] as f64;
+            if v[0].side() > 0.0 {
                 tops.push(zz)
             } else {
                 bottoms.push(zz)
@@ -528,7 +598,7 @@ mod tests {
         let s = heightfield_slab(33, 33, |i, j| (i as f64 * 10.0, j as f64 * 10.0), plane).unwrap();
         assert_eq!((s.vertices.len(), s.indices.len()), (8, 36), "one prism");
         assert!(s.gate.indices.is_empty(), "a gate no smaller than the slab is left out");
-        for v in &s.vertices {
+        for v in s.vertices.iter().map(|v| v.pos) {
             let want = 0.05 * v[0] as f64 - 0.025 * v[1] as f64;
             assert!((v[2] as f64 - want).abs() < 0.02, "{v:?}");
         }
@@ -568,10 +638,7 @@ mod tests {
         let mut edges = std::collections::HashMap::new();
         let mut volume = 0.0f64;
         for t in s.indices.chunks_exact(3) {
-            let p = [t[0], t[1], t[2]].map(|k| {
-                let v = s.vertices[k as usize];
-                glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
-            });
+            let p = [t[0], t[1], t[2]].map(|k| glam::DVec3::from(s.vertices[k as usize].pos.map(f64::from)));
             volume += p[0].dot(p[1].cross(p[2])) / 6.0;
             for e in 0..3 {
                 *edges.entry((t[e], t[(e + 1) % 3])).or_insert(0) += 1;
@@ -579,5 +646,58 @@ mod tests {
         }
         assert!(edges.iter().all(|(&(a, b), &c)| c == 1 && edges.get(&(b, a)) == Some(&1)), "{what}");
         assert!(volume > 0.0, "{what}: {volume}");
+    }
+    /// Moved by its miter (decoded from snorm8), every corner of a convex polygon moves both its
+    /// edges out by about 1, in either winding; a straight corner moves along the edge's normal.
+    #[test]
+    fn miters_move_every_edge_out_by_one() {
+        let (c, s) = (0.6f64, 0.8f64);
+        let rot = |x: f64, y: f64| [(c * x - s * y) as f32, (s * x + c * y) as f32];
+        let polygons = [
+            vec![rot(0.0, 0.0), rot(20.0, 0.0), rot(20.0, 5.0), rot(0.0, 5.0)],
+            vec![rot(0.0, 0.0), rot(20.0, 0.0), rot(20.0, 20.0)],
+            vec![rot(0.0, 0.0), rot(10.0, 0.0), rot(20.0, 0.0), rot(20.0, 12.0), rot(0.0, 12.0)],
+        ];
+        for poly in polygons {
+            for winding in [false, true] {
+                let mut p = poly.clone();
+                if winding {
+                    p.reverse();
+                }
+                let m = miters(&p);
+                let v: Vec<DVec2> = p.iter().map(|q| DVec2::new(q[0].into(), q[1].into())).collect();
+                let centre = v.iter().sum::<DVec2>() / v.len() as f64;
+                for k in 0..v.len() {
+                    let (a, b) = (v[k], v[(k + 1) % v.len()]);
+                    // The edge's outward normal: away from the centre.
+                    let mut n = (b - a).perp().normalize();
+                    if n.dot(a - centre) < 0.0 {
+                        n = -n;
+                    }
+                    for (i, q) in [(k, a), (k + 1, b)] {
+                        let mi = m[i % v.len()];
+                        let mv = DVec2::new(mi[0] as f64, mi[1] as f64) * 4.0 / 127.0;
+                        let out = mv.dot(n);
+                        assert!((0.93..=1.07).contains(&out), "{p:?} corner {q} edge {k}: {out}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The slope a prism's vertices carry bounds its top's and bottom's slopes.
+    #[test]
+    fn the_slope_prisms_carry_bounds_their_tops() {
+        let mut sh = Shell::default();
+        let corners = [[0.0f32, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+        // Top rising 3 m over 10 m along x and 1 m along y, bottom flat.
+        let bounds = [(0.0, 0.0), (0.0, 3.0), (0.0, 4.0), (0.0, 1.0)];
+        prism(&mut sh, &corners, &bounds, false);
+        let want = (0.3f64 * 0.3 + 0.1 * 0.1).sqrt();
+        for v in &sh.vertices {
+            let got = v.out[2] as f64 / 127.0 * 8.0;
+            assert!(got >= want && got < want + 8.0 / 127.0, "{got} {want}");
+        }
+        assert_eq!(sh.vertices.iter().filter(|v| v.side() > 0.0).count(), 4);
     }
 }

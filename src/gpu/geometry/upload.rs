@@ -10,6 +10,7 @@ use crate::error::Result;
 use crate::gpu::layout::DrawArgs;
 use crate::gpu::readback::map_err;
 use crate::gpu::GpuContext;
+use crate::lod::slab::ShellVertex;
 use crate::scene::Scene;
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
@@ -121,8 +122,8 @@ fn upload_values(
 /// bytes) in one vertex and one index buffer, and per tile its slab's draws
 /// (`SceneGeometry::slab_draws`).
 fn upload_slabs(d: &wgpu::Device, scene: &Scene) -> (Option<(wgpu::Buffer, wgpu::Buffer)>, Vec<Option<SlabDraw>>) {
-    let (mut verts, mut idx): (Vec<[f32; 4]>, Vec<u32>) = (Vec::new(), Vec::new());
-    let mut push = |tile: usize, v: &[[f32; 4]], ix: &[u32]| {
+    let (mut verts, mut idx): (Vec<ShellVertex>, Vec<u32>) = (Vec::new(), Vec::new());
+    let mut push = |tile: usize, v: &[ShellVertex], ix: &[u32]| {
         let args = DrawArgs {
             index_count: ix.len() as u32,
             instance_count: 1,
@@ -141,11 +142,7 @@ fn upload_slabs(d: &wgpu::Device, scene: &Scene) -> (Option<(wgpu::Buffer, wgpu:
             let s = s?;
             let args = push(i, &s.vertices, &s.indices);
             let gate = (!s.gate.indices.is_empty()).then(|| push(i, &s.gate.vertices, &s.gate.indices));
-            let corners = s
-                .vertices
-                .iter()
-                .chain(&s.gate.vertices)
-                .map(|v| glam::DVec3::new(v[0].into(), v[1].into(), v[2].into()));
+            let corners = s.vertices.iter().chain(&s.gate.vertices).map(|v| glam::DVec3::from(v.pos.map(f64::from)));
             let bounds =
                 corners.fold((glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
             Some(SlabDraw { args, gate, exact: s.levels_exact, bounds })

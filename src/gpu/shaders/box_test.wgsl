@@ -26,6 +26,32 @@ fn nearest(clip: vec4<f32>) -> vec4<f32> {
     return nearer_by(clip, 11.0 * PRIORITY_STEP);
 }
 
+// How far `grown` moves an occludee's faces out, in pixels' worth of world units at each vertex:
+// more than the rasteriser's snapping of vertices can move a surface's edge against the edge of
+// the occludee standing on it (8 sub-pixel bits, as the GPUs and CPU rasterisers we know of
+// have: each vertex within 1/362 px, so two edges within 1/181 px of each other), at the cost of
+// counting pixels that far outside the occludee.
+const DILATE_PX: f32 = 1.0 / 128.0;
+
+// The clip position of vertex `p` (render space) of a convex occludee (a box, a slab's prism)
+// moved by `grow` times DILATE_PX pixels' worth of world units at its depth. `grow` moves every
+// face out by at least that much (a box: the corner's signs; a prism: its corner's miter across
+// the walls, and along z as far as its sloping top and bottom need: slab_test.wgsl), so the
+// occludee grows by a ball that covers DILATE_PX pixels on screen: a pixel whose centre the surface inside
+// covers by less than the rasteriser's snapping stays covered by the occludee too, where a box's
+// face or a slab's wall stands on the surface's own edge. Vertices behind the eye stay put.
+fn grown(p: vec3<f32>, grow: vec3<f32>) -> vec4<f32> {
+    let clip = g.view_proj * vec4<f32>(p, 1.0);
+    if (clip.w <= 0.0) {
+        return clip;
+    }
+    // NDC per world unit along the view's x and y axes is the row's length over w.
+    let sx = length(vec3<f32>(g.view_proj[0].x, g.view_proj[1].x, g.view_proj[2].x));
+    let sy = length(vec3<f32>(g.view_proj[0].y, g.view_proj[1].y, g.view_proj[2].y));
+    let t = DILATE_PX * clip.w * max(g.pixel.x / sx, g.pixel.y / sy);
+    return clip + g.view_proj * vec4<f32>(grow * t, 0.0);
+}
+
 struct BoxOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) tile: u32,
@@ -45,7 +71,9 @@ fn vs_box(@builtin(vertex_index) vi: u32, @location(0) lo: vec4<f32>, @location(
         out.zw = vec2<f32>(0.0, 1.0);
         return out;
     }
-    out.clip = nearest(g.view_proj * vec4<f32>(corner(vi, lo.xyz, hi.xyz), 1.0));
+    // The draw is indexed by `CUBE`: `vi` is the corner.
+    let grow = select(vec3<f32>(-1.0), vec3<f32>(1.0), vec3<bool>((vi & 1u) != 0u, (vi & 2u) != 0u, (vi & 4u) != 0u));
+    out.clip = nearest(grown(corner(vi, lo.xyz, hi.xyz), grow));
     out.zw = out.clip.zw;
     return out;
 }

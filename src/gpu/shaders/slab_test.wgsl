@@ -11,15 +11,23 @@
 // row (gpu::slab_test::PLACE_ROW).
 @group(1) @binding(4) var place: texture_2d<f32>;
 
-// A slab vertex: origin-relative x, y, z and its side (+1 top, -1 bottom); the instance is the
-// tile (each slab is drawn as one instance whose first_instance is its tile).
+// A slab vertex: origin-relative x, y, z, then its corner's miter across its prism's walls over
+// 4 (x, y), the steepest slope of its prism's top and bottom over 8 (z) and its side (+1 top,
+// -1 bottom); the instance is the tile (each slab is drawn as one instance whose first_instance
+// is its tile).
 @vertex
-fn vs_slab(@location(0) v: vec4<f32>, @builtin(instance_index) tile: u32) -> BoxOut {
+fn vs_slab(@location(0) v: vec3<f32>, @location(1) o: vec4<f32>, @builtin(instance_index) tile: u32) -> BoxOut {
     var out: BoxOut;
     out.tile = tile;
     let p = textureLoad(place, vec2<u32>(tile % 8192u, tile / 8192u), 0);
-    let pos = vec3<f32>(v.xy, v.z + v.w * p.w);
-    out.clip = nearest(g.view_proj * vec4<f32>((pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale), 1.0));
+    let side = sign(o.w);
+    let pos = vec3<f32>(v.xy, v.z + side * p.w);
+    let render = (pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
+    // Moved by the miter, a top (bottom) sloping by `s` (render space) comes out along its normal
+    // by the vertical move over sqrt(1 + s^2), less the miter's climb up the slope.
+    let miter = 4.0 * o.xy;
+    let s = 8.0 * o.z * g.z_scale;
+    out.clip = nearest(grown(render, vec3<f32>(miter, side * (sqrt(1.0 + s * s) + length(miter) * s))));
     out.zw = out.clip.zw;
     return out;
 }
