@@ -173,6 +173,10 @@ EXAMPLES = int(os.environ.get("GEOCULL_HIDDEN_EXAMPLES", "150"))
 # tile's box and the scene's, through the near plane fitted to the scene, while the box does not.
 @example(seed=0, gap=2.0, elev=-70.0, az=0.0, dist=26.0, ortho=False, z_scale=4.0, lod="full", rotation=0.0,
          holes="scattered")
+# Seen exactly level (elevation 0), 5 cm gaps: the tops of the tiles' boxes and slabs are
+# edge-on, and each grown corner (box_test.wgsl `grown`) must move along its own corner's signs.
+@example(seed=208, gap=0.05, elev=0.0, az=0.0, dist=92.0, ortho=False, z_scale=4.0, lod="full", rotation=0.0,
+         holes="none")
 def _random_stack_renders_as_none(seed, gap, elev, az, dist, ortho, z_scale, lod, rotation, holes):
     """Rough horizons a random gap apart (some thinner than their relief, so that tiles
     interleave in z), rotated like survey grids, hole-free or with undefined rims or scattered
