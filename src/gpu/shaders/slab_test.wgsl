@@ -24,10 +24,13 @@ fn vs_slab(@location(0) v: vec3<f32>, @location(1) o: vec4<f32>, @builtin(instan
     let pos = vec3<f32>(v.xy, v.z + side * p.w);
     let render = (pos + p.xyz) * vec3<f32>(1.0, 1.0, g.z_scale);
     // Moved by the miter, a top (bottom) sloping by `s` (render space) comes out along its normal
-    // by the vertical move over sqrt(1 + s^2), less the miter's climb up the slope.
+    // by the vertical move over sqrt(1 + s^2), less the miter's climb up the slope. Capped at 64
+    // (half a pixel's worth of height): only tops steeper than about 88 degrees then come out by
+    // less than the snapping margin, and a steep exaggerated top never grows tall on screen.
     let miter = 4.0 * o.xy;
     let s = 8.0 * o.z * g.z_scale;
-    out.clip = nearest(grown(render, vec3<f32>(miter, side * (sqrt(1.0 + s * s) + length(miter) * s))));
+    let up = min(sqrt(1.0 + s * s) + length(miter) * s, 64.0);
+    out.clip = nearest(grown(render, vec3<f32>(miter, side * up)));
     out.zw = out.clip.zw;
     return out;
 }
