@@ -42,7 +42,7 @@ pub struct Globals {
     /// depth-tie priorities (common.wgsl `priority_clip`); -1 for perspective views.
     pub ortho_near: f32,
     /// The size of a pixel of the frame's image in NDC, (2 / width, 2 / height): how far the box
-    /// tests push their occludees out on screen (box_test.wgsl `dilated`).
+    /// tests grow their occludees on screen (box_test.wgsl `grown`).
     pub pixel: [f32; 2],
     /// The pixel rays of the lit pass's fine depth (draw.wgsl `fine_depth`): perspective, the
     /// eye in render space and w = 1; orthographic, the unit view direction and w = 0.

@@ -15,8 +15,8 @@ pub struct SlabTest {
     pipeline: wgpu::RenderPipeline,
 }
 
-/// One slab vertex (`lod::slab::ShellVertex`): origin-relative (x, y, z), then the direction
-/// from its prism's centre and its side (+1 top, -1 bottom) as snorm8.
+/// One slab vertex (`lod::slab::ShellVertex`): origin-relative (x, y, z), then as snorm8 its
+/// corner's miter (x, y), its prism's steepest slope and its side (+1 top, -1 bottom).
 const VERTEX: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: 16,
     step_mode: wgpu::VertexStepMode::Vertex,

@@ -53,10 +53,11 @@ pub const GATE_TOLERANCE: f64 = 1.0;
 /// A vertex of a shell's prism as the box test draws it (slab_test.wgsl): its origin-relative
 /// position, then `out` as snorm8: its corner's miter across the prism's walls (x, y: the vector
 /// that moves both walls at the corner out by 1, over 4), the steepest slope of its prism's top
-/// and bottom over 8, rounded up (z), and its side (+127 on top surfaces, -127 on bottom ones). The test grows each prism by a fraction of a pixel along the
-/// miters and z (box_test.wgsl `grown`), so that the snapping of vertices to the rasteriser's
-/// sub-pixel grid cannot uncover a pixel the fine surface covers where a prism's wall stands on
-/// the surface's edge (a hole's, or the tile's outline).
+/// and bottom over 8, rounded up (z), and its side (+127 on top surfaces, -127 on bottom ones).
+/// The test grows each prism by a fraction of a pixel along the miters and z (box_test.wgsl
+/// `grown`), so that the snapping of vertices to the rasteriser's sub-pixel grid cannot uncover a
+/// pixel the fine surface covers where a prism's wall stands on the surface's edge (a hole's, or
+/// the tile's outline).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShellVertex {
@@ -647,6 +648,7 @@ mod tests {
         assert!(edges.iter().all(|(&(a, b), &c)| c == 1 && edges.get(&(b, a)) == Some(&1)), "{what}");
         assert!(volume > 0.0, "{what}: {volume}");
     }
+
     /// Moved by its miter (decoded from snorm8), every corner of a convex polygon moves both its
     /// edges out by about 1, in either winding; a straight corner moves along the edge's normal.
     #[test]

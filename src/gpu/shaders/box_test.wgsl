@@ -37,9 +37,10 @@ const DILATE_PX: f32 = 1.0 / 128.0;
 // moved by `grow` times DILATE_PX pixels' worth of world units at its depth. `grow` moves every
 // face out by at least that much (a box: the corner's signs; a prism: its corner's miter across
 // the walls, and along z as far as its sloping top and bottom need: slab_test.wgsl), so the
-// occludee grows by a ball that covers DILATE_PX pixels on screen: a pixel whose centre the surface inside
-// covers by less than the rasteriser's snapping stays covered by the occludee too, where a box's
-// face or a slab's wall stands on the surface's own edge. Vertices behind the eye stay put.
+// occludee grows by a ball that covers DILATE_PX pixels on screen: a pixel whose centre the
+// surface inside covers by less than the rasteriser's snapping stays covered by the occludee
+// too, where a box's face or a slab's wall stands on the surface's own edge. Vertices behind the
+// eye stay put.
 fn grown(p: vec3<f32>, grow: vec3<f32>) -> vec4<f32> {
     let clip = g.view_proj * vec4<f32>(p, 1.0);
     if (clip.w <= 0.0) {

@@ -10,7 +10,7 @@ struct Globals {
     // Orthographic: near / (far - near); perspective: -1 (priority_clip).
     ortho_near: f32,
     // The size of a pixel of the frame's image in NDC: (2 / width, 2 / height) (the box tests'
-    // `dilated`).
+    // `grown`).
     pixel: vec2<f32>,
     // The pixel rays (draw.wgsl `fine_depth`): perspective, the eye in render space and w = 1;
     // orthographic, the unit view direction and w = 0.
