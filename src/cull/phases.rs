@@ -378,25 +378,25 @@ pub fn test_the_rest(
         f.passes.record_slab_gate(d, enc, gate, &all, first, &on, draws.len(), gate_ts);
         on
     };
+    // One test pass: `boxes` behind the open gates of `gate`, and the slab draws `slab_draws`
+    // (switched on by their own gates already), all counting into `counts`.
+    let test_pass = |enc: &mut wgpu::CommandEncoder,
+                     boxes: (&wgpu::Buffer, usize),
+                     gate: &wgpu::Buffer,
+                     counts: &wgpu::Buffer,
+                     slab_draws: Option<(&wgpu::Buffer, usize)>| {
+        let mut pass = f.passes.begin_test_pass(enc, main, ts("test_ms"));
+        f.passes.draw_boxes(d, &mut pass, bg, main, boxes, first, gate, counts);
+        if let (Some((vertices, indices, place)), Some((draws, n))) = (&slabs, slab_draws) {
+            let s = SlabDraws { vertices, indices, draws, n: n as u32, place };
+            f.passes.slab_test.draw(d, &mut pass, bg, main, &s, counts);
+        }
+    };
     let gate_slabs = slabs.as_ref().filter(|_| !t.slab_gates.is_empty()).map(|_| slab_draws(enc, &t.slab_gates, &open));
-    {
-        let mut pass = f.passes.begin_test_pass(enc, main, ts("test_ms"));
-        f.passes.draw_boxes(d, &mut pass, bg, main, (&gates_buf, t.gates.len()), first, &open, &gate);
-        if let (Some((vertices, indices, place)), Some(draws)) = (&slabs, &gate_slabs) {
-            let n = t.slab_gates.len() as u32;
-            let s = SlabDraws { vertices, indices, draws, n, place };
-            f.passes.slab_test.draw(d, &mut pass, bg, main, &s, &gate);
-        }
-    }
+    let gate_slabs = gate_slabs.as_ref().map(|b| (b, t.slab_gates.len()));
+    test_pass(enc, (&gates_buf, t.gates.len()), &open, &gate, gate_slabs);
     let fine_slabs = slabs.as_ref().map(|_| slab_draws(enc, &t.slabs, &gate));
-    {
-        let mut pass = f.passes.begin_test_pass(enc, main, ts("test_ms"));
-        f.passes.draw_boxes(d, &mut pass, bg, main, (&boxes_buf, t.boxes.len()), first, &gate, &box_counts);
-        if let (Some((vertices, indices, place)), Some(draws)) = (&slabs, &fine_slabs) {
-            let s = SlabDraws { vertices, indices, draws, n: t.slabs.len() as u32, place };
-            f.passes.slab_test.draw(d, &mut pass, bg, main, &s, &box_counts);
-        }
-    }
+    test_pass(enc, (&boxes_buf, t.boxes.len()), &gate, &box_counts, fine_slabs.as_ref().map(|b| (b, t.slabs.len())));
     let draw = if add {
         let rest = passes::empty_args_buffer(d, "rest_args", n);
         let ts = f.timestamps.and_then(|t| t.compute("count_ms"));
