@@ -480,6 +480,15 @@ fn render_origin(visible: Option<(DVec3, DVec3)>, camera: &Camera) -> DVec3 {
     }
 }
 
+/// The world size of one of a `width` × `height` image's pixels at clip w = 1 under `view_proj`
+/// (render space to clip space), the larger of a column's and a row's: NDC per world unit along
+/// the view's x (y) axis is the length of the matrix's row 0 (1) over w, and a pixel spans 2 /
+/// width (2 / height) of NDC.
+fn pixel_world(view_proj: &glam::DMat4, (width, height): (u32, u32)) -> f64 {
+    let row = |r: usize| view_proj.row(r).truncate().length();
+    (2.0 / width as f64 / row(0)).max(2.0 / height as f64 / row(1))
+}
+
 /// Stage 2: the scene bind group of this frame (uniforms, per-object offsets and colours) and
 /// the per-tile object visibility.
 #[allow(clippy::too_many_arguments)]
@@ -552,7 +561,7 @@ fn frame_state(
             crate::camera::Projection::Orthographic => (fc.near / (fc.far - fc.near)) as f32,
             crate::camera::Projection::Perspective => -1.0,
         },
-        pixel: [2.0 / width as f32, 2.0 / height as f32],
+        pixel_world: [pixel_world(&fc.view_proj, (width, height)) as f32, 0.0],
         eye: match fc.projection {
             crate::camera::Projection::Orthographic => {
                 [fc.forward.x as f32, fc.forward.y as f32, fc.forward.z as f32, 0.0]

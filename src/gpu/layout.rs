@@ -41,9 +41,10 @@ pub struct Globals {
     /// Orthographic views: near / (far - near), what turns a depth into a distance for the
     /// depth-tie priorities (common.wgsl `priority_clip`); -1 for perspective views.
     pub ortho_near: f32,
-    /// The size of a pixel of the frame's image in NDC, (2 / width, 2 / height): how far the box
-    /// tests grow their occludees on screen (box_test.wgsl `grown`).
-    pub pixel: [f32; 2],
+    /// The world size of one of the frame's pixels at clip w = 1 (times w: at any depth; the larger
+    /// of a column's and a row's): how far the box tests grow their occludees (box_test.wgsl
+    /// `grown`); then padding.
+    pub pixel_world: [f32; 2],
     /// The pixel rays of the lit pass's fine depth (draw.wgsl `fine_depth`): perspective, the
     /// eye in render space and w = 1; orthographic, the unit view direction and w = 0.
     pub eye: [f32; 4],

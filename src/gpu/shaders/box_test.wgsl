@@ -46,10 +46,7 @@ fn grown(p: vec3<f32>, grow: vec3<f32>) -> vec4<f32> {
     if (clip.w <= 0.0) {
         return clip;
     }
-    // NDC per world unit along the view's x and y axes is the row's length over w.
-    let sx = length(vec3<f32>(g.view_proj[0].x, g.view_proj[1].x, g.view_proj[2].x));
-    let sy = length(vec3<f32>(g.view_proj[0].y, g.view_proj[1].y, g.view_proj[2].y));
-    let t = DILATE_PX * clip.w * max(g.pixel.x / sx, g.pixel.y / sy);
+    let t = DILATE_PX * clip.w * g.pixel_world.x;
     return clip + g.view_proj * vec4<f32>(grow * t, 0.0);
 }
 

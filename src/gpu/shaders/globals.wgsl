@@ -9,9 +9,8 @@ struct Globals {
     z_scale: f32,
     // Orthographic: near / (far - near); perspective: -1 (priority_clip).
     ortho_near: f32,
-    // The size of a pixel of the frame's image in NDC: (2 / width, 2 / height) (the box tests'
-    // `grown`).
-    pixel: vec2<f32>,
+    // x: the world size of one of the frame's pixels at clip w = 1 (the box tests' `grown`); y unused.
+    pixel_world: vec2<f32>,
     // The pixel rays (draw.wgsl `fine_depth`): perspective, the eye in render space and w = 1;
     // orthographic, the unit view direction and w = 0.
     eye: vec4<f32>,
